@@ -1,0 +1,5 @@
+//! Integration tests that run the drivers against the emulators on the virtual bus.
+
+mod deps;
+mod piper_flow;
+mod robstride_flow;

@@ -1,0 +1,1 @@
+//! piper_flow (being built).

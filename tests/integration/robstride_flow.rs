@@ -1,0 +1,1 @@
+//! robstride_flow (being built).

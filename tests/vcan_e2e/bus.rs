@@ -1,0 +1,1 @@
+//! vcan end-to-end: bus (being built).

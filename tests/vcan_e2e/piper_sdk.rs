@@ -1,0 +1,1 @@
+//! vcan end-to-end: piper_sdk (being built).

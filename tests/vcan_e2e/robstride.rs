@@ -1,0 +1,1 @@
+//! vcan end-to-end: robstride (being built).
