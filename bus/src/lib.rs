@@ -2,15 +2,17 @@
 //!
 //! - [`CanFrame`] / [`CanId`]: plain `Copy` classic CAN frames.
 //! - [`CanBus`]: one async interface (send, receive with a timestamp, close).
-//! - [`virtual_bus`]: an in-process bus that models bit timing, arbitration, queues, load and
+//! - `virtual_bus`: an in-process bus that models bit timing, arbitration, queues, load and
 //!   faults, and runs under tokio's paused clock for deterministic virtual time.
 //! - `socketcan_bus` (Linux only): real SocketCAN interfaces such as `vcan0` or `can0`.
-//! - [`candump`] and [`pcap`]: recorders and a reader for can-utils and Wireshark.
+//! - `candump` and `pcap`: recorders and a reader for can-utils and Wireshark.
 
 mod error;
 mod frame;
 mod iface;
 
 pub use error::BusError;
-pub use frame::{CanFrame, CanId, FrameError, ReceivedFrame, MAX_DATA_LEN, MAX_EXTENDED_ID, MAX_STANDARD_ID};
+pub use frame::{
+    CanFrame, CanId, FrameError, ReceivedFrame, MAX_DATA_LEN, MAX_EXTENDED_ID, MAX_STANDARD_ID,
+};
 pub use iface::CanBus;

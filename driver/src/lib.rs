@@ -1,1 +1,8 @@
-//! placeholder
+//! armhil's drivers: each has its own codec written from the protocol specification and runs
+//! over any [`bus::CanBus`] (SocketCAN or the virtual bus).
+//!
+//! - [`piper`]: AgileX Piper arm (CAN, 11-bit IDs).
+//! - [`robstride`]: RobStride actuators (CAN, 29-bit IDs).
+
+pub mod piper;
+pub mod robstride;

@@ -1,1 +1,9 @@
-//! placeholder
+//! Firmware emulators of robot arms and actuators on a rapier3d physics world.
+//!
+//! - [`physics`]: URDF loading into rapier3d, fixed-step stepping, torque-driven joints.
+//! - [`piper`]: the AgileX Piper arm's firmware (CAN, 11-bit IDs).
+//! - [`robstride`]: RobStride quasi-direct-drive actuators (CAN, 29-bit IDs).
+
+pub mod physics;
+pub mod piper;
+pub mod robstride;

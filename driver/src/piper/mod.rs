@@ -1,0 +1,1 @@
+//! AgileX Piper driver (being built).

@@ -1,0 +1,1 @@
+//! RobStride actuator driver (being built).

@@ -1,0 +1,1 @@
+//! AgileX Piper firmware emulator (being built).

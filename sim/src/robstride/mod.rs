@@ -1,0 +1,1 @@
+//! RobStride actuator emulator (being built).
