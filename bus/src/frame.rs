@@ -220,7 +220,9 @@ mod tests {
         let extended = CanId::Extended(0x123 << 18);
         assert!(standard.arbitration_key() < extended.arbitration_key());
         // A lower base id wins regardless of format.
-        assert!(CanId::Extended(0x122 << 18 | 0x3FFFF).arbitration_key() < standard.arbitration_key());
+        assert!(
+            CanId::Extended(0x122 << 18 | 0x3FFFF).arbitration_key() < standard.arbitration_key()
+        );
     }
 
     #[test]

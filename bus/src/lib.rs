@@ -2,14 +2,20 @@
 //!
 //! - [`CanFrame`] / [`CanId`]: plain `Copy` classic CAN frames.
 //! - [`CanBus`]: one async interface (send, receive with a timestamp, close).
-//! - `virtual_bus`: an in-process bus that models bit timing, arbitration, queues, load and
+//! - [`virtual_bus`]: an in-process bus that models bit timing, arbitration, queues, load and
 //!   faults, and runs under tokio's paused clock for deterministic virtual time.
 //! - `socketcan_bus` (Linux only): real SocketCAN interfaces such as `vcan0` or `can0`.
-//! - `candump` and `pcap`: recorders and a reader for can-utils and Wireshark.
+//! - [`candump`], [`pcap`] and [`recorder`]: logs for can-utils and Wireshark, and a reader.
+//! - [`timing`]: how many bit times a frame occupies.
 
+pub mod candump;
 mod error;
 mod frame;
 mod iface;
+pub mod pcap;
+pub mod recorder;
+pub mod timing;
+pub mod virtual_bus;
 
 pub use error::BusError;
 pub use frame::{

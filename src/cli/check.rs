@@ -1,12 +1,45 @@
-//! `armhil check` (being built).
+//! `armhil check`: validate scenario files without running them.
 
+use std::path::PathBuf;
 use std::process::ExitCode;
+
+use armhil::harness::{discover, load_scenario};
 
 /// Arguments of `armhil check`.
 #[derive(Debug, clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// Scenario files or folders (searched recursively for *.yaml / *.yml).
+    #[arg(required = true)]
+    paths: Vec<PathBuf>,
+}
 
-/// Run the subcommand.
-pub fn run(_args: Args) -> anyhow::Result<ExitCode> {
-    anyhow::bail!("armhil check is not built yet")
+/// Validate every file; exit 1 if any is invalid.
+pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    let files = discover(&args.paths)?;
+    if files.is_empty() {
+        anyhow::bail!("no scenario files (*.yaml, *.yml) found");
+    }
+    let mut invalid = 0usize;
+    for file in &files {
+        match load_scenario(file) {
+            Ok(s) => println!(
+                "ok    {} ({}: {} steps, {} scheduled faults{})",
+                file.display(),
+                s.name,
+                s.steps.len(),
+                s.faults.len(),
+                if s.has_tag("vcan") { ", vcan" } else { "" }
+            ),
+            Err(e) => {
+                invalid += 1;
+                println!("error {e}");
+            }
+        }
+    }
+    println!("{} file(s) checked, {invalid} invalid", files.len());
+    Ok(if invalid == 0 {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    })
 }

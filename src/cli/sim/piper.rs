@@ -1,12 +1,149 @@
-//! `armhil sim piper` (being built).
+//! `armhil sim piper`: the Piper firmware emulator in real time on a SocketCAN interface.
 
+use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::Arc;
+
+use anyhow::Context;
+use bus::CanBus;
+use sim::piper::{FirmwareProfile, PiperConfig, PiperEmulator};
 
 /// Arguments of `armhil sim piper`.
 #[derive(Debug, clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// SocketCAN interface to answer on.
+    #[arg(long, default_value = "vcan0")]
+    pub iface: String,
+    /// Firmware to impersonate: S-V1.5-8, S-V1.6-3, S-V1.8-2 or S-V1.8-8.
+    #[arg(long, default_value = "S-V1.8-2")]
+    pub firmware: FirmwareProfile,
+    /// JSON file keeping the "flash" parameters (limits, zero offsets, collision levels, …)
+    /// across runs; created on the first change.
+    #[arg(long)]
+    pub state_file: Option<PathBuf>,
+    /// URDF to simulate instead of the bundled urdf/piper.urdf.
+    #[arg(long)]
+    pub urdf: Option<PathBuf>,
+    /// Joint angles at power-on, degrees, comma-separated J1..J6.
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+    pub initial_joints_deg: Option<Vec<f64>>,
+    /// Record every frame on the interface to this candump log until Ctrl-C.
+    #[arg(long)]
+    pub record: Option<PathBuf>,
+}
 
-/// Run the emulator.
-pub fn run(_args: Args) -> anyhow::Result<ExitCode> {
-    anyhow::bail!("armhil sim piper is not built yet")
+/// Run the emulator until Ctrl-C.
+pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+        .context("cannot start the tokio runtime")?;
+    runtime.block_on(serve(args))
+}
+
+fn initial_joints_rad(args: &Args) -> anyhow::Result<[f64; 6]> {
+    let Some(deg) = &args.initial_joints_deg else {
+        return Ok([0.0; 6]);
+    };
+    let arr: [f64; 6] = deg
+        .as_slice()
+        .try_into()
+        .map_err(|_| anyhow::anyhow!("--initial-joints-deg needs 6 values, got {}", deg.len()))?;
+    Ok(arr.map(f64::to_radians))
+}
+
+async fn serve(args: Args) -> anyhow::Result<ExitCode> {
+    let config = PiperConfig {
+        firmware: args.firmware,
+        initial_joints_rad: initial_joints_rad(&args)?,
+        state_file: args.state_file.clone(),
+        urdf_path: args.urdf.clone(),
+        ..PiperConfig::default()
+    };
+    let bus = open_bus(&args.iface)?;
+    let recorder = match &args.record {
+        Some(path) => Some(start_recorder(&args.iface, path)?),
+        None => None,
+    };
+    let emu = PiperEmulator::spawn(Arc::clone(&bus), config)
+        .with_context(|| format!("cannot start the Piper emulator on {}", args.iface))?;
+    tracing::info!(
+        iface = %args.iface,
+        firmware = %args.firmware,
+        "Piper emulator running; Ctrl-C to stop"
+    );
+    eprintln!(
+        "armhil sim piper: {} on {} (Ctrl-C to stop)",
+        args.firmware, args.iface
+    );
+    tokio::signal::ctrl_c()
+        .await
+        .context("cannot wait for Ctrl-C")?;
+    emu.shutdown().await;
+    bus.close().await;
+    if let Some(rec) = recorder {
+        rec.stop().await?;
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+#[cfg(target_os = "linux")]
+fn open_bus(iface: &str) -> anyhow::Result<Arc<dyn CanBus>> {
+    socket::open(iface)
+}
+
+#[cfg(not(target_os = "linux"))]
+fn open_bus(_iface: &str) -> anyhow::Result<Arc<dyn CanBus>> {
+    anyhow::bail!("SocketCAN is only available on Linux")
+}
+
+#[cfg(target_os = "linux")]
+mod socket {
+    use std::sync::Arc;
+
+    use bus::CanBus;
+
+    pub fn open(iface: &str) -> anyhow::Result<Arc<dyn CanBus>> {
+        anyhow::bail!(
+            "cannot open {iface}: the SocketCAN adapter is not built into this armhil yet"
+        )
+    }
+}
+
+/// A task that writes every frame seen on the interface to a candump log.
+struct Recorder {
+    stop: tokio::sync::watch::Sender<bool>,
+    task: tokio::task::JoinHandle<anyhow::Result<()>>,
+}
+
+impl Recorder {
+    async fn stop(self) -> anyhow::Result<()> {
+        let _ = self.stop.send(true);
+        self.task.await.context("recorder task failed")?
+    }
+}
+
+/// A second socket on the interface sees both the emulator's and the host's frames.
+fn start_recorder(iface: &str, path: &std::path::Path) -> anyhow::Result<Recorder> {
+    let tap = open_bus(iface)?;
+    let mut writer = bus::candump::CandumpWriter::create(path, iface)
+        .with_context(|| format!("cannot create {}", path.display()))?;
+    let (stop, mut stopped) = tokio::sync::watch::channel(false);
+    let task = tokio::spawn(async move {
+        loop {
+            tokio::select! {
+                r = tap.recv() => match r {
+                    Ok(frame) => writer.write(&frame).context("cannot write the candump log")?,
+                    Err(bus::BusError::Closed) => break,
+                    Err(e) => tracing::warn!(error = %e, "recorder receive error"),
+                },
+                _ = stopped.changed() => break,
+            }
+        }
+        tap.close().await;
+        writer.flush().context("cannot flush the candump log")?;
+        Ok(())
+    });
+    Ok(Recorder { stop, task })
 }

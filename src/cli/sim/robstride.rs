@@ -1,12 +1,202 @@
-//! `armhil sim robstride` (being built).
+//! `armhil sim robstride`: RobStride actuators in real time on a SocketCAN interface.
 
+use std::path::PathBuf;
 use std::process::ExitCode;
+use std::str::FromStr;
+use std::sync::Arc;
+
+use anyhow::Context;
+use bus::CanBus;
+use sim::robstride::{Load, Model, MotorConfig, RangeTable, RobstrideBus, RobstrideConfig};
 
 /// Arguments of `armhil sim robstride`.
 #[derive(Debug, clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// SocketCAN interface to answer on.
+    #[arg(long, default_value = "vcan0")]
+    pub iface: String,
+    /// A motor as ID:MODEL, e.g. `1:RS03` (repeat for more motors; default `127:RS03`).
+    #[arg(long = "motor", value_name = "ID:MODEL")]
+    pub motors: Vec<MotorSpec>,
+    /// Load on every motor: `disc:MASS_KG:RADIUS_M`, `pendulum:MASS_KG:LENGTH_M` or `none`.
+    #[arg(long, default_value = "disc:1.0:0.1")]
+    pub load: LoadSpec,
+    /// Scaling table: `manual` (default) or `sdk`.
+    #[arg(long, default_value = "manual")]
+    pub ranges: String,
+    /// Host ID the motors answer to until a host speaks.
+    #[arg(long, default_value_t = 0xFD)]
+    pub host_id: u8,
+    /// JSON file keeping saved parameters, CAN IDs, zeros and baud/protocol switches across
+    /// runs (the motors' flash).
+    #[arg(long)]
+    pub state_file: Option<PathBuf>,
+}
 
-/// Run the emulator.
-pub fn run(_args: Args) -> anyhow::Result<ExitCode> {
-    anyhow::bail!("armhil sim robstride is not built yet")
+/// `ID:MODEL` from the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct MotorSpec {
+    /// CAN ID.
+    pub can_id: u8,
+    /// Model.
+    pub model: Model,
+}
+
+impl FromStr for MotorSpec {
+    type Err = String;
+
+    fn from_str(text: &str) -> Result<Self, Self::Err> {
+        let (id, model) = text
+            .split_once(':')
+            .ok_or_else(|| format!("expected ID:MODEL (e.g. 1:RS03), got {text:?}"))?;
+        let can_id = parse_id(id)?;
+        let model = Model::from_name(model)
+            .ok_or_else(|| format!("unknown model {model:?} (RS00..RS06, EL05)"))?;
+        Ok(Self { can_id, model })
+    }
+}
+
+fn parse_id(text: &str) -> Result<u8, String> {
+    let parsed = match text.strip_prefix("0x").or_else(|| text.strip_prefix("0X")) {
+        Some(hex) => u8::from_str_radix(hex, 16),
+        None => text.parse(),
+    };
+    match parsed {
+        Ok(id) if (1..=0x7F).contains(&id) => Ok(id),
+        _ => Err(format!("CAN ID {text:?} must be 1..=127")),
+    }
+}
+
+/// `--load` from the command line.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LoadSpec(pub Load);
+
+impl FromStr for LoadSpec {
+    type Err = String;
+
+    fn from_str(text: &str) -> Result<Self, Self::Err> {
+        let parts: Vec<&str> = text.split(':').collect();
+        let number = |s: &str| {
+            s.parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite() && *v > 0.0)
+                .ok_or_else(|| format!("{s:?} is not a positive number"))
+        };
+        match parts.as_slice() {
+            ["none"] => Ok(Self(Load::None)),
+            ["disc", mass, radius] => Ok(Self(Load::Disc {
+                mass_kg: number(mass)?,
+                radius_m: number(radius)?,
+            })),
+            ["pendulum", mass, length] => Ok(Self(Load::Pendulum {
+                mass_kg: number(mass)?,
+                length_m: number(length)?,
+            })),
+            _ => Err(format!(
+                "expected none, disc:MASS:RADIUS or pendulum:MASS:LENGTH, got {text:?}"
+            )),
+        }
+    }
+}
+
+/// Run the emulator until Ctrl-C.
+pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+        .context("cannot start the tokio runtime")?;
+    runtime.block_on(serve(args))
+}
+
+fn config(args: &Args) -> anyhow::Result<RobstrideConfig> {
+    let table = match args.ranges.to_ascii_lowercase().as_str() {
+        "manual" => RangeTable::Manual,
+        "sdk" => RangeTable::Sdk,
+        other => anyhow::bail!("--ranges must be manual or sdk, got {other:?}"),
+    };
+    let specs = if args.motors.is_empty() {
+        vec![MotorSpec {
+            can_id: 0x7F,
+            model: Model::RS03,
+        }]
+    } else {
+        args.motors.clone()
+    };
+    let motors = specs
+        .iter()
+        .map(|spec| {
+            let mut motor = MotorConfig::new(spec.can_id, spec.model).with_load(args.load.0);
+            motor.range_table = table;
+            motor
+        })
+        .collect();
+    let mut config = RobstrideConfig::new(motors);
+    config.host_id = args.host_id;
+    config.state_file = args.state_file.clone();
+    Ok(config)
+}
+
+async fn serve(args: Args) -> anyhow::Result<ExitCode> {
+    let config = config(&args)?;
+    let bus = open_bus(&args.iface)?;
+    let motors: Vec<String> = config
+        .motors
+        .iter()
+        .map(|m| format!("{}:{}", m.can_id, m.model.name()))
+        .collect();
+    let emulator = RobstrideBus::spawn(Arc::clone(&bus), config)
+        .with_context(|| format!("cannot start the RobStride emulator on {}", args.iface))?;
+    tracing::info!(iface = %args.iface, motors = ?motors, "RobStride emulator running; Ctrl-C to stop");
+    eprintln!(
+        "armhil sim robstride: {} on {} (Ctrl-C to stop)",
+        motors.join(", "),
+        args.iface
+    );
+    tokio::signal::ctrl_c()
+        .await
+        .context("cannot wait for Ctrl-C")?;
+    emulator.shutdown().await;
+    bus.close().await;
+    Ok(ExitCode::SUCCESS)
+}
+
+#[cfg(target_os = "linux")]
+fn open_bus(iface: &str) -> anyhow::Result<Arc<dyn CanBus>> {
+    // bus::socketcan_bus has not landed yet; switch to SocketCanBus::open when it does.
+    anyhow::bail!("cannot open {iface}: the SocketCAN adapter is not built into this armhil yet")
+}
+
+#[cfg(not(target_os = "linux"))]
+fn open_bus(_iface: &str) -> anyhow::Result<Arc<dyn CanBus>> {
+    anyhow::bail!("SocketCAN is only available on Linux")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn motor_and_load_arguments_parse() {
+        assert_eq!(
+            "1:RS03".parse::<MotorSpec>(),
+            Ok(MotorSpec {
+                can_id: 1,
+                model: Model::RS03
+            })
+        );
+        assert_eq!("0x7f:rs00".parse::<MotorSpec>().map(|s| s.can_id), Ok(0x7F));
+        assert!("0:RS03".parse::<MotorSpec>().is_err());
+        assert!("200:RS03".parse::<MotorSpec>().is_err());
+        assert!("1:RS09".parse::<MotorSpec>().is_err());
+        assert!("1".parse::<MotorSpec>().is_err());
+        assert_eq!(
+            "pendulum:1.5:0.3".parse::<LoadSpec>(),
+            Ok(LoadSpec(Load::Pendulum {
+                mass_kg: 1.5,
+                length_m: 0.3
+            }))
+        );
+        assert!("disc:-1:0.1".parse::<LoadSpec>().is_err());
+    }
 }

@@ -1,0 +1,213 @@
+#!/usr/bin/env python3
+"""vcan end-to-end hook: the vendor Python SDK (piper_sdk) against `armhil sim piper`.
+
+Starts `$ARMHIL_BIN sim piper --iface $ARMHIL_VCAN_IFACE --firmware S-V1.8-2` (unless
+ARMHIL_PIPER_EXTERNAL=1, then an emulator must already run on the interface), then with
+`C_PiperInterface_V2(iface, judge_flag=False)` (a vcan has no bitrate for the SDK to check):
+
+1. connects (the SDK queries limits, max acc and the firmware version) and checks the
+   firmware string and the 0x473 joint limits;
+2. enables the arm, selects CAN mode + MOVE J at 50 %, moves to a joint target and reads the
+   joints back within 0.1 deg;
+3. opens the gripper to 40 mm and reads the stroke back within 1 mm;
+4. checks that piper_sdk's own forward kinematics of the reported joints agrees with the
+   emulator's end-pose feedback (0x2A2-0x2A4) within 0.5 mm / 0.5 deg;
+5. disables the arm.
+
+Exits non-zero with a message saying which step failed. Timeouts are generous: inside the CI
+VM (TCG) everything runs several times slower.
+"""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+
+IFACE = os.environ.get("ARMHIL_VCAN_IFACE", "vcan0")
+ARMHIL_BIN = os.environ.get("ARMHIL_BIN", "armhil")
+EXTERNAL = os.environ.get("ARMHIL_PIPER_EXTERNAL") == "1"
+OUT_DIR = os.environ.get("ARMHIL_E2E_OUT", "/tmp")
+FIRMWARE = "S-V1.8-2"
+# Spec §6.4 defaults the emulator's flash starts with (0.1 deg, 0.01 rad/s).
+EXPECTED_LIMITS = {
+    1: (1500, -1500),
+    2: (1800, 0),
+    3: (0, -1700),
+    4: (890, -890),
+    5: (890, -890),
+    6: (1800, -1800),
+}
+TARGET_MDEG = [20000, 40000, -40000, 10000, 20000, -15000]
+GRIPPER_UM = 40000
+
+
+class Failure(Exception):
+    """A check failed; the message says which."""
+
+
+def as_int(value):
+    """piper_sdk decodes status bytes into enums; compare their numeric value."""
+    return int(getattr(value, "value", value))
+
+
+def wait_for(predicate, timeout_s, what, poll_s=0.02):
+    deadline = time.monotonic() + timeout_s
+    last = None
+    while time.monotonic() < deadline:
+        last = predicate()
+        if last:
+            return last
+        time.sleep(poll_s)
+    raise Failure(f"timed out after {timeout_s:.0f} s waiting for {what} (last: {last!r})")
+
+
+def joints_mdeg(piper):
+    js = piper.GetArmJointMsgs().joint_state
+    return [js.joint_1, js.joint_2, js.joint_3, js.joint_4, js.joint_5, js.joint_6]
+
+
+def run_checks():
+    from piper_sdk import C_PiperInterface_V2
+
+    piper = C_PiperInterface_V2(IFACE, judge_flag=False)
+    piper.ConnectPort()
+
+    wait_for(lambda: piper.GetArmStatus().time_stamp > 0, 30, "0x2A1 status feedback")
+    print("connected; feedback flowing")
+
+    # 1. Firmware version: the SDK clears its buffer right after sending the query, so ask
+    #    again if the first answer does not show up.
+    def firmware():
+        version = piper.GetPiperFirmwareVersion()
+        return version if version != -0x4AF else None
+
+    version = None
+    for _ in range(5):
+        try:
+            version = wait_for(firmware, 5, "the 0x4AF firmware reply")
+            break
+        except Failure:
+            piper.SearchPiperFirmwareVersion()
+    if version != FIRMWARE:
+        raise Failure(f"firmware version {version!r}, expected {FIRMWARE!r}")
+    print(f"firmware {version}")
+
+    def limits_ready():
+        motors = piper.GetAllMotorAngleLimitMaxSpd().all_motor_angle_limit_max_spd.motor
+        return all(motors[n].motor_num == n for n in range(1, 7)) and motors
+
+    motors = None
+    for _ in range(3):
+        try:
+            motors = wait_for(limits_ready, 5, "six 0x473 replies")
+            break
+        except Failure:
+            piper.SearchAllMotorMaxAngleSpd()
+    if not motors:
+        raise Failure("no 0x473 joint limit replies")
+    for n, (max_ddeg, min_ddeg) in EXPECTED_LIMITS.items():
+        m = motors[n]
+        if (m.max_angle_limit, m.min_angle_limit, m.max_joint_spd) != (max_ddeg, min_ddeg, 300):
+            raise Failure(
+                f"joint {n} limits {m.max_angle_limit}/{m.min_angle_limit}/{m.max_joint_spd}, "
+                f"expected {max_ddeg}/{min_ddeg}/300"
+            )
+    print("joint limits match the flash defaults")
+
+    # 2. Enable (the SDK demo loop: EnablePiper returns the state read before sending).
+    wait_for(piper.EnablePiper, 20, "all six joints enabled (0x261-0x266 bit 6)", poll_s=0.05)
+    piper.ModeCtrl(0x01, 0x01, 50, 0x00)
+
+    def in_move_j():
+        s = piper.GetArmStatus().arm_status
+        return as_int(s.ctrl_mode) == 0x01 and as_int(s.mode_feed) == 0x01 and as_int(s.arm_status) == 0
+
+    wait_for(in_move_j, 10, "0x2A1 showing CAN mode + MOVE J + normal")
+    print("enabled, CAN mode, MOVE J")
+
+    deadline = time.monotonic() + 60
+    while True:
+        piper.ModeCtrl(0x01, 0x01, 50, 0x00)
+        piper.JointCtrl(*TARGET_MDEG)
+        time.sleep(0.05)
+        status = piper.GetArmStatus().arm_status
+        if as_int(status.arm_status) != 0:
+            raise Failure(f"arm_status {as_int(status.arm_status):#04x} during MOVE J")
+        err = max(abs(a - b) for a, b in zip(joints_mdeg(piper), TARGET_MDEG))
+        if as_int(status.motion_status) == 0 and err <= 100:
+            break
+        if time.monotonic() > deadline:
+            raise Failure(f"MOVE J did not arrive: joints {joints_mdeg(piper)}, target {TARGET_MDEG}")
+    time.sleep(0.3)
+    joints = joints_mdeg(piper)
+    err = max(abs(a - b) for a, b in zip(joints, TARGET_MDEG))
+    if err > 100:
+        raise Failure(f"joints {joints} differ from target {TARGET_MDEG} by {err} m° (> 0.1°)")
+    print(f"MOVE J arrived, max error {err} m°")
+
+    # 3. Gripper.
+    def gripper_there():
+        piper.GripperCtrl(GRIPPER_UM, 1000, 0x01, 0)
+        stroke = piper.GetArmGripperMsgs().gripper_state.grippers_angle
+        return abs(stroke - GRIPPER_UM) <= 1000 and stroke
+
+    stroke = wait_for(gripper_there, 30, f"gripper stroke {GRIPPER_UM} µm", poll_s=0.05)
+    print(f"gripper at {stroke} µm")
+
+    # 4. The SDK's forward kinematics against our end-pose feedback.
+    piper.EnableFkCal()
+    time.sleep(0.5)
+    fk = piper.GetFK("feedback")[5]
+    pose = piper.GetArmEndPoseMsgs().end_pose
+    fb = [pose.X_axis / 1000, pose.Y_axis / 1000, pose.Z_axis / 1000,
+          pose.RX_axis / 1000, pose.RY_axis / 1000, pose.RZ_axis / 1000]
+    for i, name in enumerate(["X", "Y", "Z"]):
+        if abs(fk[i] - fb[i]) > 0.5:
+            raise Failure(f"end pose {name}: SDK FK {fk[i]:.3f} mm, feedback {fb[i]:.3f} mm")
+    for i, name in zip(range(3, 6), ["RX", "RY", "RZ"]):
+        diff = (fk[i] - fb[i] + 180.0) % 360.0 - 180.0
+        if abs(diff) > 0.5:
+            raise Failure(f"end pose {name}: SDK FK {fk[i]:.3f}°, feedback {fb[i]:.3f}°")
+    print(f"SDK FK agrees with end-pose feedback: {[round(x, 2) for x in fb]}")
+
+    # 5. Disable.
+    wait_for(lambda: not piper.DisablePiper(), 20, "all joints disabled", poll_s=0.05)
+    piper.DisconnectPort()
+
+
+def main():
+    child = None
+    log = None
+    if not EXTERNAL:
+        log_path = os.path.join(OUT_DIR, "piper_sdk_emulator.log")
+        log = open(log_path, "w")
+        cmd = [ARMHIL_BIN, "sim", "piper", "--iface", IFACE, "--firmware", FIRMWARE]
+        print("starting", " ".join(cmd), "(log:", log_path + ")")
+        child = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT)
+        time.sleep(1.0)
+        if child.poll() is not None:
+            print(f"piper_sdk e2e FAILED: emulator exited with {child.returncode}, see {log_path}",
+                  file=sys.stderr)
+            return 1
+    try:
+        run_checks()
+    except Failure as e:
+        print(f"piper_sdk e2e FAILED: {e}", file=sys.stderr)
+        return 1
+    finally:
+        if child is not None:
+            child.send_signal(signal.SIGINT)
+            try:
+                child.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                child.kill()
+                child.wait()
+        if log is not None:
+            log.close()
+    print("piper_sdk e2e OK")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,108 @@
+//! Errors of the physics world and of the URDF model.
+
+use std::path::PathBuf;
+
+/// Everything that can go wrong while loading a URDF model or driving the physics world.
+#[derive(Debug, thiserror::Error)]
+pub enum PhysicsError {
+    /// The URDF file could not be read.
+    #[error("cannot read URDF file {path}: {source}")]
+    Io {
+        /// The file that was asked for.
+        path: PathBuf,
+        /// The underlying I/O error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The URDF text is not valid URDF (XML or schema error reported by urdf-rs).
+    #[error("invalid URDF: {message}")]
+    Parse {
+        /// The parser's message.
+        message: String,
+    },
+    /// A joint type the world does not simulate (floating, planar, spherical).
+    #[error("joint {joint}: unsupported joint type {kind}")]
+    UnsupportedJoint {
+        /// The joint's name.
+        joint: String,
+        /// The URDF joint type.
+        kind: String,
+    },
+    /// A joint names a parent or child link that the URDF does not define.
+    #[error("joint {joint}: unknown link {link}")]
+    UnknownLink {
+        /// The joint's name.
+        joint: String,
+        /// The missing link's name.
+        link: String,
+    },
+    /// A `<mimic>` element names a joint that is not a revolute or prismatic joint of the model.
+    #[error("joint {joint}: mimic leader {leader} is not a movable joint")]
+    UnknownMimicLeader {
+        /// The follower joint.
+        joint: String,
+        /// The leader it names.
+        leader: String,
+    },
+    /// The links do not form one tree with a single root.
+    #[error("URDF links do not form a single tree (roots: {roots:?})")]
+    NotATree {
+        /// The links that have no parent joint.
+        roots: Vec<String>,
+    },
+    /// A joint axis of zero length.
+    #[error("joint {joint}: axis has zero length")]
+    ZeroAxis {
+        /// The joint's name.
+        joint: String,
+    },
+    /// An inertial element is not physical (negative mass or a non-finite value).
+    #[error("link {link}: invalid inertial ({reason})")]
+    InvalidInertial {
+        /// The link's name.
+        link: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A per-joint vector has the wrong length.
+    #[error("expected {expected} joint values, got {actual}")]
+    LengthMismatch {
+        /// Number of actuated joints of the model.
+        expected: usize,
+        /// Length that was passed.
+        actual: usize,
+    },
+    /// A joint position outside the joint's URDF limits.
+    #[error("joint {joint}: {value} outside limits [{lower}, {upper}]")]
+    OutOfLimit {
+        /// The joint's name.
+        joint: String,
+        /// The rejected value (rad or m).
+        value: f64,
+        /// Lower limit (rad or m).
+        lower: f64,
+        /// Upper limit (rad or m).
+        upper: f64,
+    },
+    /// A NaN or infinite joint value.
+    #[error("joint {joint}: non-finite value {value}")]
+    NonFinite {
+        /// The joint's name.
+        joint: String,
+        /// The rejected value.
+        value: f64,
+    },
+    /// The world configuration is unusable (non-positive or non-finite step, non-finite gravity).
+    #[error("invalid world configuration: {reason}")]
+    InvalidConfig {
+        /// What is wrong.
+        reason: String,
+    },
+    /// rapier did not create a multibody joint for an actuated URDF joint (for example a joint
+    /// that would close a kinematic loop).
+    #[error("joint {joint}: not represented in the rapier multibody")]
+    NotInMultibody {
+        /// The joint's name.
+        joint: String,
+    },
+}

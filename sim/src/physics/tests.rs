@@ -1,0 +1,299 @@
+//! Unit tests of the URDF model and the rapier world on small rigs with known answers.
+
+use super::*;
+
+/// A horizontal-axis pendulum: a 2 kg point-like bob 0.5 m along +X of the child frame,
+/// hinged about Y at 1 m height.
+const PENDULUM: &str = r#"<?xml version="1.0"?>
+<robot name="pendulum">
+  <link name="base"/>
+  <link name="arm">
+    <inertial>
+      <origin xyz="0.5 0 0" rpy="0 0 0"/>
+      <mass value="2.0"/>
+      <inertia ixx="1e-4" ixy="0" ixz="0" iyy="1e-4" iyz="0" izz="1e-4"/>
+    </inertial>
+    <collision>
+      <origin xyz="0.5 0 0" rpy="0 0 0"/>
+      <geometry><sphere radius="0.05"/></geometry>
+    </collision>
+  </link>
+  <joint name="hinge" type="revolute">
+    <parent link="base"/>
+    <child link="arm"/>
+    <origin xyz="0 0 1" rpy="0 0 0"/>
+    <axis xyz="0 1 0"/>
+    <limit lower="-1.0" upper="1.0" effort="20" velocity="3"/>
+  </joint>
+</robot>"#;
+
+/// A vertical slider carrying 1.5 kg.
+const SLIDER: &str = r#"<?xml version="1.0"?>
+<robot name="slider">
+  <link name="base"><inertial><mass value="1"/><inertia ixx="1e-3" ixy="0" ixz="0" iyy="1e-3" iyz="0" izz="1e-3"/></inertial></link>
+  <link name="carriage">
+    <inertial>
+      <origin xyz="0.1 0 0" rpy="0 0 0"/>
+      <mass value="1.5"/>
+      <inertia ixx="1e-3" ixy="0" ixz="0" iyy="1e-3" iyz="0" izz="1e-3"/>
+    </inertial>
+  </link>
+  <joint name="lift" type="prismatic">
+    <parent link="base"/>
+    <child link="carriage"/>
+    <origin xyz="0 0 0" rpy="0 0 0"/>
+    <axis xyz="0 0 1"/>
+    <limit lower="-0.5" upper="0.5" effort="100" velocity="1"/>
+    <dynamics damping="0.5" friction="0"/>
+  </joint>
+</robot>"#;
+
+const PIPER: &str = include_str!("../../../urdf/piper.urdf");
+
+fn run(world: &mut ArmWorld, steps: usize, torques: &[f64]) {
+    for _ in 0..steps {
+        world.step(torques);
+    }
+}
+
+#[test]
+fn pendulum_gravity_torque_matches_the_lever_arm() {
+    let model = ArmModel::from_urdf_str(PENDULUM).unwrap();
+    // q about +Y: positive q lowers +X (Ry(q) maps X to (cos q, 0, −sin q)).
+    for q in [-0.8, -0.3, 0.0, 0.4, 0.9] {
+        let tau = model.gravity_torques(&[q], DEFAULT_GRAVITY_M_S2).unwrap()[0];
+        // Gravity pushes q positive (down); the motor must push back.
+        let expected = -2.0 * 9.81 * 0.5 * f64::cos(q);
+        assert!((tau - expected).abs() < 1e-9, "q={q}: {tau} vs {expected}");
+    }
+    let q = 0.4;
+    let pose = model.link_pose("arm", &[q]).unwrap().unwrap();
+    let bob = pose * nalgebra::Point3::new(0.5, 0.0, 0.0);
+    assert!((bob.x - 0.5 * q.cos()).abs() < 1e-12);
+    assert!((bob.z - (1.0 - 0.5 * q.sin())).abs() < 1e-12);
+}
+
+#[test]
+fn applied_torque_balances_gravity_in_the_world() {
+    let mut world = ArmWorld::from_urdf_str(PENDULUM, WorldConfig::default()).unwrap();
+    for q0 in [-0.5, 0.0, 0.6] {
+        world.set_joint_positions(&[q0]).unwrap();
+        let hold = world.gravity_torques(&[q0]).unwrap();
+        run(&mut world, 500, &hold);
+        let q = world.joint_positions()[0];
+        assert!((q - q0).abs() < 2e-3, "held at {q0}, drifted to {q}");
+        assert!(world.joint_velocities()[0].abs() < 1e-2);
+    }
+    // 20 % short of the holding torque, the bob must sag (q grows), at about the rate
+    // the missing torque predicts: θ'' = Δτ / (m L²).
+    world.set_joint_positions(&[0.0]).unwrap();
+    let hold = world.gravity_torques(&[0.0]).unwrap()[0];
+    run(&mut world, 100, &[0.8 * hold]);
+    let q = world.joint_positions()[0];
+    let accel = 0.2 * hold.abs() / (2.0 * 0.25 + 1e-4);
+    let expected = 0.5 * accel * 0.1 * 0.1;
+    assert!(q > 0.0, "the bob must fall, got {q}");
+    assert!((q - expected).abs() < 0.15 * expected, "{q} vs {expected}");
+}
+
+#[test]
+fn slider_holding_force_and_mimic_free_prismatic() {
+    let mut world = ArmWorld::from_urdf_str(SLIDER, WorldConfig::default()).unwrap();
+    let hold = world.gravity_torques(&[0.0]).unwrap();
+    assert!((hold[0] - 1.5 * 9.81).abs() < 1e-9);
+    world.set_joint_positions(&[0.1]).unwrap();
+    run(&mut world, 500, &hold);
+    assert!((world.joint_positions()[0] - 0.1).abs() < 1e-3);
+    // Pushing up twice as hard lifts it.
+    run(&mut world, 200, &[2.0 * hold[0]]);
+    assert!(world.joint_positions()[0] > 0.15);
+    assert_eq!(world.joints()[0].damping, 0.5);
+}
+
+#[test]
+fn external_torques_persist_until_changed() {
+    let mut world = ArmWorld::from_urdf_str(PENDULUM, WorldConfig::default()).unwrap();
+    let hold = world.gravity_torques(&[0.0]).unwrap();
+    world.set_external_joint_torques(&[-3.0]);
+    run(&mut world, 100, &hold);
+    let lifted = world.joint_positions()[0];
+    assert!(
+        lifted < -0.01,
+        "a −3 N·m disturbance lifts the bob, got {lifted}"
+    );
+    assert_eq!(world.external_joint_torques(), &[-3.0]);
+    world.set_external_joint_torques(&[]);
+    assert_eq!(world.external_joint_torques(), &[0.0]);
+}
+
+#[test]
+fn joint_limits_stop_the_joint() {
+    let mut world = ArmWorld::from_urdf_str(PENDULUM, WorldConfig::default()).unwrap();
+    run(&mut world, 3000, &[-15.0]);
+    let q = world.joint_positions()[0];
+    assert!(q >= -1.0 - 1e-6, "limit −1 rad, got {q}");
+    assert!(q < -0.9, "should rest against the stop, got {q}");
+}
+
+#[test]
+fn input_errors_are_typed() {
+    assert!(matches!(
+        ArmWorld::from_urdf_str("<robot", WorldConfig::default()),
+        Err(PhysicsError::Parse { .. })
+    ));
+    let bad_step = WorldConfig {
+        step_s: 0.0,
+        ..WorldConfig::default()
+    };
+    assert!(matches!(
+        ArmWorld::from_urdf_str(PENDULUM, bad_step),
+        Err(PhysicsError::InvalidConfig { .. })
+    ));
+    assert!(matches!(
+        ArmWorld::from_urdf_file(
+            std::path::Path::new("/nonexistent.urdf"),
+            WorldConfig::default()
+        ),
+        Err(PhysicsError::Io { .. })
+    ));
+    let mut world = ArmWorld::from_urdf_str(PENDULUM, WorldConfig::default()).unwrap();
+    assert!(matches!(
+        world.set_joint_positions(&[0.0, 0.0]),
+        Err(PhysicsError::LengthMismatch {
+            expected: 1,
+            actual: 2
+        })
+    ));
+    assert!(matches!(
+        world.set_joint_positions(&[1.5]),
+        Err(PhysicsError::OutOfLimit { .. })
+    ));
+    assert!(matches!(
+        world.set_joint_positions(&[f64::NAN]),
+        Err(PhysicsError::NonFinite { .. })
+    ));
+    let planar = PENDULUM.replace("type=\"revolute\"", "type=\"planar\"");
+    assert!(matches!(
+        ArmModel::from_urdf_str(&planar),
+        Err(PhysicsError::UnsupportedJoint { .. })
+    ));
+}
+
+#[test]
+fn piper_joint_table_is_read_from_the_urdf() {
+    let world = ArmWorld::from_urdf_str(PIPER, WorldConfig::default()).unwrap();
+    let names: Vec<&str> = world.joints().iter().map(|j| j.name.as_str()).collect();
+    assert_eq!(
+        names,
+        ["joint1", "joint2", "joint3", "joint4", "joint5", "joint6", "joint7", "joint8"]
+    );
+    let j2 = &world.joints()[1];
+    assert_eq!(
+        (j2.lower, j2.effort_limit, j2.velocity_limit),
+        (0.0, 32.0, 3.0)
+    );
+    assert_eq!(world.joints()[4].effort_limit, 8.0);
+    assert_eq!(world.joints()[6].kind, JointKind::Prismatic);
+    let mimic = world.joints()[7].mimic.as_ref().unwrap();
+    assert_eq!((mimic.leader_index, mimic.multiplier), (6, -1.0));
+    assert!(world.joints()[6].mimic.is_none());
+}
+
+#[test]
+fn rapier_link_poses_match_our_forward_kinematics() {
+    let mut world = ArmWorld::from_urdf_str(PIPER, WorldConfig::default()).unwrap();
+    let q = [0.4, 1.2, -1.0, 0.5, -0.6, 0.8, 0.02, -0.02];
+    world.set_joint_positions(&q).unwrap();
+    let got = world.joint_positions();
+    for (a, b) in got.iter().zip(q) {
+        assert!((a - b).abs() < 1e-5, "{got:?} vs {q:?}");
+    }
+    let model_poses = world.model().link_poses(&q).unwrap();
+    for (name, expected) in world.model().link_names().iter().zip(&model_poses) {
+        let actual = world.link_pose(name).unwrap();
+        let dp = (actual.translation.vector - expected.translation.vector).norm();
+        let dr = actual.rotation.angle_to(&expected.rotation);
+        assert!(dp < 1e-5 && dr < 1e-5, "{name}: {dp} m, {dr} rad");
+    }
+}
+
+#[test]
+fn mimic_follower_tracks_its_leader() {
+    let mut world = ArmWorld::from_urdf_str(PIPER, WorldConfig::default()).unwrap();
+    let mut q = [0.0, 1.0, -1.0, 0.0, 0.0, 0.0, 0.01, 0.0];
+    world.set_joint_positions(&q).unwrap();
+    assert!((world.joint_positions()[7] + 0.01).abs() < 1e-6);
+    let mut tau = world.gravity_torques(&q).unwrap();
+    tau[6] = 2.0; // open the fingers
+    tau[7] = 0.0;
+    run(&mut world, 300, &tau);
+    let p = world.joint_positions();
+    assert!(p[6] > 0.02, "leader opens: {p:?}");
+    assert!((p[7] + p[6]).abs() < 1e-3, "follower mirrors: {p:?}");
+    q[6] = 0.5; // out of the finger's 35 mm range
+    assert!(world.set_joint_positions(&q).is_err());
+}
+
+#[test]
+fn obstacles_report_contacts_until_removed() {
+    let mut world = ArmWorld::from_urdf_str(PENDULUM, WorldConfig::default()).unwrap();
+    // The bob (r = 5 cm) swings down on a 0.5 m radius from (0, 0, 1); a table whose top is
+    // at z = 0.8 under x = 0.3…0.7 catches it at q = asin(0.3) ≈ 0.305 rad.
+    let wall = world.add_obstacle(
+        ObstacleShape::Box {
+            half_extents_m: [0.2, 0.5, 0.4],
+        },
+        [0.5, 0.0, 0.4],
+    );
+    assert!(world.contacts().is_empty());
+    run(&mut world, 1500, &[0.0]);
+    let contacts = world.contacts();
+    assert_eq!(contacts.len(), 1, "{contacts:?}");
+    assert_eq!(contacts[0].link, "arm");
+    assert_eq!(contacts[0].obstacle, wall);
+    assert!(contacts[0].normal_force_n > 0.0);
+    // Resting on the table, far from its 1 rad limit.
+    let q = world.joint_positions()[0];
+    assert!((q - 0.3047).abs() < 0.01, "resting at {q}");
+    let weight_share = 2.0 * 9.81 * (0.5 * q.cos()) / (0.5 * q.cos());
+    assert!(
+        (contacts[0].normal_force_n - weight_share).abs() < 0.2 * weight_share,
+        "{} N",
+        contacts[0].normal_force_n
+    );
+    world.remove_obstacle(wall);
+    run(&mut world, 5, &[0.0]);
+    assert!(world.contacts().is_empty());
+    let other = world.add_obstacle(ObstacleShape::Sphere { radius_m: 0.1 }, [5.0, 0.0, 0.0]);
+    assert_ne!(other, wall, "ids are never reused");
+}
+
+#[test]
+fn same_inputs_give_the_same_trajectory() {
+    let trajectory = || {
+        let mut world = ArmWorld::from_urdf_str(PIPER, WorldConfig::default()).unwrap();
+        world
+            .set_joint_positions(&[0.2, 1.0, -1.2, 0.1, 0.3, 0.0, 0.0, 0.0])
+            .unwrap();
+        let mut out = Vec::new();
+        for k in 0..200 {
+            let t = [0.1, 2.0, -1.0, 0.05, 0.0, 0.01 * k as f64, 0.0, 0.0];
+            world.step(&t);
+            out.extend(world.joint_positions().iter().map(|v| v.to_bits()));
+        }
+        out
+    };
+    assert_eq!(trajectory(), trajectory());
+}
+
+#[test]
+fn time_advances_by_whole_steps() {
+    let config = WorldConfig {
+        step_s: 0.002,
+        ..WorldConfig::default()
+    };
+    let mut world = ArmWorld::from_urdf_str(PENDULUM, config).unwrap();
+    run(&mut world, 250, &[0.0]);
+    assert_eq!(world.steps(), 250);
+    assert!((world.time_s() - 0.5).abs() < 1e-12);
+}

@@ -1,0 +1,295 @@
+//! Fault state, protections (thermal, collision) and the harness's fault API.
+
+use super::Firmware;
+use crate::piper::codec::host::CtrlMode;
+use crate::piper::faults::{driver_bits, FaultError, PiperFault, PiperFaultKind};
+use crate::piper::motor::{JointMotor, DRIVER_OVER_TEMP_C, MOTOR_OVER_TEMP_C, TEMP_HYSTERESIS_C};
+
+/// Bus voltage below which the drivers flag under-voltage, V.
+pub const UNDER_VOLTAGE_V: f64 = 20.0;
+
+/// Every active fault and protection latch.
+#[derive(Debug, Clone, Default)]
+pub struct FaultState {
+    comm_loss: [bool; 6],
+    forced_motor_temp: [Option<f64>; 6],
+    forced_driver_temp: [Option<f64>; 6],
+    motor_over_temp: [bool; 6],
+    driver_over_temp: [bool; 6],
+    over_current: [bool; 6],
+    driver_error: [bool; 6],
+    stall: [bool; 6],
+    pub(crate) collision: [bool; 6],
+    external_torque_nm: [f64; 6],
+    forced_voltage_v: Option<f64>,
+    nominal_voltage_v: f64,
+    main_ntc: bool,
+    resistor_ntc: bool,
+    pub(crate) gripper_sensor_fault: bool,
+}
+
+impl FaultState {
+    /// No faults, drivers on `nominal_voltage_v`.
+    pub fn new(nominal_voltage_v: f64) -> Self {
+        Self {
+            nominal_voltage_v,
+            ..Self::default()
+        }
+    }
+
+    /// Supply voltage the drivers measure, V.
+    pub fn voltage_v(&self) -> f64 {
+        self.forced_voltage_v.unwrap_or(self.nominal_voltage_v)
+    }
+
+    fn under_voltage(&self) -> bool {
+        self.voltage_v() < UNDER_VOLTAGE_V
+    }
+
+    fn driver_fault(&self, j: usize) -> bool {
+        self.motor_over_temp[j]
+            || self.driver_over_temp[j]
+            || self.over_current[j]
+            || self.driver_error[j]
+            || self.stall[j]
+            || self.under_voltage()
+    }
+
+    /// The arm status a fault forces (0x05, 0x07, 0x09, 0x0E, 0x0F), most severe first.
+    pub fn status_code(&self) -> Option<u8> {
+        if self.comm_loss.iter().any(|&c| c) {
+            Some(0x05)
+        } else if self.collision.iter().any(|&c| c) {
+            Some(0x07)
+        } else if (0..6).any(|j| self.driver_fault(j)) {
+            Some(0x09)
+        } else if self.main_ntc {
+            Some(0x0E)
+        } else if self.resistor_ntc {
+            Some(0x0F)
+        } else {
+            None
+        }
+    }
+
+    /// Motion commands are refused while any fault status is active.
+    pub fn blocks_motion(&self) -> Option<u8> {
+        self.status_code()
+    }
+
+    /// The joint's driver produces no torque (lost, protection tripped, no supply).
+    pub fn joint_unpowered(&self, j: usize) -> bool {
+        self.comm_loss[j] || self.driver_fault(j)
+    }
+
+    /// Whether the joint's 0x25x/0x26x frames are lost.
+    pub fn comm_lost(&self, j: usize) -> bool {
+        self.comm_loss[j]
+    }
+
+    /// 0x2A1 byte 7.
+    pub fn comm_bits(&self) -> u8 {
+        (0..6).fold(0, |acc, j| acc | (u8::from(self.comm_loss[j]) << j))
+    }
+
+    /// Reported winding temperature, °C.
+    pub fn motor_temp_c(&self, j: usize, motor: &JointMotor) -> f64 {
+        self.forced_motor_temp[j].unwrap_or(motor.motor_temp_c())
+    }
+
+    /// Reported driver temperature, °C.
+    pub fn driver_temp_c(&self, j: usize, motor: &JointMotor) -> f64 {
+        self.forced_driver_temp[j].unwrap_or(motor.driver_temp_c())
+    }
+
+    /// 0x26x byte 5 without the enable bit.
+    pub fn driver_bits(&self, j: usize) -> u8 {
+        let mut b = 0;
+        if self.under_voltage() {
+            b |= driver_bits::UNDER_VOLTAGE;
+        }
+        if self.motor_over_temp[j] {
+            b |= driver_bits::MOTOR_OVER_TEMP;
+        }
+        if self.over_current[j] {
+            b |= driver_bits::OVER_CURRENT;
+        }
+        if self.driver_over_temp[j] {
+            b |= driver_bits::DRIVER_OVER_TEMP;
+        }
+        if self.collision[j] {
+            b |= driver_bits::COLLISION;
+        }
+        if self.driver_error[j] {
+            b |= driver_bits::DRIVER_ERROR;
+        }
+        if self.stall[j] {
+            b |= driver_bits::STALL;
+        }
+        b
+    }
+
+    /// 0x475 byte 5 / 0x150 reset: clear the latched protections of joint `j`.
+    pub fn clear_latched(&mut self, j: usize) {
+        self.over_current[j] = false;
+        self.driver_error[j] = false;
+        self.stall[j] = false;
+        self.collision[j] = false;
+    }
+}
+
+fn joint_index(joint: u8) -> Result<usize, FaultError> {
+    if (1..=6).contains(&joint) {
+        Ok(usize::from(joint - 1))
+    } else {
+        Err(FaultError::NoSuchJoint { joint })
+    }
+}
+
+fn finite(value: f64) -> Result<f64, FaultError> {
+    if value.is_finite() {
+        Ok(value)
+    } else {
+        Err(FaultError::NotFinite { value })
+    }
+}
+
+/// Collision threshold of a joint at protection `level` (1–8, higher = more sensitive), N·m:
+/// from ⅔ of the motor's torque limit at level 1 down to 1/12 of it at level 8.
+pub fn collision_threshold_nm(torque_limit_nm: f64, level: u8) -> f64 {
+    torque_limit_nm * f64::from(9u8.saturating_sub(level)) / 12.0
+}
+
+impl Firmware {
+    /// Inject a fault.
+    pub fn inject(&mut self, fault: PiperFault) -> Result<(), FaultError> {
+        tracing::info!(?fault, t_s = self.time_s(), "Piper fault injected");
+        let f = &mut self.faults;
+        match fault {
+            PiperFault::JointCommLoss { joint } => f.comm_loss[joint_index(joint)?] = true,
+            PiperFault::MotorOverTemp { joint, temp_c } => {
+                f.forced_motor_temp[joint_index(joint)?] = Some(finite(temp_c)?);
+            }
+            PiperFault::DriverOverTemp { joint, temp_c } => {
+                f.forced_driver_temp[joint_index(joint)?] = Some(finite(temp_c)?);
+            }
+            PiperFault::OverCurrent { joint } => f.over_current[joint_index(joint)?] = true,
+            PiperFault::UnderVoltage { voltage_v } => f.forced_voltage_v = Some(finite(voltage_v)?),
+            PiperFault::DriverError { joint } => f.driver_error[joint_index(joint)?] = true,
+            PiperFault::Stall { joint } => f.stall[joint_index(joint)?] = true,
+            PiperFault::ExternalTorque { joint, torque_nm } => {
+                f.external_torque_nm[joint_index(joint)?] = finite(torque_nm)?;
+                self.apply_external_torques();
+            }
+            PiperFault::Collision { joint } => f.collision[joint_index(joint)?] = true,
+            PiperFault::EStop => {
+                self.estop = true;
+                self.motion = None;
+                self.settling = false;
+            }
+            PiperFault::MainControlOverTemp => f.main_ntc = true,
+            PiperFault::ResistorOverTemp => f.resistor_ntc = true,
+            PiperFault::GripperSensorFault => f.gripper_sensor_fault = true,
+            PiperFault::TeachButton => {
+                self.ctrl_mode = CtrlMode::Teach;
+                self.motion = None;
+                self.settling = false;
+            }
+        }
+        self.check_protections();
+        Ok(())
+    }
+
+    /// Remove a fault's cause (see [`crate::piper::faults`] for what clears each one).
+    pub fn clear(&mut self, kind: PiperFaultKind) -> Result<(), FaultError> {
+        tracing::info!(?kind, t_s = self.time_s(), "Piper fault cleared");
+        let f = &mut self.faults;
+        match kind {
+            PiperFaultKind::JointCommLoss { joint } => f.comm_loss[joint_index(joint)?] = false,
+            PiperFaultKind::MotorOverTemp { joint } => {
+                f.forced_motor_temp[joint_index(joint)?] = None;
+            }
+            PiperFaultKind::DriverOverTemp { joint } => {
+                f.forced_driver_temp[joint_index(joint)?] = None;
+            }
+            PiperFaultKind::OverCurrent { joint } => f.over_current[joint_index(joint)?] = false,
+            PiperFaultKind::UnderVoltage => f.forced_voltage_v = None,
+            PiperFaultKind::DriverError { joint } => f.driver_error[joint_index(joint)?] = false,
+            PiperFaultKind::Stall { joint } => f.stall[joint_index(joint)?] = false,
+            PiperFaultKind::ExternalTorque { joint } => {
+                f.external_torque_nm[joint_index(joint)?] = 0.0;
+                self.apply_external_torques();
+            }
+            PiperFaultKind::Collision { joint } => f.collision[joint_index(joint)?] = false,
+            PiperFaultKind::EStop => self.estop = false,
+            PiperFaultKind::MainControlOverTemp => f.main_ntc = false,
+            PiperFaultKind::ResistorOverTemp => f.resistor_ntc = false,
+            PiperFaultKind::GripperSensorFault => f.gripper_sensor_fault = false,
+            PiperFaultKind::TeachButton => {
+                if self.ctrl_mode == CtrlMode::Teach {
+                    self.ctrl_mode = CtrlMode::Standby;
+                    self.hold_here();
+                }
+            }
+        }
+        self.check_protections();
+        Ok(())
+    }
+
+    fn apply_external_torques(&mut self) {
+        let mut tau = vec![0.0; self.world.joints().len()];
+        for j in 0..6 {
+            tau[self.arm_idx[j]] = self.faults.external_torque_nm[j];
+        }
+        self.world.set_external_joint_torques(&tau);
+    }
+
+    /// Thermal thresholds and collision protection; a tripped driver disables itself and the
+    /// arm stops.
+    pub(crate) fn check_protections(&mut self) {
+        let mut tripped = false;
+        for j in 0..6 {
+            let motor_t = self.faults.motor_temp_c(j, &self.motors[j]);
+            let driver_t = self.faults.driver_temp_c(j, &self.motors[j]);
+            let f = &mut self.faults;
+            if motor_t >= MOTOR_OVER_TEMP_C && !f.motor_over_temp[j] {
+                f.motor_over_temp[j] = true;
+                tripped = true;
+            } else if motor_t < MOTOR_OVER_TEMP_C - TEMP_HYSTERESIS_C {
+                f.motor_over_temp[j] = false;
+            }
+            if driver_t >= DRIVER_OVER_TEMP_C && !f.driver_over_temp[j] {
+                f.driver_over_temp[j] = true;
+                tripped = true;
+            } else if driver_t < DRIVER_OVER_TEMP_C - TEMP_HYSTERESIS_C {
+                f.driver_over_temp[j] = false;
+            }
+            let level = self.flash.collision_levels[j];
+            if level > 0 && self.enabled[j] && !self.faults.collision[j] {
+                let threshold = collision_threshold_nm(self.motors[j].torque_limit_nm(), level);
+                if self.collision_residual[j].abs() > threshold {
+                    tracing::info!(
+                        joint = j + 1,
+                        residual_nm = self.collision_residual[j],
+                        threshold_nm = threshold,
+                        "Piper collision protection"
+                    );
+                    self.faults.collision[j] = true;
+                    tripped = true;
+                }
+            }
+        }
+        for j in 0..6 {
+            if self.faults.joint_unpowered(j) && self.enabled[j] {
+                self.enabled[j] = false;
+                tripped = true;
+            }
+        }
+        if self.faults.gripper_sensor_fault {
+            self.gripper.enabled = false;
+        }
+        if tripped || (self.faults.status_code().is_some() && self.motion.is_some()) {
+            self.hold_here();
+        }
+    }
+}

@@ -1,0 +1,121 @@
+//! The motor controller's loops: operation control, profile position, velocity ramp, current,
+//! zero return and CSP, as the manual describes them (spec §4.3, §8).
+
+/// Speed of the zero-return mode (run_mode 4). The manuals only say "slowly"; an assumption.
+pub const ZERO_MODE_SPEED_RAD_S: f64 = 1.0;
+
+/// The last operation-control command (type 1), in physical units.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct OpCommand {
+    /// Target angle (rad).
+    pub angle_rad: f64,
+    /// Target speed (rad/s).
+    pub speed_rad_s: f64,
+    /// Stiffness (N·m/rad).
+    pub kp: f64,
+    /// Damping (N·m·s/rad).
+    pub kd: f64,
+    /// Feed-forward torque (N·m).
+    pub torque_nm: f64,
+}
+
+/// A trapezoidal profile generator for PP mode: the reference moves toward the target with
+/// the profile speed, accelerating with `acc` and braking with `dcc`.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Profile {
+    /// Reference angle (rad).
+    pub angle_rad: f64,
+    /// Reference speed (rad/s).
+    pub speed_rad_s: f64,
+    /// Target angle (rad).
+    pub target_rad: f64,
+}
+
+impl Profile {
+    /// A profile resting at `angle_rad`.
+    pub fn at_rest(angle_rad: f64) -> Self {
+        Self {
+            angle_rad,
+            speed_rad_s: 0.0,
+            target_rad: angle_rad,
+        }
+    }
+
+    /// Advance by `dt_s`.
+    pub fn step(&mut self, vel_max: f64, acc: f64, dcc: f64, dt_s: f64) {
+        let acc = acc.max(1e-6);
+        let dcc = dcc.max(1e-6);
+        let distance = self.target_rad - self.angle_rad;
+        let direction = distance.signum();
+        // The fastest speed from which the target can still be reached with `dcc`.
+        let braking_speed = (2.0 * dcc * distance.abs()).sqrt();
+        let desired = direction * vel_max.max(0.0).min(braking_speed);
+        let v = self.speed_rad_s;
+        // Speeding up (same sign, larger magnitude) uses acc; anything else is braking.
+        let rate = if desired * v >= 0.0 && desired.abs() > v.abs() {
+            acc
+        } else {
+            dcc
+        };
+        let dv = (desired - v).clamp(-rate * dt_s, rate * dt_s);
+        self.speed_rad_s = v + dv;
+        self.angle_rad += self.speed_rad_s * dt_s;
+        let remaining = self.target_rad - self.angle_rad;
+        if remaining.abs() < 1e-6
+            || (remaining * distance < 0.0 && self.speed_rad_s.abs() < dcc * dt_s * 2.0)
+        {
+            self.angle_rad = self.target_rad;
+            self.speed_rad_s = 0.0;
+        }
+    }
+}
+
+/// A speed PI loop producing an iq command (A). `ki` is per millisecond of error, the
+/// firmware's 1 kHz convention, scaled to the substep.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SpeedLoop {
+    /// Integral term (A).
+    pub integral_a: f64,
+}
+
+impl SpeedLoop {
+    /// One update: error → iq, limited to ±`limit_a` with anti-windup.
+    pub fn update(&mut self, error_rad_s: f64, kp: f64, ki: f64, limit_a: f64, dt_s: f64) -> f64 {
+        let limit = limit_a.abs();
+        self.integral_a = (self.integral_a + ki * error_rad_s * dt_s * 1000.0).clamp(-limit, limit);
+        (kp * error_rad_s + self.integral_a).clamp(-limit, limit)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn profile_reaches_the_target_with_the_profile_speed() {
+        let mut profile = Profile::at_rest(0.0);
+        profile.target_rad = 10.0;
+        let dt = 1e-3;
+        let mut peak: f64 = 0.0;
+        let mut steps = 0;
+        while (profile.angle_rad - 10.0).abs() > 1e-9 || profile.speed_rad_s != 0.0 {
+            profile.step(2.0, 4.0, 1.0, dt);
+            peak = peak.max(profile.speed_rad_s);
+            steps += 1;
+            assert!(steps < 100_000, "profile never settles");
+        }
+        assert!((peak - 2.0).abs() < 1e-9);
+        // acc phase 0.5 s, dcc phase 2 s, cruise (10 − 0.5 − 2)/2 = 3.75 s: 6.25 s in all.
+        let seconds = f64::from(steps) * dt;
+        assert!((seconds - 6.25).abs() < 0.08, "{seconds}");
+    }
+
+    #[test]
+    fn speed_loop_saturates_and_does_not_wind_up() {
+        let mut pi = SpeedLoop::default();
+        for _ in 0..10_000 {
+            assert!(pi.update(100.0, 6.0, 0.02, 5.0, 1e-3).abs() <= 5.0);
+        }
+        assert!(pi.integral_a <= 5.0);
+    }
+}

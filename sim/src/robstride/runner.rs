@@ -1,0 +1,365 @@
+//! Many actuators on one bus: the task that feeds them frames, steps them every millisecond,
+//! and sends what they answer; plus the handle the harness holds.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Duration;
+
+use bus::{BusError, CanBus, CanFrame};
+use tokio::sync::{mpsc, oneshot};
+use tokio::task::JoinHandle;
+use tokio::time::{interval, sleep, MissedTickBehavior};
+
+use crate::robstride::actuator::{Actuator, MotorConfig, MotorSnapshot, DEFAULT_HOST_ID};
+use crate::robstride::faults::Fault;
+use crate::robstride::state_file::{uid_key, StateFile, StateFileError};
+
+/// Configuration of an emulated RobStride bus.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RobstrideConfig {
+    /// The motors, one per CAN ID.
+    pub motors: Vec<MotorConfig>,
+    /// Host ID the motors answer to until a host speaks (default 0xFD).
+    pub host_id: u8,
+    /// Where saved parameters, CAN IDs, zeros and pending baud/protocol switches live across
+    /// restarts; `None` keeps nothing.
+    pub state_file: Option<PathBuf>,
+    /// The bus's bit rate: a motor switched to another baud rate goes deaf after a restart.
+    pub bus_bitrate_bps: u32,
+}
+
+impl RobstrideConfig {
+    /// Motors on a 1 Mbit/s bus, host 0xFD, no state file.
+    pub fn new(motors: Vec<MotorConfig>) -> Self {
+        Self {
+            motors,
+            host_id: DEFAULT_HOST_ID,
+            state_file: None,
+            bus_bitrate_bps: 1_000_000,
+        }
+    }
+}
+
+/// Why the emulator could not start or a harness request failed.
+#[derive(Debug, thiserror::Error)]
+pub enum RobstrideError {
+    /// Two motors would answer on the same CAN ID.
+    #[error("two motors use CAN ID {can_id}")]
+    DuplicateCanId {
+        /// The ID.
+        can_id: u8,
+    },
+    /// A CAN ID outside 1..=127.
+    #[error("CAN ID {can_id} is outside 1..=127")]
+    InvalidCanId {
+        /// The ID.
+        can_id: u8,
+    },
+    /// No motor answers on this ID.
+    #[error("no motor with CAN ID {can_id}")]
+    UnknownMotor {
+        /// The ID.
+        can_id: u8,
+    },
+    /// The state file could not be read or written.
+    #[error(transparent)]
+    StateFile(#[from] StateFileError),
+    /// The emulator task has stopped.
+    #[error("the RobStride emulator has stopped")]
+    Stopped,
+}
+
+/// Emulated RobStride actuators on a bus.
+#[derive(Debug)]
+pub struct RobstrideBus;
+
+enum Request {
+    Inject(u8, Fault, oneshot::Sender<Result<(), RobstrideError>>),
+    RemoveCause(u8, Fault, oneshot::Sender<Result<(), RobstrideError>>),
+    SetVoltage(u8, f64, oneshot::Sender<Result<(), RobstrideError>>),
+    SetTemperature(u8, f64, oneshot::Sender<Result<(), RobstrideError>>),
+    SetExternalTorque(u8, f64, oneshot::Sender<Result<(), RobstrideError>>),
+    Snapshot(oneshot::Sender<Vec<MotorSnapshot>>),
+    Shutdown(oneshot::Sender<()>),
+}
+
+/// The harness's handle on a running emulator.
+#[derive(Debug)]
+pub struct RobstrideHandle {
+    requests: mpsc::UnboundedSender<Request>,
+    task: Option<JoinHandle<()>>,
+}
+
+impl RobstrideBus {
+    /// Power on the motors and start answering on `bus` (spawns on the current runtime; works
+    /// under a paused clock). A state file from an earlier run is applied first.
+    pub fn spawn(
+        bus: Arc<dyn CanBus>,
+        config: RobstrideConfig,
+    ) -> Result<RobstrideHandle, RobstrideError> {
+        let state = match &config.state_file {
+            Some(path) => StateFile::load(path)?,
+            None => StateFile::default(),
+        };
+        let mut motors = Vec::with_capacity(config.motors.len());
+        for motor in &config.motors {
+            if !(1..=0x7F).contains(&motor.can_id) {
+                return Err(RobstrideError::InvalidCanId {
+                    can_id: motor.can_id,
+                });
+            }
+            let saved = state.motors.get(&uid_key(motor.effective_uid()));
+            let mut actuator = Actuator::new(motor.clone(), saved, config.bus_bitrate_bps);
+            if saved.is_none() {
+                actuator.set_master_id(config.host_id);
+            }
+            if motors
+                .iter()
+                .any(|other: &Actuator| other.can_id() == actuator.can_id())
+            {
+                return Err(RobstrideError::DuplicateCanId {
+                    can_id: actuator.can_id(),
+                });
+            }
+            motors.push(actuator);
+        }
+        let (requests, inbox) = mpsc::unbounded_channel();
+        let runner = Runner {
+            bus,
+            motors,
+            state,
+            state_path: config.state_file,
+        };
+        let task = tokio::spawn(runner.run(inbox));
+        Ok(RobstrideHandle {
+            requests,
+            task: Some(task),
+        })
+    }
+}
+
+impl RobstrideHandle {
+    async fn ask<T>(
+        &self,
+        make: impl FnOnce(oneshot::Sender<T>) -> Request,
+    ) -> Result<T, RobstrideError> {
+        let (reply, answer) = oneshot::channel();
+        self.requests
+            .send(make(reply))
+            .map_err(|_| RobstrideError::Stopped)?;
+        answer.await.map_err(|_| RobstrideError::Stopped)
+    }
+
+    /// Inject a fault into a motor: its cause is set (heat, supply) or a one-shot event
+    /// latched; the motor drops to reset and sends a type-21 frame.
+    pub async fn inject(&self, can_id: u8, fault: Fault) -> Result<(), RobstrideError> {
+        self.ask(|reply| Request::Inject(can_id, fault, reply))
+            .await?
+    }
+
+    /// Remove a fault's cause; the latched bit stays until the host sends stop + clear.
+    pub async fn clear(&self, can_id: u8, fault: Fault) -> Result<(), RobstrideError> {
+        self.ask(|reply| Request::RemoveCause(can_id, fault, reply))
+            .await?
+    }
+
+    /// Set a motor's supply voltage (V).
+    pub async fn set_bus_voltage(&self, can_id: u8, volts: f64) -> Result<(), RobstrideError> {
+        self.ask(|reply| Request::SetVoltage(can_id, volts, reply))
+            .await?
+    }
+
+    /// Set a motor's winding temperature (°C).
+    pub async fn set_temperature(&self, can_id: u8, celsius: f64) -> Result<(), RobstrideError> {
+        self.ask(|reply| Request::SetTemperature(can_id, celsius, reply))
+            .await?
+    }
+
+    /// Push a motor's load with an external torque (N·m).
+    pub async fn set_external_torque(
+        &self,
+        can_id: u8,
+        torque_nm: f64,
+    ) -> Result<(), RobstrideError> {
+        self.ask(|reply| Request::SetExternalTorque(can_id, torque_nm, reply))
+            .await?
+    }
+
+    /// Every motor's state, in configuration order.
+    pub async fn snapshot(&self) -> Result<Vec<MotorSnapshot>, RobstrideError> {
+        self.ask(Request::Snapshot).await
+    }
+
+    /// Stop the emulator (the motors "lose power"); persistent state is already on disk.
+    pub async fn shutdown(mut self) {
+        let _ = self.ask(Request::Shutdown).await;
+        if let Some(task) = self.task.take() {
+            let _ = task.await;
+        }
+    }
+}
+
+impl Drop for RobstrideHandle {
+    fn drop(&mut self) {
+        if let Some(task) = self.task.take() {
+            task.abort();
+        }
+    }
+}
+
+struct Runner {
+    bus: Arc<dyn CanBus>,
+    motors: Vec<Actuator>,
+    state: StateFile,
+    state_path: Option<PathBuf>,
+}
+
+impl Runner {
+    async fn run(mut self, mut inbox: mpsc::UnboundedReceiver<Request>) {
+        // Receiving in its own task keeps `recv` out of `select!` (never cancelled mid-frame).
+        let (frames_tx, mut frames) = mpsc::unbounded_channel();
+        let receiver_bus = Arc::clone(&self.bus);
+        let receiver = tokio::spawn(async move {
+            loop {
+                match receiver_bus.recv().await {
+                    Ok(received) => {
+                        if frames_tx.send(received.frame).is_err() {
+                            break;
+                        }
+                    }
+                    Err(BusError::Closed) => break,
+                    Err(error) => {
+                        tracing::warn!(%error, "robstride emulator: receive error");
+                        sleep(Duration::from_millis(1)).await;
+                    }
+                }
+            }
+        });
+        let mut tick = interval(Duration::from_millis(1));
+        tick.set_missed_tick_behavior(MissedTickBehavior::Burst);
+        loop {
+            tokio::select! {
+                biased;
+                request = inbox.recv() => match request {
+                    Some(Request::Shutdown(done)) => {
+                        let _ = done.send(());
+                        break;
+                    }
+                    Some(request) => self.serve(request).await,
+                    None => break,
+                },
+                frame = frames.recv() => match frame {
+                    Some(frame) => self.on_frame(&frame).await,
+                    None => break,
+                },
+                _ = tick.tick() => self.on_tick().await,
+            }
+        }
+        receiver.abort();
+    }
+
+    fn motor_mut(&mut self, can_id: u8) -> Result<&mut Actuator, RobstrideError> {
+        self.motors
+            .iter_mut()
+            .find(|motor| motor.can_id() == can_id)
+            .ok_or(RobstrideError::UnknownMotor { can_id })
+    }
+
+    async fn serve(&mut self, request: Request) {
+        match request {
+            Request::Inject(can_id, fault, reply) => {
+                let frame = self.motor_mut(can_id).map(|motor| motor.inject(fault));
+                let result = match frame {
+                    Ok(frame) => {
+                        self.send_all(frame).await;
+                        Ok(())
+                    }
+                    Err(error) => Err(error),
+                };
+                let _ = reply.send(result);
+            }
+            Request::RemoveCause(can_id, fault, reply) => {
+                let result = self
+                    .motor_mut(can_id)
+                    .map(|motor| motor.remove_cause(fault));
+                let _ = reply.send(result);
+            }
+            Request::SetVoltage(can_id, volts, reply) => {
+                let result = self
+                    .motor_mut(can_id)
+                    .map(|motor| motor.set_bus_voltage(volts));
+                let _ = reply.send(result);
+            }
+            Request::SetTemperature(can_id, celsius, reply) => {
+                let result = self
+                    .motor_mut(can_id)
+                    .map(|motor| motor.set_temperature(celsius));
+                let _ = reply.send(result);
+            }
+            Request::SetExternalTorque(can_id, torque, reply) => {
+                let result = self
+                    .motor_mut(can_id)
+                    .map(|motor| motor.set_external_torque(torque));
+                let _ = reply.send(result);
+            }
+            Request::Snapshot(reply) => {
+                let _ = reply.send(self.motors.iter().map(Actuator::snapshot).collect());
+            }
+            Request::Shutdown(done) => {
+                let _ = done.send(());
+            }
+        }
+    }
+
+    async fn on_frame(&mut self, frame: &CanFrame) {
+        let mut replies = Vec::new();
+        for motor in &mut self.motors {
+            replies.extend(motor.handle_frame(frame));
+        }
+        self.persist_if_requested();
+        self.send_all(replies).await;
+    }
+
+    async fn on_tick(&mut self) {
+        let mut out = Vec::new();
+        for motor in &mut self.motors {
+            out.extend(motor.tick());
+        }
+        self.send_all(out).await;
+    }
+
+    fn persist_if_requested(&mut self) {
+        let mut changed = false;
+        for motor in &mut self.motors {
+            if motor.take_persist_request() {
+                self.state
+                    .motors
+                    .insert(uid_key(motor.uid()), motor.persisted());
+                changed = true;
+            }
+        }
+        if let (true, Some(path)) = (changed, &self.state_path) {
+            self.state.format = 1;
+            if let Err(error) = self.state.save(path) {
+                tracing::error!(%error, "robstride emulator: state file not written");
+            }
+        }
+    }
+
+    async fn send_all(&self, frames: impl IntoIterator<Item = CanFrame>) {
+        for frame in frames {
+            // A full transmit queue is the mailbox being busy: retry briefly, then drop the
+            // frame as a firmware would.
+            for _attempt in 0..50 {
+                match self.bus.send(frame).await {
+                    Err(BusError::TxQueueFull { .. }) => sleep(Duration::from_micros(100)).await,
+                    Err(error) => {
+                        tracing::debug!(%error, %frame, "robstride emulator: frame not sent");
+                        break;
+                    }
+                    Ok(()) => break,
+                }
+            }
+        }
+    }
+}

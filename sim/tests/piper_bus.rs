@@ -1,0 +1,124 @@
+//! The Piper emulator on the virtual bus under a paused clock: rates, replies, state changes.
+
+use std::collections::BTreeMap;
+use std::sync::Arc;
+use std::time::Duration;
+
+use bus::virtual_bus::{NodeOptions, VirtualBus, VirtualBusConfig, VirtualNode};
+use bus::{CanBus, CanFrame};
+use sim::piper::{FirmwareProfile, PiperConfig, PiperEmulator, PiperHandle};
+
+fn frame(id: u16, data: [u8; 8]) -> CanFrame {
+    CanFrame::standard(id, &data).unwrap()
+}
+
+fn start(profile: FirmwareProfile) -> (VirtualBus, VirtualNode, PiperHandle) {
+    let bus = VirtualBus::new(VirtualBusConfig::default());
+    let emu_node = bus.attach_with(
+        "piper",
+        NodeOptions {
+            receive_own: false,
+            tx_queue_len: None,
+        },
+    );
+    let host = bus.attach("host");
+    let emu = PiperEmulator::spawn(
+        Arc::new(emu_node),
+        PiperConfig {
+            firmware: profile,
+            initial_joints_rad: [0.0, 0.5, -0.5, 0.0, 0.0, 0.0],
+            ..PiperConfig::default()
+        },
+    )
+    .unwrap();
+    (bus, host, emu)
+}
+
+/// Every frame the host receives during `dur` of virtual time.
+async fn collect(host: &VirtualNode, dur: Duration) -> Vec<CanFrame> {
+    let mut out = Vec::new();
+    let deadline = tokio::time::Instant::now() + dur;
+    while let Ok(Ok(rf)) = tokio::time::timeout_at(deadline, host.recv()).await {
+        out.push(rf.frame);
+    }
+    out
+}
+
+fn last(frames: &[CanFrame], id: u32) -> Option<Vec<u8>> {
+    frames
+        .iter()
+        .rev()
+        .find(|f| f.raw_id() == id)
+        .map(|f| f.data().to_vec())
+}
+
+#[tokio::test(start_paused = true)]
+async fn feedback_rates_are_200_and_40_hz_while_disabled() {
+    let (_bus, host, emu) = start(FirmwareProfile::V1_8_2);
+    // Skip the first 100 ms so the counting window holds only steady-state traffic.
+    collect(&host, Duration::from_millis(100)).await;
+    let frames = collect(&host, Duration::from_secs(1)).await;
+    let mut counts: BTreeMap<u32, usize> = BTreeMap::new();
+    for f in &frames {
+        *counts.entry(f.raw_id()).or_default() += 1;
+    }
+    for id in (0x2A1..=0x2A8).chain(0x251..=0x256) {
+        let n = counts.get(&id).copied().unwrap_or(0);
+        assert!((199..=201).contains(&n), "{id:#x}: {n} frames/s");
+    }
+    for id in 0x261..=0x266 {
+        let n = counts.get(&id).copied().unwrap_or(0);
+        assert!((39..=41).contains(&n), "{id:#x}: {n} frames/s");
+    }
+    let total: usize = counts.values().sum();
+    assert!((3030..=3050).contains(&total), "{total} frames/s");
+    // Power-on state (spec §8.1): standby, normal, joints disabled.
+    assert_eq!(last(&frames, 0x2A1).unwrap(), vec![0; 8]);
+    assert_eq!(last(&frames, 0x261).unwrap()[5] & 0x40, 0);
+    emu.shutdown().await;
+}
+
+#[tokio::test(start_paused = true)]
+async fn enable_mode_and_move_j_show_in_the_feedback() {
+    let (_bus, host, emu) = start(FirmwareProfile::V1_8_2);
+    host.send(frame(0x471, [7, 2, 0, 0, 0, 0, 0, 0]))
+        .await
+        .unwrap();
+    host.send(frame(0x151, [1, 1, 50, 0, 0, 0, 0, 0]))
+        .await
+        .unwrap();
+    let frames = collect(&host, Duration::from_millis(60)).await;
+    assert_eq!(last(&frames, 0x2A1).unwrap(), vec![1, 0, 1, 0, 0, 0, 0, 0]);
+    for id in 0x261..=0x266 {
+        assert_eq!(
+            last(&frames, id).unwrap()[5] & 0x40,
+            0x40,
+            "{id:#x} not enabled"
+        );
+    }
+    // J1 to 10°.
+    let j1 = 10_000i32.to_be_bytes();
+    let j2 = 28_648i32.to_be_bytes();
+    host.send(frame(
+        0x155,
+        [j1[0], j1[1], j1[2], j1[3], j2[0], j2[1], j2[2], j2[3]],
+    ))
+    .await
+    .unwrap();
+    let j3 = (-28_648i32).to_be_bytes();
+    host.send(frame(0x156, [j3[0], j3[1], j3[2], j3[3], 0, 0, 0, 0]))
+        .await
+        .unwrap();
+    host.send(frame(0x157, [0; 8])).await.unwrap();
+    let frames = collect(&host, Duration::from_millis(50)).await;
+    assert_eq!(last(&frames, 0x2A1).unwrap()[4], 1, "moving");
+    let frames = collect(&host, Duration::from_secs(2)).await;
+    let status = last(&frames, 0x2A1).unwrap();
+    assert_eq!(status[4], 0, "arrived");
+    let fb = last(&frames, 0x2A5).unwrap();
+    let j1_mdeg = i32::from_be_bytes([fb[0], fb[1], fb[2], fb[3]]);
+    assert!((j1_mdeg - 10_000).abs() <= 100, "J1 at {j1_mdeg} m°");
+    let truth = emu.snapshot();
+    assert!((truth.joint_positions_rad[0].to_degrees() - 10.0).abs() < 0.1);
+    emu.shutdown().await;
+}

@@ -1,0 +1,80 @@
+//! Building the bench of a scenario: the bus, the emulators and the drivers.
+
+use std::sync::Arc;
+
+use bus::virtual_bus::{VirtualBus, VirtualBusConfig};
+use bus::CanBus;
+use driver::piper::PiperBuilder;
+use tokio::time::Instant;
+
+use super::device::Device;
+use super::emulator::PiperSim;
+use super::model::{DeviceKind, PiperSettings, Scenario};
+use super::piper::{EmulatorControl, PiperDevice};
+use super::runner::{Clock, Recorder};
+
+/// Node name of the drivers on the virtual bus (bus faults can target it as `host`).
+pub const HOST_NODE: &str = "host";
+
+/// A built bench.
+pub(crate) struct BuiltBench {
+    /// Devices, in [`Scenario::bench`] order.
+    pub devices: Vec<Arc<dyn Device>>,
+    /// The virtual bus (in-process runs).
+    pub bus: Option<VirtualBus>,
+    /// Records every frame.
+    pub recorder: Recorder,
+    /// Scenario time zero.
+    pub t0: Instant,
+}
+
+/// Build the bench: in-process emulators on a virtual bus, or drivers on a real interface.
+pub(crate) async fn build(scenario: &Scenario, clock: &Clock) -> Result<BuiltBench, String> {
+    match clock {
+        Clock::Virtual | Clock::Realtime => build_virtual(scenario).await,
+        Clock::Iface(iface) => build_iface(scenario, iface).await,
+    }
+}
+
+async fn build_virtual(scenario: &Scenario) -> Result<BuiltBench, String> {
+    let bus = VirtualBus::new(VirtualBusConfig {
+        bitrate_bps: scenario.bench.bitrate_bps,
+        ..VirtualBusConfig::default()
+    });
+    let t0 = Instant::now();
+    let recorder = Recorder::from_tap(bus.tap());
+    let mut devices: Vec<Arc<dyn Device>> = Vec::new();
+    for spec in &scenario.bench.devices {
+        match &spec.kind {
+            DeviceKind::Piper(settings) => {
+                let emulator = spawn_piper_emulator(&bus, &spec.name, settings)?;
+                let host: Arc<dyn CanBus> = Arc::new(bus.attach(HOST_NODE));
+                let driver = PiperBuilder::new(host)
+                    .connect()
+                    .await
+                    .map_err(|e| format!("device `{}`: driver could not connect: {e}", spec.name))?;
+                devices.push(Arc::new(PiperDevice::new(&spec.name, driver, Some(emulator))));
+            }
+        }
+    }
+    Ok(BuiltBench {
+        devices,
+        bus: Some(bus),
+        recorder,
+        t0,
+    })
+}
+
+fn spawn_piper_emulator(
+    bus: &VirtualBus,
+    name: &str,
+    settings: &PiperSettings,
+) -> Result<Box<dyn EmulatorControl>, String> {
+    let node: Arc<dyn CanBus> = Arc::new(bus.attach(name));
+    let sim = PiperSim::spawn(node, settings).map_err(|e| format!("device `{name}`: emulator: {e}"))?;
+    Ok(Box::new(sim))
+}
+
+async fn build_iface(_scenario: &Scenario, iface: &str) -> Result<BuiltBench, String> {
+    Err(format!("SocketCAN interface `{iface}` is not supported in this build"))
+}

@@ -1,0 +1,148 @@
+//! Errors of loading a scenario: every one names the file, line and column.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// A position in a scenario file (1-based line and column; 0 when unknown).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Default)]
+pub struct Pos {
+    /// 1-based line.
+    pub line: u64,
+    /// 1-based column.
+    pub column: u64,
+}
+
+impl Pos {
+    /// A position from serde-saphyr's location.
+    pub(crate) fn from_location(location: &serde_saphyr::Location) -> Self {
+        Self {
+            line: location.line(),
+            column: location.column(),
+        }
+    }
+}
+
+/// One problem in a scenario file, with where it is and what was expected.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ScenarioError {
+    /// The file the problem is in.
+    pub file: PathBuf,
+    /// Where in the file.
+    pub pos: Pos,
+    /// What is wrong and what was expected.
+    pub message: String,
+    /// The offending source line, for display under the message.
+    pub source_line: Option<String>,
+}
+
+impl ScenarioError {
+    /// A problem at `pos` in `file`.
+    pub fn new(file: &Path, pos: Pos, message: impl Into<String>) -> Self {
+        Self {
+            file: file.to_path_buf(),
+            pos,
+            message: message.into(),
+            source_line: None,
+        }
+    }
+
+    /// Attach the source line the position points into, for display.
+    pub(crate) fn with_source(mut self, text: &str) -> Self {
+        if self.pos.line > 0 {
+            let index = usize::try_from(self.pos.line - 1).unwrap_or(usize::MAX);
+            self.source_line = text.lines().nth(index).map(str::to_owned);
+        }
+        self
+    }
+
+    /// `file:line:col: message`, without the source excerpt.
+    pub fn headline(&self) -> String {
+        format!(
+            "{}:{}:{}: {}",
+            self.file.display(),
+            self.pos.line,
+            self.pos.column,
+            self.message
+        )
+    }
+}
+
+impl fmt::Display for ScenarioError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.headline())?;
+        if let Some(line) = &self.source_line {
+            let gutter = self.pos.line.to_string();
+            let pad = " ".repeat(gutter.len());
+            let caret_pad = " ".repeat(usize::try_from(self.pos.column.saturating_sub(1)).unwrap_or(0));
+            write!(f, "\n{pad} |\n{gutter} | {line}\n{pad} | {caret_pad}^")?;
+        }
+        Ok(())
+    }
+}
+
+impl std::error::Error for ScenarioError {}
+
+/// Why a scenario could not be loaded.
+#[derive(Debug, thiserror::Error)]
+pub enum LoadError {
+    /// The file could not be read.
+    #[error("{}: cannot read: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+    /// The file was read but is not a valid scenario.
+    #[error("{0}")]
+    Invalid(#[from] Box<ScenarioError>),
+}
+
+impl LoadError {
+    /// The scenario error, when the file was readable.
+    pub fn scenario_error(&self) -> Option<&ScenarioError> {
+        match self {
+            Self::Invalid(error) => Some(error),
+            Self::Io { .. } => None,
+        }
+    }
+}
+
+/// Turn a serde-saphyr error into a [`ScenarioError`] with a friendlier message.
+pub(crate) fn from_yaml_error(file: &Path, text: &str, error: &serde_saphyr::Error) -> ScenarioError {
+    let pos = error
+        .location()
+        .map(|location| Pos::from_location(&location))
+        .unwrap_or_default();
+    let raw = error.without_snippet().to_string();
+    // The plain rendering ends with " at line L, column C"; we print the position ourselves.
+    let message = match raw.rfind(" at line ") {
+        Some(cut) => raw[..cut].to_owned(),
+        None => raw,
+    };
+    ScenarioError::new(file, pos, friendlier(&message)).with_source(text)
+}
+
+/// serde's type errors name Rust types; say what the scenario author should write instead.
+fn friendlier(message: &str) -> String {
+    let replacements: [(&str, &str); 12] = [
+        ("invalid u64", "expected a whole number >= 0"),
+        ("invalid u32", "expected a whole number >= 0"),
+        ("invalid u16", "expected a whole number >= 0"),
+        ("invalid u8", "expected a whole number >= 0"),
+        ("invalid i64", "expected a whole number"),
+        ("invalid i32", "expected a whole number"),
+        ("invalid floating point", "expected a number"),
+        ("invalid f64", "expected a number"),
+        ("invalid bool", "expected true or false"),
+        ("expected sequence start", "expected a list ([a, b, ...])"),
+        ("expected mapping start", "expected a mapping (key: value)"),
+        ("unknown field", "unknown key"),
+    ];
+    for (from, to) in replacements {
+        if let Some(rest) = message.strip_prefix(from) {
+            return format!("{to}{rest}");
+        }
+    }
+    message.to_owned()
+}

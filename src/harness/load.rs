@@ -1,0 +1,63 @@
+//! Reading scenario files: both layers, and folder discovery.
+
+use std::path::{Path, PathBuf};
+
+use super::error::{from_yaml_error, LoadError};
+use super::model::Scenario;
+use super::raw::RawScenario;
+use super::validate::{validate, Ctx};
+
+/// Parse and validate scenario text; `path` is used for error messages and relative URDFs.
+pub fn parse_scenario(path: &Path, text: &str) -> Result<Scenario, LoadError> {
+    let raw: RawScenario = serde_saphyr::from_str(text)
+        .map_err(|error| LoadError::Invalid(Box::new(from_yaml_error(path, text, &error))))?;
+    let mut ctx = Ctx::new(path, text);
+    validate(&mut ctx, raw).map_err(LoadError::Invalid)
+}
+
+/// Read, parse and validate one scenario file.
+pub fn load_scenario(path: &Path) -> Result<Scenario, LoadError> {
+    let text = std::fs::read_to_string(path).map_err(|source| LoadError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    parse_scenario(path, &text)
+}
+
+/// Expand files and folders into the scenario files they hold (`*.yaml`, `*.yml`, searched
+/// recursively, sorted by path so suites run in a stable order).
+pub fn discover(paths: &[PathBuf]) -> Result<Vec<PathBuf>, LoadError> {
+    let mut found = Vec::new();
+    for path in paths {
+        if path.is_dir() {
+            walk(path, &mut found)?;
+        } else {
+            found.push(path.clone());
+        }
+    }
+    Ok(found)
+}
+
+fn walk(dir: &Path, found: &mut Vec<PathBuf>) -> Result<(), LoadError> {
+    let io = |source| LoadError::Io {
+        path: dir.to_path_buf(),
+        source,
+    };
+    let mut entries: Vec<PathBuf> = std::fs::read_dir(dir)
+        .map_err(io)?
+        .map(|e| e.map(|e| e.path()))
+        .collect::<Result<_, _>>()
+        .map_err(io)?;
+    entries.sort();
+    for entry in entries {
+        if entry.is_dir() {
+            walk(&entry, found)?;
+        } else if matches!(
+            entry.extension().and_then(|e| e.to_str()),
+            Some("yaml" | "yml")
+        ) {
+            found.push(entry);
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,77 @@
+//! Outputs of a run: the snapshot document, the plot, the bus recordings, JUnit XML. Every
+//! file is written completely or not at all (temp file + rename).
+
+mod junit;
+mod recording;
+mod snapshot;
+mod svg;
+
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+
+pub use junit::junit_xml;
+pub use snapshot::snapshot_yaml;
+pub use svg::plot_svg;
+
+use super::model::Record;
+use super::result::ScenarioResult;
+
+/// Write `bytes` to `path` atomically: a temporary file beside it, then a rename.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    if let Some(dir) = path.parent() {
+        if !dir.as_os_str().is_empty() {
+            std::fs::create_dir_all(dir)?;
+        }
+    }
+    let file_name = path
+        .file_name()
+        .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
+    let tmp = path.with_file_name(format!(".{file_name}.tmp{}", std::process::id()));
+    let result = (|| {
+        let mut file = std::fs::File::create(&tmp)?;
+        file.write_all(bytes)?;
+        file.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+/// The files written for one run.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Written {
+    /// The snapshot document (`result.yaml`).
+    pub snapshot: Option<PathBuf>,
+    /// The candump log (`bus.log`).
+    pub candump: Option<PathBuf>,
+    /// The pcap (`bus.pcap`).
+    pub pcap: Option<PathBuf>,
+    /// The plot (`plot.svg`).
+    pub plot: Option<PathBuf>,
+}
+
+/// Write the outputs of `result` into `dir`, as `record` asks.
+pub fn write_outputs(result: &ScenarioResult, record: &Record, dir: &Path) -> std::io::Result<Written> {
+    let mut written = Written::default();
+    let snapshot = dir.join("result.yaml");
+    write_atomic(&snapshot, snapshot_yaml(result).as_bytes())?;
+    written.snapshot = Some(snapshot);
+    if record.candump {
+        let path = dir.join("bus.log");
+        write_atomic(&path, &recording::candump_bytes(&result.frames)?)?;
+        written.candump = Some(path);
+    }
+    if record.pcap {
+        let path = dir.join("bus.pcap");
+        write_atomic(&path, &recording::pcap_bytes(&result.frames)?)?;
+        written.pcap = Some(path);
+    }
+    if record.plot {
+        let path = dir.join("plot.svg");
+        write_atomic(&path, plot_svg(result).as_bytes())?;
+        written.plot = Some(path);
+    }
+    Ok(written)
+}

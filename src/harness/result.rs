@@ -1,0 +1,203 @@
+//! What a run produces: per-step outcomes, fault events, the sampled trace, bus figures.
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::time::Duration;
+
+use bus::ReceivedFrame;
+
+/// How one step ended.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Outcome {
+    /// Everything as expected.
+    Passed,
+    /// A condition or reply did not match.
+    Failed {
+        /// What the step wanted.
+        expected: String,
+        /// What it got.
+        actual: String,
+    },
+    /// A `wait_until` (or a driver confirmation) ran out of time.
+    TimedOut {
+        /// How long it waited.
+        waited: Duration,
+        /// What it waited for.
+        expected: String,
+        /// The state when it gave up.
+        actual: String,
+    },
+    /// Not run (an earlier step failed).
+    NotRun,
+}
+
+impl Outcome {
+    /// Short name: `passed`, `failed`, `timed_out`, `not_run`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Passed => "passed",
+            Self::Failed { .. } => "failed",
+            Self::TimedOut { .. } => "timed_out",
+            Self::NotRun => "not_run",
+        }
+    }
+
+    /// Whether the step passed.
+    pub fn passed(&self) -> bool {
+        matches!(self, Self::Passed)
+    }
+}
+
+/// One step's result.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepResult {
+    /// 0-based index.
+    pub index: usize,
+    /// Line in the scenario file.
+    pub line: u64,
+    /// Step label (`move_j`...).
+    pub label: String,
+    /// Step id, if any.
+    pub id: Option<String>,
+    /// Scenario time when it started.
+    pub started: Duration,
+    /// Scenario time it took.
+    pub took: Duration,
+    /// How it ended.
+    pub outcome: Outcome,
+    /// Values a query returned.
+    pub reply: Vec<(String, String)>,
+}
+
+/// A fault being applied or removed.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FaultEvent {
+    /// Scenario time.
+    pub at: Duration,
+    /// `inject` or `clear`.
+    pub action: &'static str,
+    /// What.
+    pub fault: String,
+    /// Device name for emulator faults, `bus` for bus faults.
+    pub target: String,
+}
+
+/// One trace column: a name and the quantum its integer samples count.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Column {
+    /// Name with unit (`j1_deg`).
+    pub name: String,
+    /// Value of one integer step (0.1 for 0.1°).
+    pub quantum: f64,
+    /// Group for plotting (`joints`, `currents`...).
+    pub group: &'static str,
+}
+
+/// The sampled state: quantised integers per column, so snapshots are stable.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Trace {
+    /// Sample period.
+    pub period: Duration,
+    /// Columns (without time).
+    pub columns: Vec<Column>,
+    /// `(scenario time, values)`; `None` where the driver had no value yet.
+    pub rows: Vec<(Duration, Vec<Option<i64>>)>,
+}
+
+/// Bus figures at the end of the run.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct BusSummary {
+    /// Frames seen on the wire, per identifier.
+    pub frames_by_id: BTreeMap<u32, u64>,
+    /// Total frames.
+    pub frames: u64,
+    /// Bus load in percent over the run (virtual bus only).
+    pub load_percent: Option<f64>,
+    /// Frames lost to CRC errors (corrupt faults).
+    pub errors: u64,
+    /// Frames dropped by faults.
+    pub dropped: u64,
+}
+
+/// The verdict of a scenario.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Verdict {
+    /// Every step passed.
+    Passed,
+    /// A step failed or timed out.
+    Failed,
+    /// Not run, with the reason (e.g. needs the in-process emulator).
+    Skipped(String),
+    /// The bench could not be built.
+    Error(String),
+}
+
+impl Verdict {
+    /// `PASS`, `FAIL`, `SKIP`, `ERROR`.
+    pub fn word(&self) -> &'static str {
+        match self {
+            Self::Passed => "PASS",
+            Self::Failed => "FAIL",
+            Self::Skipped(_) => "SKIP",
+            Self::Error(_) => "ERROR",
+        }
+    }
+
+    /// Whether this verdict keeps the exit code at 0.
+    pub fn ok(&self) -> bool {
+        matches!(self, Self::Passed | Self::Skipped(_))
+    }
+}
+
+/// Everything one scenario run produced.
+#[derive(Debug, Clone)]
+pub struct ScenarioResult {
+    /// Scenario name.
+    pub name: String,
+    /// Scenario file.
+    pub path: PathBuf,
+    /// Verdict.
+    pub verdict: Verdict,
+    /// `virtual`, `realtime` or `iface <name>`.
+    pub clock: String,
+    /// Per-step results.
+    pub steps: Vec<StepResult>,
+    /// Faults applied and removed.
+    pub faults: Vec<FaultEvent>,
+    /// The sampled trace.
+    pub trace: Trace,
+    /// Bus figures.
+    pub bus: BusSummary,
+    /// Every frame on the wire, for candump / pcap.
+    pub frames: Vec<ReceivedFrame>,
+    /// Scenario time the run took.
+    pub duration: Duration,
+    /// Wall-clock time the run took (never in snapshots).
+    pub wall: Duration,
+}
+
+impl ScenarioResult {
+    /// A result for a scenario that did not run.
+    pub fn not_run(name: &str, path: PathBuf, verdict: Verdict, clock: &str) -> Self {
+        Self {
+            name: name.to_owned(),
+            path,
+            verdict,
+            clock: clock.to_owned(),
+            steps: Vec::new(),
+            faults: Vec::new(),
+            trace: Trace::default(),
+            bus: BusSummary::default(),
+            frames: Vec::new(),
+            duration: Duration::ZERO,
+            wall: Duration::ZERO,
+        }
+    }
+
+    /// The first failing step, if any.
+    pub fn first_failure(&self) -> Option<&StepResult> {
+        self.steps
+            .iter()
+            .find(|s| !matches!(s.outcome, Outcome::Passed | Outcome::NotRun))
+    }
+}

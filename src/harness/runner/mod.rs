@@ -1,0 +1,371 @@
+//! Runs a scenario: builds the bench, executes the steps, applies faults, samples the state.
+
+mod eval;
+mod faults;
+mod recorder;
+mod trace;
+
+use std::collections::BTreeMap;
+use std::sync::Arc;
+use std::time::Duration;
+
+use tokio::time::Instant;
+
+pub(crate) use recorder::Recorder;
+
+use super::bench::{self, BuiltBench};
+use super::device::Device;
+use super::model::{FaultTrigger, Scenario, Step, StepKind};
+use super::result::{BusSummary, Outcome, ScenarioResult, StepResult, Verdict};
+use faults::FaultControl;
+use trace::Sampler;
+
+/// Which clock and bus a run uses.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Clock {
+    /// In-process emulator and virtual bus on tokio's paused clock (deterministic, fast).
+    Virtual,
+    /// In-process emulator and virtual bus on the real clock.
+    Realtime,
+    /// Real time on a SocketCAN interface, against a separate emulator process
+    /// (`armhil sim piper --iface IF`). Bus and emulator faults are unavailable.
+    Iface(String),
+}
+
+impl Clock {
+    fn describe(&self) -> String {
+        match self {
+            Self::Virtual => "virtual".to_owned(),
+            Self::Realtime => "realtime".to_owned(),
+            Self::Iface(iface) => format!("iface {iface}"),
+        }
+    }
+}
+
+/// Polling period of `wait_until` and `expect … for_ms`.
+const POLL: Duration = Duration::from_millis(1);
+
+/// Run one scenario to completion on its own tokio runtime.
+///
+/// With [`Clock::Iface`], scenarios that need the in-process emulator (faults, obstacles,
+/// initial joints) are skipped with the reason.
+pub fn run_scenario(scenario: &Scenario, clock: &Clock) -> ScenarioResult {
+    let wall_start = std::time::Instant::now();
+    if let Clock::Iface(_) = clock {
+        let needs = scenario.in_process_requirements();
+        if !needs.is_empty() {
+            let reason = format!(
+                "needs the in-process emulator (not available with --iface): {}",
+                needs.join(", ")
+            );
+            return ScenarioResult::not_run(
+                &scenario.name,
+                scenario.path.clone(),
+                Verdict::Skipped(reason),
+                &clock.describe(),
+            );
+        }
+    }
+    let runtime = match clock {
+        Clock::Virtual => tokio::runtime::Builder::new_current_thread()
+            .enable_all()
+            .start_paused(true)
+            .build(),
+        Clock::Realtime | Clock::Iface(_) => tokio::runtime::Builder::new_multi_thread()
+            .worker_threads(2)
+            .enable_all()
+            .build(),
+    };
+    let mut result = match runtime {
+        Ok(rt) => rt.block_on(run_async(scenario, clock)),
+        Err(e) => ScenarioResult::not_run(
+            &scenario.name,
+            scenario.path.clone(),
+            Verdict::Error(format!("cannot start the tokio runtime: {e}")),
+            &clock.describe(),
+        ),
+    };
+    result.wall = wall_start.elapsed();
+    result
+}
+
+async fn run_async(scenario: &Scenario, clock: &Clock) -> ScenarioResult {
+    let built = match bench::build(scenario, clock).await {
+        Ok(b) => b,
+        Err(message) => {
+            return ScenarioResult::not_run(
+                &scenario.name,
+                scenario.path.clone(),
+                Verdict::Error(message),
+                &clock.describe(),
+            )
+        }
+    };
+    let BuiltBench {
+        devices,
+        bus,
+        recorder,
+        t0,
+    } = built;
+    let faults = Arc::new(FaultControl::new(
+        devices.clone(),
+        bus.as_ref().map(bus::virtual_bus::VirtualBus::faults),
+        t0,
+    ));
+    let sampler = Sampler::start(&scenario.record, devices.clone(), t0);
+    for fault in &scenario.faults {
+        if let FaultTrigger::At(at) = fault.trigger {
+            let delay = at.saturating_sub(t0.elapsed());
+            faults.schedule(delay, fault.fault.clone(), fault.duration);
+        }
+    }
+
+    let mut steps = Vec::new();
+    let mut failed = false;
+    for step in &scenario.steps {
+        if failed {
+            steps.push(StepResult {
+                index: step.index,
+                line: step.line,
+                label: step.label.clone(),
+                id: step.id.clone(),
+                started: t0.elapsed(),
+                took: Duration::ZERO,
+                outcome: Outcome::NotRun,
+                reply: Vec::new(),
+            });
+            continue;
+        }
+        let started = t0.elapsed();
+        let step_start = Instant::now();
+        let (outcome, reply) = run_step(step, &devices, &faults).await;
+        failed = !outcome.passed();
+        steps.push(StepResult {
+            index: step.index,
+            line: step.line,
+            label: step.label.clone(),
+            id: step.id.clone(),
+            started,
+            took: step_start.elapsed(),
+            outcome,
+            reply,
+        });
+        for fault in &scenario.faults {
+            if let FaultTrigger::AfterStep { step: after, delay } = fault.trigger {
+                if after == step.index {
+                    faults.schedule(delay, fault.fault.clone(), fault.duration);
+                }
+            }
+        }
+    }
+    let duration = t0.elapsed();
+    let trace = sampler.finish();
+    let (fault_events, fault_errors) = faults.finish();
+    for dev in &devices {
+        dev.shutdown().await;
+    }
+    let stats = bus.as_ref().map(bus::virtual_bus::VirtualBus::stats);
+    let (frames, _missed) = recorder.finish().await;
+
+    let mut frames_by_id = BTreeMap::new();
+    for f in &frames {
+        *frames_by_id.entry(f.frame.raw_id()).or_insert(0u64) += 1;
+    }
+    let summary = BusSummary {
+        frames: frames.len() as u64,
+        frames_by_id,
+        load_percent: stats.as_ref().map(|s| s.load_percent),
+        errors: stats.as_ref().map_or(0, |s| s.errors),
+        dropped: stats.as_ref().map_or(0, |s| s.dropped),
+    };
+    let verdict = if let Some(err) = fault_errors.first() {
+        failed = true;
+        Verdict::Error(format!("scheduled fault failed: {err}"))
+    } else if failed {
+        Verdict::Failed
+    } else {
+        Verdict::Passed
+    };
+    let _ = failed;
+    ScenarioResult {
+        name: scenario.name.clone(),
+        path: scenario.path.clone(),
+        verdict,
+        clock: clock.describe(),
+        steps,
+        faults: fault_events,
+        trace,
+        bus: summary,
+        frames,
+        duration,
+        wall: Duration::ZERO,
+    }
+}
+
+async fn run_step(
+    step: &Step,
+    devices: &[Arc<dyn Device>],
+    faults: &Arc<FaultControl>,
+) -> (Outcome, Vec<(String, String)>) {
+    let device = |index: usize| devices.get(index).cloned();
+    match &step.kind {
+        StepKind::Wait(d) => {
+            tokio::time::sleep(*d).await;
+            (Outcome::Passed, Vec::new())
+        }
+        StepKind::Action {
+            device: index,
+            action,
+            timeout,
+            expect_error,
+        } => {
+            let Some(dev) = device(*index) else {
+                return (missing_device(*index), Vec::new());
+            };
+            let start = Instant::now();
+            match (dev.perform(action, *timeout).await, expect_error) {
+                (Ok(reply), None) => {
+                    if reply.mismatches.is_empty() {
+                        (Outcome::Passed, reply.values)
+                    } else {
+                        let expected: Vec<String> =
+                            reply.mismatches.iter().map(|(k, e, _)| format!("{k} {e}")).collect();
+                        let actual: Vec<String> =
+                            reply.mismatches.iter().map(|(k, _, a)| format!("{k} {a}")).collect();
+                        (
+                            Outcome::Failed {
+                                expected: expected.join("; "),
+                                actual: actual.join("; "),
+                            },
+                            reply.values,
+                        )
+                    }
+                }
+                (Ok(reply), Some(class)) => (
+                    Outcome::Failed {
+                        expected: format!("error ({})", class.name()),
+                        actual: "success".to_owned(),
+                    },
+                    reply.values,
+                ),
+                (Err(e), None) => {
+                    if e.class == super::model::ErrorClass::Timeout {
+                        (
+                            Outcome::TimedOut {
+                                waited: start.elapsed(),
+                                expected: "success".to_owned(),
+                                actual: e.message,
+                            },
+                            Vec::new(),
+                        )
+                    } else {
+                        (
+                            Outcome::Failed {
+                                expected: "success".to_owned(),
+                                actual: format!("error ({}): {}", e.class.name(), e.message),
+                            },
+                            Vec::new(),
+                        )
+                    }
+                }
+                (Err(e), Some(class)) => {
+                    let reply = vec![("error".to_owned(), format!("{} — {}", e.class.name(), e.message))];
+                    if *class == super::model::ErrorClass::Any || e.class == *class {
+                        (Outcome::Passed, reply)
+                    } else {
+                        (
+                            Outcome::Failed {
+                                expected: format!("error ({})", class.name()),
+                                actual: format!("error ({}): {}", e.class.name(), e.message),
+                            },
+                            reply,
+                        )
+                    }
+                }
+            }
+        }
+        StepKind::Expect {
+            device: index,
+            checks,
+            hold,
+        } => {
+            let Some(dev) = device(*index) else {
+                return (missing_device(*index), Vec::new());
+            };
+            if let Err((expected, actual)) = eval::evaluate(checks, &dev.observe()) {
+                return (Outcome::Failed { expected, actual }, Vec::new());
+            }
+            if let Some(hold) = hold {
+                let start = Instant::now();
+                while start.elapsed() < *hold {
+                    tokio::time::sleep(POLL).await;
+                    if let Err((expected, actual)) = eval::evaluate(checks, &dev.observe()) {
+                        let at = start.elapsed().as_millis();
+                        return (
+                            Outcome::Failed {
+                                expected: format!("{expected} for {} ms", hold.as_millis()),
+                                actual: format!("after {at} ms: {actual}"),
+                            },
+                            Vec::new(),
+                        );
+                    }
+                }
+            }
+            (Outcome::Passed, Vec::new())
+        }
+        StepKind::WaitUntil {
+            device: index,
+            checks,
+            timeout,
+        } => {
+            let Some(dev) = device(*index) else {
+                return (missing_device(*index), Vec::new());
+            };
+            let start = Instant::now();
+            loop {
+                let last = match eval::evaluate(checks, &dev.observe()) {
+                    Ok(()) => return (Outcome::Passed, Vec::new()),
+                    Err((_, actual)) => actual,
+                };
+                if start.elapsed() >= *timeout {
+                    return (
+                        Outcome::TimedOut {
+                            waited: start.elapsed(),
+                            expected: eval::describe(checks),
+                            actual: last,
+                        },
+                        Vec::new(),
+                    );
+                }
+                tokio::time::sleep(POLL).await;
+            }
+        }
+        StepKind::Inject { fault, duration } => match faults.apply(fault, *duration) {
+            Ok(()) => (Outcome::Passed, Vec::new()),
+            Err(e) => (
+                Outcome::Failed {
+                    expected: format!("fault `{}` applied", fault.describe()),
+                    actual: e,
+                },
+                Vec::new(),
+            ),
+        },
+        StepKind::ClearFaults { device: index } => match faults.clear_all(*index) {
+            Ok(()) => (Outcome::Passed, Vec::new()),
+            Err(e) => (
+                Outcome::Failed {
+                    expected: "faults cleared".to_owned(),
+                    actual: e,
+                },
+                Vec::new(),
+            ),
+        },
+    }
+}
+
+fn missing_device(index: usize) -> Outcome {
+    Outcome::Failed {
+        expected: format!("device #{index}"),
+        actual: "not on the bench".to_owned(),
+    }
+}
