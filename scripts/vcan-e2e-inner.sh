@@ -58,6 +58,9 @@ else
     failures=$((failures + 1))
 fi
 
+python_safe_path=()
+"$ARMHIL_E2E_PYTHON" -P -c '' 2>/dev/null && python_safe_path=(-P)
+
 shopt -s nullglob
 hooks=("$ARMHIL_E2E_HOOKS"/*.sh "$ARMHIL_E2E_HOOKS"/*.py)
 if ((${#hooks[@]})); then mapfile -t hooks < <(printf '%s\n' "${hooks[@]}" | sort); fi
@@ -65,7 +68,9 @@ echo "==== ${#hooks[@]} e2e hook(s) in scripts/e2e ===="
 for hook in "${hooks[@]}"; do
     name=$(basename "$hook")
     case $hook in
-        *.py) runner=("$ARMHIL_E2E_PYTHON" -u) ;;
+        # -P: do not put scripts/e2e first on sys.path, where a hook named like a package
+        # (piper_sdk.py) would shadow the package it imports (Python 3.11+).
+        *.py) runner=("$ARMHIL_E2E_PYTHON" -u "${python_safe_path[@]}") ;;
         *) runner=(bash) ;;
     esac
     echo "---- hook $name ----"

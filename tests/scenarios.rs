@@ -6,17 +6,26 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 
 use armhil::harness::report::{plot_svg, snapshot_yaml};
-use armhil::harness::{discover, load_scenario, parse_scenario, run_scenario, Clock, ScenarioResult, Verdict};
+use armhil::harness::{
+    discover, load_scenario, parse_scenario, run_scenario, Clock, ScenarioResult, Verdict,
+};
 
 fn scenario_files() -> Vec<PathBuf> {
     let files = discover(&[PathBuf::from("scenarios")]).expect("scenarios/ is readable");
-    assert!(files.len() >= 26, "expected the full suite, found {} files", files.len());
+    assert!(
+        files.len() >= 26,
+        "expected the full suite, found {} files",
+        files.len()
+    );
     files
 }
 
 /// Snapshot name: the path under `scenarios/` without extension, `/` → `__`.
 fn snapshot_name(path: &Path) -> String {
-    let rel = path.strip_prefix("scenarios").unwrap_or(path).with_extension("");
+    let rel = path
+        .strip_prefix("scenarios")
+        .unwrap_or(path)
+        .with_extension("");
     rel.to_string_lossy().replace(['/', '\\'], "__")
 }
 
@@ -61,7 +70,12 @@ fn every_scenario_passes_and_matches_its_snapshot() {
     let mut failures = Vec::new();
     for (file, result) in &results {
         if result.verdict != Verdict::Passed {
-            failures.push(format!("{}: verdict {:?}\n{}", file.display(), result.verdict, snapshot_yaml(result)));
+            failures.push(format!(
+                "{}: verdict {:?}\n{}",
+                file.display(),
+                result.verdict,
+                snapshot_yaml(result)
+            ));
             continue;
         }
         let name = snapshot_name(file);
@@ -75,7 +89,12 @@ fn every_scenario_passes_and_matches_its_snapshot() {
             failures.push(format!("{}: snapshot `{name}` differs", file.display()));
         }
     }
-    assert!(failures.is_empty(), "{} scenario(s) failed:\n{}", failures.len(), failures.join("\n"));
+    assert!(
+        failures.is_empty(),
+        "{} scenario(s) failed:\n{}",
+        failures.len(),
+        failures.join("\n")
+    );
 }
 
 #[test]
@@ -84,16 +103,34 @@ fn runs_are_deterministic_to_the_byte() {
     let first = run_all(&files);
     let second = run_all(&files);
     for ((file, a), (_, b)) in first.iter().zip(&second) {
-        assert_eq!(snapshot_yaml(a), snapshot_yaml(b), "{}: snapshot differs between runs", file.display());
-        assert_eq!(plot_svg(a), plot_svg(b), "{}: plot differs between runs", file.display());
-        assert_eq!(a.frames, b.frames, "{}: bus recording differs between runs", file.display());
+        assert_eq!(
+            snapshot_yaml(a),
+            snapshot_yaml(b),
+            "{}: snapshot differs between runs",
+            file.display()
+        );
+        assert_eq!(
+            plot_svg(a),
+            plot_svg(b),
+            "{}: plot differs between runs",
+            file.display()
+        );
+        assert_eq!(
+            a.frames,
+            b.frames,
+            "{}: bus recording differs between runs",
+            file.display()
+        );
         let dir_a = tempdir(&format!("det-a-{}", snapshot_name(file)));
         let dir_b = tempdir(&format!("det-b-{}", snapshot_name(file)));
         let scenario = load_scenario(file).expect("loads");
         armhil::harness::report::write_outputs(a, &scenario.record, &dir_a).expect("writes");
         armhil::harness::report::write_outputs(b, &scenario.record, &dir_b).expect("writes");
         for name in ["result.yaml", "bus.log", "bus.pcap", "plot.svg"] {
-            let (x, y) = (std::fs::read(dir_a.join(name)), std::fs::read(dir_b.join(name)));
+            let (x, y) = (
+                std::fs::read(dir_a.join(name)),
+                std::fs::read(dir_b.join(name)),
+            );
             if let (Ok(x), Ok(y)) = (x, y) {
                 assert!(x == y, "{}: {name} differs between runs", file.display());
             }
@@ -119,10 +156,11 @@ const BENCH: &str = "bench:\n  devices:\n    arm: {kind: piper}\n";
 
 #[test]
 fn typo_in_a_key_names_the_key_and_the_valid_ones() {
-    let text = format!("{BENCH}steps:\n  - move_j: {{joints_deg: [0, 0, 0, 0, 0, 0], sped_pct: 20}}\n");
+    let text =
+        format!("{BENCH}steps:\n  - move_j: {{joints_deg: [0, 0, 0, 0, 0, 0], sped_pct: 20}}\n");
     assert_eq!(
         error_of(&text),
-        "broken.yaml:5:45: unknown key `sped_pct`, expected one of device, id, timeout_ms, expect_error, joints_deg, speed_pct"
+        "broken.yaml:5:46: unknown key `sped_pct`, expected one of device, id, timeout_ms, expect_error, joints_deg, speed_pct; did you mean `speed_pct`?"
     );
 }
 
@@ -131,7 +169,7 @@ fn typo_in_a_top_level_key_is_an_error() {
     let text = format!("{BENCH}step:\n  - estop\n");
     assert_eq!(
         error_of(&text),
-        "broken.yaml:4:1: unknown key `step`, expected one of name, description, tags, bench, record, faults, steps"
+        "broken.yaml:4:1: unknown key `step`, expected one of name, description, tags, bench, record, faults, steps; did you mean `steps`?"
     );
 }
 
@@ -139,7 +177,12 @@ fn typo_in_a_top_level_key_is_an_error() {
 fn unknown_action_lists_the_actions() {
     let text = format!("{BENCH}steps:\n  - move_z: {{joints_deg: [0, 0, 0, 0, 0, 0]}}\n");
     let e = error_of(&text);
-    assert!(e.starts_with("broken.yaml:5:5: unknown step `move_z`; expected one of: wait_ms, enable, disable"), "{e}");
+    assert!(
+        e.starts_with(
+            "broken.yaml:5:5: unknown step `move_z`; expected one of: wait_ms, enable, disable"
+        ),
+        "{e}"
+    );
 }
 
 #[test]
@@ -147,44 +190,63 @@ fn wrong_type_says_what_was_expected() {
     let text = format!("{BENCH}steps:\n  - wait_ms: soon\n");
     assert_eq!(error_of(&text), "broken.yaml:5:14: expected a whole number");
     let text = format!("{BENCH}steps:\n  - move_j: {{joints_deg: 90}}\n");
-    assert_eq!(error_of(&text), "broken.yaml:5:27: expected a list ([a, b, ...])");
+    assert_eq!(
+        error_of(&text),
+        "broken.yaml:5:26: expected a list ([a, b, ...])"
+    );
 }
 
 #[test]
 fn unknown_device_names_the_bench_devices() {
     let text = format!("{BENCH}steps:\n  - estop: {{device: left_arm}}\n");
-    assert_eq!(error_of(&text), "broken.yaml:5:21: unknown device `left_arm`; the bench has: arm");
+    assert_eq!(
+        error_of(&text),
+        "broken.yaml:5:21: unknown device `left_arm`; the bench has: arm"
+    );
 }
 
 #[test]
 fn negative_timeout_is_rejected() {
     let text = format!("{BENCH}steps:\n  - wait_until: {{enabled: true, timeout_ms: -50}}\n");
-    assert_eq!(error_of(&text), "broken.yaml:5:45: `timeout_ms` must be >= 0 (milliseconds), got -50");
+    assert_eq!(
+        error_of(&text),
+        "broken.yaml:5:45: `timeout_ms` must be >= 0 (milliseconds), got -50"
+    );
 }
 
 #[test]
 fn out_of_range_joint_index_is_rejected() {
     let text = format!("{BENCH}steps:\n  - inject: {{fault: {{comm_loss: {{joint: 7}}}}}}\n");
-    assert_eq!(error_of(&text), "broken.yaml:5:40: `joint`: joint index 7 out of range, expected 1..=6");
+    assert_eq!(
+        error_of(&text),
+        "broken.yaml:5:41: `joint`: joint index 7 out of range, expected 1..=6"
+    );
 }
 
 #[test]
 fn wrong_number_of_joints_is_rejected() {
     let text = format!("{BENCH}steps:\n  - move_j: {{joints_deg: [1, 2, 3]}}\n");
-    assert_eq!(error_of(&text), "broken.yaml:5:27: `joints_deg` needs exactly 6 numbers, got 3");
+    assert_eq!(
+        error_of(&text),
+        "broken.yaml:5:26: `joints_deg` needs exactly 6 numbers, got 3"
+    );
 }
 
 #[test]
 fn fault_schedule_must_refer_to_a_known_step() {
     let text = format!("{BENCH}faults:\n  - {{after: mvoe, fault: estop}}\nsteps:\n  - move_j: {{joints_deg: [0, 0, 0, 0, 0, 0], id: move}}\n");
-    assert_eq!(error_of(&text), "broken.yaml:5:13: `after`: no step has id `mvoe` (step ids: move)");
+    assert_eq!(
+        error_of(&text),
+        "broken.yaml:5:13: `after`: no step has id `mvoe` (step ids: move)"
+    );
 }
 
 #[test]
 fn unknown_firmware_lists_the_emulated_ones() {
-    let text = "bench:\n  devices:\n    arm: {kind: piper, firmware: S-V9.9-9}\nsteps:\n  - estop\n";
+    let text =
+        "bench:\n  devices:\n    arm: {kind: piper, firmware: S-V9.9-9}\nsteps:\n  - estop\n";
     let e = error_of(text);
-    assert!(e.starts_with("broken.yaml:3:35: `firmware`: unknown Piper firmware `S-V9.9-9`; the emulator implements: S-V1.5-8"), "{e}");
+    assert!(e.starts_with("broken.yaml:3:34: `firmware`: unknown Piper firmware `S-V9.9-9`; the emulator implements: S-V1.5-8"), "{e}");
 }
 
 #[test]
@@ -201,5 +263,8 @@ fn error_display_shows_the_source_line_with_a_caret() {
     let text = format!("{BENCH}steps:\n  - estop: {{device: left_arm}}\n");
     let e = parse_scenario(Path::new("broken.yaml"), &text).expect_err("invalid");
     let shown = e.to_string();
-    assert!(shown.contains("5 |   - estop: {device: left_arm}\n  |                     ^"), "{shown}");
+    assert!(
+        shown.contains("5 |   - estop: {device: left_arm}\n  |                     ^"),
+        "{shown}"
+    );
 }

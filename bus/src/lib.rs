@@ -14,6 +14,8 @@ mod frame;
 mod iface;
 pub mod pcap;
 pub mod recorder;
+#[cfg(target_os = "linux")]
+pub mod socketcan_bus;
 pub mod timing;
 pub mod virtual_bus;
 

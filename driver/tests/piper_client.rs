@@ -424,3 +424,68 @@ async fn disconnect_stops_the_tasks_and_reconnect_restarts_them() {
         Err(PiperError::Disconnected)
     ));
 }
+
+#[tokio::test(start_paused = true)]
+async fn a_closed_interface_is_reopened_through_the_opener() {
+    let bus = VirtualBus::new(VirtualBusConfig {
+        tx_queue_len: 32,
+        ..VirtualBusConfig::default()
+    });
+    let _model = spawn_arm(&bus, ARM);
+    let opened: Arc<Mutex<Vec<Arc<bus::virtual_bus::VirtualNode>>>> = Arc::default();
+    let opener_bus = bus.clone();
+    let opener_log = opened.clone();
+    let opener: BusOpener = Arc::new(move || {
+        let node = Arc::new(opener_bus.attach("host"));
+        opener_log.lock().expect("log").push(node.clone());
+        Ok(node as Arc<dyn CanBus>)
+    });
+    let piper = PiperBuilder::with_opener("virt-host", opener)
+        .connect()
+        .await
+        .expect("connect");
+    let again =
+        PiperBuilder::with_opener("virt-host", Arc::new(|| Err(bus::BusError::Unsupported)))
+            .connect()
+            .await;
+    assert!(
+        matches!(again, Err(PiperError::AlreadyOwned { .. })),
+        "{again:?}"
+    );
+
+    // The interface goes away under the driver.
+    let first = opened.lock().expect("log")[0].clone();
+    first.close().await;
+    let state = piper
+        .wait_for(
+            |s| s.link.reconnects == 1 && s.link.ok,
+            Duration::from_secs(2),
+            "reopen",
+        )
+        .await
+        .expect("reopened");
+    assert_eq!(state.link.bus_fault, None);
+    assert_eq!(opened.lock().expect("log").len(), 2);
+    piper
+        .query_joint_limits(2)
+        .await
+        .expect("queries work on the new endpoint");
+    piper.disconnect().await;
+}
+
+/// The driver's futures can run on a multi-thread runtime (real-time mode, `tokio::spawn`).
+#[allow(dead_code)]
+fn futures_are_send(piper: Piper) {
+    fn send<T: Send>(_: T) {}
+    send(piper.enable(MotorSelect::All));
+    send(piper.disable(MotorSelect::Joint(1)));
+    send(piper.move_joints_rad([0.0; 6], 10));
+    send(piper.wait_for_arrival(0.01, Duration::from_secs(1)));
+    send(piper.wait_for(|s| s.arm_enabled(), Duration::from_secs(1), "enabled"));
+    send(piper.query_all_joint_limits());
+    send(piper.query_firmware());
+    send(piper.mit(1, MitCommand { p_rad: 0.0, v_rad_s: 0.0, kp: 0.0, kd: 0.0, t_nm: 0.0 }));
+    send(piper.disconnect());
+    send(piper.reconnect());
+    send(PiperBuilder::new(Arc::new(VirtualBus::new(VirtualBusConfig::default()).attach("x"))).connect());
+}

@@ -93,26 +93,21 @@ def run_checks():
         raise Failure(f"firmware version {version!r}, expected {FIRMWARE!r}")
     print(f"firmware {version}")
 
-    def limits_ready():
-        motors = piper.GetAllMotorAngleLimitMaxSpd().all_motor_angle_limit_max_spd.motor
-        return all(motors[n].motor_num == n for n in range(1, 7)) and motors
-
-    motors = None
-    for _ in range(3):
-        try:
-            motors = wait_for(limits_ready, 5, "six 0x473 replies")
-            break
-        except Failure:
-            piper.SearchAllMotorMaxAngleSpd()
-    if not motors:
-        raise Failure("no 0x473 joint limit replies")
+    # GetAllMotorAngleLimitMaxSpd() is unusable here: piper_sdk 0.6.x stores a reference to
+    # its one reused rx message object in all six slots, so after the connect burst every slot
+    # shows joint 6. Query joint by joint and read the per-reply copy instead.
     for n, (max_ddeg, min_ddeg) in EXPECTED_LIMITS.items():
-        m = motors[n]
-        if (m.max_angle_limit, m.min_angle_limit, m.max_joint_spd) != (max_ddeg, min_ddeg, 300):
-            raise Failure(
-                f"joint {n} limits {m.max_angle_limit}/{m.min_angle_limit}/{m.max_joint_spd}, "
-                f"expected {max_ddeg}/{min_ddeg}/300"
-            )
+        def reply_for_n(n=n):
+            cur = piper.GetCurrentMotorAngleLimitMaxVel().current_motor_angle_limit_max_vel
+            if cur.motor_num != n:
+                piper.SearchMotorMaxAngleSpdAccLimit(n, 0x01)
+                return None
+            return (cur.max_angle_limit, cur.min_angle_limit, cur.max_joint_spd)
+
+        piper.SearchMotorMaxAngleSpdAccLimit(n, 0x01)
+        got = wait_for(reply_for_n, 10, f"the 0x473 reply for joint {n}", poll_s=0.05)
+        if got != (max_ddeg, min_ddeg, 300):
+            raise Failure(f"joint {n} limits {got}, expected {(max_ddeg, min_ddeg, 300)}")
     print("joint limits match the flash defaults")
 
     # 2. Enable (the SDK demo loop: EnablePiper returns the state read before sending).

@@ -78,6 +78,7 @@ fn main() {
         per_s / f64::from(MOTORS)
     );
     println!("  theoretical: {worst:.0}..{best:.0}/s (2 extended frames of 160..131 bits each)");
+    println!("  bus load: {load:.1} %, mean frame {bits_per_frame:.1} bits (stuffing included)");
     println!(
         "  utilisation: {:.1} % of the no-stuffing capacity",
         100.0 * per_s / best

@@ -13,6 +13,13 @@ fn frame(id: u16, data: [u8; 8]) -> CanFrame {
 }
 
 fn start(profile: FirmwareProfile) -> (VirtualBus, VirtualNode, PiperHandle) {
+    start_with(profile, 1)
+}
+
+fn start_with(
+    profile: FirmwareProfile,
+    ticks_per_wake: u32,
+) -> (VirtualBus, VirtualNode, PiperHandle) {
     let bus = VirtualBus::new(VirtualBusConfig::default());
     let emu_node = bus.attach_with(
         "piper",
@@ -27,6 +34,7 @@ fn start(profile: FirmwareProfile) -> (VirtualBus, VirtualNode, PiperHandle) {
         PiperConfig {
             firmware: profile,
             initial_joints_rad: [0.0, 0.5, -0.5, 0.0, 0.0, 0.0],
+            ticks_per_wake,
             ..PiperConfig::default()
         },
     )
@@ -50,6 +58,23 @@ fn last(frames: &[CanFrame], id: u32) -> Option<Vec<u8>> {
         .rev()
         .find(|f| f.raw_id() == id)
         .map(|f| f.data().to_vec())
+}
+
+#[tokio::test(start_paused = true)]
+async fn batched_steps_keep_the_feedback_rates() {
+    let (_bus, host, emu) = start_with(FirmwareProfile::V1_8_2, 5);
+    collect(&host, Duration::from_millis(100)).await;
+    let frames = collect(&host, Duration::from_secs(1)).await;
+    let count = |id: u32| frames.iter().filter(|f| f.raw_id() == id).count();
+    assert!((199..=201).contains(&count(0x2A1)), "{}", count(0x2A1));
+    assert!((199..=201).contains(&count(0x256)), "{}", count(0x256));
+    assert!((39..=41).contains(&count(0x263)), "{}", count(0x263));
+    assert!(
+        (emu.snapshot().time_s - 1.1).abs() < 0.011,
+        "{}",
+        emu.snapshot().time_s
+    );
+    emu.shutdown().await;
 }
 
 #[tokio::test(start_paused = true)]
@@ -121,4 +146,46 @@ async fn enable_mode_and_move_j_show_in_the_feedback() {
     let truth = emu.snapshot();
     assert!((truth.joint_positions_rad[0].to_degrees() - 10.0).abs() < 0.1);
     emu.shutdown().await;
+}
+
+/// Everything on the wire (frames and timestamps) during a scripted 1.5 s session.
+async fn session_log() -> Vec<(Duration, CanFrame)> {
+    let (bus, host, emu) = start(FirmwareProfile::V1_8_8);
+    let mut tap = bus.tap();
+    host.send(frame(0x471, [7, 2, 0, 0, 0, 0, 0, 0]))
+        .await
+        .unwrap();
+    host.send(frame(0x151, [1, 1, 80, 0, 0, 0, 0, 0]))
+        .await
+        .unwrap();
+    let j1 = 20_000i32.to_be_bytes();
+    host.send(frame(0x155, [j1[0], j1[1], j1[2], j1[3], 0, 0x6F, 0xE8, 0]))
+        .await
+        .unwrap();
+    host.send(frame(0x4AF, [1, 0, 0, 0, 0, 0, 0, 0]))
+        .await
+        .unwrap();
+    tokio::time::sleep(Duration::from_millis(1500)).await;
+    emu.shutdown().await;
+    let mut out = Vec::new();
+    while let Ok(rf) = tap.try_recv() {
+        out.push((rf.timestamp, rf.frame));
+    }
+    out
+}
+
+#[test]
+fn same_inputs_give_the_same_bytes_and_times() {
+    let run = || {
+        tokio::runtime::Builder::new_current_thread()
+            .enable_time()
+            .start_paused(true)
+            .build()
+            .unwrap()
+            .block_on(session_log())
+    };
+    let a = run();
+    let b = run();
+    assert!(a.len() > 4000, "{} frames", a.len());
+    assert_eq!(a, b);
 }

@@ -284,3 +284,53 @@ async fn estop_and_teach_button_and_gripper_sensor() {
         .is_err());
     emu.shutdown().await;
 }
+
+#[tokio::test(start_paused = true)]
+async fn blocked_motor_trips_the_stall_protection() {
+    let (_bus, host, emu) = start();
+    // Collision protection off (level 0, the factory default): the motor pushes until stall.
+    enable(&host).await;
+    collect(&host, Duration::from_millis(100)).await;
+    emu.add_obstacle(
+        ObstacleShape::Box {
+            half_extents_m: [0.3, 0.02, 0.3],
+        },
+        [0.0, 0.25, 0.2],
+    );
+    let target = 90_000i32.to_be_bytes();
+    let j2 = 28_648i32.to_be_bytes();
+    host.send(f8(
+        0x155,
+        [
+            target[0], target[1], target[2], target[3], j2[0], j2[1], j2[2], j2[3],
+        ],
+    ))
+    .await
+    .unwrap();
+    let j3 = (-28_648i32).to_be_bytes();
+    host.send(f8(0x156, [j3[0], j3[1], j3[2], j3[3], 0, 0, 0, 0]))
+        .await
+        .unwrap();
+    host.send(f8(0x157, [0; 8])).await.unwrap();
+    let frames = collect(&host, Duration::from_secs(5)).await;
+    // Whichever joint the wall blocks ends up pinned at its torque limit.
+    let stalled: Vec<u32> = (0x261..=0x266)
+        .filter(|&id| last(&frames, id).unwrap()[5] & 0x80 != 0)
+        .collect();
+    let snap = emu.snapshot();
+    assert!(
+        !stalled.is_empty(),
+        "no stall bit; q {:?} tau {:?}",
+        snap.joint_positions_rad,
+        snap.joint_torques_nm
+    );
+    for id in &stalled {
+        assert_eq!(
+            last(&frames, *id).unwrap()[5] & 0x40,
+            0,
+            "{id:#x} still enabled"
+        );
+    }
+    assert_eq!(last(&frames, 0x2A1).unwrap()[1], 0x09);
+    emu.shutdown().await;
+}

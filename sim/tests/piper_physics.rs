@@ -187,3 +187,51 @@ fn torque_limited_pd_never_drives_a_joint_past_its_urdf_limit() {
         }
     }
 }
+
+#[test]
+fn arm_stops_on_an_obstacle_and_reports_the_touching_link() {
+    let mut world = piper_world();
+    let home = [0.0, 1.0, -1.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+    world
+        .set_joint_positions(&home)
+        .expect("home within limits");
+    // A post where the gripper would be after turning J1 by +0.6 rad.
+    let mut turned = home;
+    turned[0] = 0.6;
+    let gripper = world
+        .model()
+        .link_pose("gripper_base", &turned)
+        .expect("valid pose")
+        .expect("gripper_base exists");
+    let p = gripper * nalgebra::Point3::new(0.0, 0.0, 0.06);
+    let post = world.add_obstacle(
+        sim::physics::ObstacleShape::Cylinder {
+            radius_m: 0.03,
+            half_height_m: 0.3,
+        },
+        [p.x, p.y, p.z],
+    );
+    assert!(world.contacts().is_empty(), "{:?}", world.contacts());
+    let mut goal = home;
+    goal[0] = 1.2;
+    let joints = world.joints().to_vec();
+    let mut controller = Controller::new(&goal, world.config().step_s);
+    for _ in 0..3000 {
+        let tau = controller.torques(&world.joint_positions(), &world.joint_velocities(), &joints);
+        world.step(&tau);
+    }
+    let q1 = world.joint_positions()[0];
+    assert!(q1 > 0.2 && q1 < 0.6, "J1 blocked by the post, at {q1}");
+    let contacts = world.contacts();
+    assert!(!contacts.is_empty());
+    let hand = ["link5", "link6", "gripper_base", "link7", "link8"];
+    for c in &contacts {
+        assert_eq!(c.obstacle, post);
+        assert!(hand.contains(&c.link.as_str()), "{c:?}");
+    }
+    assert!(
+        contacts.iter().any(|c| c.normal_force_n > 1.0),
+        "{contacts:?}"
+    );
+    eprintln!("J1 stopped at {q1:.3} rad; contacts {contacts:?}");
+}

@@ -651,3 +651,50 @@ async fn state_file_keeps_flash_across_restarts() {
     emu.shutdown().await;
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[tokio::test(start_paused = true)]
+async fn leader_homing_and_upgrade_silence() {
+    let (_bus, host, emu) = start(config(FirmwareProfile::V1_8_2));
+    send_all(
+        &host,
+        &[
+            f8(0x470, [0xFA, 0, 0, 0, 0, 0, 0, 0]),
+            f8(0x151, [0, 0, 0, 0, 0, 0, 0, 0]),
+        ],
+    )
+    .await;
+    collect(&host, Duration::from_millis(50)).await;
+    // Leader goes home alone: it stops emitting joint targets while it moves.
+    host.send(f8(0x191, [1, 1, 1, 0, 0, 0, 0, 0]))
+        .await
+        .unwrap();
+    collect(&host, Duration::from_millis(20)).await;
+    let frames = collect(&host, Duration::from_millis(100)).await;
+    assert!(
+        last(&frames, 0x155).is_none(),
+        "joint targets while homing alone"
+    );
+    assert!(last(&frames, 0x151).is_some());
+    // It arrives home (then goes compliant again and may drift under its own weight).
+    let mut best = f64::INFINITY;
+    for _ in 0..300 {
+        collect(&host, Duration::from_millis(10)).await;
+        let q = emu.snapshot().reported_joints_rad;
+        best = best.min(q.iter().fold(0.0f64, |m, x| m.max(x.abs())));
+    }
+    assert!(best < 0.01, "leader never got home: {best} rad");
+    // Back in drag mode it reports its joints again.
+    let frames = collect(&host, Duration::from_millis(50)).await;
+    assert!(last(&frames, 0x155).is_some());
+    // 0x422 mode 1: the bus goes silent until mode 0.
+    host.send(CanFrame::standard(0x422, &[1]).unwrap())
+        .await
+        .unwrap();
+    collect(&host, Duration::from_millis(10)).await;
+    assert!(collect(&host, Duration::from_millis(100)).await.is_empty());
+    host.send(CanFrame::standard(0x422, &[0]).unwrap())
+        .await
+        .unwrap();
+    assert!(!collect(&host, Duration::from_millis(50)).await.is_empty());
+    emu.shutdown().await;
+}

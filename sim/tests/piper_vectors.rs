@@ -10,11 +10,17 @@ use bus::CanFrame;
 /// One vector: the comment(s) before a frame and the frame.
 #[derive(Debug)]
 pub struct Vector {
+    /// Fixture file name.
     pub file: String,
+    /// 1-based line of the vector comment.
     pub line: usize,
+    /// CAN id named by the comment.
     pub id: u16,
+    /// Vector name (`arm_status`, `mode_ctrl`, …).
     pub name: String,
+    /// Decoded fields as written.
     pub fields: BTreeMap<String, String>,
+    /// The frame.
     pub frame: CanFrame,
     /// 1-based line of the frame itself (several comments may share it).
     pub frame_line: usize,
@@ -23,9 +29,11 @@ pub struct Vector {
 }
 
 impl Vector {
+    /// Whether the comment lists `key`.
     pub fn has(&self, key: &str) -> bool {
         self.fields.contains_key(key)
     }
+    /// Integer field (decimal or 0x hex).
     pub fn get(&self, key: &str) -> i64 {
         let v = self
             .fields
@@ -39,15 +47,19 @@ impl Vector {
             })
         }
     }
+    /// Float field.
     pub fn f(&self, key: &str) -> f64 {
         self.fields[key].parse().unwrap()
     }
+    /// String field.
     pub fn s(&self, key: &str) -> &str {
         &self.fields[key]
     }
+    /// The `expect=` handling, if any.
     pub fn expect(&self) -> Option<&str> {
         self.fields.get("expect").map(String::as_str)
     }
+    /// Location for assertion messages.
     pub fn at(&self) -> String {
         format!(
             "{}:{} ({:03X} {})",
@@ -56,10 +68,12 @@ impl Vector {
     }
 }
 
+/// `fixtures/piper/`.
 pub fn fixtures_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../fixtures/piper")
 }
 
+/// `ID#HEX` → frame.
 pub fn parse_frame(text: &str) -> CanFrame {
     let (id, data) = text.split_once('#').unwrap();
     let id = u16::from_str_radix(id, 16).unwrap();

@@ -153,7 +153,7 @@ fn csp_respects_limit_spd() {
         rs03.tick();
         peak = peak.max(rs03.snapshot().speed_rad_s);
     }
-    assert!(peak <= 1.5 * 1.05 && peak >= 1.5 * 0.95, "peak {peak}");
+    assert!((1.5 * 0.95..=1.5 * 1.05).contains(&peak), "peak {peak}");
     assert!((rs03.snapshot().angle_rad - 3.0).abs() < 0.01);
 }
 
@@ -342,4 +342,33 @@ fn rig_urdf_file_matches_the_generator() {
     let load = robot.links.iter().find(|l| l.name == "load").unwrap();
     assert_eq!(load.inertial.mass.value, 1.0);
     assert_eq!(load.inertial.origin.xyz.0, [0.0, 0.0, -0.3]);
+}
+
+/// The same CSP hold on the rig's URDF in the rapier world agrees with the analytic rig.
+#[test]
+fn pendulum_hold_in_the_physics_world_needs_mgl_too() {
+    let (mass, length) = (1.0, 0.3);
+    let mut config = MotorConfig::new(MOTOR, Model::RS03).with_load(Load::Pendulum {
+        mass_kg: mass,
+        length_m: length,
+    });
+    config.plant = sim::robstride::PlantKind::World;
+    let mut rs03 = Actuator::new(config, None, 1_000_000);
+    write_u8(&mut rs03, 0x7005, 5);
+    enable(&mut rs03);
+    write_f32(&mut rs03, 0x7017, 2.0);
+    write_f32(&mut rs03, 0x7016, std::f32::consts::FRAC_PI_2);
+    run_ms(&mut rs03, 6000);
+    let snap = rs03.snapshot();
+    assert!(
+        (snap.angle_rad - std::f64::consts::FRAC_PI_2).abs() < 0.01,
+        "{}",
+        snap.angle_rad
+    );
+    let mgl = mass * GRAVITY_M_S2 * length;
+    assert!(
+        (snap.torque_nm - mgl).abs() <= 0.05 * mgl,
+        "{} vs {mgl}",
+        snap.torque_nm
+    );
 }

@@ -1,12 +1,107 @@
-//! `armhil record` (being built).
+//! `armhil record`: write everything seen on a SocketCAN interface to a candump log or pcap.
 
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 /// Arguments of `armhil record`.
 #[derive(Debug, clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// CAN interface to record, e.g. `vcan0`.
+    #[arg(long)]
+    pub iface: String,
+    /// Output file: `.pcap` writes pcap (Wireshark), anything else a candump `-L` log.
+    #[arg(short = 'o', long)]
+    pub output: PathBuf,
+    /// Stop after this many seconds instead of waiting for Ctrl-C.
+    #[arg(long, value_name = "SECS")]
+    pub duration: Option<f64>,
+}
 
 /// Run the subcommand.
-pub fn run(_args: Args) -> anyhow::Result<ExitCode> {
-    anyhow::bail!("armhil record is not built yet")
+pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    if let Some(secs) = args.duration {
+        anyhow::ensure!(
+            secs.is_finite() && secs >= 0.0,
+            "--duration must be a non-negative number of seconds, got {secs}"
+        );
+    }
+    imp::run(args)
+}
+
+#[cfg(not(target_os = "linux"))]
+mod imp {
+    use super::*;
+
+    pub fn run(_args: Args) -> anyhow::Result<ExitCode> {
+        anyhow::bail!("armhil record needs SocketCAN, which only exists on Linux")
+    }
+}
+
+#[cfg(target_os = "linux")]
+mod imp {
+    use std::time::Duration;
+
+    use anyhow::Context as _;
+    use bus::recorder::Recorder;
+    use bus::socketcan_bus::SocketCanBus;
+    use bus::{BusError, CanBus};
+
+    use super::*;
+
+    pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+        let runtime = tokio::runtime::Builder::new_current_thread()
+            .enable_all()
+            .build()
+            .context("cannot start the async runtime")?;
+        runtime.block_on(record(args))
+    }
+
+    async fn record(args: Args) -> anyhow::Result<ExitCode> {
+        let bus = SocketCanBus::open(&args.iface)
+            .with_context(|| format!("cannot open CAN interface {}", args.iface))?;
+        let mut recorder = Recorder::create(&args.output, &args.iface)
+            .with_context(|| format!("cannot create {}", args.output.display()))?;
+        tracing::info!(iface = %args.iface, output = %args.output.display(), "recording; Ctrl-C stops");
+        let stop_after = async {
+            match args.duration {
+                Some(secs) => tokio::time::sleep(Duration::from_secs_f64(secs)).await,
+                None => std::future::pending().await,
+            }
+        };
+        tokio::pin!(stop_after);
+        // Flush now and then so a killed process leaves at most a second unwritten.
+        let mut flush = tokio::time::interval(Duration::from_secs(1));
+        let outcome = loop {
+            tokio::select! {
+                signal = tokio::signal::ctrl_c() => {
+                    if let Err(error) = signal {
+                        tracing::warn!(%error, "cannot listen for Ctrl-C");
+                    }
+                    tracing::info!("interrupted");
+                    break Ok(());
+                }
+                () = &mut stop_after => break Ok(()),
+                _ = flush.tick() => {
+                    if let Err(error) = recorder.flush() {
+                        break Err(anyhow::Error::new(error).context("cannot write the recording"));
+                    }
+                }
+                received = bus.recv() => match received {
+                    Ok(frame) => {
+                        if let Err(error) = recorder.write(&frame) {
+                            break Err(anyhow::Error::new(error).context("cannot write the recording"));
+                        }
+                    }
+                    Err(BusError::BusOff) => tracing::warn!(iface = %args.iface, "bus-off reported; still recording"),
+                    Err(error) => break Err(anyhow::Error::new(error).context("reading the bus failed")),
+                },
+            }
+        };
+        // Finish the file whatever stopped us, so it is complete.
+        let frames = recorder
+            .finish()
+            .with_context(|| format!("cannot finish {}", args.output.display()))?;
+        tracing::info!(frames, output = %args.output.display(), "recording finished");
+        outcome.map(|()| ExitCode::SUCCESS)
+    }
 }

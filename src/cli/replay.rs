@@ -1,12 +1,167 @@
-//! `armhil replay` (being built).
+//! `armhil replay`: send a candump log onto a SocketCAN interface with its original timing.
 
+use std::path::PathBuf;
 use std::process::ExitCode;
+use std::time::Duration;
+
+use bus::candump::LogEntry;
+use bus::CanFrame;
 
 /// Arguments of `armhil replay`.
 #[derive(Debug, clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// candump `-L` log to replay (blank lines and `#` comments are skipped).
+    pub log: PathBuf,
+    /// CAN interface to send on, e.g. `vcan0`.
+    #[arg(long)]
+    pub iface: String,
+    /// Start over at the end until interrupted.
+    #[arg(long = "loop")]
+    pub repeat: bool,
+    /// Time scale: 2 plays twice as fast, 0.5 at half speed.
+    #[arg(long, default_value_t = 1.0)]
+    pub speed: f64,
+}
+
+/// Frames with their send offset from the start of the replay: the log's gaps divided by
+/// `speed`. Timestamps that go backwards are sent without a gap.
+pub fn schedule(entries: &[LogEntry], speed: f64) -> Vec<(Duration, CanFrame)> {
+    let Some(first) = entries.first() else {
+        return Vec::new();
+    };
+    entries
+        .iter()
+        .map(|entry| {
+            let gap = entry.timestamp.saturating_sub(first.timestamp);
+            (gap.div_f64(speed), entry.frame)
+        })
+        .collect()
+}
 
 /// Run the subcommand.
-pub fn run(_args: Args) -> anyhow::Result<ExitCode> {
-    anyhow::bail!("armhil replay is not built yet")
+pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    anyhow::ensure!(
+        args.speed.is_finite() && args.speed > 0.0,
+        "--speed must be a positive number, got {}",
+        args.speed
+    );
+    imp::run(args)
+}
+
+#[cfg(not(target_os = "linux"))]
+mod imp {
+    use super::*;
+
+    pub fn run(_args: Args) -> anyhow::Result<ExitCode> {
+        anyhow::bail!("armhil replay needs SocketCAN, which only exists on Linux")
+    }
+}
+
+#[cfg(target_os = "linux")]
+mod imp {
+    use anyhow::Context as _;
+    use bus::socketcan_bus::SocketCanBus;
+    use bus::{BusError, CanBus};
+    use tokio::time::Instant;
+
+    use super::*;
+
+    /// How long a full transmit queue may keep one frame waiting before the replay gives up.
+    const QUEUE_FULL_PATIENCE: Duration = Duration::from_secs(1);
+
+    pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+        let entries = bus::candump::read_log(&args.log)
+            .with_context(|| format!("cannot read {}", args.log.display()))?;
+        let plan = schedule(&entries, args.speed);
+        anyhow::ensure!(!plan.is_empty(), "{} holds no frames", args.log.display());
+        let runtime = tokio::runtime::Builder::new_current_thread()
+            .enable_all()
+            .build()
+            .context("cannot start the async runtime")?;
+        runtime.block_on(async {
+            let bus = SocketCanBus::open(&args.iface)
+                .with_context(|| format!("cannot open CAN interface {}", args.iface))?;
+            tokio::select! {
+                result = replay(&bus, &plan, &args) => result,
+                signal = tokio::signal::ctrl_c() => {
+                    signal.context("cannot listen for Ctrl-C")?;
+                    tracing::info!("interrupted");
+                    Ok(ExitCode::SUCCESS)
+                }
+            }
+        })
+    }
+
+    async fn replay(
+        bus: &SocketCanBus,
+        plan: &[(Duration, CanFrame)],
+        args: &Args,
+    ) -> anyhow::Result<ExitCode> {
+        let mut pass = 0u64;
+        loop {
+            pass += 1;
+            tracing::info!(pass, frames = plan.len(), iface = %args.iface, speed = args.speed, "replaying");
+            let start = Instant::now();
+            for (offset, frame) in plan {
+                tokio::time::sleep_until(start + *offset).await;
+                send_patiently(bus, *frame).await?;
+            }
+            if !args.repeat {
+                tracing::info!(frames = plan.len(), "replay finished");
+                return Ok(ExitCode::SUCCESS);
+            }
+        }
+    }
+
+    /// Send, retrying while the interface's queue is full (a replay should not lose frames
+    /// to a momentarily busy bus).
+    async fn send_patiently(bus: &SocketCanBus, frame: CanFrame) -> anyhow::Result<()> {
+        let deadline = Instant::now() + QUEUE_FULL_PATIENCE;
+        loop {
+            match bus.send(frame).await {
+                Ok(()) => return Ok(()),
+                Err(BusError::TxQueueFull { .. }) if Instant::now() < deadline => {
+                    tokio::time::sleep(Duration::from_millis(1)).await;
+                }
+                Err(error) => {
+                    return Err(anyhow::Error::new(error).context(format!("cannot send {frame}")))
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn entry(micros: u64, id: u16) -> LogEntry {
+        LogEntry {
+            timestamp: Duration::from_micros(micros),
+            iface: "vcan0".into(),
+            frame: CanFrame::standard(id, &[]).unwrap(),
+        }
+    }
+
+    #[test]
+    fn schedule_keeps_gaps_scaled_by_speed() {
+        let entries = [
+            entry(1_000_000, 1),
+            entry(1_010_000, 2),
+            entry(1_030_000, 3),
+        ];
+        let at = |plan: Vec<(Duration, CanFrame)>| -> Vec<u128> {
+            plan.iter().map(|(offset, _)| offset.as_micros()).collect()
+        };
+        assert_eq!(at(schedule(&entries, 1.0)), vec![0, 10_000, 30_000]);
+        assert_eq!(at(schedule(&entries, 2.0)), vec![0, 5_000, 15_000]);
+        assert_eq!(at(schedule(&entries, 0.5)), vec![0, 20_000, 60_000]);
+        assert!(schedule(&[], 1.0).is_empty());
+    }
+
+    #[test]
+    fn backwards_timestamps_do_not_wrap() {
+        let plan = schedule(&[entry(5_000, 1), entry(4_000, 2)], 1.0);
+        assert_eq!(plan[1].0, Duration::ZERO);
+    }
 }

@@ -7,7 +7,7 @@ use std::time::Duration;
 
 use armhil::harness::report::{junit_xml, write_atomic, write_outputs, Written};
 use armhil::harness::{
-    discover, load_scenario, run_scenario, Clock, Outcome, ScenarioResult, Verdict,
+    discover, load_scenario, run_scenario_with, Clock, Outcome, RunOptions, ScenarioResult, Verdict,
 };
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -23,7 +23,8 @@ pub struct Args {
     /// Output root: each scenario writes into DIR/<scenario name>/.
     #[arg(long, value_name = "DIR", default_value = "out")]
     out: PathBuf,
-    /// Run on the real clock (in-process emulator and virtual bus) instead of virtual time.
+    /// Run on the real clock instead of virtual time: on the scenario's `bench.bus.interface`
+    /// when it names one, else with the in-process emulator on the virtual bus.
     #[arg(long)]
     realtime: bool,
     /// Run in real time against a separate emulator process (`armhil sim piper --iface IF`)
@@ -31,6 +32,11 @@ pub struct Args {
     /// bus faults, obstacles, initial joints) are skipped with the reason.
     #[arg(long, value_name = "IF")]
     iface: Option<String>,
+    /// Multiply every deadline (wait_until, action and driver timeouts) by this factor in
+    /// real-time runs, for slow machines such as a vcan VM under emulation. Ignored in virtual
+    /// time.
+    #[arg(long, value_name = "FACTOR", default_value_t = 1.0)]
+    time_scale: f64,
 }
 
 fn secs(d: Duration) -> String {
@@ -38,6 +44,11 @@ fn secs(d: Duration) -> String {
 }
 
 fn verdict_line(r: &ScenarioResult) -> String {
+    match &r.verdict {
+        Verdict::Skipped(reason) => return format!("SKIP  {}: {reason}", r.name),
+        Verdict::Error(message) => return format!("ERROR {}: {message}", r.name),
+        Verdict::Passed | Verdict::Failed => {}
+    }
     let passed = r.steps.iter().filter(|s| s.outcome.passed()).count();
     let mut line = format!(
         "{:<5} {} ({}/{} steps, {} scenario time, {} wall)",
@@ -49,8 +60,7 @@ fn verdict_line(r: &ScenarioResult) -> String {
         secs(r.wall)
     );
     match &r.verdict {
-        Verdict::Skipped(reason) => line.push_str(&format!("\n      skipped: {reason}")),
-        Verdict::Error(message) => line.push_str(&format!("\n      error: {message}")),
+        Verdict::Skipped(_) | Verdict::Error(_) => {}
         Verdict::Failed => {
             if let Some(step) = r.first_failure() {
                 line.push_str(&format!(
@@ -65,7 +75,9 @@ fn verdict_line(r: &ScenarioResult) -> String {
                     | Outcome::TimedOut {
                         expected, actual, ..
                     } => {
-                        line.push_str(&format!("\n      expected: {expected}\n      actual:   {actual}"));
+                        line.push_str(&format!(
+                            "\n      expected: {expected}\n      actual:   {actual}"
+                        ));
                     }
                     Outcome::Passed | Outcome::NotRun => {}
                 }
@@ -82,7 +94,10 @@ fn where_written(w: &Written) -> String {
     if let Some(s) = show(&w.snapshot) {
         parts.push(format!("      snapshot:  {s}"));
     }
-    let recording: Vec<String> = [show(&w.candump), show(&w.pcap)].into_iter().flatten().collect();
+    let recording: Vec<String> = [show(&w.candump), show(&w.pcap)]
+        .into_iter()
+        .flatten()
+        .collect();
     if !recording.is_empty() {
         parts.push(format!("      recording: {}", recording.join(", ")));
     }
@@ -94,11 +109,18 @@ fn where_written(w: &Written) -> String {
 
 /// Run every scenario; exit 0 only when none failed.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    let clock = match (&args.iface, args.realtime) {
-        (Some(iface), _) => Clock::Iface(iface.clone()),
-        (None, true) => Clock::Realtime,
-        (None, false) => Clock::Virtual,
+    let clock_for = |bench_iface: Option<&String>| match (&args.iface, args.realtime, bench_iface) {
+        (Some(iface), _, _) => Clock::Iface(iface.clone()),
+        (None, true, Some(iface)) => Clock::Iface(iface.clone()),
+        (None, true, None) => Clock::Realtime,
+        (None, false, _) => Clock::Virtual,
     };
+    if !(args.time_scale.is_finite() && args.time_scale >= 1.0) {
+        anyhow::bail!(
+            "--time-scale must be a number >= 1, got {}",
+            args.time_scale
+        );
+    }
     let files = discover(&args.paths)?;
     if files.is_empty() {
         anyhow::bail!("no scenario files (*.yaml, *.yml) found");
@@ -114,7 +136,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         Some(bar) => bar.println(text),
         None => println!("{text}"),
     };
-    if let Clock::Iface(iface) = &clock {
+    if let Some(iface) = &args.iface {
         print(&format!(
             "running on {iface} in real time against a separate emulator process: bus faults and emulator faults are unavailable; scenarios that use them are skipped"
         ));
@@ -127,20 +149,30 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         }
         let result = match load_scenario(file) {
             Ok(scenario) => {
-                let result = run_scenario(&scenario, &clock);
+                let options = RunOptions {
+                    time_scale: args.time_scale,
+                };
+                let result = run_scenario_with(
+                    &scenario,
+                    &clock_for(scenario.bench.interface.as_ref()),
+                    &options,
+                );
                 if !matches!(result.verdict, Verdict::Skipped(_)) {
                     let dir = args.out.join(&scenario.name);
                     match write_outputs(&result, &scenario.record, &dir) {
                         Ok(w) => last_written = Some(w),
-                        Err(e) => print(&format!("error writing outputs to {}: {e}", dir.display())),
+                        Err(e) => {
+                            print(&format!("error writing outputs to {}: {e}", dir.display()))
+                        }
                     }
                 }
                 result
             }
             Err(e) => {
-                let name = file
-                    .file_stem()
-                    .map_or_else(|| "scenario".to_owned(), |s| s.to_string_lossy().into_owned());
+                let name = file.file_stem().map_or_else(
+                    || "scenario".to_owned(),
+                    |s| s.to_string_lossy().into_owned(),
+                );
                 ScenarioResult::not_run(&name, file.clone(), Verdict::Error(e.to_string()), "none")
             }
         };
@@ -172,7 +204,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             secs(scenario_time),
             secs(wall)
         );
-        println!("outputs: {}/<scenario>/{{result.yaml, bus.log, bus.pcap, plot.svg}}", args.out.display());
+        println!(
+            "outputs: {}/<scenario>/{{result.yaml, bus.log, bus.pcap, plot.svg}}",
+            args.out.display()
+        );
     }
     if let Some(path) = &args.junit {
         write_atomic(path, junit_xml("armhil", &results).as_bytes())?;

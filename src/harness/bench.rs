@@ -4,14 +4,14 @@ use std::sync::Arc;
 
 use bus::virtual_bus::{VirtualBus, VirtualBusConfig};
 use bus::CanBus;
-use driver::piper::PiperBuilder;
+use driver::piper::{PiperBuilder, Timeouts};
 use tokio::time::Instant;
 
 use super::device::Device;
 use super::emulator::PiperSim;
 use super::model::{DeviceKind, PiperSettings, Scenario};
 use super::piper::{EmulatorControl, PiperDevice};
-use super::runner::{Clock, Recorder};
+use super::runner::{Clock, Recorder, RunOptions};
 
 /// Node name of the drivers on the virtual bus (bus faults can target it as `host`).
 pub const HOST_NODE: &str = "host";
@@ -29,14 +29,31 @@ pub(crate) struct BuiltBench {
 }
 
 /// Build the bench: in-process emulators on a virtual bus, or drivers on a real interface.
-pub(crate) async fn build(scenario: &Scenario, clock: &Clock) -> Result<BuiltBench, String> {
+pub(crate) async fn build(
+    scenario: &Scenario,
+    clock: &Clock,
+    options: &RunOptions,
+) -> Result<BuiltBench, String> {
     match clock {
-        Clock::Virtual | Clock::Realtime => build_virtual(scenario).await,
-        Clock::Iface(iface) => build_iface(scenario, iface).await,
+        Clock::Virtual | Clock::Realtime => build_virtual(scenario, options).await,
+        Clock::Iface(iface) => build_iface(scenario, iface, options).await,
     }
 }
 
-async fn build_virtual(scenario: &Scenario) -> Result<BuiltBench, String> {
+/// The driver's timeouts, scaled for slow real-time runs.
+fn driver_timeouts(options: &RunOptions) -> Timeouts {
+    let d = Timeouts::default();
+    Timeouts {
+        first_feedback: d.first_feedback.map(|t| options.deadline(t)),
+        query: options.deadline(d.query),
+        enable: options.deadline(d.enable),
+        link: options.deadline(d.link),
+        send: options.deadline(d.send),
+        ..d
+    }
+}
+
+async fn build_virtual(scenario: &Scenario, options: &RunOptions) -> Result<BuiltBench, String> {
     let bus = VirtualBus::new(VirtualBusConfig {
         bitrate_bps: scenario.bench.bitrate_bps,
         ..VirtualBusConfig::default()
@@ -49,11 +66,15 @@ async fn build_virtual(scenario: &Scenario) -> Result<BuiltBench, String> {
             DeviceKind::Piper(settings) => {
                 let emulator = spawn_piper_emulator(&bus, &spec.name, settings)?;
                 let host: Arc<dyn CanBus> = Arc::new(bus.attach(HOST_NODE));
-                let driver = PiperBuilder::new(host)
-                    .connect()
-                    .await
-                    .map_err(|e| format!("device `{}`: driver could not connect: {e}", spec.name))?;
-                devices.push(Arc::new(PiperDevice::new(&spec.name, driver, Some(emulator))));
+                let driver = PiperBuilder::new(host).connect().await.map_err(|e| {
+                    format!("device `{}`: driver could not connect: {e}", spec.name)
+                })?;
+                devices.push(Arc::new(PiperDevice::new(
+                    &spec.name,
+                    driver,
+                    Some(emulator),
+                    *options,
+                )));
             }
         }
     }
@@ -71,10 +92,59 @@ fn spawn_piper_emulator(
     settings: &PiperSettings,
 ) -> Result<Box<dyn EmulatorControl>, String> {
     let node: Arc<dyn CanBus> = Arc::new(bus.attach(name));
-    let sim = PiperSim::spawn(node, settings).map_err(|e| format!("device `{name}`: emulator: {e}"))?;
+    let sim =
+        PiperSim::spawn(node, settings).map_err(|e| format!("device `{name}`: emulator: {e}"))?;
     Ok(Box::new(sim))
 }
 
-async fn build_iface(_scenario: &Scenario, iface: &str) -> Result<BuiltBench, String> {
-    Err(format!("SocketCAN interface `{iface}` is not supported in this build"))
+#[cfg(target_os = "linux")]
+async fn build_iface(
+    scenario: &Scenario,
+    iface: &str,
+    options: &RunOptions,
+) -> Result<BuiltBench, String> {
+    use bus::socketcan_bus::SocketCanBus;
+    let open = |what: &str| {
+        SocketCanBus::open(iface)
+            .map(|b| Arc::new(b) as Arc<dyn CanBus>)
+            .map_err(|e| format!("cannot open {iface} for the {what}: {e}"))
+    };
+    // A second socket sees every frame on the interface (the driver's and the emulator's).
+    let recorder = Recorder::from_bus(open("recorder")?);
+    let t0 = Instant::now();
+    let mut devices: Vec<Arc<dyn Device>> = Vec::new();
+    for spec in &scenario.bench.devices {
+        match &spec.kind {
+            DeviceKind::Piper(_) => {
+                let driver = PiperBuilder::new(open("driver")?)
+                    .timeouts(driver_timeouts(options))
+                    .connect()
+                    .await
+                    .map_err(|e| {
+                        format!(
+                            "device `{}`: driver could not connect on {iface} (is `armhil sim piper --iface {iface}` running?): {e}",
+                            spec.name
+                        )
+                    })?;
+                devices.push(Arc::new(PiperDevice::new(
+                    &spec.name, driver, None, *options,
+                )));
+            }
+        }
+    }
+    Ok(BuiltBench {
+        devices,
+        bus: None,
+        recorder,
+        t0,
+    })
+}
+
+#[cfg(not(target_os = "linux"))]
+async fn build_iface(
+    _scenario: &Scenario,
+    iface: &str,
+    _options: &RunOptions,
+) -> Result<BuiltBench, String> {
+    Err(format!("SocketCAN interface `{iface}` needs Linux"))
 }

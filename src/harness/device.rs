@@ -90,7 +90,11 @@ pub trait Device: Send + Sync {
     fn name(&self) -> &str;
 
     /// Perform a driver action. `timeout` overrides the driver's default deadline.
-    async fn perform(&self, action: &Action, timeout: Option<Duration>) -> Result<Reply, DeviceError>;
+    async fn perform(
+        &self,
+        action: &Action,
+        timeout: Option<Duration>,
+    ) -> Result<Reply, DeviceError>;
 
     /// The current state as the driver sees it.
     fn observe(&self) -> Observation;

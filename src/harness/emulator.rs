@@ -22,16 +22,24 @@ pub(crate) struct PiperSim {
 fn to_sim(fault: &EmulatorFault) -> PiperFault {
     match *fault {
         EmulatorFault::CommLoss { joint } => PiperFault::JointCommLoss { joint },
-        EmulatorFault::MotorOverTemp { joint, temp_c } => PiperFault::MotorOverTemp { joint, temp_c },
-        EmulatorFault::DriverOverTemp { joint, temp_c } => PiperFault::DriverOverTemp { joint, temp_c },
+        EmulatorFault::MotorOverTemp { joint, temp_c } => {
+            PiperFault::MotorOverTemp { joint, temp_c }
+        }
+        EmulatorFault::DriverOverTemp { joint, temp_c } => {
+            PiperFault::DriverOverTemp { joint, temp_c }
+        }
         EmulatorFault::OverCurrent { joint } => PiperFault::OverCurrent { joint },
         EmulatorFault::UnderVoltage { voltage_v } => PiperFault::UnderVoltage { voltage_v },
         EmulatorFault::DriverError { joint } => PiperFault::DriverError { joint },
         EmulatorFault::Stall { joint } => PiperFault::Stall { joint },
-        EmulatorFault::ExternalTorque { joint, torque_nm } => PiperFault::ExternalTorque { joint, torque_nm },
+        EmulatorFault::ExternalTorque { joint, torque_nm } => {
+            PiperFault::ExternalTorque { joint, torque_nm }
+        }
         EmulatorFault::Collision { joint } => PiperFault::Collision { joint },
         EmulatorFault::Estop => PiperFault::EStop,
-        EmulatorFault::NtcOverTemp { board: NtcBoard::Main } => PiperFault::MainControlOverTemp,
+        EmulatorFault::NtcOverTemp {
+            board: NtcBoard::Main,
+        } => PiperFault::MainControlOverTemp,
         EmulatorFault::NtcOverTemp {
             board: NtcBoard::BrakeResistor,
         } => PiperFault::ResistorOverTemp,
@@ -116,7 +124,11 @@ impl EmulatorControl for PiperSim {
     }
 
     async fn shutdown(&self) {
-        let handle = self.handle.lock().unwrap_or_else(PoisonError::into_inner).take();
+        let handle = self
+            .handle
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .take();
         if let Some(h) = handle {
             h.shutdown().await;
         }

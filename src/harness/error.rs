@@ -73,7 +73,8 @@ impl fmt::Display for ScenarioError {
         if let Some(line) = &self.source_line {
             let gutter = self.pos.line.to_string();
             let pad = " ".repeat(gutter.len());
-            let caret_pad = " ".repeat(usize::try_from(self.pos.column.saturating_sub(1)).unwrap_or(0));
+            let caret_pad =
+                " ".repeat(usize::try_from(self.pos.column.saturating_sub(1)).unwrap_or(0));
             write!(f, "\n{pad} |\n{gutter} | {line}\n{pad} | {caret_pad}^")?;
         }
         Ok(())
@@ -109,7 +110,11 @@ impl LoadError {
 }
 
 /// Turn a serde-saphyr error into a [`ScenarioError`] with a friendlier message.
-pub(crate) fn from_yaml_error(file: &Path, text: &str, error: &serde_saphyr::Error) -> ScenarioError {
+pub(crate) fn from_yaml_error(
+    file: &Path,
+    text: &str,
+    error: &serde_saphyr::Error,
+) -> ScenarioError {
     let pos = error
         .location()
         .map(|location| Pos::from_location(&location))
@@ -120,7 +125,54 @@ pub(crate) fn from_yaml_error(file: &Path, text: &str, error: &serde_saphyr::Err
         Some(cut) => raw[..cut].to_owned(),
         None => raw,
     };
-    ScenarioError::new(file, pos, friendlier(&message)).with_source(text)
+    ScenarioError::new(file, pos, suggest(&friendlier(&message))).with_source(text)
+}
+
+/// Append "did you mean `x`?" to an unknown-key message when one expected key is close.
+fn suggest(message: &str) -> String {
+    let Some(rest) = message.strip_prefix("unknown key `") else {
+        return message.to_owned();
+    };
+    let Some((key, tail)) = rest.split_once('`') else {
+        return message.to_owned();
+    };
+    let Some(list) = tail.strip_prefix(", expected one of ") else {
+        return message.to_owned();
+    };
+    let best = list
+        .split(", ")
+        .map(|c| (edit_distance(key, c), c))
+        .filter(|(d, c)| *d <= 2 && *d < c.len())
+        .min();
+    match best {
+        Some((_, candidate)) => format!("{message}; did you mean `{candidate}`?"),
+        None => message.to_owned(),
+    }
+}
+
+/// `; did you mean `x`?` when one of `candidates` is within two edits of `word`, else empty.
+pub(crate) fn suggestion(word: &str, candidates: &[&str]) -> String {
+    candidates
+        .iter()
+        .map(|c| (edit_distance(word, c), *c))
+        .filter(|(d, c)| *d <= 2 && *d < c.len())
+        .min()
+        .map_or_else(String::new, |(_, c)| format!("; did you mean `{c}`?"))
+}
+
+/// Levenshtein distance (keys are short ASCII words).
+pub(crate) fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut prev: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut cur = vec![i + 1];
+        for (j, cb) in b.iter().enumerate() {
+            let cost = usize::from(ca != *cb);
+            cur.push((prev[j] + cost).min(prev[j + 1] + 1).min(cur[j] + 1));
+        }
+        prev = cur;
+    }
+    prev[b.len()]
 }
 
 /// serde's type errors name Rust types; say what the scenario author should write instead.

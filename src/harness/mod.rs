@@ -5,7 +5,7 @@
 //! file, line and column ([`ScenarioError`]). The grammar is documented in
 //! `scenarios/README.md`.
 
-mod error;
+pub(crate) mod error;
 mod load;
 pub mod model;
 mod onekey;
@@ -28,4 +28,6 @@ mod runner;
 pub use bench::HOST_NODE;
 pub use device::{Device, DeviceError, Observation, Reply};
 pub use result::{Outcome, ScenarioResult, StepResult, Verdict};
-pub use runner::{run_scenario, Clock};
+pub use runner::{run_scenario, run_scenario_with, Clock, RunOptions};
+#[cfg(test)]
+mod tests;

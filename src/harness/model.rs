@@ -47,7 +47,11 @@ impl Scenario {
         }
         for step in &self.steps {
             if let StepKind::Inject { fault, .. } = &step.kind {
-                needs.push(format!("inject `{}` (line {})", fault.describe(), step.line));
+                needs.push(format!(
+                    "inject `{}` (line {})",
+                    fault.describe(),
+                    step.line
+                ));
             }
             if let StepKind::ClearFaults { .. } = &step.kind {
                 needs.push(format!("clear_faults (line {})", step.line));
@@ -62,7 +66,10 @@ impl Scenario {
                 needs.push(format!("initial_joints_deg on `{}`", device.name));
             }
             if settings.gripper_max_mm.is_some() || settings.collision_levels.is_some() {
-                needs.push(format!("flash settings (gripper_max_mm, collision_levels) on `{}`", device.name));
+                needs.push(format!(
+                    "flash settings (gripper_max_mm, collision_levels) on `{}`",
+                    device.name
+                ));
             }
             if settings.urdf.is_some() {
                 needs.push(format!("urdf on `{}`", device.name));
@@ -321,16 +328,24 @@ impl EmulatorFault {
     pub fn describe(&self) -> String {
         match self {
             Self::CommLoss { joint } => format!("comm_loss joint {joint}"),
-            Self::MotorOverTemp { joint, temp_c } => format!("motor_over_temp joint {joint} {temp_c} C"),
-            Self::DriverOverTemp { joint, temp_c } => format!("driver_over_temp joint {joint} {temp_c} C"),
+            Self::MotorOverTemp { joint, temp_c } => {
+                format!("motor_over_temp joint {joint} {temp_c} C")
+            }
+            Self::DriverOverTemp { joint, temp_c } => {
+                format!("driver_over_temp joint {joint} {temp_c} C")
+            }
             Self::OverCurrent { joint } => format!("over_current joint {joint}"),
             Self::UnderVoltage { voltage_v } => format!("under_voltage {voltage_v} V"),
             Self::DriverError { joint } => format!("driver_error joint {joint}"),
             Self::Stall { joint } => format!("stall joint {joint}"),
-            Self::ExternalTorque { joint, torque_nm } => format!("external_torque joint {joint} {torque_nm} Nm"),
+            Self::ExternalTorque { joint, torque_nm } => {
+                format!("external_torque joint {joint} {torque_nm} Nm")
+            }
             Self::Collision { joint } => format!("collision joint {joint}"),
             Self::Estop => "estop".to_owned(),
-            Self::NtcOverTemp { board: NtcBoard::Main } => "ntc_over_temp main".to_owned(),
+            Self::NtcOverTemp {
+                board: NtcBoard::Main,
+            } => "ntc_over_temp main".to_owned(),
             Self::NtcOverTemp {
                 board: NtcBoard::BrakeResistor,
             } => "ntc_over_temp brake_resistor".to_owned(),

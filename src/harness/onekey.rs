@@ -36,8 +36,9 @@ macro_rules! one_key_enum {
                         match text {
                             $( $key => one_key_enum!(@bare E, $name, $variant, $key $(, $bare)?), )*
                             other => Err(E::custom(format!(
-                                "unknown {} `{}`; expected one of: {}",
-                                $what, other, $name::KEYS.join(", ")
+                                "unknown {} `{}`; expected one of: {}{}",
+                                $what, other, $name::KEYS.join(", "),
+                                $crate::harness::error::suggestion(other, $name::KEYS)
                             ))),
                         }
                     }
@@ -59,8 +60,9 @@ macro_rules! one_key_enum {
                             } )*
                             other => {
                                 return Err(A::Error::custom(format!(
-                                    "unknown {} `{}`; expected one of: {}",
-                                    $what, other, $name::KEYS.join(", ")
+                                    "unknown {} `{}`; expected one of: {}{}",
+                                    $what, other, $name::KEYS.join(", "),
+                                    $crate::harness::error::suggestion(other, $name::KEYS)
                                 )))
                             }
                         };

@@ -18,6 +18,7 @@ use super::model::{
     Action, CtrlMode, EmulatorFault, ErrorClass, Install, MoveMode, Near, Payload, PiperAction,
     Pose, Role,
 };
+use super::runner::RunOptions;
 use super::vocab;
 
 /// Deadline of a `mode` step's confirmation on 0x2A1 when the step gives none.
@@ -39,14 +40,21 @@ pub(crate) struct PiperDevice {
     name: String,
     driver: Piper,
     emulator: Option<Box<dyn EmulatorControl>>,
+    options: RunOptions,
 }
 
 impl PiperDevice {
-    pub fn new(name: &str, driver: Piper, emulator: Option<Box<dyn EmulatorControl>>) -> Self {
+    pub fn new(
+        name: &str,
+        driver: Piper,
+        emulator: Option<Box<dyn EmulatorControl>>,
+        options: RunOptions,
+    ) -> Self {
         Self {
             name: name.to_owned(),
             driver,
             emulator,
+            options,
         }
     }
 }
@@ -86,7 +94,9 @@ fn target(pose: &Pose) -> EndPoseTarget {
 
 /// Compare a reply value with its expectation, recording it either way.
 fn check_near(reply: &mut Reply, key: &str, actual: f64, expected: Option<Near>, decimals: usize) {
-    reply.values.push((key.to_owned(), format!("{actual:.decimals$}")));
+    reply
+        .values
+        .push((key.to_owned(), format!("{actual:.decimals$}")));
     if let Some(e) = expected {
         if (actual - e.value).abs() > e.tolerance + 1e-9 {
             reply.mismatches.push((
@@ -169,25 +179,40 @@ const FRESH: Duration = Duration::from_millis(50);
 pub(crate) fn observe(state: &PiperState, now: tokio::time::Instant) -> Observation {
     let mut obs = Observation::default();
     if let Some(j) = &state.joints {
-        obs.joints_deg = j.value.angles_mdeg.iter().map(|a| f64::from(*a) / 1000.0).collect();
+        obs.joints_deg = j
+            .value
+            .angles_mdeg
+            .iter()
+            .map(|a| f64::from(*a) / 1000.0)
+            .collect();
     }
     if state.high_speed.iter().any(Option::is_some) {
         obs.speeds_deg_s = state
             .high_speed
             .iter()
-            .map(|h| h.as_ref().map_or(f64::NAN, |h| f64::from(h.value.speed_mrad_s).to_degrees() / 1000.0))
+            .map(|h| {
+                h.as_ref().map_or(f64::NAN, |h| {
+                    f64::from(h.value.speed_mrad_s).to_degrees() / 1000.0
+                })
+            })
             .collect();
         obs.currents_a = state
             .high_speed
             .iter()
-            .map(|h| h.as_ref().map_or(f64::NAN, |h| f64::from(h.value.current_ma) / 1000.0))
+            .map(|h| {
+                h.as_ref()
+                    .map_or(f64::NAN, |h| f64::from(h.value.current_ma) / 1000.0)
+            })
             .collect();
     }
     if state.low_speed.iter().any(Option::is_some) {
         obs.motor_temps_c = state
             .low_speed
             .iter()
-            .map(|l| l.as_ref().map_or(f64::NAN, |l| f64::from(l.value.motor_temp_c)))
+            .map(|l| {
+                l.as_ref()
+                    .map_or(f64::NAN, |l| f64::from(l.value.motor_temp_c))
+            })
             .collect();
         obs.enabled = state
             .low_speed
@@ -197,13 +222,17 @@ pub(crate) fn observe(state: &PiperState, now: tokio::time::Instant) -> Observat
         obs.joint_flags = state
             .low_speed
             .iter()
-            .map(|l| l.as_ref().map_or_else(Vec::new, |l| flag_names(l.value.status.0, &JOINT_BITS)))
+            .map(|l| {
+                l.as_ref()
+                    .map_or_else(Vec::new, |l| flag_names(l.value.status.0, &JOINT_BITS))
+            })
             .collect();
     }
     if let Some(p) = &state.end_pose {
         let p = &p.value;
         obs.position_mm = Some([p.x_um, p.y_um, p.z_um].map(|v| f64::from(v) / 1000.0));
-        obs.orientation_deg = Some([p.rx_mdeg, p.ry_mdeg, p.rz_mdeg].map(|v| f64::from(v) / 1000.0));
+        obs.orientation_deg =
+            Some([p.rx_mdeg, p.ry_mdeg, p.rz_mdeg].map(|v| f64::from(v) / 1000.0));
     }
     if let Some(g) = &state.gripper {
         obs.gripper_mm = Some(f64::from(g.value.stroke_um) / 1000.0);
@@ -216,7 +245,10 @@ pub(crate) fn observe(state: &PiperState, now: tokio::time::Instant) -> Observat
         let code = u8::from(a.arm_status);
         obs.arm_status_code = Some(code);
         status.insert("arm_status", vocab::name_of(&vocab::ARM_STATUS, code));
-        status.insert("ctrl_mode", vocab::name_of(&vocab::CTRL_MODE, u8::from(a.ctrl_mode)));
+        status.insert(
+            "ctrl_mode",
+            vocab::name_of(&vocab::CTRL_MODE, u8::from(a.ctrl_mode)),
+        );
         status.insert("move_mode", move_name(a.mode_feed));
         status.insert(
             "motion",
@@ -229,9 +261,14 @@ pub(crate) fn observe(state: &PiperState, now: tokio::time::Instant) -> Observat
         obs.comm_error_joints = a.comm_error.joints();
         obs.limit_error_joints = a.angle_limit_exceeded.joints();
     }
-    let fresh = |at: Option<tokio::time::Instant>| at.is_some_and(|at| now.saturating_duration_since(at) <= FRESH);
+    let fresh = |at: Option<tokio::time::Instant>| {
+        at.is_some_and(|at| now.saturating_duration_since(at) <= FRESH)
+    };
     let joints_fresh = fresh(state.joints.as_ref().map(|j| j.received_at));
-    status.insert("feedback", if joints_fresh { "alive" } else { "lost" }.to_owned());
+    status.insert(
+        "feedback",
+        if joints_fresh { "alive" } else { "lost" }.to_owned(),
+    );
     let leader_fresh = fresh(state.joint_cmd_echo.as_ref().map(|j| j.received_at));
     status.insert("leader_frames", leader_fresh.to_string());
     obs.status = status;
@@ -256,13 +293,21 @@ impl PiperDevice {
         }
     }
 
-    async fn act(&self, action: &PiperAction, timeout: Option<Duration>) -> Result<Reply, DeviceError> {
+    async fn act(
+        &self,
+        action: &PiperAction,
+        timeout: Option<Duration>,
+    ) -> Result<Reply, DeviceError> {
         let d = &self.driver;
         let mut reply = Reply::default();
         match action {
             PiperAction::Enable { joints, gripper } => {
                 if joints.is_empty() {
-                    let select = if *gripper { MotorSelect::AllWithGripper } else { MotorSelect::All };
+                    let select = if *gripper {
+                        MotorSelect::AllWithGripper
+                    } else {
+                        MotorSelect::All
+                    };
                     Self::within(timeout, "enable", d.enable(select)).await?;
                 } else {
                     for j in joints {
@@ -279,7 +324,13 @@ impl PiperDevice {
                     }
                 }
             }
-            PiperAction::Mode { ctrl, move_mode, speed_pct, mit, install } => {
+            PiperAction::Mode {
+                ctrl,
+                move_mode,
+                speed_pct,
+                mit,
+                install,
+            } => {
                 let kind = match move_mode {
                     MoveMode::P => MoveKind::P,
                     MoveMode::J => MoveKind::J,
@@ -295,7 +346,11 @@ impl PiperDevice {
                     },
                     move_mode: code,
                     speed_pct: *speed_pct,
-                    mit_mode: if *mit { MitMode::Mit } else { MitMode::PositionVelocity },
+                    mit_mode: if *mit {
+                        MitMode::Mit
+                    } else {
+                        MitMode::PositionVelocity
+                    },
                     dwell_s: 0,
                     install_pos: match install {
                         None => InstallPosition::Unchanged,
@@ -306,27 +361,52 @@ impl PiperDevice {
                 };
                 d.mode_ctrl(command).await.map_err(derr)?;
                 if *ctrl == CtrlMode::Can {
-                    let limit = timeout.unwrap_or(MODE_CONFIRM);
+                    let limit = timeout.unwrap_or(self.options.deadline(MODE_CONFIRM));
                     d.wait_for_move_mode(kind, limit).await.map_err(derr)?;
                 }
             }
-            PiperAction::MoveJ { joints_deg, speed_pct } => {
+            PiperAction::MoveJ {
+                joints_deg,
+                speed_pct,
+            } => {
                 let rad = joints_deg.map(f64::to_radians);
                 Self::within(timeout, "move_j", d.move_joints_rad(rad, *speed_pct)).await?;
             }
             PiperAction::MoveP { pose, speed_pct } | PiperAction::MoveL { pose, speed_pct } => {
-                let kind = if matches!(action, PiperAction::MoveP { .. }) { MoveKind::P } else { MoveKind::L };
+                let kind = if matches!(action, PiperAction::MoveP { .. }) {
+                    MoveKind::P
+                } else {
+                    MoveKind::L
+                };
                 d.set_move_mode(kind, *speed_pct).await.map_err(derr)?;
                 d.end_pose(target(pose)).await.map_err(derr)?;
             }
-            PiperAction::MoveC { start, middle, end, speed_pct } => {
-                for (pose, point) in [(start, MoveCPoint::Start), (middle, MoveCPoint::Middle), (end, MoveCPoint::End)] {
+            PiperAction::MoveC {
+                start,
+                middle,
+                end,
+                speed_pct,
+            } => {
+                for (pose, point) in [
+                    (start, MoveCPoint::Start),
+                    (middle, MoveCPoint::Middle),
+                    (end, MoveCPoint::End),
+                ] {
                     d.end_pose(target(pose)).await.map_err(derr)?;
                     d.move_c_point(point).await.map_err(derr)?;
                 }
-                d.set_move_mode(MoveKind::C, *speed_pct).await.map_err(derr)?;
+                d.set_move_mode(MoveKind::C, *speed_pct)
+                    .await
+                    .map_err(derr)?;
             }
-            PiperAction::Mit { joint, position_deg, velocity_deg_s, kp, kd, torque_nm } => {
+            PiperAction::Mit {
+                joint,
+                position_deg,
+                velocity_deg_s,
+                kp,
+                kd,
+                torque_nm,
+            } => {
                 let command = MitCommand {
                     p_rad: position_deg.to_radians(),
                     v_rad_s: velocity_deg_s.to_radians(),
@@ -336,7 +416,12 @@ impl PiperDevice {
                 };
                 d.mit(*joint, command).await.map_err(derr)?;
             }
-            PiperAction::Gripper { stroke_mm, torque_nm, enable, clear_error } => {
+            PiperAction::Gripper {
+                stroke_mm,
+                torque_nm,
+                enable,
+                clear_error,
+            } => {
                 d.gripper(GripperCommand {
                     stroke_m: stroke_mm / 1000.0,
                     effort_nm: *torque_nm,
@@ -351,48 +436,129 @@ impl PiperDevice {
             PiperAction::Reset => d.reset().await.map_err(derr)?,
             PiperAction::QueryFirmware { expect } => {
                 let info = Self::within(timeout, "query_firmware", d.query_firmware()).await?;
-                reply.values.push(("firmware".to_owned(), info.software.clone()));
+                reply
+                    .values
+                    .push(("firmware".to_owned(), info.software.clone()));
                 if let Some(e) = expect {
                     if *e != info.software {
-                        reply.mismatches.push(("firmware".to_owned(), e.clone(), info.software.clone()));
+                        reply.mismatches.push((
+                            "firmware".to_owned(),
+                            e.clone(),
+                            info.software.clone(),
+                        ));
                     }
                 }
             }
-            PiperAction::QueryJointLimits { joint, min_deg, max_deg, max_speed_rad_s } => {
-                let l = Self::within(timeout, "query_joint_limits", d.query_joint_limits(*joint)).await?;
-                check_near(&mut reply, "min_deg", f64::from(l.min_angle_ddeg) / 10.0, *min_deg, 1);
-                check_near(&mut reply, "max_deg", f64::from(l.max_angle_ddeg) / 10.0, *max_deg, 1);
-                check_near(&mut reply, "max_speed_rad_s", f64::from(l.max_speed_crad_s) / 100.0, *max_speed_rad_s, 2);
+            PiperAction::QueryJointLimits {
+                joint,
+                min_deg,
+                max_deg,
+                max_speed_rad_s,
+            } => {
+                let l = Self::within(timeout, "query_joint_limits", d.query_joint_limits(*joint))
+                    .await?;
+                check_near(
+                    &mut reply,
+                    "min_deg",
+                    f64::from(l.min_angle_ddeg) / 10.0,
+                    *min_deg,
+                    1,
+                );
+                check_near(
+                    &mut reply,
+                    "max_deg",
+                    f64::from(l.max_angle_ddeg) / 10.0,
+                    *max_deg,
+                    1,
+                );
+                check_near(
+                    &mut reply,
+                    "max_speed_rad_s",
+                    f64::from(l.max_speed_crad_s) / 100.0,
+                    *max_speed_rad_s,
+                    2,
+                );
             }
-            PiperAction::QueryJointAcc { joint, max_acc_rad_s2 } => {
-                let a = Self::within(timeout, "query_joint_max_acc", d.query_joint_max_acc(*joint)).await?;
-                check_near(&mut reply, "max_acc_rad_s2", f64::from(a.max_acc_crad_s2) / 100.0, *max_acc_rad_s2, 2);
+            PiperAction::QueryJointAcc {
+                joint,
+                max_acc_rad_s2,
+            } => {
+                let a = Self::within(
+                    timeout,
+                    "query_joint_max_acc",
+                    d.query_joint_max_acc(*joint),
+                )
+                .await?;
+                check_near(
+                    &mut reply,
+                    "max_acc_rad_s2",
+                    f64::from(a.max_acc_crad_s2) / 100.0,
+                    *max_acc_rad_s2,
+                    2,
+                );
             }
             PiperAction::QueryEndLimits { expect } => {
                 let p = Self::within(timeout, "query_end_limits", d.query_end_params()).await?;
-                let values = [p.lin_vel_mm_s, p.ang_vel_mrad_s, p.lin_acc_mm_s2, p.ang_acc_mrad_s2];
-                let keys = ["linear_m_s", "angular_rad_s", "linear_acc_m_s2", "angular_acc_rad_s2"];
+                let values = [
+                    p.lin_vel_mm_s,
+                    p.ang_vel_mrad_s,
+                    p.lin_acc_mm_s2,
+                    p.ang_acc_mrad_s2,
+                ];
+                let keys = [
+                    "linear_m_s",
+                    "angular_rad_s",
+                    "linear_acc_m_s2",
+                    "angular_acc_rad_s2",
+                ];
                 for ((key, raw), e) in keys.iter().zip(values).zip(expect) {
                     check_near(&mut reply, key, f64::from(raw) / 1000.0, *e, 3);
                 }
             }
             PiperAction::QueryCollision { expect } => {
-                let c = Self::within(timeout, "query_collision_levels", d.query_collision_levels()).await?;
+                let c = Self::within(
+                    timeout,
+                    "query_collision_levels",
+                    d.query_collision_levels(),
+                )
+                .await?;
                 let text = format!("{:?}", c.levels);
                 reply.values.push(("levels".to_owned(), text.clone()));
                 if let Some(e) = expect {
                     if *e != c.levels {
-                        reply.mismatches.push(("levels".to_owned(), format!("{e:?}"), text));
+                        reply
+                            .mismatches
+                            .push(("levels".to_owned(), format!("{e:?}"), text));
                     }
                 }
             }
             PiperAction::QueryGripperParams { expect } => {
-                let g = Self::within(timeout, "query_gripper_params", d.query_gripper_teach_params()).await?;
-                check_u(&mut reply, "max_stroke_mm", u16::from(g.max_stroke_mm), expect[0]);
-                check_u(&mut reply, "teach_coefficient_pct", u16::from(g.teach_coef_pct), expect[1]);
+                let g = Self::within(
+                    timeout,
+                    "query_gripper_params",
+                    d.query_gripper_teach_params(),
+                )
+                .await?;
+                check_u(
+                    &mut reply,
+                    "max_stroke_mm",
+                    u16::from(g.max_stroke_mm),
+                    expect[0],
+                );
+                check_u(
+                    &mut reply,
+                    "teach_coefficient_pct",
+                    u16::from(g.teach_coef_pct),
+                    expect[1],
+                );
                 check_u(&mut reply, "friction", u16::from(g.friction), expect[2]);
             }
-            PiperAction::SetJointLimits { joint, min_deg, max_deg, max_speed_rad_s } => {
+            PiperAction::SetJointLimits {
+                joint,
+                min_deg,
+                max_deg,
+                max_speed_rad_s,
+            } => {
                 let limits = JointLimits {
                     joint: *joint,
                     max_angle_ddeg: ddeg(*max_deg),
@@ -401,9 +567,17 @@ impl PiperDevice {
                 };
                 Self::within(timeout, "set_joint_limits", d.set_joint_limits(limits)).await?;
             }
-            PiperAction::SetJointAcc { joint, max_acc_rad_s2 } => {
+            PiperAction::SetJointAcc {
+                joint,
+                max_acc_rad_s2,
+            } => {
                 let raw = (max_acc_rad_s2 * 100.0).round() as u16;
-                Self::within(timeout, "set_joint_max_acc", d.set_joint_max_acc(*joint, raw)).await?;
+                Self::within(
+                    timeout,
+                    "set_joint_max_acc",
+                    d.set_joint_max_acc(*joint, raw),
+                )
+                .await?;
             }
             PiperAction::SetEndLimits { values } => {
                 let params = EndParams {
@@ -415,12 +589,27 @@ impl PiperDevice {
                 Self::within(timeout, "set_end_limits", d.set_end_params(params)).await?;
             }
             PiperAction::SetCollision { levels } => {
-                Self::within(timeout, "set_collision_levels", d.set_collision_levels(CollisionLevels { levels: *levels })).await?;
+                Self::within(
+                    timeout,
+                    "set_collision_levels",
+                    d.set_collision_levels(CollisionLevels { levels: *levels }),
+                )
+                .await?;
             }
-            PiperAction::SetGripperParams { max_stroke_mm, teach_coefficient_pct, friction } => {
+            PiperAction::SetGripperParams {
+                max_stroke_mm,
+                teach_coefficient_pct,
+                friction,
+            } => {
                 // 0x47D has no "unchanged" value: start from the arm's current parameters.
-                let current = Self::within(timeout, "set_gripper_params", d.query_gripper_teach_params()).await?;
-                let narrow = |v: Option<u16>, old: u8| v.map_or(old, |v| u8::try_from(v).unwrap_or(u8::MAX));
+                let current = Self::within(
+                    timeout,
+                    "set_gripper_params",
+                    d.query_gripper_teach_params(),
+                )
+                .await?;
+                let narrow =
+                    |v: Option<u16>, old: u8| v.map_or(old, |v| u8::try_from(v).unwrap_or(u8::MAX));
                 let params = GripperTeachParams {
                     teach_coef_pct: narrow(*teach_coefficient_pct, current.teach_coef_pct),
                     max_stroke_mm: narrow(*max_stroke_mm, current.max_stroke_mm),
@@ -435,7 +624,10 @@ impl PiperDevice {
                 Self::within(timeout, "clear_joint_error", d.clear_joint_error(*joint)).await?;
             }
             PiperAction::ResetParams => {
-                let command = ParamCommand { reset: Some(ParamReset::JointParams), ..ParamCommand::default() };
+                let command = ParamCommand {
+                    reset: Some(ParamReset::JointParams),
+                    ..ParamCommand::default()
+                };
                 Self::within(timeout, "reset_params", d.param_settings(command)).await?;
             }
             PiperAction::SetPayload { payload } => {
@@ -444,10 +636,18 @@ impl PiperDevice {
                     Payload::Half => WirePayload::Half,
                     Payload::Full => WirePayload::Full,
                 };
-                let command = ParamCommand { payload: Some(p), ..ParamCommand::default() };
+                let command = ParamCommand {
+                    payload: Some(p),
+                    ..ParamCommand::default()
+                };
                 Self::within(timeout, "set_payload", d.param_settings(command)).await?;
             }
-            PiperAction::SetRole { role, feedback_offset, control_offset, target_offset } => {
+            PiperAction::SetRole {
+                role,
+                feedback_offset,
+                control_offset,
+                target_offset,
+            } => {
                 let config = LeaderFollowerConfig {
                     linkage: match role {
                         Role::Leader => LinkageConfig::Leader,
@@ -470,7 +670,11 @@ impl Device for PiperDevice {
         &self.name
     }
 
-    async fn perform(&self, action: &Action, timeout: Option<Duration>) -> Result<Reply, DeviceError> {
+    async fn perform(
+        &self,
+        action: &Action,
+        timeout: Option<Duration>,
+    ) -> Result<Reply, DeviceError> {
         match action {
             Action::Piper(a) => self.act(a, timeout).await,
         }

@@ -57,7 +57,10 @@ impl<'a> Ctx<'a> {
     fn positive_millis(&self, value: &S<i64>, key: &str) -> Res<Duration> {
         let duration = self.millis(value, key)?;
         if duration.is_zero() {
-            return Err(self.err(pos(value), format!("`{key}` must be > 0 (milliseconds), got 0")));
+            return Err(self.err(
+                pos(value),
+                format!("`{key}` must be > 0 (milliseconds), got 0"),
+            ));
         }
         Ok(duration)
     }
@@ -90,18 +93,33 @@ impl<'a> Ctx<'a> {
             };
             Err(self.err(
                 pos(value),
-                format!("`{key}`: joint index {} out of range, expected {range}", value.value),
+                format!(
+                    "`{key}`: joint index {} out of range, expected {range}",
+                    value.value
+                ),
             ))
         }
     }
 
-    fn required<'v, T>(&self, value: &'v Option<T>, key: &str, action: &str, at: Pos) -> Res<&'v T> {
+    fn required<'v, T>(
+        &self,
+        value: &'v Option<T>,
+        key: &str,
+        action: &str,
+        at: Pos,
+    ) -> Res<&'v T> {
         value
             .as_ref()
             .ok_or_else(|| self.err(at, format!("`{action}` needs `{key}`")))
     }
 
-    fn joint_required(&self, value: &Option<S<i64>>, action: &str, at: Pos, allow_all: bool) -> Res<u8> {
+    fn joint_required(
+        &self,
+        value: &Option<S<i64>>,
+        action: &str,
+        at: Pos,
+        allow_all: bool,
+    ) -> Res<u8> {
         let v = self.required(value, "joint", action, at)?;
         self.joint(v, "joint", allow_all)
     }
@@ -121,7 +139,10 @@ impl<'a> Ctx<'a> {
         if value.value.len() != N {
             return Err(self.err(
                 pos(value),
-                format!("`{key}` needs exactly {N} numbers, got {}", value.value.len()),
+                format!(
+                    "`{key}` needs exactly {N} numbers, got {}",
+                    value.value.len()
+                ),
             ));
         }
         let mut out = [0.0; N];
@@ -229,14 +250,19 @@ pub(crate) fn validate(ctx: &mut Ctx<'_>, raw: RawScenario) -> Res<Scenario> {
             }
             name.value.clone()
         }
-        None => ctx
-            .file
-            .file_stem()
-            .map_or_else(|| "scenario".to_owned(), |s| s.to_string_lossy().into_owned()),
+        None => ctx.file.file_stem().map_or_else(
+            || "scenario".to_owned(),
+            |s| s.to_string_lossy().into_owned(),
+        ),
     };
     let mut tags = Vec::new();
     for tag in raw.tags.iter().flatten() {
-        if tag.value != "vcan" && !tag.value.chars().all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_') {
+        if tag.value != "vcan"
+            && !tag
+                .value
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
+        {
             return Err(ctx.err(pos(tag), "tags use letters, digits, '-' and '_'"));
         }
         tags.push(tag.value.clone());
@@ -246,7 +272,10 @@ pub(crate) fn validate(ctx: &mut Ctx<'_>, raw: RawScenario) -> Res<Scenario> {
     let record = record(ctx, raw.record.as_ref())?;
 
     if raw.steps.value.is_empty() {
-        return Err(ctx.err(pos(&raw.steps), "`steps` is empty; a scenario needs at least one step"));
+        return Err(ctx.err(
+            pos(&raw.steps),
+            "`steps` is empty; a scenario needs at least one step",
+        ));
     }
     // Step ids first, so that the fault schedule can refer to any step.
     for step in &raw.steps.value {
@@ -279,7 +308,12 @@ pub(crate) fn validate(ctx: &mut Ctx<'_>, raw: RawScenario) -> Res<Scenario> {
     if scenario.has_tag("vcan") {
         let needs = scenario.in_process_requirements();
         if let Some(first) = needs.first() {
-            let at = raw.tags.iter().flatten().find(|t| t.value == "vcan").map_or_else(Pos::default, pos);
+            let at = raw
+                .tags
+                .iter()
+                .flatten()
+                .find(|t| t.value == "vcan")
+                .map_or_else(Pos::default, pos);
             return Err(ctx.err(
                 at,
                 format!("tagged `vcan` but needs the in-process emulator: {first}"),
@@ -299,11 +333,38 @@ fn step_id(step: &RawStep) -> Option<&S<String>> {
         };
     }
     id_of!(
-        Enable, Disable, Mode, MoveJ, MoveP, MoveL, MoveC, Mit, Gripper, GripperZero, Estop, Reset,
-        QueryFirmware, QueryJointLimits, QueryJointAcc, QueryEndLimits, QueryCollision,
-        QueryGripperParams, SetJointLimits, SetJointAcc, SetEndLimits, SetCollision,
-        SetGripperParams, SetZero, ClearJointError, ResetParams, SetPayload, SetRole, Inject,
-        ClearFaults, Expect, WaitUntil
+        Enable,
+        Disable,
+        Mode,
+        MoveJ,
+        MoveP,
+        MoveL,
+        MoveC,
+        Mit,
+        Gripper,
+        GripperZero,
+        Estop,
+        Reset,
+        QueryFirmware,
+        QueryJointLimits,
+        QueryJointAcc,
+        QueryEndLimits,
+        QueryCollision,
+        QueryGripperParams,
+        SetJointLimits,
+        SetJointAcc,
+        SetEndLimits,
+        SetCollision,
+        SetGripperParams,
+        SetZero,
+        ClearJointError,
+        ResetParams,
+        SetPayload,
+        SetRole,
+        Inject,
+        ClearFaults,
+        Expect,
+        WaitUntil
     )
 }
 
@@ -315,7 +376,10 @@ fn bench(ctx: &Ctx<'_>, raw: &S<RawBench>) -> Res<Bench> {
             if !(10_000..=1_000_000).contains(&rate.value) {
                 return Err(ctx.err(
                     pos(rate),
-                    format!("`bitrate_bps` must be 10000..=1000000 (classic CAN), got {}", rate.value),
+                    format!(
+                        "`bitrate_bps` must be 10000..=1000000 (classic CAN), got {}",
+                        rate.value
+                    ),
                 ));
             }
             bitrate_bps = rate.value as u32;
@@ -323,12 +387,18 @@ fn bench(ctx: &Ctx<'_>, raw: &S<RawBench>) -> Res<Bench> {
         interface = bus.value.interface.as_ref().map(|i| i.value.clone());
     }
     if raw.value.devices.value.is_empty() {
-        return Err(ctx.err(pos(&raw.value.devices), "`devices` is empty; a bench needs at least one device"));
+        return Err(ctx.err(
+            pos(&raw.value.devices),
+            "`devices` is empty; a bench needs at least one device",
+        ));
     }
     let mut devices = Vec::new();
     for (name, device) in &raw.value.devices.value {
         if name == "host" {
-            return Err(ctx.err(pos(device), "`host` is reserved for the driver's bus node; pick another device name"));
+            return Err(ctx.err(
+                pos(device),
+                "`host` is reserved for the driver's bus node; pick another device name",
+            ));
         }
         devices.push(DeviceSpec {
             name: name.clone(),
@@ -358,10 +428,17 @@ fn device_kind(ctx: &Ctx<'_>, raw: &S<RawDevice>) -> Res<DeviceKind> {
             .value
             .parse::<sim::piper::FirmwareProfile>()
             .map_err(|_| {
-                let names: Vec<&str> = sim::piper::FirmwareProfile::ALL.iter().map(|p| p.version_string()).collect();
+                let names: Vec<&str> = sim::piper::FirmwareProfile::ALL
+                    .iter()
+                    .map(|p| p.version_string())
+                    .collect();
                 ctx.err(
                     pos(fw),
-                    format!("`firmware`: unknown Piper firmware `{}`; the emulator implements: {}", fw.value, names.join(", ")),
+                    format!(
+                        "`firmware`: unknown Piper firmware `{}`; the emulator implements: {}",
+                        fw.value,
+                        names.join(", ")
+                    ),
                 )
             })?
             .version_string()
@@ -377,7 +454,10 @@ fn device_kind(ctx: &Ctx<'_>, raw: &S<RawDevice>) -> Res<DeviceKind> {
                 ctx.file.parent().map_or(p.clone(), |dir| dir.join(&p))
             };
             if !resolved.exists() {
-                return Err(ctx.err(pos(path), format!("`urdf`: file `{}` not found", path.value)));
+                return Err(ctx.err(
+                    pos(path),
+                    format!("`urdf`: file `{}` not found", path.value),
+                ));
             }
             Some(resolved)
         }
@@ -390,11 +470,21 @@ fn device_kind(ctx: &Ctx<'_>, raw: &S<RawDevice>) -> Res<DeviceKind> {
     let gripper_max_mm = match &d.gripper_max_mm {
         Some(v) if matches!(v.value, 0 | 70 | 100) => Some(v.value as u8),
         Some(v) => {
-            return Err(ctx.err(pos(v), format!("`gripper_max_mm` must be 0 (never set), 70 or 100, got {}", v.value)))
+            return Err(ctx.err(
+                pos(v),
+                format!(
+                    "`gripper_max_mm` must be 0 (never set), 70 or 100, got {}",
+                    v.value
+                ),
+            ))
         }
         None => None,
     };
-    let collision_levels = d.collision_levels.as_ref().map(|l| levels(ctx, l)).transpose()?;
+    let collision_levels = d
+        .collision_levels
+        .as_ref()
+        .map(|l| levels(ctx, l))
+        .transpose()?;
     let mut obstacles = Vec::new();
     for (i, o) in d.obstacles.iter().flatten().enumerate() {
         let at_m = ctx.array::<3>(&o.value.at_m, "at_m")?;
@@ -410,15 +500,17 @@ fn device_kind(ctx: &Ctx<'_>, raw: &S<RawDevice>) -> Res<DeviceKind> {
                 let radius_m = ctx.non_negative(r, "sphere_radius_m")?;
                 ObstacleShape::Sphere { radius_m }
             }
-            _ => {
-                return Err(ctx.err(
-                    pos(o),
-                    "an obstacle needs exactly one shape: `box_m: [x, y, z]` or `sphere_radius_m: r`",
-                ))
-            }
+            _ => return Err(ctx.err(
+                pos(o),
+                "an obstacle needs exactly one shape: `box_m: [x, y, z]` or `sphere_radius_m: r`",
+            )),
         };
         obstacles.push(Obstacle {
-            name: o.value.name.clone().unwrap_or_else(|| format!("obstacle{}", i + 1)),
+            name: o
+                .value
+                .name
+                .clone()
+                .unwrap_or_else(|| format!("obstacle{}", i + 1)),
             shape,
             at_m,
         });
@@ -447,7 +539,10 @@ fn record(ctx: &Ctx<'_>, raw: Option<&S<RawRecord>>) -> Res<Record> {
     if let Some(period) = &raw.value.sample_period_ms {
         let p = ctx.positive_millis(period, "sample_period_ms")?;
         if p < Duration::from_millis(5) {
-            return Err(ctx.err(pos(period), "`sample_period_ms` must be >= 5 (the feedback period)"));
+            return Err(ctx.err(
+                pos(period),
+                "`sample_period_ms` must be >= 5 (the feedback period)",
+            ));
         }
         record.sample_period = p;
     }
@@ -472,7 +567,10 @@ fn scheduled_fault(ctx: &Ctx<'_>, raw: &S<RawFaultEntry>) -> Res<ScheduledFault>
     let trigger = match (&e.at_ms, &e.after) {
         (Some(at), None) => {
             if let Some(delay) = &e.delay_ms {
-                return Err(ctx.err(pos(delay), "`delay_ms` goes with `after:`; with `at_ms` add the delay to the time"));
+                return Err(ctx.err(
+                    pos(delay),
+                    "`delay_ms` goes with `after:`; with `at_ms` add the delay to the time",
+                ));
             }
             FaultTrigger::At(ctx.millis(at, "at_ms")?)
         }
@@ -482,13 +580,18 @@ fn scheduled_fault(ctx: &Ctx<'_>, raw: &S<RawFaultEntry>) -> Res<ScheduledFault>
                 .iter()
                 .position(|id| id.as_deref() == Some(after.value.as_str()))
                 .ok_or_else(|| {
-                    let known: Vec<&str> = ctx.step_ids.iter().flatten().map(String::as_str).collect();
+                    let known: Vec<&str> =
+                        ctx.step_ids.iter().flatten().map(String::as_str).collect();
                     ctx.err(
                         pos(after),
                         format!(
                             "`after`: no step has id `{}` (step ids: {})",
                             after.value,
-                            if known.is_empty() { "none".to_owned() } else { known.join(", ") }
+                            if known.is_empty() {
+                                "none".to_owned()
+                            } else {
+                                known.join(", ")
+                            }
                         ),
                     )
                 })?;
@@ -522,9 +625,17 @@ fn duration(ctx: &Ctx<'_>, raw: &Option<S<i64>>) -> Res<Option<Duration>> {
         .transpose()
 }
 
-fn check_duration(ctx: &Ctx<'_>, fault: &FaultSpec, duration: Option<Duration>, at: Pos) -> Res<()> {
+fn check_duration(
+    ctx: &Ctx<'_>,
+    fault: &FaultSpec,
+    duration: Option<Duration>,
+    at: Pos,
+) -> Res<()> {
     if matches!(fault, FaultSpec::Bus(BusFault::BusOff { .. })) && duration.is_none() {
-        return Err(ctx.err(at, "`bus_off` needs `duration_ms` (the node recovers after it)"));
+        return Err(ctx.err(
+            at,
+            "`bus_off` needs `duration_ms` (the node recovers after it)",
+        ));
     }
     Ok(())
 }
@@ -549,7 +660,13 @@ fn frames(ctx: &Ctx<'_>, sel: &RawFrameSel, at: Pos) -> Res<FrameSelector> {
         (Some(_), Some(_)) => Err(ctx.err(at, "select frames by `id` or by `node`, not both")),
         (Some(id), None) => {
             if !(0..=0x7FF).contains(&id.value) {
-                return Err(ctx.err(pos(id), format!("`id` must be a standard 11-bit CAN id (0..=0x7FF), got {}", id.value)));
+                return Err(ctx.err(
+                    pos(id),
+                    format!(
+                        "`id` must be a standard 11-bit CAN id (0..=0x7FF), got {}",
+                        id.value
+                    ),
+                ));
             }
             Ok(FrameSelector::Id(id.value as u32))
         }
@@ -558,10 +675,19 @@ fn frames(ctx: &Ctx<'_>, sel: &RawFrameSel, at: Pos) -> Res<FrameSelector> {
     }
 }
 
-fn reject_extra(ctx: &Ctx<'_>, sel: &RawFrameSel, kind: &str, probability_ok: bool, ms_ok: bool) -> Res<()> {
+fn reject_extra(
+    ctx: &Ctx<'_>,
+    sel: &RawFrameSel,
+    kind: &str,
+    probability_ok: bool,
+    ms_ok: bool,
+) -> Res<()> {
     if !probability_ok {
         if let Some(p) = &sel.probability {
-            return Err(ctx.err(pos(p), format!("`probability` only applies to `drop`, not `{kind}`")));
+            return Err(ctx.err(
+                pos(p),
+                format!("`probability` only applies to `drop`, not `{kind}`"),
+            ));
         }
         if sel.seed.is_some() && sel.probability.is_none() {
             return Err(ctx.err(Pos::default(), "`seed` goes with `probability`"));
@@ -569,7 +695,10 @@ fn reject_extra(ctx: &Ctx<'_>, sel: &RawFrameSel, kind: &str, probability_ok: bo
     }
     if !ms_ok {
         if let Some(ms) = &sel.ms {
-            return Err(ctx.err(pos(ms), format!("`ms` only applies to `delay`, not `{kind}`")));
+            return Err(ctx.err(
+                pos(ms),
+                format!("`ms` only applies to `delay`, not `{kind}`"),
+            ));
         }
     }
     Ok(())
@@ -600,7 +729,10 @@ impl EmuArgs<'_, '_> {
                     } else {
                         allowed.join(", ")
                     };
-                    return Err(self.ctx.err(at, format!("`{}` takes no `{key}` (it takes: {takes})", self.name)));
+                    return Err(self.ctx.err(
+                        at,
+                        format!("`{}` takes no `{key}` (it takes: {takes})", self.name),
+                    ));
                 }
             }
         }
@@ -608,11 +740,14 @@ impl EmuArgs<'_, '_> {
     }
 
     fn joint(&self) -> Res<u8> {
-        self.ctx.joint_required(&self.args.joint, self.name, self.at, false)
+        self.ctx
+            .joint_required(&self.args.joint, self.name, self.at, false)
     }
 
     fn number(&self, value: &Option<S<f64>>, key: &str, default: f64) -> Res<f64> {
-        value.as_ref().map_or(Ok(default), |v| self.ctx.finite(v, key))
+        value
+            .as_ref()
+            .map_or(Ok(default), |v| self.ctx.finite(v, key))
     }
 }
 
@@ -623,8 +758,19 @@ const DEFAULT_UNDER_VOLTAGE_V: f64 = 18.0;
 
 fn fault(ctx: &Ctx<'_>, raw: &S<RawFault>, device: &Option<S<String>>, at: Pos) -> Res<FaultSpec> {
     let fpos = pos(raw);
-    fn emu<'c, 'a>(ctx: &'c Ctx<'a>, args: &'c RawEmuArgs, name: &'static str, at: Pos, allowed: &[&str]) -> Res<EmuArgs<'c, 'a>> {
-        let e = EmuArgs { ctx, args, name, at };
+    fn emu<'c, 'a>(
+        ctx: &'c Ctx<'a>,
+        args: &'c RawEmuArgs,
+        name: &'static str,
+        at: Pos,
+        allowed: &[&str],
+    ) -> Res<EmuArgs<'c, 'a>> {
+        let e = EmuArgs {
+            ctx,
+            args,
+            name,
+            at,
+        };
         e.allow(allowed)?;
         Ok(e)
     }
@@ -641,32 +787,54 @@ fn fault(ctx: &Ctx<'_>, raw: &S<RawFault>, device: &Option<S<String>>, at: Pos) 
         Ok(FaultSpec::Bus(fault))
     };
     match &raw.value {
-        RawFault::CommLoss(a) => emulator(EmulatorFault::CommLoss { joint: emu(ctx, a, "comm_loss", fpos, &["joint"])?.joint()? }),
+        RawFault::CommLoss(a) => emulator(EmulatorFault::CommLoss {
+            joint: emu(ctx, a, "comm_loss", fpos, &["joint"])?.joint()?,
+        }),
         RawFault::MotorOverTemp(a) => {
             let e = emu(ctx, a, "motor_over_temp", fpos, &["joint", "temp_c"])?;
-            emulator(EmulatorFault::MotorOverTemp { joint: e.joint()?, temp_c: e.number(&a.temp_c, "temp_c", DEFAULT_OVER_TEMP_C)? })
+            emulator(EmulatorFault::MotorOverTemp {
+                joint: e.joint()?,
+                temp_c: e.number(&a.temp_c, "temp_c", DEFAULT_OVER_TEMP_C)?,
+            })
         }
         RawFault::DriverOverTemp(a) => {
             let e = emu(ctx, a, "driver_over_temp", fpos, &["joint", "temp_c"])?;
-            emulator(EmulatorFault::DriverOverTemp { joint: e.joint()?, temp_c: e.number(&a.temp_c, "temp_c", DEFAULT_OVER_TEMP_C)? })
+            emulator(EmulatorFault::DriverOverTemp {
+                joint: e.joint()?,
+                temp_c: e.number(&a.temp_c, "temp_c", DEFAULT_OVER_TEMP_C)?,
+            })
         }
-        RawFault::OverCurrent(a) => emulator(EmulatorFault::OverCurrent { joint: emu(ctx, a, "over_current", fpos, &["joint"])?.joint()? }),
+        RawFault::OverCurrent(a) => emulator(EmulatorFault::OverCurrent {
+            joint: emu(ctx, a, "over_current", fpos, &["joint"])?.joint()?,
+        }),
         RawFault::UnderVoltage(a) => {
             let e = emu(ctx, a, "under_voltage", fpos, &["voltage_v"])?;
             let voltage_v = e.number(&a.voltage_v, "voltage_v", DEFAULT_UNDER_VOLTAGE_V)?;
             if voltage_v < 0.0 {
-                return Err(ctx.err(a.voltage_v.as_ref().map_or(fpos, pos), "`voltage_v` must be >= 0"));
+                return Err(ctx.err(
+                    a.voltage_v.as_ref().map_or(fpos, pos),
+                    "`voltage_v` must be >= 0",
+                ));
             }
             emulator(EmulatorFault::UnderVoltage { voltage_v })
         }
-        RawFault::DriverError(a) => emulator(EmulatorFault::DriverError { joint: emu(ctx, a, "driver_error", fpos, &["joint"])?.joint()? }),
-        RawFault::Stall(a) => emulator(EmulatorFault::Stall { joint: emu(ctx, a, "stall", fpos, &["joint"])?.joint()? }),
+        RawFault::DriverError(a) => emulator(EmulatorFault::DriverError {
+            joint: emu(ctx, a, "driver_error", fpos, &["joint"])?.joint()?,
+        }),
+        RawFault::Stall(a) => emulator(EmulatorFault::Stall {
+            joint: emu(ctx, a, "stall", fpos, &["joint"])?.joint()?,
+        }),
         RawFault::ExternalTorque(a) => {
             let e = emu(ctx, a, "external_torque", fpos, &["joint", "torque_nm"])?;
             let t = ctx.required(&a.torque_nm, "torque_nm", "external_torque", fpos)?;
-            emulator(EmulatorFault::ExternalTorque { joint: e.joint()?, torque_nm: ctx.finite(t, "torque_nm")? })
+            emulator(EmulatorFault::ExternalTorque {
+                joint: e.joint()?,
+                torque_nm: ctx.finite(t, "torque_nm")?,
+            })
         }
-        RawFault::Collision(a) => emulator(EmulatorFault::Collision { joint: emu(ctx, a, "collision", fpos, &["joint"])?.joint()? }),
+        RawFault::Collision(a) => emulator(EmulatorFault::Collision {
+            joint: emu(ctx, a, "collision", fpos, &["joint"])?.joint()?,
+        }),
         RawFault::Estop(a) => {
             emu(ctx, a, "estop", fpos, &[])?;
             emulator(EmulatorFault::Estop)
@@ -675,7 +843,14 @@ fn fault(ctx: &Ctx<'_>, raw: &S<RawFault>, device: &Option<S<String>>, at: Pos) 
             emu(ctx, a, "ntc_over_temp", fpos, &["board"])?;
             let board = match &a.board {
                 None => NtcBoard::Main,
-                Some(b) => ctx.choice(b, "board", &[(NtcBoard::Main, "main"), (NtcBoard::BrakeResistor, "brake_resistor")])?,
+                Some(b) => ctx.choice(
+                    b,
+                    "board",
+                    &[
+                        (NtcBoard::Main, "main"),
+                        (NtcBoard::BrakeResistor, "brake_resistor"),
+                    ],
+                )?,
             };
             emulator(EmulatorFault::NtcOverTemp { board })
         }
@@ -693,40 +868,62 @@ fn fault(ctx: &Ctx<'_>, raw: &S<RawFault>, device: &Option<S<String>>, at: Pos) 
                 Some(p) => {
                     let v = ctx.finite(p, "probability")?;
                     if !(0.0..=1.0).contains(&v) {
-                        return Err(ctx.err(pos(p), format!("`probability` must be in 0..=1, got {v}")));
+                        return Err(
+                            ctx.err(pos(p), format!("`probability` must be in 0..=1, got {v}"))
+                        );
                     }
                     Some((v, sel.seed.unwrap_or(1)))
                 }
                 None => None,
             };
-            bus(BusFault::Drop { frames: frames(ctx, sel, fpos)?, probability })
+            bus(BusFault::Drop {
+                frames: frames(ctx, sel, fpos)?,
+                probability,
+            })
         }
         RawFault::Delay(sel) => {
             reject_extra(ctx, sel, "delay", false, true)?;
             let ms = ctx.required(&sel.ms, "ms", "delay", fpos)?;
             let delay = ctx.positive_millis(ms, "ms")?;
-            bus(BusFault::Delay { frames: frames(ctx, sel, fpos)?, delay })
+            bus(BusFault::Delay {
+                frames: frames(ctx, sel, fpos)?,
+                delay,
+            })
         }
         RawFault::Corrupt(sel) => {
             reject_extra(ctx, sel, "corrupt", false, false)?;
-            bus(BusFault::Corrupt { frames: frames(ctx, sel, fpos)? })
+            bus(BusFault::Corrupt {
+                frames: frames(ctx, sel, fpos)?,
+            })
         }
         RawFault::Duplicate(sel) => {
             reject_extra(ctx, sel, "duplicate", false, false)?;
-            bus(BusFault::Duplicate { frames: frames(ctx, sel, fpos)? })
+            bus(BusFault::Duplicate {
+                frames: frames(ctx, sel, fpos)?,
+            })
         }
         RawFault::Silence(n) => {
             let n = ctx.required(&n.node, "node", "silence", fpos)?;
-            bus(BusFault::Silence { node: node(ctx, n)? })
+            bus(BusFault::Silence {
+                node: node(ctx, n)?,
+            })
         }
         RawFault::BusOff(n) => {
             let n = ctx.required(&n.node, "node", "bus_off", fpos)?;
-            bus(BusFault::BusOff { node: node(ctx, n)? })
+            bus(BusFault::BusOff {
+                node: node(ctx, n)?,
+            })
         }
     }
 }
 
-fn pose(ctx: &Ctx<'_>, position: &Option<S<Vec<f64>>>, orientation: &Option<S<Vec<f64>>>, action: &str, at: Pos) -> Res<Pose> {
+fn pose(
+    ctx: &Ctx<'_>,
+    position: &Option<S<Vec<f64>>>,
+    orientation: &Option<S<Vec<f64>>>,
+    action: &str,
+    at: Pos,
+) -> Res<Pose> {
     let p = ctx.required(position, "position_mm", action, at)?;
     let o = ctx.required(orientation, "orientation_deg", action, at)?;
     Ok(Pose {
@@ -746,24 +943,45 @@ fn raw_pose(ctx: &Ctx<'_>, raw: &Option<S<RawPose>>, key: &str, at: Pos) -> Res<
 fn near(ctx: &Ctx<'_>, value: &Option<S<f64>>, key: &str, tolerance: f64) -> Res<Option<Near>> {
     value
         .as_ref()
-        .map(|v| Ok(Near { value: ctx.finite(v, key)?, tolerance }))
+        .map(|v| {
+            Ok(Near {
+                value: ctx.finite(v, key)?,
+                tolerance,
+            })
+        })
         .transpose()
 }
 
-fn small_uint(ctx: &Ctx<'_>, value: &Option<S<i64>>, key: &str, range: std::ops::RangeInclusive<i64>) -> Res<Option<u16>> {
+fn small_uint(
+    ctx: &Ctx<'_>,
+    value: &Option<S<i64>>,
+    key: &str,
+    range: std::ops::RangeInclusive<i64>,
+) -> Res<Option<u16>> {
     match value {
         None => Ok(None),
         Some(v) if range.contains(&v.value) => Ok(Some(v.value as u16)),
         Some(v) => Err(ctx.err(
             pos(v),
-            format!("`{key}` must be {}..={}, got {}", range.start(), range.end(), v.value),
+            format!(
+                "`{key}` must be {}..={}, got {}",
+                range.start(),
+                range.end(),
+                v.value
+            ),
         )),
     }
 }
 
 fn levels(ctx: &Ctx<'_>, raw: &S<Vec<i64>>) -> Res<[u8; PIPER_JOINTS]> {
     if raw.value.len() != PIPER_JOINTS {
-        return Err(ctx.err(pos(raw), format!("`levels` needs exactly 6 values (one per joint), got {}", raw.value.len())));
+        return Err(ctx.err(
+            pos(raw),
+            format!(
+                "`levels` needs exactly 6 values (one per joint), got {}",
+                raw.value.len()
+            ),
+        ));
     }
     let mut out = [0u8; PIPER_JOINTS];
     for (slot, v) in out.iter_mut().zip(&raw.value) {
@@ -779,7 +997,10 @@ fn offset(ctx: &Ctx<'_>, raw: &Option<S<i64>>, key: &str) -> Res<u8> {
     match raw {
         None => Ok(0),
         Some(v) if matches!(v.value, 0 | 0x10 | 0x20) => Ok(v.value as u8),
-        Some(v) => Err(ctx.err(pos(v), format!("`{key}` must be 0, 0x10 or 0x20, got {}", v.value))),
+        Some(v) => Err(ctx.err(
+            pos(v),
+            format!("`{key}` must be 0, 0x10 or 0x20, got {}", v.value),
+        )),
     }
 }
 
@@ -837,56 +1058,163 @@ fn step_kind(ctx: &Ctx<'_>, raw: &RawStep, at: Pos) -> Res<(&'static str, StepKi
     Ok(match raw {
         RawStep::WaitMs(ms) => ("wait_ms", StepKind::Wait(ctx.millis(ms, "wait_ms")?)),
         RawStep::Enable(a) => {
-            let joints = a.joints.as_ref().map(|j| ctx.joints_list(j, "joints")).transpose()?.unwrap_or_default();
-            ("enable", action(ctx, common!(a), at, P::Enable { joints, gripper: a.gripper.unwrap_or(false) })?)
+            let joints = a
+                .joints
+                .as_ref()
+                .map(|j| ctx.joints_list(j, "joints"))
+                .transpose()?
+                .unwrap_or_default();
+            (
+                "enable",
+                action(
+                    ctx,
+                    common!(a),
+                    at,
+                    P::Enable {
+                        joints,
+                        gripper: a.gripper.unwrap_or(false),
+                    },
+                )?,
+            )
         }
         RawStep::Disable(a) => {
             if a.gripper.is_some() {
-                return Err(ctx.err(at, "`disable` takes no `gripper` (use `gripper: {enable: false, ...}`)"));
+                return Err(ctx.err(
+                    at,
+                    "`disable` takes no `gripper` (use `gripper: {enable: false, ...}`)",
+                ));
             }
-            let joints = a.joints.as_ref().map(|j| ctx.joints_list(j, "joints")).transpose()?.unwrap_or_default();
-            ("disable", action(ctx, common!(a), at, P::Disable { joints })?)
+            let joints = a
+                .joints
+                .as_ref()
+                .map(|j| ctx.joints_list(j, "joints"))
+                .transpose()?
+                .unwrap_or_default();
+            (
+                "disable",
+                action(ctx, common!(a), at, P::Disable { joints })?,
+            )
         }
         RawStep::Mode(a) => {
             let ctrl = match &a.ctrl {
                 None => CtrlMode::Can,
-                Some(c) => ctx.choice(c, "ctrl", &[(CtrlMode::Can, "can"), (CtrlMode::Standby, "standby")])?,
+                Some(c) => ctx.choice(
+                    c,
+                    "ctrl",
+                    &[(CtrlMode::Can, "can"), (CtrlMode::Standby, "standby")],
+                )?,
             };
             let move_mode = match &a.move_mode {
                 None => MoveMode::J,
                 Some(m) => ctx.choice(
                     m,
                     "move",
-                    &[(MoveMode::P, "p"), (MoveMode::J, "j"), (MoveMode::L, "l"), (MoveMode::C, "c"), (MoveMode::M, "m")],
+                    &[
+                        (MoveMode::P, "p"),
+                        (MoveMode::J, "j"),
+                        (MoveMode::L, "l"),
+                        (MoveMode::C, "c"),
+                        (MoveMode::M, "m"),
+                    ],
                 )?,
             };
             let install = a
                 .install
                 .as_ref()
-                .map(|i| ctx.choice(i, "install", &[(Install::Upright, "upright"), (Install::Left, "left"), (Install::Right, "right")]))
+                .map(|i| {
+                    ctx.choice(
+                        i,
+                        "install",
+                        &[
+                            (Install::Upright, "upright"),
+                            (Install::Left, "left"),
+                            (Install::Right, "right"),
+                        ],
+                    )
+                })
                 .transpose()?;
             let speed_pct = ctx.pct(&a.speed_pct)?;
             let mit = a.mit.unwrap_or(move_mode == MoveMode::M);
-            ("mode", action(ctx, common!(a), at, P::Mode { ctrl, move_mode, speed_pct, mit, install })?)
+            (
+                "mode",
+                action(
+                    ctx,
+                    common!(a),
+                    at,
+                    P::Mode {
+                        ctrl,
+                        move_mode,
+                        speed_pct,
+                        mit,
+                        install,
+                    },
+                )?,
+            )
         }
         RawStep::MoveJ(a) => {
             let j = ctx.required(&a.joints_deg, "joints_deg", "move_j", at)?;
             let joints_deg = ctx.array::<PIPER_JOINTS>(j, "joints_deg")?;
-            ("move_j", action(ctx, common!(a), at, P::MoveJ { joints_deg, speed_pct: ctx.pct(&a.speed_pct)? })?)
+            (
+                "move_j",
+                action(
+                    ctx,
+                    common!(a),
+                    at,
+                    P::MoveJ {
+                        joints_deg,
+                        speed_pct: ctx.pct(&a.speed_pct)?,
+                    },
+                )?,
+            )
         }
         RawStep::MoveP(a) => {
             let pose = pose(ctx, &a.position_mm, &a.orientation_deg, "move_p", at)?;
-            ("move_p", action(ctx, common!(a), at, P::MoveP { pose, speed_pct: ctx.pct(&a.speed_pct)? })?)
+            (
+                "move_p",
+                action(
+                    ctx,
+                    common!(a),
+                    at,
+                    P::MoveP {
+                        pose,
+                        speed_pct: ctx.pct(&a.speed_pct)?,
+                    },
+                )?,
+            )
         }
         RawStep::MoveL(a) => {
             let pose = pose(ctx, &a.position_mm, &a.orientation_deg, "move_l", at)?;
-            ("move_l", action(ctx, common!(a), at, P::MoveL { pose, speed_pct: ctx.pct(&a.speed_pct)? })?)
+            (
+                "move_l",
+                action(
+                    ctx,
+                    common!(a),
+                    at,
+                    P::MoveL {
+                        pose,
+                        speed_pct: ctx.pct(&a.speed_pct)?,
+                    },
+                )?,
+            )
         }
         RawStep::MoveC(a) => {
             let start = raw_pose(ctx, &a.start, "start", at)?;
             let middle = raw_pose(ctx, &a.middle, "middle", at)?;
             let end = raw_pose(ctx, &a.end, "end", at)?;
-            ("move_c", action(ctx, common!(a), at, P::MoveC { start, middle, end, speed_pct: ctx.pct(&a.speed_pct)? })?)
+            (
+                "move_c",
+                action(
+                    ctx,
+                    common!(a),
+                    at,
+                    P::MoveC {
+                        start,
+                        middle,
+                        end,
+                        speed_pct: ctx.pct(&a.speed_pct)?,
+                    },
+                )?,
+            )
         }
         RawStep::Mit(a) => {
             let joint = ctx.joint_required(&a.joint, "mit", at, false)?;
@@ -896,10 +1224,16 @@ fn step_kind(ctx: &Ctx<'_>, raw: &RawStep, at: Pos) -> Res<(&'static str, StepKi
             let kp = num(&a.kp, "kp", 10.0)?;
             let kd = num(&a.kd, "kd", 0.8)?;
             if !(0.0..=500.0).contains(&kp) {
-                return Err(ctx.err(a.kp.as_ref().map_or(at, pos), format!("`kp` must be 0..=500, got {kp}")));
+                return Err(ctx.err(
+                    a.kp.as_ref().map_or(at, pos),
+                    format!("`kp` must be 0..=500, got {kp}"),
+                ));
             }
             if !(-5.0..=5.0).contains(&kd) {
-                return Err(ctx.err(a.kd.as_ref().map_or(at, pos), format!("`kd` must be -5..=5, got {kd}")));
+                return Err(ctx.err(
+                    a.kd.as_ref().map_or(at, pos),
+                    format!("`kd` must be -5..=5, got {kd}"),
+                ));
             }
             (
                 "mit",
@@ -937,7 +1271,12 @@ fn step_kind(ctx: &Ctx<'_>, raw: &RawStep, at: Pos) -> Res<(&'static str, StepKi
                     ctx,
                     common!(a),
                     at,
-                    P::Gripper { stroke_mm, torque_nm, enable: a.enable.unwrap_or(true), clear_error: a.clear_error.unwrap_or(false) },
+                    P::Gripper {
+                        stroke_mm,
+                        torque_nm,
+                        enable: a.enable.unwrap_or(true),
+                        clear_error: a.clear_error.unwrap_or(false),
+                    },
                 )?,
             )
         }
@@ -946,7 +1285,14 @@ fn step_kind(ctx: &Ctx<'_>, raw: &RawStep, at: Pos) -> Res<(&'static str, StepKi
         RawStep::Reset(a) => ("reset", action(ctx, common!(a), at, P::Reset)?),
         RawStep::QueryFirmware(a) => (
             "query_firmware",
-            action(ctx, common!(a), at, P::QueryFirmware { expect: a.expect.as_ref().map(|e| e.value.clone()) })?,
+            action(
+                ctx,
+                common!(a),
+                at,
+                P::QueryFirmware {
+                    expect: a.expect.as_ref().map(|e| e.value.clone()),
+                },
+            )?,
         ),
         RawStep::QueryJointLimits(a) => {
             let joint = ctx.joint_required(&a.joint, "query_joint_limits", at, false)?;
@@ -961,7 +1307,20 @@ fn step_kind(ctx: &Ctx<'_>, raw: &RawStep, at: Pos) -> Res<(&'static str, StepKi
                 ),
                 None => (None, None, None),
             };
-            ("query_joint_limits", action(ctx, common!(a), at, P::QueryJointLimits { joint, min_deg, max_deg, max_speed_rad_s })?)
+            (
+                "query_joint_limits",
+                action(
+                    ctx,
+                    common!(a),
+                    at,
+                    P::QueryJointLimits {
+                        joint,
+                        min_deg,
+                        max_deg,
+                        max_speed_rad_s,
+                    },
+                )?,
+            )
         }
         RawStep::QueryJointAcc(a) => {
             let joint = ctx.joint_required(&a.joint, "query_joint_max_acc", at, false)?;
@@ -969,7 +1328,18 @@ fn step_kind(ctx: &Ctx<'_>, raw: &RawStep, at: Pos) -> Res<(&'static str, StepKi
                 Some(e) => near(ctx, &e.value.max_acc_rad_s2, "max_acc_rad_s2", 0.01)?,
                 None => None,
             };
-            ("query_joint_max_acc", action(ctx, common!(a), at, P::QueryJointAcc { joint, max_acc_rad_s2 })?)
+            (
+                "query_joint_max_acc",
+                action(
+                    ctx,
+                    common!(a),
+                    at,
+                    P::QueryJointAcc {
+                        joint,
+                        max_acc_rad_s2,
+                    },
+                )?,
+            )
         }
         RawStep::QueryEndLimits(a) => {
             let expect = match &a.expect {
@@ -977,64 +1347,137 @@ fn step_kind(ctx: &Ctx<'_>, raw: &RawStep, at: Pos) -> Res<(&'static str, StepKi
                     near(ctx, &e.value.linear_m_s, "linear_m_s", 0.001)?,
                     near(ctx, &e.value.angular_rad_s, "angular_rad_s", 0.001)?,
                     near(ctx, &e.value.linear_acc_m_s2, "linear_acc_m_s2", 0.001)?,
-                    near(ctx, &e.value.angular_acc_rad_s2, "angular_acc_rad_s2", 0.001)?,
+                    near(
+                        ctx,
+                        &e.value.angular_acc_rad_s2,
+                        "angular_acc_rad_s2",
+                        0.001,
+                    )?,
                 ],
                 None => [None; 4],
             };
-            ("query_end_limits", action(ctx, common!(a), at, P::QueryEndLimits { expect })?)
+            (
+                "query_end_limits",
+                action(ctx, common!(a), at, P::QueryEndLimits { expect })?,
+            )
         }
         RawStep::QueryCollision(a) => {
             let expect = match a.expect.as_ref().and_then(|e| e.value.levels.as_ref()) {
                 Some(l) => Some(levels(ctx, l)?),
                 None => None,
             };
-            ("query_collision_levels", action(ctx, common!(a), at, P::QueryCollision { expect })?)
+            (
+                "query_collision_levels",
+                action(ctx, common!(a), at, P::QueryCollision { expect })?,
+            )
         }
         RawStep::QueryGripperParams(a) => {
             let expect = match &a.expect {
                 Some(e) => [
                     small_uint(ctx, &e.value.max_stroke_mm, "max_stroke_mm", 0..=255)?,
-                    small_uint(ctx, &e.value.teach_coefficient_pct, "teach_coefficient_pct", 0..=255)?,
+                    small_uint(
+                        ctx,
+                        &e.value.teach_coefficient_pct,
+                        "teach_coefficient_pct",
+                        0..=255,
+                    )?,
                     small_uint(ctx, &e.value.friction, "friction", 0..=255)?,
                 ],
                 None => [None; 3],
             };
-            ("query_gripper_params", action(ctx, common!(a), at, P::QueryGripperParams { expect })?)
+            (
+                "query_gripper_params",
+                action(ctx, common!(a), at, P::QueryGripperParams { expect })?,
+            )
         }
         RawStep::SetJointLimits(a) => {
             let joint = ctx.joint_required(&a.joint, "set_joint_limits", at, false)?;
-            let min_deg = a.min_deg.as_ref().map(|v| ctx.finite(v, "min_deg")).transpose()?;
-            let max_deg = a.max_deg.as_ref().map(|v| ctx.finite(v, "max_deg")).transpose()?;
+            let min_deg = a
+                .min_deg
+                .as_ref()
+                .map(|v| ctx.finite(v, "min_deg"))
+                .transpose()?;
+            let max_deg = a
+                .max_deg
+                .as_ref()
+                .map(|v| ctx.finite(v, "max_deg"))
+                .transpose()?;
             if let (Some(lo), Some(hi)) = (min_deg, max_deg) {
                 if lo > hi {
                     return Err(ctx.err(at, format!("`min_deg` ({lo}) is above `max_deg` ({hi})")));
                 }
             }
-            let max_speed_rad_s = a.max_speed_rad_s.as_ref().map(|v| ctx.non_negative(v, "max_speed_rad_s")).transpose()?;
-            ("set_joint_limits", action(ctx, common!(a), at, P::SetJointLimits { joint, min_deg, max_deg, max_speed_rad_s })?)
+            let max_speed_rad_s = a
+                .max_speed_rad_s
+                .as_ref()
+                .map(|v| ctx.non_negative(v, "max_speed_rad_s"))
+                .transpose()?;
+            (
+                "set_joint_limits",
+                action(
+                    ctx,
+                    common!(a),
+                    at,
+                    P::SetJointLimits {
+                        joint,
+                        min_deg,
+                        max_deg,
+                        max_speed_rad_s,
+                    },
+                )?,
+            )
         }
         RawStep::SetJointAcc(a) => {
             let joint = ctx.joint_required(&a.joint, "set_joint_max_acc", at, true)?;
             let v = ctx.required(&a.max_acc_rad_s2, "max_acc_rad_s2", "set_joint_max_acc", at)?;
             let max_acc_rad_s2 = ctx.non_negative(v, "max_acc_rad_s2")?;
             if max_acc_rad_s2 > 5.0 {
-                return Err(ctx.err(pos(v), format!("`max_acc_rad_s2` must be 0..=5, got {max_acc_rad_s2}")));
+                return Err(ctx.err(
+                    pos(v),
+                    format!("`max_acc_rad_s2` must be 0..=5, got {max_acc_rad_s2}"),
+                ));
             }
-            ("set_joint_max_acc", action(ctx, common!(a), at, P::SetJointAcc { joint, max_acc_rad_s2 })?)
+            (
+                "set_joint_max_acc",
+                action(
+                    ctx,
+                    common!(a),
+                    at,
+                    P::SetJointAcc {
+                        joint,
+                        max_acc_rad_s2,
+                    },
+                )?,
+            )
         }
         RawStep::SetEndLimits(a) => {
-            let nn = |v: &Option<S<f64>>, k: &str| v.as_ref().map(|v| ctx.non_negative(v, k)).transpose();
+            let nn = |v: &Option<S<f64>>, k: &str| {
+                v.as_ref().map(|v| ctx.non_negative(v, k)).transpose()
+            };
             let values = [
                 nn(&a.linear_m_s, "linear_m_s")?,
                 nn(&a.angular_rad_s, "angular_rad_s")?,
                 nn(&a.linear_acc_m_s2, "linear_acc_m_s2")?,
                 nn(&a.angular_acc_rad_s2, "angular_acc_rad_s2")?,
             ];
-            ("set_end_limits", action(ctx, common!(a), at, P::SetEndLimits { values })?)
+            (
+                "set_end_limits",
+                action(ctx, common!(a), at, P::SetEndLimits { values })?,
+            )
         }
         RawStep::SetCollision(a) => {
             let l = ctx.required(&a.levels, "levels", "set_collision_levels", at)?;
-            ("set_collision_levels", action(ctx, common!(a), at, P::SetCollision { levels: levels(ctx, l)? })?)
+            (
+                "set_collision_levels",
+                action(
+                    ctx,
+                    common!(a),
+                    at,
+                    P::SetCollision {
+                        levels: levels(ctx, l)?,
+                    },
+                )?,
+            )
         }
         RawStep::SetGripperParams(a) => (
             "set_gripper_params",
@@ -1044,28 +1487,54 @@ fn step_kind(ctx: &Ctx<'_>, raw: &RawStep, at: Pos) -> Res<(&'static str, StepKi
                 at,
                 P::SetGripperParams {
                     max_stroke_mm: small_uint(ctx, &a.max_stroke_mm, "max_stroke_mm", 0..=255)?,
-                    teach_coefficient_pct: small_uint(ctx, &a.teach_coefficient_pct, "teach_coefficient_pct", 100..=200)?,
+                    teach_coefficient_pct: small_uint(
+                        ctx,
+                        &a.teach_coefficient_pct,
+                        "teach_coefficient_pct",
+                        100..=200,
+                    )?,
                     friction: small_uint(ctx, &a.friction, "friction", 1..=10)?,
                 },
             )?,
         ),
         RawStep::SetZero(a) => {
             let joint = ctx.joint_required(&a.joint, "set_zero", at, true)?;
-            ("set_zero", action(ctx, common!(a), at, P::SetZero { joint })?)
+            (
+                "set_zero",
+                action(ctx, common!(a), at, P::SetZero { joint })?,
+            )
         }
         RawStep::ClearJointError(a) => {
             let joint = ctx.joint_required(&a.joint, "clear_joint_error", at, true)?;
-            ("clear_joint_error", action(ctx, common!(a), at, P::ClearJointError { joint })?)
+            (
+                "clear_joint_error",
+                action(ctx, common!(a), at, P::ClearJointError { joint })?,
+            )
         }
         RawStep::ResetParams(a) => ("reset_params", action(ctx, common!(a), at, P::ResetParams)?),
         RawStep::SetPayload(a) => {
             let p = ctx.required(&a.payload, "payload", "set_payload", at)?;
-            let payload = ctx.choice(p, "payload", &[(Payload::Empty, "empty"), (Payload::Half, "half"), (Payload::Full, "full")])?;
-            ("set_payload", action(ctx, common!(a), at, P::SetPayload { payload })?)
+            let payload = ctx.choice(
+                p,
+                "payload",
+                &[
+                    (Payload::Empty, "empty"),
+                    (Payload::Half, "half"),
+                    (Payload::Full, "full"),
+                ],
+            )?;
+            (
+                "set_payload",
+                action(ctx, common!(a), at, P::SetPayload { payload })?,
+            )
         }
         RawStep::SetRole(a) => {
             let r = ctx.required(&a.role, "role", "set_role", at)?;
-            let role = ctx.choice(r, "role", &[(Role::Leader, "leader"), (Role::Follower, "follower")])?;
+            let role = ctx.choice(
+                r,
+                "role",
+                &[(Role::Leader, "leader"), (Role::Follower, "follower")],
+            )?;
             (
                 "set_role",
                 action(
@@ -1091,24 +1560,50 @@ fn step_kind(ctx: &Ctx<'_>, raw: &RawStep, at: Pos) -> Res<(&'static str, StepKi
             if let Some(t) = &a.timeout_ms {
                 return Err(ctx.err(pos(t), "`clear_faults` takes no `timeout_ms`"));
             }
-            ("clear_faults", StepKind::ClearFaults { device: ctx.device(&a.device, at)? })
+            (
+                "clear_faults",
+                StepKind::ClearFaults {
+                    device: ctx.device(&a.device, at)?,
+                },
+            )
         }
         RawStep::Expect(c) => {
             if let Some(t) = &c.timeout_ms {
                 return Err(ctx.err(pos(t), "`expect` checks now (or throughout `for_ms`); to wait for a condition use `wait_until` with `timeout_ms`"));
             }
-            let hold = c.for_ms.as_ref().map(|f| ctx.positive_millis(f, "for_ms")).transpose()?;
+            let hold = c
+                .for_ms
+                .as_ref()
+                .map(|f| ctx.positive_millis(f, "for_ms"))
+                .transpose()?;
             let device = ctx.device(&c.device, at)?;
-            ("expect", StepKind::Expect { device, checks: checks(ctx, c, "expect", at)?, hold })
+            (
+                "expect",
+                StepKind::Expect {
+                    device,
+                    checks: checks(ctx, c, "expect", at)?,
+                    hold,
+                },
+            )
         }
         RawStep::WaitUntil(c) => {
             if let Some(f) = &c.for_ms {
-                return Err(ctx.err(pos(f), "`for_ms` goes with `expect`; `wait_until` takes `timeout_ms`"));
+                return Err(ctx.err(
+                    pos(f),
+                    "`for_ms` goes with `expect`; `wait_until` takes `timeout_ms`",
+                ));
             }
             let t = ctx.required(&c.timeout_ms, "timeout_ms", "wait_until", at)?;
             let timeout = ctx.positive_millis(t, "timeout_ms")?;
             let device = ctx.device(&c.device, at)?;
-            ("wait_until", StepKind::WaitUntil { device, checks: checks(ctx, c, "wait_until", at)?, timeout })
+            (
+                "wait_until",
+                StepKind::WaitUntil {
+                    device,
+                    checks: checks(ctx, c, "wait_until", at)?,
+                    timeout,
+                },
+            )
         }
     })
 }
@@ -1124,42 +1619,82 @@ fn checks(ctx: &Ctx<'_>, c: &RawConditions, step: &str, at: Pos) -> Res<Vec<Chec
         None => DEFAULT_TOLERANCE_MM,
     };
     if let Some(j) = &c.joints_deg {
-        out.push(Check::JointsNear { targets_deg: ctx.optional_list(j, "joints_deg")?, tolerance_deg });
+        out.push(Check::JointsNear {
+            targets_deg: ctx.optional_list(j, "joints_deg")?,
+            tolerance_deg,
+        });
     }
     if let Some(j) = &c.joints_min_deg {
-        out.push(Check::JointsMin { bounds_deg: ctx.optional_list(j, "joints_min_deg")? });
+        out.push(Check::JointsMin {
+            bounds_deg: ctx.optional_list(j, "joints_min_deg")?,
+        });
     }
     if let Some(j) = &c.joints_max_deg {
-        out.push(Check::JointsMax { bounds_deg: ctx.optional_list(j, "joints_max_deg")? });
+        out.push(Check::JointsMax {
+            bounds_deg: ctx.optional_list(j, "joints_max_deg")?,
+        });
     }
     if let Some(s) = &c.max_speed_deg_s {
-        out.push(Check::MaxSpeed { deg_s: ctx.non_negative(s, "max_speed_deg_s")? });
+        out.push(Check::MaxSpeed {
+            deg_s: ctx.non_negative(s, "max_speed_deg_s")?,
+        });
     }
     if let Some(s) = &c.max_current_a {
-        out.push(Check::MaxCurrent { amps: ctx.non_negative(s, "max_current_a")? });
+        out.push(Check::MaxCurrent {
+            amps: ctx.non_negative(s, "max_current_a")?,
+        });
     }
     if let Some(p) = &c.position_mm {
-        out.push(Check::PositionNear { mm: ctx.array::<3>(p, "position_mm")?, tolerance_mm });
+        out.push(Check::PositionNear {
+            mm: ctx.array::<3>(p, "position_mm")?,
+            tolerance_mm,
+        });
     }
     if let Some(o) = &c.orientation_deg {
-        out.push(Check::OrientationNear { deg: ctx.array::<3>(o, "orientation_deg")?, tolerance_deg });
+        out.push(Check::OrientationNear {
+            deg: ctx.array::<3>(o, "orientation_deg")?,
+            tolerance_deg,
+        });
     }
     if let Some(g) = &c.gripper_mm {
-        out.push(Check::GripperNear { mm: ctx.non_negative(g, "gripper_mm")?, tolerance_mm });
+        out.push(Check::GripperNear {
+            mm: ctx.non_negative(g, "gripper_mm")?,
+            tolerance_mm,
+        });
     }
     if let Some(s) = &c.arm_status {
         let name = vocab::resolve(&vocab::ARM_STATUS, &s.value).ok_or_else(|| {
             let names: Vec<&str> = vocab::ARM_STATUS.iter().map(|(_, n)| *n).collect();
-            ctx.err(pos(s), format!("`arm_status`: unknown value `{}`; expected a code 0x00..=0x0F or one of: {}", s.value, names.join(", ")))
+            ctx.err(
+                pos(s),
+                format!(
+                    "`arm_status`: unknown value `{}`; expected a code 0x00..=0x0F or one of: {}",
+                    s.value,
+                    names.join(", ")
+                ),
+            )
         })?;
-        out.push(Check::Status { field: "arm_status", value: name.to_owned() });
+        out.push(Check::Status {
+            field: "arm_status",
+            value: name.to_owned(),
+        });
     }
     if let Some(s) = &c.ctrl_mode {
         let name = vocab::resolve(&vocab::CTRL_MODE, &s.value).ok_or_else(|| {
             let names: Vec<&str> = vocab::CTRL_MODE.iter().map(|(_, n)| *n).collect();
-            ctx.err(pos(s), format!("`ctrl_mode`: unknown value `{}`; expected one of: {}", s.value, names.join(", ")))
+            ctx.err(
+                pos(s),
+                format!(
+                    "`ctrl_mode`: unknown value `{}`; expected one of: {}",
+                    s.value,
+                    names.join(", ")
+                ),
+            )
         })?;
-        out.push(Check::Status { field: "ctrl_mode", value: name.to_owned() });
+        out.push(Check::Status {
+            field: "ctrl_mode",
+            value: name.to_owned(),
+        });
     }
     for (key, field, table) in [
         (&c.move_mode, "move_mode", &vocab::MOVE_MODE[..]),
@@ -1168,13 +1703,26 @@ fn checks(ctx: &Ctx<'_>, c: &RawConditions, step: &str, at: Pos) -> Res<Vec<Chec
     ] {
         if let Some(s) = key {
             if !table.contains(&s.value.as_str()) {
-                return Err(ctx.err(pos(s), format!("`{field}`: unknown value `{}`; expected one of: {}", s.value, table.join(", "))));
+                return Err(ctx.err(
+                    pos(s),
+                    format!(
+                        "`{field}`: unknown value `{}`; expected one of: {}",
+                        s.value,
+                        table.join(", ")
+                    ),
+                ));
             }
-            out.push(Check::Status { field, value: s.value.clone() });
+            out.push(Check::Status {
+                field,
+                value: s.value.clone(),
+            });
         }
     }
     if let Some(l) = c.leader_frames {
-        out.push(Check::Status { field: "leader_frames", value: l.to_string() });
+        out.push(Check::Status {
+            field: "leader_frames",
+            value: l.to_string(),
+        });
     }
     if let Some(e) = c.enabled {
         out.push(Check::Enabled(e));
@@ -1186,25 +1734,45 @@ fn checks(ctx: &Ctx<'_>, c: &RawConditions, step: &str, at: Pos) -> Res<Vec<Chec
         out.push(Check::GripperEnabled(e));
     }
     if let Some(j) = &c.comm_error_joints {
-        out.push(Check::CommErrorJoints(ctx.joints_list(j, "comm_error_joints")?));
+        out.push(Check::CommErrorJoints(
+            ctx.joints_list(j, "comm_error_joints")?,
+        ));
     }
     if let Some(j) = &c.limit_error_joints {
-        out.push(Check::LimitErrorJoints(ctx.joints_list(j, "limit_error_joints")?));
+        out.push(Check::LimitErrorJoints(
+            ctx.joints_list(j, "limit_error_joints")?,
+        ));
     }
     if let Some(map) = &c.joint_faults {
         for (joint, flags) in &map.value {
             if !(1..=PIPER_JOINTS as i64).contains(joint) {
-                return Err(ctx.err(pos(map), format!("`joint_faults`: joint index {joint} out of range, expected 1..=6")));
+                return Err(ctx.err(
+                    pos(map),
+                    format!("`joint_faults`: joint index {joint} out of range, expected 1..=6"),
+                ));
             }
             let flags = flag_list(ctx, flags, &vocab::JOINT_FLAGS, "joint_faults")?;
-            out.push(Check::JointFaults { joint: *joint as u8, flags });
+            out.push(Check::JointFaults {
+                joint: *joint as u8,
+                flags,
+            });
         }
     }
     if let Some(flags) = &c.gripper_faults {
-        out.push(Check::GripperFaults(flag_list(ctx, &flags.value, &vocab::GRIPPER_FLAGS, "gripper_faults")?));
+        out.push(Check::GripperFaults(flag_list(
+            ctx,
+            &flags.value,
+            &vocab::GRIPPER_FLAGS,
+            "gripper_faults",
+        )?));
     }
     if out.is_empty() {
-        return Err(ctx.err(at, format!("`{step}` has no condition (for example `joints_deg`, `arm_status`, `enabled`)")));
+        return Err(ctx.err(
+            at,
+            format!(
+                "`{step}` has no condition (for example `joints_deg`, `arm_status`, `enabled`)"
+            ),
+        ));
     }
     Ok(out)
 }
@@ -1213,7 +1781,14 @@ fn flag_list(ctx: &Ctx<'_>, flags: &[S<String>], table: &[&str], key: &str) -> R
     let mut out = Vec::new();
     for f in flags {
         if !table.contains(&f.value.as_str()) {
-            return Err(ctx.err(pos(f), format!("`{key}`: unknown flag `{}`; expected one of: {}", f.value, table.join(", "))));
+            return Err(ctx.err(
+                pos(f),
+                format!(
+                    "`{key}`: unknown flag `{}`; expected one of: {}",
+                    f.value,
+                    table.join(", ")
+                ),
+            ));
         }
         out.push(f.value.clone());
     }

@@ -64,10 +64,10 @@ pub const GRIPPER_FLAGS: [&str; 6] = [
 
 /// The name of a coded value, or `unknown(0xNN)`.
 pub fn name_of(table: &[(u8, &'static str)], code: u8) -> String {
-    table
-        .iter()
-        .find(|(c, _)| *c == code)
-        .map_or_else(|| format!("unknown(0x{code:02X})"), |(_, n)| (*n).to_owned())
+    table.iter().find(|(c, _)| *c == code).map_or_else(
+        || format!("unknown(0x{code:02X})"),
+        |(_, n)| (*n).to_owned(),
+    )
 }
 
 /// Resolve a name or a number written in a scenario (`angle_limit`, `0x04`, `4`) to the

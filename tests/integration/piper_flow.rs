@@ -359,3 +359,26 @@ async fn piper_link_loss_and_bus_off_are_surfaced() {
     piper.disconnect().await;
     emulator.shutdown().await;
 }
+
+#[tokio::test(start_paused = true)]
+async fn piper_trajectory_transfer_is_acknowledged() {
+    let (_bus, emulator, host) = start(FirmwareProfile::V1_8_2);
+    let piper = PiperBuilder::new(host).connect().await.expect("connect");
+    for index in 0..3 {
+        let ack = piper
+            .trajectory_transfer_point(index)
+            .await
+            .expect("point acked");
+        assert_eq!(ack.traj_index, index);
+    }
+    let ack = piper
+        .trajectory_transfer_end(2, 0x1234, 0xBEEF)
+        .await
+        .expect("package acked");
+    assert_eq!(
+        (ack.pkg_status, ack.name_index, ack.crc16),
+        (0xAE, 0x1234, 0xBEEF)
+    );
+    piper.disconnect().await;
+    emulator.shutdown().await;
+}

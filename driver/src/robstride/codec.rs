@@ -353,3 +353,78 @@ pub fn op_control_frame(
 pub fn magic_payload(f_cmd: u8) -> [u8; 8] {
     [1, 2, 3, 4, 5, 6, f_cmd, 0]
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::robstride::model::{Model, RangeTable};
+
+    fn rs03() -> Ranges {
+        Model::RS03.ranges(RangeTable::Manual)
+    }
+
+    #[test]
+    fn scaling_endpoints_follow_the_manual() {
+        assert_eq!(to_u16(-60.0, -60.0, 60.0), 0);
+        assert_eq!(to_u16(60.0, -60.0, 60.0), 65535);
+        assert_eq!(to_u16(1e9, -60.0, 60.0), 65535);
+        assert_eq!(to_u16(f32::NAN, -60.0, 60.0), 0);
+        assert!((from_u16(0x7FFF, -60.0, 60.0)).abs() < 0.001);
+        assert_eq!(ext_id(comm::SET_CAN_ID, 0x01FD, 0x7F), 0x0701_FD7F);
+    }
+
+    #[test]
+    fn decode_ignores_what_is_not_a_motor_reply_to_us() {
+        let status = |id: u32| {
+            CanFrame::extended(id, &[0x7F, 0xFF, 0x7F, 0xFF, 0x7F, 0xFF, 0, 250]).unwrap()
+        };
+        let ranges = |_| Some(rs03());
+        // Another host's reply, a short frame and a standard frame decode to nothing.
+        assert_eq!(
+            decode(&status(0x0280_7FFC), 0xFD, Duration::ZERO, ranges),
+            None
+        );
+        let short = CanFrame::extended(0x0280_7FFD, &[0; 4]).unwrap();
+        assert_eq!(decode(&short, 0xFD, Duration::ZERO, ranges), None);
+        let standard = CanFrame::standard(0x7F, &[0; 8]).unwrap();
+        assert_eq!(decode(&standard, 0xFD, Duration::ZERO, ranges), None);
+        // Unknown motor (no ranges): status frames cannot be scaled.
+        assert_eq!(
+            decode(&status(0x0280_7FFD), 0xFD, Duration::ZERO, |_| None),
+            None
+        );
+        let Some(Incoming::Feedback(fb)) =
+            decode(&status(0x1880_7FFD), 0xFD, Duration::ZERO, ranges)
+        else {
+            panic!("type 24 decodes");
+        };
+        assert_eq!(
+            (fb.kind, fb.mode, fb.temperature_c),
+            (FeedbackKind::ActiveReport, MotorMode::Run, 25.0)
+        );
+        let brake = decode(&status(0x02C0_7FFD), 0xFD, Duration::ZERO, ranges);
+        assert!(matches!(
+            brake,
+            Some(Incoming::Feedback(Feedback {
+                mode: MotorMode::Brake,
+                ..
+            }))
+        ));
+    }
+
+    #[test]
+    fn op_control_clamps_inside_the_codec_only_after_range_checks() {
+        let frame = op_control_frame(
+            1,
+            &OpControl {
+                torque_nm: 60.0,
+                kp: 5000.0,
+                ..OpControl::default()
+            },
+            &rs03(),
+        )
+        .unwrap();
+        assert_eq!(frame.raw_id(), 0x01FF_FF01);
+        assert_eq!(&frame.data()[4..6], &[0xFF, 0xFF]);
+    }
+}

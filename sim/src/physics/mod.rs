@@ -2,18 +2,39 @@
 //!
 //! - [`ArmModel`]: the URDF read into owned `f64` data (limits, efforts, `<dynamics>`,
 //!   `<mimic>`, inertials), with forward kinematics of the links and
-//!   [`ArmModel::gravity_torques`], our own Jacobian-transpose computation (no rapier).
-//! - [`ArmWorld`]: a fixed-base articulated world (rapier3d multibody) loaded from a URDF:
-//!   motor torques in, joint positions and velocities out, static obstacles and contacts.
+//!   [`ArmModel::gravity_torques`], our own Jacobian-transpose computation (no rapier), usable
+//!   as gravity feed-forward and as an independent reference in tests.
+//! - [`ArmWorld`]: a fixed-base articulated world (rapier3d multibody, gravity −Z, fixed step,
+//!   enhanced determinism) loaded from a URDF: motor torques in, joint positions and
+//!   velocities out, persistent disturbance torques, static obstacles and contacts.
+//!
+//! Joint vectors everywhere have one entry per actuated joint (revolute, continuous,
+//! prismatic) in URDF document order, as listed by [`ArmWorld::joints`]; rad / rad/s / N·m
+//! for revolute joints, m / m/s / N for prismatic joints.
+//!
+//! ```
+//! use sim::physics::{ArmWorld, WorldConfig};
+//! use sim::piper::kinematics::PIPER_URDF;
+//!
+//! let mut world = ArmWorld::from_urdf_str(PIPER_URDF, WorldConfig::default())?;
+//! let q = [0.0, 1.0, -1.0, 0.0, 0.3, 0.0, 0.0, 0.0];
+//! world.set_joint_positions(&q)?;
+//! let hold = world.gravity_torques(&q)?; // N·m (N for the fingers)
+//! for _ in 0..100 {
+//!     world.step(&hold); // 1 ms each
+//! }
+//! assert!((world.joint_positions()[1] - 1.0).abs() < 1e-3);
+//! assert!((world.time_s() - 0.1).abs() < 1e-9);
+//! # Ok::<(), sim::physics::PhysicsError>(())
+//! ```
 
 mod error;
 mod model;
-
-pub use error::PhysicsError;
-pub use model::{ArmModel, JointInfo, JointKind, LinkInertial, Mimic, DEFAULT_GRAVITY_M_S2};
 mod obstacle;
 mod world;
 
+pub use error::PhysicsError;
+pub use model::{ArmModel, JointInfo, JointKind, LinkInertial, Mimic, DEFAULT_GRAVITY_M_S2};
 pub use obstacle::{Contact, ObstacleId, ObstacleShape};
 pub use world::{ArmWorld, WorldConfig};
 

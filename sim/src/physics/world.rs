@@ -73,6 +73,7 @@ pub struct ArmWorld {
     obstacles: BTreeMap<ObstacleId, (RigidBodyHandle, ColliderHandle)>,
     next_obstacle: u64,
     steps: u64,
+    warned_torque_len: bool,
 }
 
 impl std::fmt::Debug for ArmWorld {
@@ -194,6 +195,7 @@ impl ArmWorld {
             obstacles: BTreeMap::new(),
             next_obstacle: 0,
             steps: 0,
+            warned_torque_len: false,
         };
         world.apply_joint_dynamics();
         Ok(world)
@@ -339,7 +341,9 @@ impl ArmWorld {
     /// nothing to the others. The torque is not clamped to the effort limit. Missing
     /// entries count as 0, extra entries are ignored, non-finite entries count as 0.
     pub fn step(&mut self, joint_torques: &[f64]) {
-        if joint_torques.len() != self.bindings.len() {
+        if joint_torques.len() != self.bindings.len() && !self.warned_torque_len {
+            // Once per world: a caller at 1 kHz would otherwise flood the log.
+            self.warned_torque_len = true;
             tracing::warn!(
                 expected = self.bindings.len(),
                 actual = joint_torques.len(),
@@ -541,10 +545,16 @@ impl ArmWorld {
                 let Some((_, link)) = self.link_bodies.iter().find(|(b, _)| *b == body) else {
                     continue;
                 };
-                let depth = pair
+                let deepest_dist_m = pair
                     .find_deepest_contact()
-                    .map_or(0.0, |(_, c)| f64::from(-c.dist).max(0.0));
+                    .map_or(f64::INFINITY, |(_, c)| f64::from(c.dist));
                 let force = f64::from(pair.total_impulse_magnitude()) / self.config.step_s;
+                // rapier also keeps speculative contacts up to 2 cm apart: report a pair only
+                // when the shapes touch or the solver had to push.
+                if deepest_dist_m > 0.0 && force == 0.0 {
+                    continue;
+                }
+                let depth = (-deepest_dist_m).max(0.0);
                 let entry = merged.entry((link.clone(), id)).or_insert((0.0, 0.0));
                 entry.0 = entry.0.max(depth);
                 entry.1 += force;

@@ -21,7 +21,8 @@ pub struct PiperConfig {
     pub initial_gripper_stroke_m: f64,
     /// JSON file holding the "flash" parameters across restarts (written atomically on change).
     pub state_file: Option<PathBuf>,
-    /// Flash contents when there is no state file (defaults of spec §9 when `None`).
+    /// Flash contents at boot when the state file is absent or does not exist yet (defaults
+    /// of spec §9 when `None`).
     pub flash: Option<Flash>,
     /// URDF to simulate instead of the bundled `urdf/piper.urdf`.
     pub urdf_path: Option<PathBuf>,
@@ -30,6 +31,12 @@ pub struct PiperConfig {
     /// 0x477 byte 2 value that switches periodic 0x481–0x486 feedback *on* (spec §14 #7:
     /// majority 0x01; the other value switches it off).
     pub periodic_48x_on_code: u8,
+    /// Physics steps run per wake-up of the core task (1–25, default 1). Physics always steps
+    /// at 1 kHz and feedback keeps its 200/40 Hz cadence; a larger value only batches the
+    /// steps (fewer timer wake-ups, less CPU in real time) at the cost of up to
+    /// `ticks_per_wake − 1` ms extra latency before a host command is seen. `armhil sim piper`
+    /// uses 5 (one wake-up per 200 Hz feedback group).
+    pub ticks_per_wake: u32,
 }
 
 impl Default for PiperConfig {
@@ -43,6 +50,7 @@ impl Default for PiperConfig {
             urdf_path: None,
             bus_voltage_v: 48.0,
             periodic_48x_on_code: 0x01,
+            ticks_per_wake: 1,
         }
     }
 }

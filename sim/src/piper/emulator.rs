@@ -60,6 +60,7 @@ impl PiperEmulator {
     /// clock (virtual time) and on a multi-thread runtime (real time).
     pub fn spawn(bus: Arc<dyn CanBus>, config: PiperConfig) -> Result<PiperHandle, PiperError> {
         let runtime = tokio::runtime::Handle::try_current().map_err(|_| PiperError::NoRuntime)?;
+        let ticks_per_wake = config.ticks_per_wake.clamp(1, 25);
         let firmware = Firmware::new(config)?;
         tracing::info!(firmware = %firmware.profile(), bus = bus.name(), "Piper emulator starting");
         let core = Arc::new(Mutex::new(firmware));
@@ -72,6 +73,7 @@ impl PiperEmulator {
         let receiver = runtime.spawn(async move {
             loop {
                 tokio::select! {
+                    biased;
                     r = rx_bus.recv() => match r {
                         Ok(rf) => {
                             if in_tx.send(rf.frame).is_err() {
@@ -92,11 +94,14 @@ impl PiperEmulator {
         let tick_core = Arc::clone(&core);
         let mut tick_stop = stop_rx.clone();
         let ticker = runtime.spawn(async move {
-            let mut clock = interval(Duration::from_secs_f64(STEP_S));
-            clock.set_missed_tick_behavior(MissedTickBehavior::Burst);
+            let mut clock = interval(Duration::from_secs_f64(STEP_S * f64::from(ticks_per_wake)));
+            // Under a paused clock no tick is ever late. In real time a stalled process skips
+            // the missed steps instead of bursting a backlog of feedback onto the bus.
+            clock.set_missed_tick_behavior(MissedTickBehavior::Skip);
             let mut produced = Vec::with_capacity(32);
             loop {
                 tokio::select! {
+                    biased;
                     _ = clock.tick() => {}
                     _ = tick_stop.changed() => break,
                 }
@@ -105,7 +110,9 @@ impl PiperEmulator {
                     while let Ok(frame) = in_rx.try_recv() {
                         fw.handle_frame(&frame);
                     }
-                    fw.tick();
+                    for _ in 0..ticks_per_wake {
+                        fw.tick();
+                    }
                     fw.drain_output_into(&mut produced);
                 }
                 for frame in produced.drain(..) {
@@ -122,6 +129,7 @@ impl PiperEmulator {
             let mut dropped: u64 = 0;
             loop {
                 let frame = tokio::select! {
+                    biased;
                     f = out_rx.recv() => match f {
                         Some(f) => f,
                         None => break,

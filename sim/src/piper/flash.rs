@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-/// Default max angle per joint, 0.1° (the real 0x473 replies of spec §6.4 [OBS]).
+/// Default max angle per joint, 0.1° (the real 0x473 replies of spec §6.4 (OBS)).
 pub const DEFAULT_MAX_ANGLE_DDEG: [i16; 6] = [1500, 1800, 0, 890, 890, 1800];
 /// Default min angle per joint, 0.1°.
 pub const DEFAULT_MIN_ANGLE_DDEG: [i16; 6] = [-1500, 0, -1700, -890, -890, -1800];

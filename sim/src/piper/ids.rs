@@ -66,7 +66,7 @@ pub const SET_GRIPPER_TEACH: u16 = 0x47D;
 pub const GRIPPER_TEACH_REPLY: u16 = 0x47E;
 /// Per-joint end velocity/acceleration feedback, joint 1 (joint n = id − 0x480).
 pub const END_VEL_FIRST: u16 = 0x481;
-/// Set joint assistance levels ([AGX] only).
+/// Set joint assistance levels ((AGX) only).
 pub const SET_ASSIST: u16 = 0x487;
 /// Firmware version query (host → arm) and reply (arm → host).
 pub const FIRMWARE: u16 = 0x4AF;

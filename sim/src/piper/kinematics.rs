@@ -185,7 +185,7 @@ pub struct JointLimits {
 }
 
 impl JointLimits {
-    /// The firmware's default limits as reported in 0x473 (spec §9.1, [OBS] column, 0.1°):
+    /// The firmware's default limits as reported in 0x473 (spec §9.1, `[OBS]` column, 0.1°):
     /// J1 ±150°, J2 0…180°, J3 −170…0°, J4 ±89°, J5 ±89°, J6 ±180°. `urdf/piper.urdf` uses
     /// the same values.
     pub fn firmware_default() -> Self {

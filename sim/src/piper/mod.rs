@@ -1,19 +1,47 @@
 //! AgileX Piper firmware emulator (CAN, 11-bit IDs; protocol in `shared/protocols/piper.md`).
 //!
+//! # Harness API (stable)
+//!
 //! ```no_run
 //! # async fn demo(bus: std::sync::Arc<dyn bus::CanBus>) -> Result<(), Box<dyn std::error::Error>> {
+//! use sim::physics::ObstacleShape;
 //! use sim::piper::{FirmwareProfile, PiperConfig, PiperEmulator, PiperFault, PiperFaultKind};
 //! let emu = PiperEmulator::spawn(bus, PiperConfig {
 //!     firmware: FirmwareProfile::V1_8_2,
+//!     initial_joints_rad: [0.0, 0.5, -0.5, 0.0, 0.0, 0.0],
 //!     ..PiperConfig::default()
 //! })?;
 //! emu.inject(PiperFault::JointCommLoss { joint: 3 })?;
 //! emu.clear(PiperFaultKind::JointCommLoss { joint: 3 })?;
-//! let state = emu.snapshot();
-//! println!("{:?}", state.joint_positions_rad);
+//! let wall = emu.add_obstacle(ObstacleShape::Sphere { radius_m: 0.05 }, [0.3, 0.0, 0.2]);
+//! let state = emu.snapshot(); // true joints, velocities, torques, currents, status bytes, flash
+//! println!("{:?} {:?}", state.joint_positions_rad, state.status);
+//! emu.remove_obstacle(wall);
 //! emu.shutdown().await;
 //! # Ok(()) }
 //! ```
+//!
+//! - [`PiperEmulator::spawn`] boots the firmware on the current tokio runtime (paused clock =
+//!   virtual time, multi-thread = real time) with three tasks: receive, 1 kHz core, transmit.
+//! - [`Firmware`] is the same machine without tasks: [`Firmware::handle_frame`],
+//!   [`Firmware::tick`] (1 ms), [`Firmware::take_output`] — for synchronous tests.
+//! - [`PiperConfig`]: firmware profile, power-on joints, optional JSON state file ("flash"),
+//!   optional URDF path (default: the bundled `urdf/piper.urdf`, compiled in).
+//!
+//! # What the firmware does
+//!
+//! - Feedback: 0x2A1–0x2A8 and 0x251–0x256 at 200 Hz, 0x261–0x266 at 40 Hz (3040 frames/s),
+//!   each group back to back, also while disabled; 0x481–0x486 at 40 Hz when switched on.
+//!   Feedback IDs move by the 0x470 feedback offset, the motion block by the control offset.
+//! - Every joint has a motor controller ([`motor`]) whose torque drives the rapier world;
+//!   position, speed, current (τ / k_t) and effort on the wire come from the simulated state
+//!   and that torque. MOVE J/P use a synchronised trapezoid (joint max speed × speed %, max
+//!   acceleration from flash), MOVE L/C a Cartesian line/arc through firmware-DH IK, MIT the
+//!   host's law with the profile's sign/scale quirks ([`profile`]).
+//! - Limits, collision levels, gripper range, zero offsets, leader/follower role and offsets
+//!   live in [`flash::Flash`] (persisted atomically when a state file is configured).
+//! - Malformed frames (wrong DLC, undefined enum values, bad MIT check nibble) are ignored,
+//!   as the firmware ignores them; unknown IDs are ignored.
 //!
 //! Layout: [`codec`] (the emulator's own wire codec), [`profile`] (firmware differences),
 //! [`firmware`] (the synchronous master-controller state machine on the physics world),

@@ -5,14 +5,14 @@
 //! current (mA) × 1.18125 on J1–J3 and × 0.95844 on J4–J6, i.e. k_t = 1.18125 N·m/A and
 //! 0.95844 N·m/A. The emulator reports current = τ / k_t, so the SDK's effort equals the torque
 //! the emulated motor produced (spec §14 #10: the disputed ×4 / ÷4 correction is not applied).
-//! Torque limits are the URDF effort limits (32 N·m J1–J3, 8 N·m J4–J6, spec §9.2 [AGX]).
+//! Torque limits are the URDF effort limits (32 N·m J1–J3, 8 N·m J4–J6, spec §9.2 (AGX)).
 
 /// Torque constant per joint, N·m/A (spec §4.5).
 pub const TORQUE_CONSTANT_NM_PER_A: [f64; 6] =
     [1.18125, 1.18125, 1.18125, 0.95844, 0.95844, 0.95844];
 
 /// Position-loop bandwidth of the MOVE-mode drivers, rad/s: J1–J3, then J4–J6.
-pub const LOOP_BANDWIDTH_RAD_S: [f64; 6] = [60.0, 60.0, 60.0, 150.0, 150.0, 150.0];
+pub const LOOP_BANDWIDTH_RAD_S: [f64; 6] = [100.0, 100.0, 100.0, 150.0, 150.0, 150.0];
 /// Damping ratio of the MOVE-mode position loop.
 pub const LOOP_DAMPING_RATIO: f64 = 0.7;
 /// Damping of the quick-stop "damping mode" (0x150 = 0x01), N·m·s/rad: the arm sinks slowly.

@@ -35,7 +35,7 @@ pub struct UnknownFirmware {
     pub name: String,
 }
 
-/// Coefficient c the S-V1.8-8 master applies to J4–J6 MIT torques (spec §10, [AGX]).
+/// Coefficient c the S-V1.8-8 master applies to J4–J6 MIT torques (spec §10, (AGX)).
 const WRIST_TORQUE_COEFFICIENT: f64 = 0.813_252;
 
 impl FirmwareProfile {

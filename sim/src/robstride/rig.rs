@@ -143,8 +143,20 @@ impl Plant for RigPlant {
 /// The pendulum is a thin rod of negligible mass with a point-like sphere at its end; the disc
 /// a cylinder whose axis is the joint axis.
 pub fn rig_urdf(load: Load, peak_torque_nm: f64, max_speed_rad_s: f64) -> String {
+    rig_urdf_with_rotor(load, 0.0, peak_torque_nm, max_speed_rad_s)
+}
+
+/// [`rig_urdf`] with the rotor's reflected inertia added to the load link about the joint axis
+/// (URDF has no armature; this is how the physics world sees the rotor).
+pub fn rig_urdf_with_rotor(
+    load: Load,
+    rotor_inertia_kg_m2: f64,
+    peak_torque_nm: f64,
+    max_speed_rad_s: f64,
+) -> String {
+    let rotor = rotor_inertia_kg_m2.max(0.0);
     let load_link = match load {
-        Load::None => inertial_block(0.001, [0.0, 0.0, 0.0], [1e-6, 1e-6, 1e-6], ""),
+        Load::None => inertial_block(0.001, [0.0, 0.0, 0.0], [1e-6, 1e-6 + rotor, 1e-6], ""),
         Load::Disc { mass_kg, radius_m } => {
             let axial = 0.5 * mass_kg * radius_m * radius_m;
             let thickness = 0.02;
@@ -152,7 +164,7 @@ pub fn rig_urdf(load: Load, peak_torque_nm: f64, max_speed_rad_s: f64) -> String
             inertial_block(
                 mass_kg,
                 [0.0, 0.0, 0.0],
-                [radial, axial, radial],
+                [radial, axial + rotor, radial],
                 &format!(
                     "<collision><origin rpy=\"1.5707963 0 0\"/><geometry><cylinder radius=\"{radius_m}\" length=\"{thickness}\"/></geometry></collision>"
                 ),
@@ -165,7 +177,7 @@ pub fn rig_urdf(load: Load, peak_torque_nm: f64, max_speed_rad_s: f64) -> String
             inertial_block(
                 mass_kg,
                 [0.0, 0.0, -length_m],
-                [own, own, own],
+                [own, own + rotor, own],
                 &format!(
                     "<collision><origin xyz=\"0 0 {z}\"/><geometry><sphere radius=\"0.02\"/></geometry></collision>",
                     z = -length_m
@@ -200,6 +212,76 @@ fn inertial_block(mass_kg: f64, com: [f64; 3], diag: [f64; 3], extra: &str) -> S
         "<inertial><origin xyz=\"{} {} {}\"/><mass value=\"{mass_kg}\"/><inertia ixx=\"{}\" iyy=\"{}\" izz=\"{}\" ixy=\"0\" ixz=\"0\" iyz=\"0\"/></inertial>{extra}",
         com[0], com[1], com[2], diag[0], diag[1], diag[2]
     )
+}
+
+/// The rig in the shared physics world (`sim::physics::ArmWorld`, rapier3d), loaded from
+/// [`rig_urdf_with_rotor`]. The world's step must equal the controller's substep (100 µs).
+pub struct WorldPlant {
+    world: crate::physics::ArmWorld,
+    inertia_kg_m2: f64,
+    friction_nm_s_per_rad: f64,
+    external_nm: f64,
+}
+
+impl WorldPlant {
+    /// Build the rig world with a fixed step of `step_s` starting at `start_rad`.
+    pub fn new(
+        load: Load,
+        rotor_inertia_kg_m2: f64,
+        friction_nm_s_per_rad: f64,
+        start_rad: f64,
+        step_s: f64,
+    ) -> Result<Self, crate::physics::PhysicsError> {
+        // Effort and speed limits are the controller's business; the URDF values are nominal.
+        let urdf = rig_urdf_with_rotor(load, rotor_inertia_kg_m2, 1.0e3, 1.0e3);
+        let config = crate::physics::WorldConfig {
+            step_s,
+            ..crate::physics::WorldConfig::default()
+        };
+        let mut world = crate::physics::ArmWorld::from_urdf_str(&urdf, config)?;
+        world.set_joint_positions(&[start_rad])?;
+        Ok(Self {
+            world,
+            inertia_kg_m2: (rotor_inertia_kg_m2 + load.inertia_kg_m2()).max(1e-6),
+            friction_nm_s_per_rad: friction_nm_s_per_rad.max(0.0),
+            external_nm: 0.0,
+        })
+    }
+}
+
+impl Plant for WorldPlant {
+    fn step(&mut self, torque_nm: f64, dt_s: f64) {
+        let step = self.world.config().step_s;
+        let steps = (dt_s / step).round().max(1.0) as u32;
+        for _ in 0..steps {
+            let friction = -self.friction_nm_s_per_rad * self.velocity_rad_s();
+            self.world.step(&[torque_nm + friction + self.external_nm]);
+        }
+    }
+
+    fn position_rad(&self) -> f64 {
+        self.world.joint_positions().first().copied().unwrap_or(0.0)
+    }
+
+    fn velocity_rad_s(&self) -> f64 {
+        self.world
+            .joint_velocities()
+            .first()
+            .copied()
+            .unwrap_or(0.0)
+    }
+
+    fn inertia_kg_m2(&self) -> f64 {
+        self.inertia_kg_m2
+    }
+
+    fn set_external_torque_nm(&mut self, torque_nm: f64) {
+        self.external_nm = if torque_nm.is_finite() {
+            torque_nm
+        } else {
+            0.0
+        };
+    }
 }
 
 #[cfg(test)]

@@ -7,7 +7,9 @@ use std::sync::Arc;
 
 use anyhow::Context;
 use bus::CanBus;
-use sim::robstride::{Load, Model, MotorConfig, RangeTable, RobstrideBus, RobstrideConfig};
+use sim::robstride::{
+    Load, Model, MotorConfig, PlantKind, RangeTable, RobstrideBus, RobstrideConfig,
+};
 
 /// Arguments of `armhil sim robstride`.
 #[derive(Debug, clap::Args)]
@@ -24,6 +26,10 @@ pub struct Args {
     /// Scaling table: `manual` (default) or `sdk`.
     #[arg(long, default_value = "manual")]
     pub ranges: String,
+    /// Move the rigs in the rapier3d physics world (the rig's URDF) instead of the built-in
+    /// one-joint integrator.
+    #[arg(long)]
+    pub world_physics: bool,
     /// Host ID the motors answer to until a host speaks.
     #[arg(long, default_value_t = 0xFD)]
     pub host_id: u8,
@@ -128,6 +134,9 @@ fn config(args: &Args) -> anyhow::Result<RobstrideConfig> {
         .map(|spec| {
             let mut motor = MotorConfig::new(spec.can_id, spec.model).with_load(args.load.0);
             motor.range_table = table;
+            if args.world_physics {
+                motor.plant = PlantKind::World;
+            }
             motor
         })
         .collect();
@@ -163,8 +172,9 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
 
 #[cfg(target_os = "linux")]
 fn open_bus(iface: &str) -> anyhow::Result<Arc<dyn CanBus>> {
-    // bus::socketcan_bus has not landed yet; switch to SocketCanBus::open when it does.
-    anyhow::bail!("cannot open {iface}: the SocketCAN adapter is not built into this armhil yet")
+    let socket = bus::socketcan_bus::SocketCanBus::open(iface)
+        .with_context(|| format!("cannot open SocketCAN interface {iface}"))?;
+    Ok(Arc::new(socket))
 }
 
 #[cfg(not(target_os = "linux"))]

@@ -32,7 +32,9 @@ fn failure_text(result: &ScenarioResult) -> (String, String) {
                 step.outcome.name().replace('_', " ")
             );
             let body = match &step.outcome {
-                Outcome::Failed { expected, actual } => format!("expected: {expected}\nactual: {actual}"),
+                Outcome::Failed { expected, actual } => {
+                    format!("expected: {expected}\nactual: {actual}")
+                }
                 Outcome::TimedOut {
                     waited,
                     expected,
@@ -102,9 +104,11 @@ pub fn junit_xml(suite: &str, results: &[ScenarioResult]) -> String {
                 );
             }
             Verdict::Error(message) => {
+                let headline = message.lines().next().unwrap_or_default();
                 let _ = writeln!(
                     out,
-                    ">\n      <error message=\"{}\" type=\"bench\" />\n    </testcase>",
+                    ">\n      <error message=\"{}\" type=\"error\">{}</error>\n    </testcase>",
+                    escape(headline),
                     escape(message)
                 );
             }

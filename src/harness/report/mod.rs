@@ -53,7 +53,11 @@ pub struct Written {
 }
 
 /// Write the outputs of `result` into `dir`, as `record` asks.
-pub fn write_outputs(result: &ScenarioResult, record: &Record, dir: &Path) -> std::io::Result<Written> {
+pub fn write_outputs(
+    result: &ScenarioResult,
+    record: &Record,
+    dir: &Path,
+) -> std::io::Result<Written> {
     let mut written = Written::default();
     let snapshot = dir.join("result.yaml");
     write_atomic(&snapshot, snapshot_yaml(result).as_bytes())?;

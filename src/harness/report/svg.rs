@@ -40,11 +40,22 @@ fn fault_windows(result: &ScenarioResult) -> Vec<Window> {
             open.push((e.at, e.fault.clone(), e.target.clone()));
         } else if e.fault == "all faults" {
             for (from, label, _) in open.drain(..) {
-                windows.push(Window { from, to: e.at, label });
+                windows.push(Window {
+                    from,
+                    to: e.at,
+                    label,
+                });
             }
-        } else if let Some(i) = open.iter().position(|(_, f, t)| *f == e.fault && *t == e.target) {
+        } else if let Some(i) = open
+            .iter()
+            .position(|(_, f, t)| *f == e.fault && *t == e.target)
+        {
             let (from, label, _) = open.remove(i);
-            windows.push(Window { from, to: e.at, label });
+            windows.push(Window {
+                from,
+                to: e.at,
+                label,
+            });
         }
     }
     for (from, label, _) in open {
@@ -59,7 +70,9 @@ fn fault_windows(result: &ScenarioResult) -> Vec<Window> {
 }
 
 fn escape(text: &str) -> String {
-    text.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
+    text.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
 }
 
 /// Tidy axis bounds around the data (with a little margin, never a zero range).
@@ -80,7 +93,15 @@ fn bounds(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
     Some((lo - margin, hi + margin))
 }
 
-fn panel(out: &mut String, trace: &Trace, group: &str, label: &str, top: f64, t_end: f64, windows: &[Window]) {
+fn panel(
+    out: &mut String,
+    trace: &Trace,
+    group: &str,
+    label: &str,
+    top: f64,
+    t_end: f64,
+    windows: &[Window],
+) {
     let cols: Vec<usize> = trace
         .columns
         .iter()
@@ -88,7 +109,12 @@ fn panel(out: &mut String, trace: &Trace, group: &str, label: &str, top: f64, t_
         .filter(|(_, c)| c.group == group)
         .map(|(i, _)| i)
         .collect();
-    let value = |row: &[Option<i64>], c: usize| row.get(c).copied().flatten().map(|v| v as f64 * trace.columns[c].quantum);
+    let value = |row: &[Option<i64>], c: usize| {
+        row.get(c)
+            .copied()
+            .flatten()
+            .map(|v| v as f64 * trace.columns[c].quantum)
+    };
     let Some((lo, hi)) = bounds(
         trace
             .rows
@@ -113,6 +139,18 @@ fn panel(out: &mut String, trace: &Trace, group: &str, label: &str, top: f64, t_
             x1 - x0,
             escape(&w.label)
         );
+    }
+    // Label the fault windows once, on the first panel.
+    if top <= TOP {
+        for (k, w) in windows.iter().enumerate() {
+            let _ = writeln!(
+                out,
+                r##"<text x="{:.1}" y="{:.1}" font-size="10" fill="#a01010">{}</text>"##,
+                x(w.from.as_secs_f64()) + 3.0,
+                top + 12.0 + 12.0 * (k % 4) as f64,
+                escape(&w.label)
+            );
+        }
     }
     // Horizontal grid: bottom, middle, top values.
     for frac in [0.0, 0.5, 1.0] {

@@ -13,7 +13,11 @@ pub(crate) fn evaluate(checks: &[Check], obs: &Observation) -> Result<(), (Strin
 
 /// Describe what every check wants (for timeouts).
 pub(crate) fn describe(checks: &[Check]) -> String {
-    checks.iter().map(expected_text).collect::<Vec<_>>().join("; ")
+    checks
+        .iter()
+        .map(expected_text)
+        .collect::<Vec<_>>()
+        .join("; ")
 }
 
 fn fmt1(v: f64) -> String {
@@ -45,7 +49,10 @@ fn opt_list(values: &[Option<f64>]) -> String {
 
 fn expected_text(check: &Check) -> String {
     match check {
-        Check::JointsNear { targets_deg, tolerance_deg } => {
+        Check::JointsNear {
+            targets_deg,
+            tolerance_deg,
+        } => {
             format!("joints_deg {} ± {}", opt_list(targets_deg), tolerance_deg)
         }
         Check::JointsMin { bounds_deg } => format!("joints_deg >= {}", opt_list(bounds_deg)),
@@ -58,14 +65,18 @@ fn expected_text(check: &Check) -> String {
         Check::OrientationNear { deg, tolerance_deg } => {
             format!("orientation_deg {} ± {}", list(deg), tolerance_deg)
         }
-        Check::GripperNear { mm, tolerance_mm } => format!("gripper_mm {} ± {}", fmt1(*mm), tolerance_mm),
+        Check::GripperNear { mm, tolerance_mm } => {
+            format!("gripper_mm {} ± {}", fmt1(*mm), tolerance_mm)
+        }
         Check::Status { field, value } => format!("{field} {value}"),
         Check::Enabled(e) => format!("enabled {e}"),
         Check::GripperEnabled(e) => format!("gripper_enabled {e}"),
         Check::EnabledJoints(j) => format!("enabled_joints {}", joints(j)),
         Check::CommErrorJoints(j) => format!("comm_error_joints {}", joints(j)),
         Check::LimitErrorJoints(j) => format!("limit_error_joints {}", joints(j)),
-        Check::JointFaults { joint, flags } => format!("joint {joint} faults [{}]", flags.join(", ")),
+        Check::JointFaults { joint, flags } => {
+            format!("joint {joint} faults [{}]", flags.join(", "))
+        }
         Check::GripperFaults(flags) => format!("gripper_faults [{}]", flags.join(", ")),
     }
 }
@@ -110,14 +121,22 @@ fn actual_text(check: &Check, obs: &Observation) -> String {
         ),
         Check::EnabledJoints(_) => format!("enabled_joints {}", joints(&enabled_list(obs))),
         Check::Enabled(_) => {
-            let parts: Vec<&str> = obs.enabled.iter().map(|e| if *e { "1" } else { "0" }).collect();
+            let parts: Vec<&str> = obs
+                .enabled
+                .iter()
+                .map(|e| if *e { "1" } else { "0" })
+                .collect();
             format!("enable bits [{}]", parts.join(", "))
         }
         Check::GripperEnabled(_) => obs
             .gripper_enabled
             .map_or_else(none, |e| format!("gripper_enabled {e}")),
-        Check::CommErrorJoints(_) => format!("comm_error_joints {}", joints(&obs.comm_error_joints)),
-        Check::LimitErrorJoints(_) => format!("limit_error_joints {}", joints(&obs.limit_error_joints)),
+        Check::CommErrorJoints(_) => {
+            format!("comm_error_joints {}", joints(&obs.comm_error_joints))
+        }
+        Check::LimitErrorJoints(_) => {
+            format!("limit_error_joints {}", joints(&obs.limit_error_joints))
+        }
         Check::JointFaults { joint, .. } => match obs.joint_flags.get(usize::from(*joint) - 1) {
             Some(flags) => format!("joint {joint} faults [{}]", flags.join(", ")),
             None => none(),
@@ -138,9 +157,12 @@ fn per_joint(values: &[f64], wanted: &[Option<f64>], ok: impl Fn(f64, f64) -> bo
 
 fn holds(check: &Check, obs: &Observation) -> bool {
     match check {
-        Check::JointsNear { targets_deg, tolerance_deg } => {
-            per_joint(&obs.joints_deg, targets_deg, |v, w| (v - w).abs() <= *tolerance_deg)
-        }
+        Check::JointsNear {
+            targets_deg,
+            tolerance_deg,
+        } => per_joint(&obs.joints_deg, targets_deg, |v, w| {
+            (v - w).abs() <= *tolerance_deg
+        }),
         Check::JointsMin { bounds_deg } => per_joint(&obs.joints_deg, bounds_deg, |v, w| v >= w),
         Check::JointsMax { bounds_deg } => per_joint(&obs.joints_deg, bounds_deg, |v, w| v <= w),
         Check::MaxSpeed { deg_s } => {
@@ -150,14 +172,18 @@ fn holds(check: &Check, obs: &Observation) -> bool {
             !obs.currents_a.is_empty() && obs.currents_a.iter().all(|c| c.abs() <= *amps)
         }
         Check::PositionNear { mm, tolerance_mm } => obs.position_mm.is_some_and(|p| {
-            p.iter().zip(mm).all(|(a, b)| (a - b).abs() <= *tolerance_mm)
+            p.iter()
+                .zip(mm)
+                .all(|(a, b)| (a - b).abs() <= *tolerance_mm)
         }),
         Check::OrientationNear { deg, tolerance_deg } => obs.orientation_deg.is_some_and(|p| {
-            p.iter().zip(deg).all(|(a, b)| angle_diff(*a, *b) <= *tolerance_deg)
+            p.iter()
+                .zip(deg)
+                .all(|(a, b)| angle_diff(*a, *b) <= *tolerance_deg)
         }),
-        Check::GripperNear { mm, tolerance_mm } => {
-            obs.gripper_mm.is_some_and(|g| (g - mm).abs() <= *tolerance_mm)
-        }
+        Check::GripperNear { mm, tolerance_mm } => obs
+            .gripper_mm
+            .is_some_and(|g| (g - mm).abs() <= *tolerance_mm),
         Check::Status { field, value } => obs.status.get(field) == Some(value),
         Check::Enabled(e) => !obs.enabled.is_empty() && obs.enabled.iter().all(|b| b == e),
         Check::GripperEnabled(e) => obs.gripper_enabled == Some(*e),
@@ -212,7 +238,10 @@ mod tests {
             targets_deg: vec![Some(90.0), None, None, None, None, Some(0.0)],
             tolerance_deg: 0.5,
         };
-        assert!(holds(&check, &obs_with_joints([90.4, 33.0, 0.0, 0.0, 0.0, -0.2])));
+        assert!(holds(
+            &check,
+            &obs_with_joints([90.4, 33.0, 0.0, 0.0, 0.0, -0.2])
+        ));
         let err = evaluate(&[check], &obs_with_joints([89.0, 0.0, 0.0, 0.0, 0.0, 0.0]));
         let (expected, actual) = err.expect_err("89.0 is 1° off");
         assert_eq!(expected, "joints_deg [90.0, ~, ~, ~, ~, 0.0] ± 0.5");

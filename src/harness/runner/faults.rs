@@ -74,7 +74,11 @@ impl FaultControl {
     }
 
     /// Apply `fault` now; when `duration` is set, remove it after that long.
-    pub fn apply(self: &Arc<Self>, fault: &FaultSpec, duration: Option<Duration>) -> Result<(), String> {
+    pub fn apply(
+        self: &Arc<Self>,
+        fault: &FaultSpec,
+        duration: Option<Duration>,
+    ) -> Result<(), String> {
         let undo = match fault {
             FaultSpec::Emulator { device, fault: f } => {
                 let dev = self
@@ -86,10 +90,14 @@ impl FaultControl {
             }
             FaultSpec::Bus(bus_fault) => {
                 let handle = self.bus.as_ref().ok_or_else(|| {
-                    "bus faults need the in-process virtual bus (not available with --iface)".to_owned()
+                    "bus faults need the in-process virtual bus (not available with --iface)"
+                        .to_owned()
                 })?;
                 match bus_fault {
-                    BusFault::Drop { frames, probability } => {
+                    BusFault::Drop {
+                        frames,
+                        probability,
+                    } => {
                         let f = filter(frames)?;
                         let fault = match probability {
                             Some((p, seed)) => Fault::drop_with_probability(f, *p, *seed),
@@ -97,9 +105,15 @@ impl FaultControl {
                         };
                         Undo::Bus(handle.inject(fault))
                     }
-                    BusFault::Delay { frames, delay } => Undo::Bus(handle.inject(Fault::delay(filter(frames)?, *delay))),
-                    BusFault::Corrupt { frames } => Undo::Bus(handle.inject(Fault::corrupt(filter(frames)?))),
-                    BusFault::Duplicate { frames } => Undo::Bus(handle.inject(Fault::duplicate(filter(frames)?))),
+                    BusFault::Delay { frames, delay } => {
+                        Undo::Bus(handle.inject(Fault::delay(filter(frames)?, *delay)))
+                    }
+                    BusFault::Corrupt { frames } => {
+                        Undo::Bus(handle.inject(Fault::corrupt(filter(frames)?)))
+                    }
+                    BusFault::Duplicate { frames } => {
+                        Undo::Bus(handle.inject(Fault::duplicate(filter(frames)?)))
+                    }
                     BusFault::Silence { node } => Undo::Bus(handle.silence_node(node)),
                     BusFault::BusOff { node } => {
                         let Some(duration) = duration else {
@@ -134,7 +148,9 @@ impl FaultControl {
                 }
             }
             Undo::Emulator(device) => {
-                if let (Some(dev), FaultSpec::Emulator { fault: f, .. }) = (self.devices.get(device), fault) {
+                if let (Some(dev), FaultSpec::Emulator { fault: f, .. }) =
+                    (self.devices.get(device), fault)
+                {
                     if let Err(e) = dev.clear(Some(f)) {
                         lock(&self.errors).push(format!("clearing {}: {e}", f.describe()));
                     }
@@ -146,7 +162,12 @@ impl FaultControl {
     }
 
     /// Schedule `fault` to start after `delay`.
-    pub fn schedule(self: &Arc<Self>, delay: Duration, fault: FaultSpec, duration: Option<Duration>) {
+    pub fn schedule(
+        self: &Arc<Self>,
+        delay: Duration,
+        fault: FaultSpec,
+        duration: Option<Duration>,
+    ) {
         let this = Arc::clone(self);
         let timer = tokio::spawn(async move {
             tokio::time::sleep(delay).await;

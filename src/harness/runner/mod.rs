@@ -42,6 +42,32 @@ impl Clock {
     }
 }
 
+/// Options of a run beyond the clock.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RunOptions {
+    /// Multiplies every deadline (`wait_until` and action `timeout_ms`, the driver's own
+    /// timeouts) for real-time runs on slow machines (e.g. a vcan VM under emulation). Waits
+    /// (`wait_ms`) and hold durations (`for_ms`) are not scaled. 1 in virtual time.
+    pub time_scale: f64,
+}
+
+impl Default for RunOptions {
+    fn default() -> Self {
+        Self { time_scale: 1.0 }
+    }
+}
+
+impl RunOptions {
+    /// Scale a deadline.
+    pub(crate) fn deadline(&self, d: Duration) -> Duration {
+        if self.time_scale.is_finite() && self.time_scale > 0.0 {
+            d.mul_f64(self.time_scale)
+        } else {
+            d
+        }
+    }
+}
+
 /// Polling period of `wait_until` and `expect … for_ms`.
 const POLL: Duration = Duration::from_millis(1);
 
@@ -50,6 +76,20 @@ const POLL: Duration = Duration::from_millis(1);
 /// With [`Clock::Iface`], scenarios that need the in-process emulator (faults, obstacles,
 /// initial joints) are skipped with the reason.
 pub fn run_scenario(scenario: &Scenario, clock: &Clock) -> ScenarioResult {
+    run_scenario_with(scenario, clock, &RunOptions::default())
+}
+
+/// [`run_scenario`] with options (deadline scaling for slow real-time runs).
+pub fn run_scenario_with(
+    scenario: &Scenario,
+    clock: &Clock,
+    options: &RunOptions,
+) -> ScenarioResult {
+    // Virtual time is exact: scaling deadlines there would only hide regressions.
+    let options = match clock {
+        Clock::Virtual => RunOptions::default(),
+        Clock::Realtime | Clock::Iface(_) => *options,
+    };
     let wall_start = std::time::Instant::now();
     if let Clock::Iface(_) = clock {
         let needs = scenario.in_process_requirements();
@@ -77,7 +117,7 @@ pub fn run_scenario(scenario: &Scenario, clock: &Clock) -> ScenarioResult {
             .build(),
     };
     let mut result = match runtime {
-        Ok(rt) => rt.block_on(run_async(scenario, clock)),
+        Ok(rt) => rt.block_on(run_async(scenario, clock, &options)),
         Err(e) => ScenarioResult::not_run(
             &scenario.name,
             scenario.path.clone(),
@@ -89,8 +129,8 @@ pub fn run_scenario(scenario: &Scenario, clock: &Clock) -> ScenarioResult {
     result
 }
 
-async fn run_async(scenario: &Scenario, clock: &Clock) -> ScenarioResult {
-    let built = match bench::build(scenario, clock).await {
+async fn run_async(scenario: &Scenario, clock: &Clock, options: &RunOptions) -> ScenarioResult {
+    let built = match bench::build(scenario, clock, options).await {
         Ok(b) => b,
         Err(message) => {
             return ScenarioResult::not_run(
@@ -138,7 +178,7 @@ async fn run_async(scenario: &Scenario, clock: &Clock) -> ScenarioResult {
         }
         let started = t0.elapsed();
         let step_start = Instant::now();
-        let (outcome, reply) = run_step(step, &devices, &faults).await;
+        let (outcome, reply) = run_step(step, &devices, &faults, options).await;
         failed = !outcome.passed();
         steps.push(StepResult {
             index: step.index,
@@ -206,6 +246,7 @@ async fn run_step(
     step: &Step,
     devices: &[Arc<dyn Device>],
     faults: &Arc<FaultControl>,
+    options: &RunOptions,
 ) -> (Outcome, Vec<(String, String)>) {
     let device = |index: usize| devices.get(index).cloned();
     match &step.kind {
@@ -223,15 +264,25 @@ async fn run_step(
                 return (missing_device(*index), Vec::new());
             };
             let start = Instant::now();
-            match (dev.perform(action, *timeout).await, expect_error) {
+            match (
+                dev.perform(action, timeout.map(|t| options.deadline(t)))
+                    .await,
+                expect_error,
+            ) {
                 (Ok(reply), None) => {
                     if reply.mismatches.is_empty() {
                         (Outcome::Passed, reply.values)
                     } else {
-                        let expected: Vec<String> =
-                            reply.mismatches.iter().map(|(k, e, _)| format!("{k} {e}")).collect();
-                        let actual: Vec<String> =
-                            reply.mismatches.iter().map(|(k, _, a)| format!("{k} {a}")).collect();
+                        let expected: Vec<String> = reply
+                            .mismatches
+                            .iter()
+                            .map(|(k, e, _)| format!("{k} {e}"))
+                            .collect();
+                        let actual: Vec<String> = reply
+                            .mismatches
+                            .iter()
+                            .map(|(k, _, a)| format!("{k} {a}"))
+                            .collect();
                         (
                             Outcome::Failed {
                                 expected: expected.join("; "),
@@ -269,7 +320,10 @@ async fn run_step(
                     }
                 }
                 (Err(e), Some(class)) => {
-                    let reply = vec![("error".to_owned(), format!("{} — {}", e.class.name(), e.message))];
+                    let reply = vec![(
+                        "error".to_owned(),
+                        format!("{} — {}", e.class.name(), e.message),
+                    )];
                     if *class == super::model::ErrorClass::Any || e.class == *class {
                         (Outcome::Passed, reply)
                     } else {
@@ -321,13 +375,14 @@ async fn run_step(
             let Some(dev) = device(*index) else {
                 return (missing_device(*index), Vec::new());
             };
+            let timeout = options.deadline(*timeout);
             let start = Instant::now();
             loop {
                 let last = match eval::evaluate(checks, &dev.observe()) {
                     Ok(()) => return (Outcome::Passed, Vec::new()),
                     Err((_, actual)) => actual,
                 };
-                if start.elapsed() >= *timeout {
+                if start.elapsed() >= timeout {
                     return (
                         Outcome::TimedOut {
                             waited: start.elapsed(),

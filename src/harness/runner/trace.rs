@@ -34,14 +34,22 @@ fn columns(record: &Record, devices: &[Arc<dyn Device>]) -> Vec<Column> {
         };
         for signal in &record.signals {
             match signal {
-                Signal::Joints => (1..=PIPER_JOINTS).for_each(|j| push(format!("j{j}_deg"), DEG_Q, "joints")),
-                Signal::Speeds => (1..=PIPER_JOINTS).for_each(|j| push(format!("v{j}_deg_s"), SPEED_Q, "speeds")),
-                Signal::Currents => (1..=PIPER_JOINTS).for_each(|j| push(format!("i{j}_a"), AMP_Q, "currents")),
+                Signal::Joints => {
+                    (1..=PIPER_JOINTS).for_each(|j| push(format!("j{j}_deg"), DEG_Q, "joints"))
+                }
+                Signal::Speeds => {
+                    (1..=PIPER_JOINTS).for_each(|j| push(format!("v{j}_deg_s"), SPEED_Q, "speeds"))
+                }
+                Signal::Currents => {
+                    (1..=PIPER_JOINTS).for_each(|j| push(format!("i{j}_a"), AMP_Q, "currents"))
+                }
                 Signal::Gripper => push("gripper_mm".to_owned(), MM_Q, "gripper"),
                 Signal::Pose => ["x", "y", "z"]
                     .iter()
                     .for_each(|a| push(format!("{a}_mm"), MM_Q, "pose")),
-                Signal::Temperatures => (1..=PIPER_JOINTS).for_each(|j| push(format!("t{j}_c"), TEMP_Q, "temperatures")),
+                Signal::Temperatures => {
+                    (1..=PIPER_JOINTS).for_each(|j| push(format!("t{j}_c"), TEMP_Q, "temperatures"))
+                }
                 Signal::Status => {
                     push("arm_status".to_owned(), 1.0, "status");
                     push("enabled_mask".to_owned(), 1.0, "status");
@@ -172,6 +180,9 @@ mod tests {
     #[test]
     fn late_real_time_ticks_report_the_nominal_time() {
         let p = Duration::from_millis(50);
-        assert_eq!(round_to_period(Duration::from_micros(100_300), p), Duration::from_millis(100));
+        assert_eq!(
+            round_to_period(Duration::from_micros(100_300), p),
+            Duration::from_millis(100)
+        );
     }
 }

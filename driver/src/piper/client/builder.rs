@@ -159,6 +159,18 @@ impl PiperBuilder {
         }
     }
 
+    /// A SocketCAN interface by name (`can0`, `vcan0`), opened at connect and re-opened when
+    /// it goes down.
+    #[cfg(target_os = "linux")]
+    pub fn interface(name: &str) -> Self {
+        let iface = name.to_owned();
+        let open: BusOpener = Arc::new(move || {
+            let bus = bus::socketcan_bus::SocketCanBus::open(&iface)?;
+            Ok(Arc::new(bus) as Arc<dyn CanBus>)
+        });
+        Self::with_opener(name, open)
+    }
+
     /// Firmware profile: auto-detected from 0x4AF (default) or forced.
     pub fn firmware(mut self, firmware: FirmwareSelection) -> Self {
         self.config.firmware = firmware;

@@ -7,8 +7,8 @@ use tokio::time::Instant;
 use super::{lock, Piper, Reply};
 use crate::piper::codec::{
     encode_firmware_query, encode_joint_query, Ack, AckedCommand, CollisionLevels, CpvFrame,
-    CpvMode, EndParams, FirmwareInfo, GripperTeachParams, JointLimits, JointMaxAcc, JointQuery,
-    Message, ParamCommand, ParamQuery,
+    CpvMode, EmergencyStop, EndParams, FirmwareInfo, GripperTeachParams, JointLimits, JointMaxAcc,
+    JointQuery, Message, MotionCtrl1, ParamCommand, ParamQuery, TrackCommand,
 };
 use crate::piper::error::PiperError;
 
@@ -240,6 +240,73 @@ impl Piper {
             },
         )
         .await
+    }
+
+    /// Offline-trajectory transfer of point `index` (0x150 `00 07 00 N`): waits for the
+    /// 0x476 acknowledgement of that point (the caller resends on [`PiperError::Timeout`],
+    /// as the spec asks).
+    pub async fn trajectory_transfer_point(&self, index: u8) -> Result<Ack, PiperError> {
+        let frame = MotionCtrl1 {
+            track: TrackCommand::Transfer,
+            traj_index: index,
+            ..MotionCtrl1::estop(EmergencyStop::None)
+        }
+        .encode();
+        self.query(
+            &[frame],
+            "0x476 trajectory point ack",
+            || {},
+            |reply| match reply {
+                Reply::Frame(Message::Ack(ack))
+                    if ack.cmd == AckedCommand::TrajectoryPoint && ack.traj_index == index =>
+                {
+                    Some(*ack)
+                }
+                _ => None,
+            },
+        )
+        .await
+    }
+
+    /// End of an offline-trajectory transfer (0x150 `00 08`, package name index and CRC-16).
+    /// A package CRC failure (0x476 byte 3 = 0xEE) is [`PiperError::Rejected`].
+    pub async fn trajectory_transfer_end(
+        &self,
+        last_index: u8,
+        name_index: u16,
+        crc16: u16,
+    ) -> Result<Ack, PiperError> {
+        let frame = MotionCtrl1 {
+            track: TrackCommand::TransferEnd,
+            traj_index: last_index,
+            name_index,
+            crc16,
+            ..MotionCtrl1::estop(EmergencyStop::None)
+        }
+        .encode();
+        let ack = self
+            .query(
+                &[frame],
+                "0x476 trajectory package ack",
+                || {},
+                |reply| match reply {
+                    Reply::Frame(Message::Ack(ack))
+                        if ack.cmd == AckedCommand::TrajectoryPoint && ack.pkg_status != 0 =>
+                    {
+                        Some(*ack)
+                    }
+                    _ => None,
+                },
+            )
+            .await?;
+        if ack.pkg_status == 0xAE {
+            Ok(ack)
+        } else {
+            Err(PiperError::Rejected {
+                command: AckedCommand::TrajectoryPoint,
+                reason: "trajectory package CRC failure",
+            })
+        }
     }
 
     /// Wait for the next 0x476 acknowledgement of `command` without sending anything (for

@@ -245,7 +245,7 @@ mod tests {
 
     #[test]
     fn low_speed_matches_real_capture() {
-        // [AGX] _HEX_261_LOW_SPD: 01 E0 00 19 19 40 00 00.
+        // (AGX) _HEX_261_LOW_SPD: 01 E0 00 19 19 40 00 00.
         let f = encode_low_speed(0, 480, 25, 25, 0x40, 0);
         assert_eq!(f.raw_id(), 0x261);
         assert_eq!(f.data(), &[0x01, 0xE0, 0x00, 0x19, 0x19, 0x40, 0x00, 0x00]);

@@ -396,13 +396,13 @@ impl Firmware {
         let was_mit = self.mit_active();
         if let Some(mm) = m.move_mode {
             // Up to S-V1.8-5 the arm cannot leave MIT for position-velocity without a reset
-            // (spec §5.1, [ISS piper_sdk#83]).
+            // (spec §5.1, (piper_sdk#83)).
             if !(self.mit_sticky && mm != MoveMode::Mit) {
                 self.move_mode = mm;
             }
         }
         if let Some(mit) = m.mit {
-            if !(self.mit_sticky && !mit) {
+            if !self.mit_sticky || mit {
                 self.mit_flag = mit;
             }
         }
@@ -531,7 +531,7 @@ impl Firmware {
                 let target = WirePose::from_wire(self.pose_cmd).to_isometry();
                 if self.move_mode == MoveMode::P {
                     let seed = self.reported_joints();
-                    match kin::solve(&target, &seed, &self.limits(), self.profile) {
+                    match kin::solve(&target, &seed, &self.limits(), self.profile, false) {
                         Some(q) => self.go_to_joints(q, false),
                         None => self.reject(0x02, 0),
                     }
@@ -606,7 +606,7 @@ impl Firmware {
             std::array::from_fn(|j| self.hold_ref[j] - self.flash.zero_offset_rad[j]);
         let mut waypoints = Vec::with_capacity(poses.len());
         for p in poses {
-            match kin::solve(p, &seed, &limits, self.profile) {
+            match kin::solve(p, &seed, &limits, self.profile, true) {
                 Some(q) => {
                     // A jump between neighbouring samples means the IK switched branch: the
                     // straight path crosses a singularity.

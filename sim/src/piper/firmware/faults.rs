@@ -5,6 +5,12 @@ use crate::piper::codec::host::CtrlMode;
 use crate::piper::faults::{driver_bits, FaultError, PiperFault, PiperFaultKind};
 use crate::piper::motor::{JointMotor, DRIVER_OVER_TEMP_C, MOTOR_OVER_TEMP_C, TEMP_HYSTERESIS_C};
 
+/// A motor pinned at its torque limit while (almost) not moving for this long trips the stall
+/// protection, ms.
+pub const STALL_TIME_MS: u32 = 2000;
+/// "Not moving" for the stall protection, rad/s.
+const STALL_SPEED_RAD_S: f64 = 0.05;
+
 /// Bus voltage below which the drivers flag under-voltage, V.
 pub const UNDER_VOLTAGE_V: f64 = 20.0;
 
@@ -26,6 +32,8 @@ pub struct FaultState {
     main_ntc: bool,
     resistor_ntc: bool,
     pub(crate) gripper_sensor_fault: bool,
+    /// Consecutive ms each motor spent saturated and still.
+    stall_ms: [u32; 6],
 }
 
 impl FaultState {
@@ -277,6 +285,20 @@ impl Firmware {
                     self.faults.collision[j] = true;
                     tripped = true;
                 }
+            }
+        }
+        for j in 0..6 {
+            let saturated =
+                self.motors[j].torque_nm().abs() >= 0.99 * self.motors[j].torque_limit_nm();
+            if self.enabled[j] && saturated && self.v_phys(j).abs() < STALL_SPEED_RAD_S {
+                self.faults.stall_ms[j] += 1;
+                if self.faults.stall_ms[j] >= STALL_TIME_MS && !self.faults.stall[j] {
+                    tracing::info!(joint = j + 1, t_s = self.time_s(), "Piper stall protection");
+                    self.faults.stall[j] = true;
+                    tripped = true;
+                }
+            } else {
+                self.faults.stall_ms[j] = 0;
             }
         }
         for j in 0..6 {

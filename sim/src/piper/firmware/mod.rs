@@ -233,9 +233,10 @@ impl Firmware {
                 1.0
             }
         });
+        // A state file that exists wins; a new one starts from `config.flash` (or defaults).
         let flash = match &config.state_file {
-            Some(path) => Flash::load(path)?,
-            None => config.flash.clone().unwrap_or_default(),
+            Some(path) if path.exists() => Flash::load(path)?,
+            _ => config.flash.clone().unwrap_or_default(),
         };
         let n = world.joints().len();
         let mut q0 = vec![0.0; n];
@@ -251,6 +252,12 @@ impl Firmware {
                 });
             }
             q0[i] = phys.clamp(lim.lower, lim.upper);
+        }
+        // Each finger takes half of the initial opening (clamped to its travel).
+        let half_stroke_m = 0.5 * config.initial_gripper_stroke_m.max(0.0);
+        for (k, &i) in finger_idx.iter().enumerate() {
+            let lim = &world.joints()[i];
+            q0[i] = (finger_sign[k] * half_stroke_m).clamp(lim.lower, lim.upper);
         }
         world.set_joint_positions(&q0)?;
         let viscous = std::array::from_fn(|j| world.joints()[arm_idx[j]].damping);
@@ -307,6 +314,7 @@ impl Firmware {
             mit_cmd: [None; 6],
             gripper: Gripper {
                 effort_nm: 1.0,
+                target_stroke_m: config.initial_gripper_stroke_m.max(0.0),
                 ..Gripper::default()
             },
             cpv_params: Default::default(),
@@ -462,14 +470,14 @@ impl Firmware {
         self.update_settling();
         if !self.silent {
             if self.leader_active {
-                if self.ticks % HIGH_RATE_DIVIDER == 0 {
+                if self.ticks.is_multiple_of(HIGH_RATE_DIVIDER) {
                     self.emit_leader();
                 }
             } else {
-                if self.ticks % HIGH_RATE_DIVIDER == 0 {
+                if self.ticks.is_multiple_of(HIGH_RATE_DIVIDER) {
                     self.emit_high_rate();
                 }
-                if self.ticks % LOW_RATE_DIVIDER == 0 {
+                if self.ticks.is_multiple_of(LOW_RATE_DIVIDER) {
                     self.emit_low_rate();
                 }
             }

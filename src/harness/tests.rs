@@ -1,0 +1,227 @@
+//! Unit tests of the two parsing layers and the report writers.
+
+use std::path::Path;
+use std::time::Duration;
+
+use super::model::*;
+use super::parse_scenario;
+use super::report::{junit_xml, write_atomic};
+use super::result::{Outcome, ScenarioResult, StepResult, Verdict};
+
+fn parse(text: &str) -> Scenario {
+    parse_scenario(Path::new("t.yaml"), text).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn error(text: &str) -> String {
+    parse_scenario(Path::new("t.yaml"), text)
+        .err()
+        .and_then(|e| e.scenario_error().map(super::ScenarioError::headline))
+        .expect("an error")
+}
+
+const BENCH: &str = "bench:\n  devices:\n    arm: {kind: piper}\n";
+
+#[test]
+fn bare_and_mapping_forms_give_the_same_action() {
+    let s = parse(&format!(
+        "{BENCH}steps:\n  - estop\n  - estop:\n  - estop: {{device: arm}}\n"
+    ));
+    assert_eq!(s.steps.len(), 3);
+    for step in &s.steps {
+        assert!(matches!(
+            step.kind,
+            StepKind::Action {
+                device: 0,
+                action: Action::Piper(PiperAction::Estop),
+                timeout: None,
+                expect_error: None
+            }
+        ));
+    }
+    assert_eq!(s.steps[1].line, 6);
+}
+
+#[test]
+fn defaults_and_units_are_applied() {
+    let s = parse(&format!(
+        "{BENCH}steps:\n  - move_j: {{joints_deg: [90, 0, 0, 0, 0, 0]}}\n  - wait_until: {{joints_deg: [90, ~, ~, ~, ~, ~], timeout_ms: 250}}\n"
+    ));
+    assert_eq!(s.name, "t");
+    assert_eq!(s.record.sample_period, Duration::from_millis(50));
+    let StepKind::Action {
+        action:
+            Action::Piper(PiperAction::MoveJ {
+                joints_deg,
+                speed_pct,
+            }),
+        ..
+    } = &s.steps[0].kind
+    else {
+        panic!("move_j expected");
+    };
+    assert_eq!(joints_deg[0], 90.0);
+    assert_eq!(*speed_pct, 50);
+    let StepKind::WaitUntil {
+        checks, timeout, ..
+    } = &s.steps[1].kind
+    else {
+        panic!("wait_until expected")
+    };
+    assert_eq!(*timeout, Duration::from_millis(250));
+    assert_eq!(
+        checks,
+        &vec![Check::JointsNear {
+            targets_deg: vec![Some(90.0), None, None, None, None, None],
+            tolerance_deg: 0.5
+        }]
+    );
+}
+
+#[test]
+fn schedule_after_a_step_resolves_the_step_index() {
+    let s = parse(&format!(
+        "{BENCH}faults:\n  - {{after: go, delay_ms: 20, duration_ms: 100, fault: {{drop: {{id: 0x2A5}}}}}}\nsteps:\n  - wait_ms: 1\n  - enable: {{id: go}}\n"
+    ));
+    assert_eq!(s.faults.len(), 1);
+    assert_eq!(
+        s.faults[0].trigger,
+        FaultTrigger::AfterStep {
+            step: 1,
+            delay: Duration::from_millis(20)
+        }
+    );
+    assert_eq!(s.faults[0].duration, Some(Duration::from_millis(100)));
+    assert_eq!(
+        s.faults[0].fault,
+        FaultSpec::Bus(BusFault::Drop {
+            frames: FrameSelector::Id(0x2A5),
+            probability: None
+        })
+    );
+}
+
+#[test]
+fn arm_status_accepts_names_and_codes() {
+    let s = parse(&format!("{BENCH}steps:\n  - expect: {{arm_status: 0x04}}\n  - expect: {{arm_status: angle_limit}}\n"));
+    for step in &s.steps {
+        let StepKind::Expect { checks, .. } = &step.kind else {
+            panic!()
+        };
+        assert_eq!(
+            checks,
+            &vec![Check::Status {
+                field: "arm_status",
+                value: "angle_limit".to_owned()
+            }]
+        );
+    }
+}
+
+#[test]
+fn semantic_errors_point_at_the_value() {
+    assert_eq!(
+        error(&format!("{BENCH}steps:\n  - mode: {{move: x}}\n")),
+        "t.yaml:5:18: `move`: unknown value `x`; expected one of: p, j, l, c, m"
+    );
+    assert_eq!(
+        error(&format!(
+            "{BENCH}steps:\n  - inject: {{fault: {{estop: {{joint: 2}}}}}}\n"
+        )),
+        "t.yaml:5:37: `estop` takes no `joint` (it takes: no arguments)"
+    );
+    assert_eq!(
+        error(&format!(
+            "{BENCH}steps:\n  - inject: {{fault: {{bus_off: {{node: host}}}}}}\n"
+        )),
+        "t.yaml:5:5: `bus_off` needs `duration_ms` (the node recovers after it)"
+    );
+    assert_eq!(
+        error(&format!(
+            "{BENCH}steps:\n  - inject: {{fault: {{silence: {{node: left}}}}}}\n"
+        )),
+        "t.yaml:5:38: unknown node `left`; expected `host` (the driver) or a device: arm"
+    );
+    assert_eq!(
+        error(&format!("{BENCH}steps:\n  - expect: {{}}\n")),
+        "t.yaml:5:5: `expect` has no condition (for example `joints_deg`, `arm_status`, `enabled`)"
+    );
+    assert_eq!(
+        error(&format!("{BENCH}steps:\n  - move_j: {{speed_pct: 20}}\n")),
+        "t.yaml:5:5: `move_j` needs `joints_deg`"
+    );
+    assert_eq!(
+        error(&format!("{BENCH}steps:\n  - estop: {{}}\n    reset:\n")),
+        "t.yaml:5:5: one step per list item, found a second key `reset` (indent its arguments under `estop:`)"
+    );
+}
+
+#[test]
+fn several_devices_need_a_device_key() {
+    let text =
+        "bench:\n  devices:\n    a: {kind: piper}\n    b: {kind: piper}\nsteps:\n  - estop\n";
+    assert_eq!(
+        error(text),
+        "t.yaml:6:5: the bench has several devices (a, b): say which with `device:`"
+    );
+}
+
+fn result(verdict: Verdict, outcome: Outcome) -> ScenarioResult {
+    let mut r = ScenarioResult::not_run(
+        "demo",
+        "scenarios/piper/demo.yaml".into(),
+        verdict,
+        "virtual",
+    );
+    r.steps.push(StepResult {
+        index: 0,
+        line: 7,
+        label: "wait_until".to_owned(),
+        id: None,
+        started: Duration::ZERO,
+        took: Duration::from_millis(50),
+        outcome,
+        reply: Vec::new(),
+    });
+    r
+}
+
+#[test]
+fn junit_reports_failures_with_expected_and_actual() {
+    let failed = result(
+        Verdict::Failed,
+        Outcome::TimedOut {
+            waited: Duration::from_millis(50),
+            expected: "arm_status estop".into(),
+            actual: "arm_status normal".into(),
+        },
+    );
+    let passed = result(Verdict::Passed, Outcome::Passed);
+    let xml = junit_xml("armhil", &[failed, passed]);
+    assert!(
+        xml.contains(r#"<testsuites name="armhil" tests="2" failures="1" errors="0" skipped="0""#),
+        "{xml}"
+    );
+    assert!(
+        xml.contains(
+            r#"<failure message="step 1 (wait_until, line 7) timed out" type="step">waited 50 ms"#
+        ),
+        "{xml}"
+    );
+    assert!(
+        xml.contains("expected: arm_status estop\nactual: arm_status normal</failure>"),
+        "{xml}"
+    );
+    assert!(xml.contains(r#"classname="scenarios.piper""#), "{xml}");
+}
+
+#[test]
+fn atomic_write_replaces_the_file_and_leaves_no_temp() {
+    let dir = std::env::temp_dir().join(format!("armhil-atomic-{}", std::process::id()));
+    let path = dir.join("sub").join("f.txt");
+    write_atomic(&path, b"one").expect("first write");
+    write_atomic(&path, b"two").expect("second write");
+    assert_eq!(std::fs::read(&path).expect("readable"), b"two");
+    let leftovers: Vec<_> = std::fs::read_dir(dir.join("sub")).expect("dir").collect();
+    assert_eq!(leftovers.len(), 1);
+    let _ = std::fs::remove_dir_all(&dir);
+}
