@@ -64,9 +64,13 @@ log "vcan_e2e: $test_bin"
 target_dir=$(cargo metadata --format-version 1 --no-deps |
     python3 -c 'import json, sys; print(json.load(sys.stdin)["target_directory"])')
 # The one directory the VM may write to: the status file, the guest log, test artifacts.
-run_dir="$target_dir/vcan-e2e-run"
-rm -rf "$run_dir"
-mkdir -p "$run_dir"
+# One per run, so that runs started at the same time by different people do not collide;
+# runs older than two hours are pruned.
+mkdir -p "$target_dir/vcan-e2e"
+find "$target_dir/vcan-e2e" -mindepth 1 -maxdepth 1 -name 'run.*' -mmin +120 -exec rm -rf {} +
+run_dir=$(mktemp -d "$target_dir/vcan-e2e/run.XXXXXX")
+chmod 755 "$run_dir"
+log "run directory: $run_dir"
 
 # The interpreter for python hooks, resolved to a real path: the VM's PATH lacks pyenv and
 # similar shims (and a pyenv shim costs ~30 s under TCG anyway).

@@ -484,8 +484,22 @@ fn futures_are_send(piper: Piper) {
     send(piper.wait_for(|s| s.arm_enabled(), Duration::from_secs(1), "enabled"));
     send(piper.query_all_joint_limits());
     send(piper.query_firmware());
-    send(piper.mit(1, MitCommand { p_rad: 0.0, v_rad_s: 0.0, kp: 0.0, kd: 0.0, t_nm: 0.0 }));
+    send(piper.mit(
+        1,
+        MitCommand {
+            p_rad: 0.0,
+            v_rad_s: 0.0,
+            kp: 0.0,
+            kd: 0.0,
+            t_nm: 0.0,
+        },
+    ));
     send(piper.disconnect());
     send(piper.reconnect());
-    send(PiperBuilder::new(Arc::new(VirtualBus::new(VirtualBusConfig::default()).attach("x"))).connect());
+    send(
+        PiperBuilder::new(Arc::new(
+            VirtualBus::new(VirtualBusConfig::default()).attach("x"),
+        ))
+        .connect(),
+    );
 }
