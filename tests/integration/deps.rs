@@ -8,7 +8,13 @@ use serde_json::Value;
 fn workspace_metadata() -> Value {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_owned());
     let output = Command::new(cargo)
-        .args(["metadata", "--format-version", "1", "--offline", "--no-deps"])
+        .args([
+            "metadata",
+            "--format-version",
+            "1",
+            "--offline",
+            "--no-deps",
+        ])
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .output()
         .expect("cargo metadata runs");
@@ -39,7 +45,16 @@ fn driver_and_sim_do_not_depend_on_each_other() {
     let metadata = workspace_metadata();
     let driver = dependency_names(&metadata, "armhil-driver");
     let sim = dependency_names(&metadata, "armhil-sim");
-    assert!(driver.iter().any(|name| name == "armhil-bus"), "driver uses the bus: {driver:?}");
-    assert!(!driver.iter().any(|name| name == "armhil-sim"), "driver depends on sim: {driver:?}");
-    assert!(!sim.iter().any(|name| name == "armhil-driver"), "sim depends on driver: {sim:?}");
+    assert!(
+        driver.iter().any(|name| name == "armhil-bus"),
+        "driver uses the bus: {driver:?}"
+    );
+    assert!(
+        !driver.iter().any(|name| name == "armhil-sim"),
+        "driver depends on sim: {driver:?}"
+    );
+    assert!(
+        !sim.iter().any(|name| name == "armhil-driver"),
+        "sim depends on driver: {sim:?}"
+    );
 }
