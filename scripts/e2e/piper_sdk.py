@@ -3,10 +3,13 @@
 
 Starts `$ARMHIL_BIN sim piper --iface $ARMHIL_VCAN_IFACE --firmware S-V1.8-2` (unless
 ARMHIL_PIPER_EXTERNAL=1, then an emulator must already run on the interface), then with
-`C_PiperInterface_V2(iface, judge_flag=False)` (a vcan has no bitrate for the SDK to check):
+`C_PiperInterface_V2(iface, judge_flag=False)` (a vcan has no bitrate for the SDK to check)
+and CAN_RAW_LOOPBACK turned back on for the SDK's send socket (see run_checks: without it a
+vcan delivers none of the SDK's frames):
 
 1. connects (the SDK queries limits, max acc and the firmware version) and checks the
-   firmware string and the 0x473 joint limits;
+   firmware string and the 0x473 joint limits (with a kernel filter on the SDK's receive
+   socket for that step, so that the slow VM's queue overflow cannot eat the 0x4AF burst);
 2. enables the arm, selects CAN mode + MOVE J at 50 %, moves to a joint target and reads the
    joints back within 0.1 deg;
 3. opens the gripper to 40 mm and reads the stroke back within 1 mm;
@@ -20,6 +23,7 @@ VM (TCG) everything runs several times slower.
 
 import os
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -40,6 +44,14 @@ EXPECTED_LIMITS = {
 }
 TARGET_MDEG = [20000, 40000, -40000, 10000, 20000, -15000]
 GRIPPER_UM = 40000
+
+
+T0 = time.monotonic()
+
+
+def say(msg):
+    """Progress line with the seconds since the hook started (the VM is slow: show where)."""
+    print(f"[{time.monotonic() - T0:6.1f} s] {msg}", flush=True)
 
 
 class Failure(Exception):
@@ -67,31 +79,36 @@ def joints_mdeg(piper):
     return [js.joint_1, js.joint_2, js.joint_3, js.joint_4, js.joint_5, js.joint_6]
 
 
-def run_checks():
-    from piper_sdk import C_PiperInterface_V2
+def sdk_buses(piper):
+    """The python-can buses the SDK receives and sends on (0.6.2 opens two on Linux)."""
+    port = piper.GetCanBus()
+    rx = getattr(port, "recv_bus", None) or getattr(port, "bus", None)
+    tx = getattr(port, "send_bus", None) or rx
+    if rx is None or tx is None:
+        raise Failure(f"cannot find the SDK's CAN sockets on {type(port).__name__}")
+    return rx, tx
 
-    piper = C_PiperInterface_V2(IFACE, judge_flag=False)
-    piper.ConnectPort()
 
-    wait_for(lambda: piper.GetArmStatus().time_stamp > 0, 30, "0x2A1 status feedback")
-    print("connected; feedback flowing")
-
-    # 1. Firmware version: the SDK clears its buffer right after sending the query, so ask
-    #    again if the first answer does not show up.
+def check_firmware_and_limits(piper):
+    """Step 1 (see run_checks): the 0x4AF version string and the 0x473 limits."""
+    # The SDK clears its firmware buffer right after sending the query (SearchPiperFirmware-
+    # Version) and returns the 8 bytes after "S-V" as soon as "S-V" is in the buffer, so a
+    # reply read half-way gives "S-V1": wait for the whole string, re-query when none comes.
     def firmware():
         version = piper.GetPiperFirmwareVersion()
-        return version if version != -0x4AF else None
+        return version if isinstance(version, str) and len(version) >= len(FIRMWARE) else None
 
     version = None
-    for _ in range(5):
+    for attempt in range(1, 7):
+        piper.SearchPiperFirmwareVersion()
         try:
-            version = wait_for(firmware, 5, "the 0x4AF firmware reply")
+            version = wait_for(firmware, 10, "the 0x4AF firmware reply")
             break
-        except Failure:
-            piper.SearchPiperFirmwareVersion()
+        except Failure as e:
+            say(f"firmware query {attempt}: {e}")
     if version != FIRMWARE:
         raise Failure(f"firmware version {version!r}, expected {FIRMWARE!r}")
-    print(f"firmware {version}")
+    say(f"firmware {version}")
 
     # GetAllMotorAngleLimitMaxSpd() is unusable here: piper_sdk 0.6.x stores a reference to
     # its one reused rx message object in all six slots, so after the connect burst every slot
@@ -105,10 +122,43 @@ def run_checks():
             return (cur.max_angle_limit, cur.min_angle_limit, cur.max_joint_spd)
 
         piper.SearchMotorMaxAngleSpdAccLimit(n, 0x01)
-        got = wait_for(reply_for_n, 10, f"the 0x473 reply for joint {n}", poll_s=0.05)
+        got = wait_for(reply_for_n, 20, f"the 0x473 reply for joint {n}", poll_s=0.1)
         if got != (max_ddeg, min_ddeg, 300):
             raise Failure(f"joint {n} limits {got}, expected {(max_ddeg, min_ddeg, 300)}")
-    print("joint limits match the flash defaults")
+    say("joint limits match the flash defaults")
+
+
+def run_checks():
+    from piper_sdk import C_PiperInterface_V2
+
+    say("piper_sdk imported")
+    piper = C_PiperInterface_V2(IFACE, judge_flag=False)
+    sdk_rx, sdk_tx = sdk_buses(piper)
+    # piper_sdk 0.6.2 (can_encapsulation_v0_4_0) sends on its own socket opened with
+    # local_loopback=False. On a real adapter the frames still go out on the wire; a vcan *is*
+    # the local loopback (vcan_tx drops every frame not marked for loopback), so without this
+    # no command of the SDK, not even its 0x4AF query, ever reaches the emulator. Turn the
+    # kernel loopback back on for that socket before ConnectPort sends its first queries.
+    sdk_tx.socket.setsockopt(socket.SOL_CAN_RAW, socket.CAN_RAW_LOOPBACK, 1)
+    piper.ConnectPort()
+
+    wait_for(lambda: piper.GetArmStatus().time_stamp > 0, 30, "0x2A1 status feedback")
+    say("connected; feedback flowing")
+
+    # 1. Firmware version and joint limits. The arm streams ~3000 feedback frames/s; under TCG
+    #    the SDK's reader thread parses only a few hundred per second, so its socket queue
+    #    overflows and the kernel drops most frames, and with them the 11-frame 0x4AF burst
+    #    (the SDK needs the two frames holding "S-V1" and ".8-2" back to back). Let the kernel
+    #    queue only the replies of this step on the SDK's own socket (python-can filters, i.e.
+    #    CAN_RAW_FILTER) and lift the filter afterwards. The SDK itself parses the replies.
+    sdk_rx.set_filters([
+        {"can_id": 0x4AF, "can_mask": 0x7FF},
+        {"can_id": 0x473, "can_mask": 0x7FF},
+    ])
+    try:
+        check_firmware_and_limits(piper)
+    finally:
+        sdk_rx.set_filters(None)
 
     # 2. Enable (the SDK demo loop: EnablePiper returns the state read before sending).
     wait_for(piper.EnablePiper, 20, "all six joints enabled (0x261-0x266 bit 6)", poll_s=0.05)
@@ -119,7 +169,7 @@ def run_checks():
         return as_int(s.ctrl_mode) == 0x01 and as_int(s.mode_feed) == 0x01 and as_int(s.arm_status) == 0
 
     wait_for(in_move_j, 10, "0x2A1 showing CAN mode + MOVE J + normal")
-    print("enabled, CAN mode, MOVE J")
+    say("enabled, CAN mode, MOVE J")
 
     deadline = time.monotonic() + 60
     while True:
@@ -139,7 +189,7 @@ def run_checks():
     err = max(abs(a - b) for a, b in zip(joints, TARGET_MDEG))
     if err > 100:
         raise Failure(f"joints {joints} differ from target {TARGET_MDEG} by {err} m° (> 0.1°)")
-    print(f"MOVE J arrived, max error {err} m°")
+    say(f"MOVE J arrived, max error {err} m°")
 
     # 3. Gripper.
     def gripper_there():
@@ -148,7 +198,7 @@ def run_checks():
         return abs(stroke - GRIPPER_UM) <= 1000 and stroke
 
     stroke = wait_for(gripper_there, 30, f"gripper stroke {GRIPPER_UM} µm", poll_s=0.05)
-    print(f"gripper at {stroke} µm")
+    say(f"gripper at {stroke} µm")
 
     # 4. The SDK's forward kinematics against our end-pose feedback.
     piper.EnableFkCal()
@@ -164,10 +214,11 @@ def run_checks():
         diff = (fk[i] - fb[i] + 180.0) % 360.0 - 180.0
         if abs(diff) > 0.5:
             raise Failure(f"end pose {name}: SDK FK {fk[i]:.3f}°, feedback {fb[i]:.3f}°")
-    print(f"SDK FK agrees with end-pose feedback: {[round(x, 2) for x in fb]}")
+    say(f"SDK FK agrees with end-pose feedback: {[round(x, 2) for x in fb]}")
 
     # 5. Disable.
     wait_for(lambda: not piper.DisablePiper(), 20, "all joints disabled", poll_s=0.05)
+    say("disabled")
     piper.DisconnectPort()
 
 
@@ -195,9 +246,11 @@ def main():
             child.send_signal(signal.SIGINT)
             try:
                 child.wait(timeout=20)
+                say(f"emulator stopped (exit {child.returncode})")
             except subprocess.TimeoutExpired:
                 child.kill()
                 child.wait()
+                say("emulator did not stop on SIGINT within 20 s: killed")
         if log is not None:
             log.close()
     print("piper_sdk e2e OK")

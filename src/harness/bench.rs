@@ -11,10 +11,14 @@ use super::device::Device;
 use super::emulator::PiperSim;
 use super::model::{DeviceKind, PiperSettings, Scenario};
 use super::piper::{EmulatorControl, PiperDevice};
+use super::robstride::RobstrideDevice;
 use super::runner::{Clock, Recorder, RunOptions};
 
 /// Node name of the drivers on the virtual bus (bus faults can target it as `host`).
 pub const HOST_NODE: &str = "host";
+
+/// How long the RobStride driver waits for each reply (its default, before time scaling).
+const RS_DRIVER_TIMEOUT: std::time::Duration = std::time::Duration::from_millis(20);
 
 /// A built bench.
 pub(crate) struct BuiltBench {
@@ -76,6 +80,17 @@ async fn build_virtual(scenario: &Scenario, options: &RunOptions) -> Result<Buil
                     *options,
                 )));
             }
+            DeviceKind::Robstride(settings) => {
+                let host: Arc<dyn CanBus> = Arc::new(bus.attach(HOST_NODE));
+                devices.push(Arc::new(RobstrideDevice::start(
+                    &spec.name,
+                    settings,
+                    host,
+                    Some(&bus),
+                    scenario.bench.bitrate_bps,
+                    options.deadline(RS_DRIVER_TIMEOUT),
+                )?));
+            }
         }
     }
     Ok(BuiltBench {
@@ -129,6 +144,16 @@ async fn build_iface(
                 devices.push(Arc::new(PiperDevice::new(
                     &spec.name, driver, None, *options,
                 )));
+            }
+            DeviceKind::Robstride(settings) => {
+                devices.push(Arc::new(RobstrideDevice::start(
+                    &spec.name,
+                    settings,
+                    open("driver")?,
+                    None,
+                    scenario.bench.bitrate_bps,
+                    options.deadline(RS_DRIVER_TIMEOUT),
+                )?));
             }
         }
     }

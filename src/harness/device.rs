@@ -81,6 +81,8 @@ pub struct Observation {
     pub joint_flags: Vec<Vec<String>>,
     /// Gripper fault flags (sorted names).
     pub gripper_flags: Vec<String>,
+    /// RobStride motors by CAN ID (empty for other devices).
+    pub motors: BTreeMap<u8, super::robstride::MotorObservation>,
 }
 
 /// A device on the bench: its driver (always) and its emulator (in-process runs).

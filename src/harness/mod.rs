@@ -23,6 +23,8 @@ mod emulator;
 mod piper;
 pub mod report;
 pub mod result;
+pub mod robstride;
+mod robstride_raw;
 mod runner;
 
 pub use bench::HOST_NODE;

@@ -56,9 +56,24 @@ impl Scenario {
             if let StepKind::ClearFaults { .. } = &step.kind {
                 needs.push(format!("clear_faults (line {})", step.line));
             }
+            if let StepKind::Action {
+                action: Action::Robstride(a),
+                ..
+            } = &step.kind
+            {
+                if a.command.needs_emulator() {
+                    needs.push(format!(
+                        "robstride `{}` (line {})",
+                        a.command.name(),
+                        step.line
+                    ));
+                }
+            }
         }
         for device in &self.bench.devices {
-            let DeviceKind::Piper(settings) = &device.kind;
+            let DeviceKind::Piper(settings) = &device.kind else {
+                continue;
+            };
             if !settings.obstacles.is_empty() {
                 needs.push(format!("obstacles on `{}`", device.name));
             }
@@ -104,6 +119,8 @@ pub struct DeviceSpec {
 pub enum DeviceKind {
     /// An AgileX Piper arm.
     Piper(PiperSettings),
+    /// A bus of RobStride actuators.
+    Robstride(super::robstride::RobstrideSettings),
 }
 
 impl DeviceKind {
@@ -111,6 +128,7 @@ impl DeviceKind {
     pub fn name(&self) -> &'static str {
         match self {
             Self::Piper(_) => "piper",
+            Self::Robstride(_) => "robstride",
         }
     }
 }
@@ -558,6 +576,8 @@ pub struct Pose {
 pub enum Action {
     /// Actions on a Piper.
     Piper(PiperAction),
+    /// A command to a RobStride motor (or its emulator).
+    Robstride(super::robstride::RobstrideAction),
 }
 
 /// Piper control modes (0x151 byte 0).
@@ -899,4 +919,11 @@ pub enum Check {
     },
     /// Exactly these gripper fault flags.
     GripperFaults(Vec<String>),
+    /// A condition on one RobStride motor.
+    Motor {
+        /// CAN ID.
+        motor: u8,
+        /// The condition.
+        cond: super::robstride::MotorCond,
+    },
 }

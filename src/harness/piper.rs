@@ -677,6 +677,10 @@ impl Device for PiperDevice {
     ) -> Result<Reply, DeviceError> {
         match action {
             Action::Piper(a) => self.act(a, timeout).await,
+            Action::Robstride(_) => Err(DeviceError::unsupported(format!(
+                "`{}` is a Piper: `robstride` steps need a robstride device",
+                self.name
+            ))),
         }
     }
 

@@ -7,6 +7,7 @@ use serde::Deserialize;
 use serde_saphyr::Spanned;
 
 use super::onekey::one_key_enum;
+use super::robstride_raw::{RawMotorConds, RawRsMotor, RawRsStep};
 
 /// A spanned value.
 pub(crate) type S<T> = Spanned<T>;
@@ -47,6 +48,8 @@ pub(crate) struct RawDevice {
     pub gripper_max_mm: Option<S<i64>>,
     pub collision_levels: Option<S<Vec<i64>>>,
     pub obstacles: Option<Vec<S<RawObstacle>>>,
+    /// RobStride motors (`kind: robstride`).
+    pub motors: Option<S<Vec<S<RawRsMotor>>>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -293,6 +296,8 @@ pub(crate) struct RawConditions {
     pub feedback: Option<S<String>>,
     pub leader_frames: Option<bool>,
     pub max_current_a: Option<S<f64>>,
+    /// RobStride per-motor conditions by CAN ID.
+    pub motors: Option<S<BTreeMap<i64, S<RawMotorConds>>>>,
 }
 
 /// `inject` step arguments: the fault, its device and how long it lasts.
@@ -341,5 +346,6 @@ one_key_enum! {
         "clear_faults" => ClearFaults(RawPlain) [bare],
         "expect" => Expect(RawConditions),
         "wait_until" => WaitUntil(RawConditions),
+        "robstride" => Robstride(Box<RawRsStep>),
     }
 }

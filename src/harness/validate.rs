@@ -8,6 +8,8 @@ use super::model::*;
 use super::raw::*;
 use super::vocab;
 
+mod robstride;
+
 type Res<T> = Result<T, Box<ScenarioError>>;
 
 /// Default MOVE speed percentage.
@@ -364,7 +366,8 @@ fn step_id(step: &RawStep) -> Option<&S<String>> {
         Inject,
         ClearFaults,
         Expect,
-        WaitUntil
+        WaitUntil,
+        Robstride
     )
 }
 
@@ -415,11 +418,19 @@ fn bench(ctx: &Ctx<'_>, raw: &S<RawBench>) -> Res<Bench> {
 fn device_kind(ctx: &Ctx<'_>, raw: &S<RawDevice>) -> Res<DeviceKind> {
     let d = &raw.value;
     match d.kind.value.as_str() {
-        "piper" => {}
+        "piper" => {
+            if let Some(m) = &d.motors {
+                return Err(ctx.err(
+                    pos(m),
+                    "`motors` is a robstride setting; a piper device does not take it",
+                ));
+            }
+        }
+        "robstride" => return Ok(DeviceKind::Robstride(robstride::device_kind(ctx, raw)?)),
         other => {
             return Err(ctx.err(
                 pos(&d.kind),
-                format!("unknown device kind `{other}`; expected: piper"),
+                format!("unknown device kind `{other}`; expected: piper, robstride"),
             ))
         }
     }
@@ -1605,6 +1616,7 @@ fn step_kind(ctx: &Ctx<'_>, raw: &RawStep, at: Pos) -> Res<(&'static str, StepKi
                 },
             )
         }
+        RawStep::Robstride(a) => robstride::step(ctx, a, at)?,
     })
 }
 
@@ -1765,6 +1777,9 @@ fn checks(ctx: &Ctx<'_>, c: &RawConditions, step: &str, at: Pos) -> Res<Vec<Chec
             &vocab::GRIPPER_FLAGS,
             "gripper_faults",
         )?));
+    }
+    if let Some(m) = &c.motors {
+        robstride::checks(ctx, m, &mut out)?;
     }
     if out.is_empty() {
         return Err(ctx.err(

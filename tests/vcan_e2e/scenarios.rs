@@ -3,8 +3,8 @@
 //! Every scenario tagged `vcan` runs in real time against a fresh emulator process (started
 //! with the scenario's firmware, so state from one scenario never leaks into the next). Those
 //! scenarios include driver-visible faults that need no in-process hooks: the e-stop command,
-//! a target past a joint limit, a MOVE P without IK solution, and feedback lost through an ID
-//! offset. A scenario with injected faults must be reported as skipped, not failed.
+//! a target past a joint limit, a MOVE P without IK solution, and feedback lost to a configured
+//! leader. A scenario with injected faults must be reported as skipped, not failed.
 
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
@@ -42,9 +42,9 @@ impl Drop for Sim {
 }
 
 /// Deadline factor for `armhil run --time-scale` (the VM runs several times slower than the
-/// host): `ARMHIL_E2E_TIME_SCALE`, default 10.
+/// host): `ARMHIL_E2E_TIME_SCALE`, default 25.
 fn time_scale() -> String {
-    std::env::var("ARMHIL_E2E_TIME_SCALE").unwrap_or_else(|_| "10".to_owned())
+    std::env::var("ARMHIL_E2E_TIME_SCALE").unwrap_or_else(|_| "25".to_owned())
 }
 
 /// Wait until the emulator streams its status frame (0x2A1) on the interface.
@@ -106,6 +106,8 @@ fn firmware_of(file: &Path) -> String {
         .iter()
         .map(|d| match &d.kind {
             DeviceKind::Piper(p) => p.firmware.clone(),
+            // RobStride scenarios are not tagged `vcan` (they need the in-process emulator).
+            DeviceKind::Robstride(_) => String::new(),
         })
         .next()
         .expect("one device")
@@ -128,7 +130,7 @@ fn vcan_tagged_scenarios_pass_against_a_separate_emulator() {
         "estop_command",
         "limit_violation",
         "move_p_unreachable",
-        "id_offset",
+        "leader_follower",
     ] {
         assert!(
             files

@@ -78,6 +78,7 @@ fn expected_text(check: &Check) -> String {
             format!("joint {joint} faults [{}]", flags.join(", "))
         }
         Check::GripperFaults(flags) => format!("gripper_faults [{}]", flags.join(", ")),
+        Check::Motor { motor, cond } => cond.expected_text(*motor),
     }
 }
 
@@ -142,6 +143,7 @@ fn actual_text(check: &Check, obs: &Observation) -> String {
             None => none(),
         },
         Check::GripperFaults(_) => format!("gripper_faults [{}]", obs.gripper_flags.join(", ")),
+        Check::Motor { motor, cond } => cond.actual_text(*motor, obs),
     }
 }
 
@@ -195,6 +197,7 @@ fn holds(check: &Check, obs: &Observation) -> bool {
             .get(usize::from(*joint) - 1)
             .is_some_and(|f| f == flags),
         Check::GripperFaults(flags) => obs.gripper_flags == *flags,
+        Check::Motor { motor, cond } => cond.holds(*motor, obs),
     }
 }
 

@@ -25,7 +25,7 @@ const NODE_TYPE: &str = "ARM_MC";
 const PRODUCTION_DATE: &str = "250925";
 const NODE_NUMBER: &str = "15";
 
-/// Delay of the 0x4AF reply, ticks (ms). piper_sdk clears its firmware buffer *after* sending
+/// Minimum delay of the 0x4AF reply, ms. piper_sdk clears its firmware buffer *after* sending
 /// the query, so an instant reply could be wiped; its README waits ~25 ms for the answer.
 const FIRMWARE_REPLY_DELAY_MS: u64 = 5;
 
@@ -314,7 +314,12 @@ impl Firmware {
                     production_date: PRODUCTION_DATE,
                     node_number: NODE_NUMBER,
                 });
-                let due = self.ticks + FIRMWARE_REPLY_DELAY_MS;
+                // Frames are handled before the wake-up's batch of ticks runs, so the delay is
+                // counted from the end of that batch: otherwise, with several ticks per wake-up,
+                // the reply would leave in the same wake-up as the query arrived, i.e. at once
+                // in real time, and race the SDK's buffer reset.
+                let batch = u64::from(self.config.ticks_per_wake.clamp(1, 25));
+                let due = self.ticks + batch + FIRMWARE_REPLY_DELAY_MS;
                 self.delayed.extend(frames.into_iter().map(|f| (due, f)));
             }
         }
@@ -761,5 +766,41 @@ mod tests {
         assert!(near_b < 0.002, "{near_b}");
         assert!((arc.last().unwrap().translation.vector - c.translation.vector).norm() < 1e-9);
         assert!(arc_samples(&a, &Isometry3::translation(0.2, 0.0, 0.2), &c).is_none());
+    }
+
+    /// Ticks until the first 0x4AF reply frame leaves after a query, for a given batching.
+    fn firmware_reply_ticks(ticks_per_wake: u32) -> (u64, usize) {
+        let mut fw = Firmware::new(crate::piper::PiperConfig {
+            ticks_per_wake,
+            ..crate::piper::PiperConfig::default()
+        })
+        .unwrap();
+        let mut out = Vec::new();
+        fw.tick();
+        fw.drain_output_into(&mut out);
+        let query = CanFrame::standard(ids::FIRMWARE, &[1, 0, 0, 0, 0, 0, 0, 0]).unwrap();
+        fw.handle_frame(&query);
+        for tick in 1..=100u64 {
+            fw.tick();
+            out.clear();
+            fw.drain_output_into(&mut out);
+            let replies = out.iter().filter(|f| f.raw_id() == 0x4AF).count();
+            if replies > 0 {
+                return (tick, replies);
+            }
+        }
+        panic!("no 0x4AF reply within 100 ticks");
+    }
+
+    #[test]
+    fn firmware_reply_leaves_a_wake_up_after_the_query_at_the_earliest() {
+        // One tick per wake-up: the reply needs FIRMWARE_REPLY_DELAY_MS ticks after the batch
+        // of the wake-up that handled the query.
+        assert_eq!(firmware_reply_ticks(1), (1 + FIRMWARE_REPLY_DELAY_MS, 11));
+        // Five ticks per wake-up (armhil sim piper): the five ticks after the query run at
+        // once, in the same wake-up, so the reply must wait past them to be late in real time.
+        let (ticks, frames) = firmware_reply_ticks(5);
+        assert_eq!(frames, 11);
+        assert!(ticks >= 5 + FIRMWARE_REPLY_DELAY_MS, "{ticks}");
     }
 }

@@ -1,0 +1,100 @@
+//! Layer 1 of the RobStride grammar: the `motors:` list of a `robstride` device, the
+//! `robstride:` step and the per-motor conditions (`motors: {ID: {...}}`), as written.
+
+use serde::Deserialize;
+
+use super::onekey::one_key_enum;
+use super::raw::S;
+
+/// One motor of a `robstride` device.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawRsMotor {
+    pub id: S<i64>,
+    pub model: S<String>,
+    pub load: Option<S<RawRsLoad>>,
+    pub start_angle_rad: Option<S<f64>>,
+    pub friction_nm_s_per_rad: Option<S<f64>>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawNoLoad {}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawDisc {
+    pub mass_kg: S<f64>,
+    pub radius_m: S<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawPendulum {
+    pub mass_kg: S<f64>,
+    pub length_m: S<f64>,
+}
+
+one_key_enum! {
+    /// What a motor drives.
+    pub(crate) enum RawRsLoad ("load") {
+        "none" => NoLoad(RawNoLoad) [bare],
+        "disc" => Disc(RawDisc),
+        "pendulum" => Pendulum(RawPendulum),
+    }
+}
+
+/// The `robstride:` step: `do:` names the command, the other keys are its arguments.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawRsStep {
+    pub device: Option<S<String>>,
+    pub id: Option<S<String>>,
+    pub timeout_ms: Option<S<i64>>,
+    pub expect_error: Option<S<String>>,
+    #[serde(rename = "do")]
+    pub command: Option<S<String>>,
+    pub motor: Option<S<i64>>,
+    pub clear: Option<S<bool>>,
+    pub mode: Option<S<String>>,
+    pub angle_rad: Option<S<f64>>,
+    pub speed_rad_s: Option<S<f64>>,
+    pub kp: Option<S<f64>>,
+    pub kd: Option<S<f64>>,
+    pub torque_nm: Option<S<f64>>,
+    pub limit_cur_a: Option<S<f64>>,
+    pub acc_rad_s2: Option<S<f64>>,
+    pub target_rad: Option<S<f64>>,
+    pub vel_max_rad_s: Option<S<f64>>,
+    pub iq_a: Option<S<f64>>,
+    pub limit_spd_rad_s: Option<S<f64>>,
+    pub param: Option<S<String>>,
+    pub value: Option<S<f64>>,
+    pub expect: Option<S<f64>>,
+    pub tolerance: Option<S<f64>>,
+    pub new_id: Option<S<i64>>,
+    pub on: Option<S<bool>>,
+    pub period_ms: Option<S<i64>>,
+    pub window_ms: Option<S<i64>>,
+    pub fault: Option<S<String>>,
+    pub temp_c: Option<S<f64>>,
+    pub voltage_v: Option<S<f64>>,
+}
+
+/// Conditions on one motor.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawMotorConds {
+    pub position_rad: Option<S<f64>>,
+    pub tolerance_rad: Option<S<f64>>,
+    pub velocity_rad_s: Option<S<f64>>,
+    pub tolerance_rad_s: Option<S<f64>>,
+    pub torque_nm: Option<S<f64>>,
+    pub tolerance_nm: Option<S<f64>>,
+    pub temp_min_c: Option<S<f64>>,
+    pub temp_max_c: Option<S<f64>>,
+    pub mode_state: Option<S<String>>,
+    pub faults: Option<S<Vec<S<String>>>>,
+    pub fault_report: Option<S<Vec<S<String>>>>,
+    pub feedback: Option<S<String>>,
+}
