@@ -34,7 +34,13 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    cli::logging::init(cli.verbose);
+    // `run` and `check` print their own verdicts; the emulator's and driver's progress logs
+    // would drown them, so those two start at `warn`.
+    let base_level = match cli.command {
+        Command::Run(_) | Command::Check(_) => "warn",
+        _ => "info",
+    };
+    cli::logging::init(cli.verbose, base_level);
     let outcome = match cli.command {
         Command::Record(args) => cli::record::run(args),
         Command::Replay(args) => cli::replay::run(args),

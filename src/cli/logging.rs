@@ -2,10 +2,11 @@
 
 use tracing_subscriber::EnvFilter;
 
-/// Log to stderr at `info`, `debug` with `-v`, `trace` with `-vv`; `RUST_LOG` wins when set.
-pub fn init(verbosity: u8) {
+/// Log to stderr at `base_level` (`info` for long-running tools, `warn` where the command
+/// prints its own report), `debug` with `-v`, `trace` with `-vv`; `RUST_LOG` wins when set.
+pub fn init(verbosity: u8, base_level: &str) {
     let default_level = match verbosity {
-        0 => "info",
+        0 => base_level,
         1 => "debug",
         _ => "trace",
     };
