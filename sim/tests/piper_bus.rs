@@ -1,12 +1,14 @@
 //! The Piper emulator on the virtual bus under a paused clock: rates, replies, state changes.
 
 use std::collections::BTreeMap;
-use std::sync::Arc;
 use std::time::Duration;
 
-use bus::virtual_bus::{NodeOptions, VirtualBus, VirtualBusConfig, VirtualNode};
+mod piper_common;
+
+use bus::virtual_bus::{VirtualBus, VirtualNode};
 use bus::{CanBus, CanFrame};
-use sim::piper::{FirmwareProfile, PiperConfig, PiperEmulator, PiperHandle};
+use piper_common::{collect, last, spawn_emulator};
+use sim::piper::{FirmwareProfile, PiperConfig, PiperHandle};
 
 fn frame(id: u16, data: [u8; 8]) -> CanFrame {
     CanFrame::standard(id, &data).unwrap()
@@ -20,44 +22,12 @@ fn start_with(
     profile: FirmwareProfile,
     ticks_per_wake: u32,
 ) -> (VirtualBus, VirtualNode, PiperHandle) {
-    let bus = VirtualBus::new(VirtualBusConfig::default());
-    let emu_node = bus.attach_with(
-        "piper",
-        NodeOptions {
-            receive_own: false,
-            tx_queue_len: None,
-        },
-    );
-    let host = bus.attach("host");
-    let emu = PiperEmulator::spawn(
-        Arc::new(emu_node),
-        PiperConfig {
-            firmware: profile,
-            initial_joints_rad: [0.0, 0.5, -0.5, 0.0, 0.0, 0.0],
-            ticks_per_wake,
-            ..PiperConfig::default()
-        },
-    )
-    .unwrap();
-    (bus, host, emu)
-}
-
-/// Every frame the host receives during `dur` of virtual time.
-async fn collect(host: &VirtualNode, dur: Duration) -> Vec<CanFrame> {
-    let mut out = Vec::new();
-    let deadline = tokio::time::Instant::now() + dur;
-    while let Ok(Ok(rf)) = tokio::time::timeout_at(deadline, host.recv()).await {
-        out.push(rf.frame);
-    }
-    out
-}
-
-fn last(frames: &[CanFrame], id: u32) -> Option<Vec<u8>> {
-    frames
-        .iter()
-        .rev()
-        .find(|f| f.raw_id() == id)
-        .map(|f| f.data().to_vec())
+    spawn_emulator(PiperConfig {
+        firmware: profile,
+        initial_joints_rad: [0.0, 0.5, -0.5, 0.0, 0.0, 0.0],
+        ticks_per_wake,
+        ..PiperConfig::default()
+    })
 }
 
 #[tokio::test(start_paused = true)]

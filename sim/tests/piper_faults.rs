@@ -1,50 +1,25 @@
 //! Injected faults as they show on the wire (virtual bus, paused clock).
 
-use std::sync::Arc;
 use std::time::Duration;
 
-use bus::virtual_bus::{VirtualBus, VirtualBusConfig, VirtualNode};
+mod piper_common;
+
+use bus::virtual_bus::{VirtualBus, VirtualNode};
 use bus::{CanBus, CanFrame};
+use piper_common::{collect, last, spawn_emulator};
 use sim::physics::ObstacleShape;
-use sim::piper::{
-    FirmwareProfile, PiperConfig, PiperEmulator, PiperFault, PiperFaultKind, PiperHandle,
-};
+use sim::piper::{FirmwareProfile, PiperConfig, PiperFault, PiperFaultKind, PiperHandle};
 
 fn f8(id: u16, data: [u8; 8]) -> CanFrame {
     CanFrame::standard(id, &data).unwrap()
 }
 
 fn start() -> (VirtualBus, VirtualNode, PiperHandle) {
-    let bus = VirtualBus::new(VirtualBusConfig::default());
-    let emu_node = bus.attach("piper");
-    let host = bus.attach("host");
-    let emu = PiperEmulator::spawn(
-        Arc::new(emu_node),
-        PiperConfig {
-            firmware: FirmwareProfile::V1_8_2,
-            initial_joints_rad: [0.0, 0.5, -0.5, 0.0, 0.0, 0.0],
-            ..PiperConfig::default()
-        },
-    )
-    .unwrap();
-    (bus, host, emu)
-}
-
-async fn collect(host: &VirtualNode, dur: Duration) -> Vec<CanFrame> {
-    let mut out = Vec::new();
-    let deadline = tokio::time::Instant::now() + dur;
-    while let Ok(Ok(rf)) = tokio::time::timeout_at(deadline, host.recv()).await {
-        out.push(rf.frame);
-    }
-    out
-}
-
-fn last(frames: &[CanFrame], id: u32) -> Option<Vec<u8>> {
-    frames
-        .iter()
-        .rev()
-        .find(|f| f.raw_id() == id)
-        .map(|f| f.data().to_vec())
+    spawn_emulator(PiperConfig {
+        firmware: FirmwareProfile::V1_8_2,
+        initial_joints_rad: [0.0, 0.5, -0.5, 0.0, 0.0, 0.0],
+        ..PiperConfig::default()
+    })
 }
 
 async fn enable(host: &VirtualNode) {

@@ -2,35 +2,23 @@
 //! the emulator's replies checked byte for byte (exchanges in `fixtures/piper/emu_*.log`),
 //! and state changes visible in the periodic feedback.
 
+mod piper_common;
 #[path = "piper_vectors.rs"]
 mod vectors;
 
-use std::sync::Arc;
 use std::time::Duration;
 
-use bus::virtual_bus::{VirtualBus, VirtualBusConfig, VirtualNode};
+use bus::virtual_bus::{VirtualBus, VirtualNode};
 use bus::{CanBus, CanFrame};
-use sim::piper::{FirmwareProfile, PiperConfig, PiperEmulator, PiperHandle};
+use piper_common::{collect, last, spawn_emulator};
+use sim::piper::{FirmwareProfile, PiperConfig, PiperHandle};
 
 fn is_periodic(id: u32) -> bool {
     matches!(id, 0x2A1..=0x2A8 | 0x2B1..=0x2B8 | 0x2C1..=0x2C8 | 0x251..=0x256 | 0x261..=0x266 | 0x481..=0x486)
 }
 
 fn start(config: PiperConfig) -> (VirtualBus, VirtualNode, PiperHandle) {
-    let bus = VirtualBus::new(VirtualBusConfig::default());
-    let emu_node = bus.attach("piper");
-    let host = bus.attach("host");
-    let emu = PiperEmulator::spawn(Arc::new(emu_node), config).unwrap();
-    (bus, host, emu)
-}
-
-async fn collect(host: &VirtualNode, dur: Duration) -> Vec<CanFrame> {
-    let mut out = Vec::new();
-    let deadline = tokio::time::Instant::now() + dur;
-    while let Ok(Ok(rf)) = tokio::time::timeout_at(deadline, host.recv()).await {
-        out.push(rf.frame);
-    }
-    out
+    spawn_emulator(config)
 }
 
 fn is_host_frame(v: &vectors::Vector) -> bool {
@@ -78,14 +66,6 @@ async fn exchanges_reply_byte_for_byte() {
         assert_eq!(got, expected, "exchange {name}");
         emu.shutdown().await;
     }
-}
-
-fn last(frames: &[CanFrame], id: u32) -> Option<Vec<u8>> {
-    frames
-        .iter()
-        .rev()
-        .find(|f| f.raw_id() == id)
-        .map(|f| f.data().to_vec())
 }
 
 fn f8(id: u16, data: [u8; 8]) -> CanFrame {
