@@ -164,17 +164,26 @@ impl Piper {
         .await
     }
 
-    /// End-effector max velocity / acceleration (0x477 `01` → 0x478).
-    pub async fn query_end_params(&self) -> Result<EndParams, PiperError> {
+    /// Send a 0x477 parameter query and wait for the reply `pick` recognises.
+    async fn param_query<T>(
+        &self,
+        query: ParamQuery,
+        what: &'static str,
+        pick: impl FnMut(&Reply) -> Option<T>,
+    ) -> Result<T, PiperError> {
         let frame = ParamCommand {
-            query: Some(ParamQuery::EndParams),
+            query: Some(query),
             ..Default::default()
         }
         .encode();
-        self.query(
-            &[frame],
+        self.query(&[frame], what, || {}, pick).await
+    }
+
+    /// End-effector max velocity / acceleration (0x477 `01` → 0x478).
+    pub async fn query_end_params(&self) -> Result<EndParams, PiperError> {
+        self.param_query(
+            ParamQuery::EndParams,
             "0x478 end params",
-            || {},
             |reply| match reply {
                 Reply::Frame(Message::EndParams(p)) => Some(*p),
                 _ => None,
@@ -185,15 +194,9 @@ impl Piper {
 
     /// Collision-protection levels (0x477 `02` → 0x47B).
     pub async fn query_collision_levels(&self) -> Result<CollisionLevels, PiperError> {
-        let frame = ParamCommand {
-            query: Some(ParamQuery::Collision),
-            ..Default::default()
-        }
-        .encode();
-        self.query(
-            &[frame],
+        self.param_query(
+            ParamQuery::Collision,
             "0x47B collision levels",
-            || {},
             |reply| match reply {
                 Reply::Frame(Message::Collision(c)) => Some(*c),
                 _ => None,
@@ -204,15 +207,9 @@ impl Piper {
 
     /// Gripper / teach-pendant parameters (0x477 `04` → 0x47E, fw >= V1.5-2).
     pub async fn query_gripper_teach_params(&self) -> Result<GripperTeachParams, PiperError> {
-        let frame = ParamCommand {
-            query: Some(ParamQuery::GripperTeach),
-            ..Default::default()
-        }
-        .encode();
-        self.query(
-            &[frame],
+        self.param_query(
+            ParamQuery::GripperTeach,
             "0x47E gripper/teach params",
-            || {},
             |reply| match reply {
                 Reply::Frame(Message::GripperTeach(g)) => Some(*g),
                 _ => None,
@@ -223,15 +220,9 @@ impl Piper {
 
     /// Current offline-trajectory index (0x477 `03` → 0x476 with the index in bytes 4–7).
     pub async fn query_trajectory_index(&self) -> Result<Ack, PiperError> {
-        let frame = ParamCommand {
-            query: Some(ParamQuery::TrajectoryIndex),
-            ..Default::default()
-        }
-        .encode();
-        self.query(
-            &[frame],
+        self.param_query(
+            ParamQuery::TrajectoryIndex,
             "0x476 trajectory index",
-            || {},
             |reply| match reply {
                 Reply::Frame(Message::Ack(ack)) if ack.cmd == AckedCommand::ParamSettings => {
                     Some(*ack)
