@@ -6,10 +6,13 @@
 //!   faults, and runs under tokio's paused clock for deterministic virtual time.
 //! - `socketcan_bus` (Linux only): real SocketCAN interfaces such as `vcan0` or `can0`.
 //! - [`candump`], [`pcap`] and [`recorder`]: logs for can-utils and Wireshark, and a reader.
+//! - [`fixtures`]: the annotated candump test vectors in `fixtures/` that drivers and emulators
+//!   are both checked against.
 //! - [`timing`]: how many bit times a frame occupies.
 
 pub mod candump;
 mod error;
+pub mod fixtures;
 mod frame;
 mod iface;
 pub mod pcap;
