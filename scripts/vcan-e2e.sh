@@ -6,8 +6,8 @@
 # Where the kernel has vcan (a normal Linux box, `sudo modprobe vcan`), the suite runs directly.
 # Our development and CI machines run a kernel without CAN, so there the suite runs inside a
 # virtme-ng VM (TCG; KVM hangs on these machines) booting the Debian kernel from /boot, which
-# shares the host's filesystem and so runs the host-built binaries. See DESIGN.md, "vcan on
-# machines without kernel CAN".
+# shares the host's filesystem and so runs the host-built binaries. See docs/vcan.md, "Machines
+# without kernel CAN".
 #
 # Environment knobs (all optional):
 #   ARMHIL_E2E_MODE       auto (default) | direct | vm

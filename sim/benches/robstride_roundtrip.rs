@@ -69,7 +69,7 @@ fn main() {
     let (round_trips, elapsed, wall, load, bits_per_frame) = runtime.block_on(run(seconds));
     let per_s = round_trips as f64 / elapsed;
     // An extended 8-byte data frame is 131 bits without stuffing, 160 with worst-case
-    // stuffing (DESIGN.md); a round trip is two frames.
+    // stuffing (`bus::timing`); a round trip is two frames.
     let best = 1_000_000.0 / 131.0 / 2.0;
     let worst = 1_000_000.0 / 160.0 / 2.0;
     println!("robstride_roundtrip: {MOTORS} motors, 1 Mbit/s virtual bus, {elapsed:.2} s virtual");

@@ -1,4 +1,4 @@
-//! The dependency rule of DESIGN.md: the driver and the emulators never depend on each other,
+//! The dependency rule of docs/architecture.md: the driver and the emulators never depend on each other,
 //! in any dependency kind, so neither can borrow the other's codec.
 
 use std::process::Command;

@@ -1,5 +1,5 @@
 //! RobStride actuator driver for the private 29-bit CAN protocol
-//! (spec `shared/protocols/robstride.md`), with its own codec.
+//! (protocol note `docs/protocols/robstride.md`), with its own codec.
 //!
 //! One [`RobstrideDriver`] per bus runs a single receive task and routes each frame to the
 //! [`Motor`] handle of the motor that sent it. Every request waits for its documented reply

@@ -1,4 +1,4 @@
-//! AgileX Piper firmware emulator (CAN, 11-bit IDs; protocol in `shared/protocols/piper.md`).
+//! AgileX Piper firmware emulator (CAN, 11-bit IDs; protocol in `docs/protocols/piper.md`).
 //!
 //! # Harness API (stable)
 //!

@@ -1,5 +1,5 @@
 //! RobStride actuator emulator: the private 29-bit CAN protocol (spec
-//! `shared/protocols/robstride.md`), any number of motors on one bus, each driving a rig.
+//! `docs/protocols/robstride.md`), any number of motors on one bus, each driving a rig.
 //!
 //! - [`Actuator`]: one motor's firmware (pure: frames in, frames out, 1 ms ticks).
 //! - [`model`]: per-model ranges (manual table by default, SDK table selectable, or explicit
