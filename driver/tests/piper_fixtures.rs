@@ -1,42 +1,35 @@
-//! The driver's codec against the shared byte-level fixtures in `fixtures/piper/*.log`.
+//! The driver's codec against the shared byte-level fixtures in `fixtures/piper/*.log`, read
+//! with `bus::fixtures` (format: docs/fixtures.md).
 //!
 //! Every vector comment in a file must be checked by one of these tests (each test fails on a
 //! vector name it does not know), so adding a vector without a check fails loudly.
 
-use std::collections::BTreeMap;
-use std::path::PathBuf;
-
-use bus::CanFrame;
+use bus::fixtures;
 use driver::piper::codec::*;
 
+/// A fixture vector with the panicking accessors these checks use (a missing or unreadable
+/// field is a test failure naming file and line).
 #[derive(Debug)]
 struct Vector {
+    /// 1-based line of the annotation.
     line: usize,
-    id: u16,
-    name: String,
-    fields: BTreeMap<String, String>,
-    frame: CanFrame,
+    inner: fixtures::Vector,
+}
+
+impl std::ops::Deref for Vector {
+    type Target = fixtures::Vector;
+    fn deref(&self) -> &fixtures::Vector {
+        &self.inner
+    }
 }
 
 impl Vector {
     fn get(&self, key: &str) -> &str {
-        self.fields
-            .get(key)
-            .map(String::as_str)
-            .unwrap_or_else(|| panic!("line {}: vector {} has no {key}", self.line, self.name))
-    }
-
-    fn has(&self, key: &str) -> bool {
-        self.fields.contains_key(key)
+        self.inner.text(key).unwrap_or_else(|e| panic!("{e}"))
     }
 
     fn int(&self, key: &str) -> i64 {
-        let text = self.get(key);
-        let parsed = match text.strip_prefix("0x") {
-            Some(hex) => i64::from_str_radix(hex, 16),
-            None => text.parse(),
-        };
-        parsed.unwrap_or_else(|_| panic!("line {}: {key}={text} is not an integer", self.line))
+        self.inner.int(key).unwrap_or_else(|e| panic!("{e}"))
     }
 
     fn i32(&self, key: &str) -> i32 {
@@ -52,16 +45,11 @@ impl Vector {
     }
 
     fn f64(&self, key: &str) -> f64 {
-        let text = self.get(key);
-        text.parse()
-            .unwrap_or_else(|_| panic!("line {}: {key}={text} is not a number", self.line))
+        self.inner.float(key).unwrap_or_else(|e| panic!("{e}"))
     }
 
     fn expect(&self) -> &str {
-        self.fields
-            .get("expect")
-            .map(String::as_str)
-            .unwrap_or("ok")
+        self.inner.expect().unwrap_or("ok")
     }
 
     fn bytes(&self) -> &[u8] {
@@ -69,83 +57,48 @@ impl Vector {
     }
 }
 
+/// Every Piper fixture file and the test that checks it: a file missing from the folder, or a
+/// file nobody checks, fails [`every_fixture_file_is_checked`].
+const TOPICS: [&str; 8] = [
+    "config",
+    "cpv",
+    "emu_exchanges",
+    "feedback",
+    "firmware",
+    "malformed",
+    "mit",
+    "motion",
+];
+
+/// The vectors of `fixtures/piper/<topic>.log`; a missing file or a malformed line fails.
 fn load(topic: &str) -> Vec<Vector> {
-    let path =
-        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("../fixtures/piper/{topic}.log"));
-    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let mut pending: Vec<(usize, u16, String, BTreeMap<String, String>)> = Vec::new();
-    let mut out = Vec::new();
-    for (index, line) in text.lines().enumerate() {
-        let line_no = index + 1;
-        let line = line.trim();
-        if line.is_empty() || line.starts_with("##") {
-            continue;
-        }
-        if let Some(comment) = line.strip_prefix("# ") {
-            let (head, rest) = comment
-                .split_once(": ")
-                .unwrap_or_else(|| panic!("line {line_no}: no ': '"));
-            let (id, name) = head
-                .split_once(' ')
-                .unwrap_or_else(|| panic!("line {line_no}: no name"));
-            let id =
-                u16::from_str_radix(id, 16).unwrap_or_else(|_| panic!("line {line_no}: bad id"));
-            let fields = rest
-                .split_whitespace()
-                .map(|kv| {
-                    let (k, v) = kv
-                        .split_once('=')
-                        .unwrap_or_else(|| panic!("line {line_no}: {kv}"));
-                    (k.to_owned(), v.to_owned())
-                })
-                .collect();
-            pending.push((line_no, id, name.to_owned(), fields));
-            continue;
-        }
-        // `(seconds) iface ID#HEX`
-        let compact = line
-            .split_whitespace()
-            .nth(2)
-            .unwrap_or_else(|| panic!("line {line_no}: not candump -L"));
-        let (id, hex) = compact
-            .split_once('#')
-            .unwrap_or_else(|| panic!("line {line_no}: no #"));
-        let id = u16::from_str_radix(id, 16).unwrap_or_else(|_| panic!("line {line_no}: bad id"));
-        let data: Vec<u8> = (0..hex.len())
-            .step_by(2)
-            .map(|i| {
-                u8::from_str_radix(&hex[i..i + 2], 16)
-                    .unwrap_or_else(|_| panic!("line {line_no}: hex"))
-            })
-            .collect();
-        let frame = CanFrame::standard(id, &data).unwrap_or_else(|e| panic!("line {line_no}: {e}"));
-        assert!(
-            !pending.is_empty(),
-            "line {line_no}: frame without a vector comment"
-        );
-        for (line, cid, name, fields) in pending.drain(..) {
-            assert_eq!(cid, id, "line {line}: comment id differs from the frame's");
-            out.push(Vector {
-                line,
-                id,
-                name,
-                fields,
-                frame,
-            });
-        }
-    }
-    assert!(
-        pending.is_empty(),
-        "{topic}: trailing comments without a frame"
-    );
-    assert!(!out.is_empty(), "{topic}: no vectors");
-    out
+    let path = fixtures::repo_path("piper").join(format!("{topic}.log"));
+    fixtures::read_file(&path)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .into_iter()
+        .map(|inner| Vector {
+            line: inner.at.line,
+            inner,
+        })
+        .collect()
+}
+
+#[test]
+fn every_fixture_file_is_checked() {
+    let listed: Vec<String> = fixtures::list_dir(fixtures::repo_path("piper"))
+        .unwrap_or_else(|e| panic!("{e}"))
+        .iter()
+        .filter_map(|p| p.file_stem().map(|n| n.to_string_lossy().into_owned()))
+        .collect();
+    assert_eq!(listed, TOPICS);
 }
 
 fn unknown(v: &Vector) -> ! {
     panic!(
         "line {}: vector {} ({:03X}) has no check in this test",
-        v.line, v.name, v.id
+        v.line,
+        v.name,
+        v.raw_id()
     )
 }
 
@@ -815,86 +768,74 @@ fn malformed_frames_get_the_documented_handling() {
     }
 }
 
-/// The emulator colleague's own vectors (`emu_*.log`, same format): every frame whose vector
-/// name the driver's checks know must agree with the driver's codec too.
+/// The emulator's own exchange vectors (`emu_exchanges.log`, same format): every one of them
+/// must agree with the driver's codec too. A missing file, or a vector name or `expect=` this
+/// test has no check for, fails.
 #[test]
 fn emulator_vectors_agree_with_the_driver_codec() {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../fixtures/piper");
-    let mut topics: Vec<String> = std::fs::read_dir(&dir)
-        .map(|entries| {
-            entries
-                .filter_map(|e| e.ok())
-                .filter_map(|e| e.file_name().into_string().ok())
-                .filter(|name| name.starts_with("emu_") && name.ends_with(".log"))
-                .map(|name| name.trim_end_matches(".log").to_owned())
-                .collect()
-        })
-        .unwrap_or_default();
-    topics.sort();
-    let mut checked = 0;
-    for topic in &topics {
-        let mut assembler = FirmwareAssembler::new();
-        let mut last = None;
-        for v in &load(topic) {
-            if v.expect() != "ok" {
-                // Malformed host frames test the emulator's rejection; the driver never sends them.
-                continue;
+    let vectors = load("emu_exchanges");
+    let mut assembler = FirmwareAssembler::new();
+    let mut last = None;
+    let mut unknown = Vec::new();
+    for v in &vectors {
+        let line = v.line;
+        match v.name.as_str() {
+            _ if v.expect() != "ok" => {
+                // Malformed host frames test the emulator's rejection. The driver never sends
+                // them; seeing one on the bus it must not take it for arm feedback.
+                assert!(
+                    matches!(
+                        v.expect(),
+                        "bad_dlc" | "out_of_range" | "unknown_enum" | "ignore"
+                    ),
+                    "line {line}: expect={} has no check",
+                    v.expect()
+                );
+                assert_eq!(decode(&v.frame), Ok(None), "line {line}: {}", v.expect());
             }
-            let known = match v.name.as_str() {
-                "motion_ctrl_1" => {
-                    let cmd = MotionCtrl1 {
-                        estop: v.u8("estop").into(),
-                        track: v.u8("track").into(),
-                        drag_teach: v.u8("drag_teach").into(),
-                        traj_index: v.u8("traj_index"),
-                        name_index: v.u16("name_index"),
-                        crc16: v.u16("crc16"),
-                    };
-                    assert_eq!(cmd.encode(), v.frame, "{topic} line {}", v.line);
-                    true
-                }
-                "cpv" => {
-                    let param = v.get("param").as_bytes();
-                    let cpv = CpvFrame {
-                        motor: v.u8("motor"),
-                        mode: v.get("mode").as_bytes()[0].into(),
-                        param: [param[0], param[1]],
-                        value: v.i32("value"),
-                    };
-                    assert_eq!(
-                        CpvFrame::decode(&v.frame),
-                        Ok(cpv),
-                        "{topic} line {}",
-                        v.line
-                    );
-                    true
-                }
-                "firmware_query" => decode(&v.frame) == Ok(None),
-                "firmware_reply_part" => {
-                    let Message::FirmwarePart(part) = decoded(v) else {
-                        panic!("line {}", v.line)
-                    };
-                    last = assembler.push(&part);
-                    true
-                }
-                "firmware_reply" => {
-                    let info: FirmwareInfo = last
-                        .take()
-                        .unwrap_or_else(|| panic!("{topic} line {}: incomplete", v.line));
-                    assert_eq!(info.software, v.get("software"), "{topic} line {}", v.line);
-                    true
-                }
-                _ => check_config(v),
-            };
-            if known {
-                checked += 1;
+            "motion_ctrl_1" => {
+                let cmd = MotionCtrl1 {
+                    estop: v.u8("estop").into(),
+                    track: v.u8("track").into(),
+                    drag_teach: v.u8("drag_teach").into(),
+                    traj_index: v.u8("traj_index"),
+                    name_index: v.u16("name_index"),
+                    crc16: v.u16("crc16"),
+                };
+                assert_eq!(cmd.encode(), v.frame, "line {line}");
             }
+            "cpv" => {
+                let param = v.get("param").as_bytes();
+                let cpv = CpvFrame {
+                    motor: v.u8("motor"),
+                    mode: v.get("mode").as_bytes()[0].into(),
+                    param: [param[0], param[1]],
+                    value: v.i32("value"),
+                };
+                assert_eq!(CpvFrame::decode(&v.frame), Ok(cpv), "line {line}");
+                assert_eq!(cpv.encode(), v.frame, "line {line}");
+            }
+            "firmware_query" => {
+                assert_eq!(encode_firmware_query(), v.frame, "line {line}");
+                assert_eq!(decode(&v.frame), Ok(None), "line {line}: not a reply part");
+            }
+            "firmware_reply_part" => {
+                let Message::FirmwarePart(part) = decoded(v) else {
+                    panic!("line {line}: not a firmware part")
+                };
+                last = assembler.push(&part);
+            }
+            "firmware_reply" => {
+                let info: FirmwareInfo = last
+                    .take()
+                    .unwrap_or_else(|| panic!("line {line}: reply incomplete"));
+                assert_eq!(info.hardware, v.get("hardware"), "line {line}");
+                assert_eq!(info.software, v.get("software"), "line {line}");
+                assert_eq!(info.date, v.get("date"), "line {line}");
+            }
+            _ if check_config(v) => {}
+            _ => unknown.push(format!("line {line}: {}", v.name)),
         }
     }
-    if !topics.is_empty() {
-        assert!(
-            checked > 0,
-            "no emulator vector matched the driver's vocabulary"
-        );
-    }
+    assert!(unknown.is_empty(), "vectors without a check: {unknown:#?}");
 }

@@ -1,4 +1,5 @@
-//! Driver conformance against the shared fixtures (spec §15 and the reply matrix): the driver
+//! Driver conformance against the shared fixtures (`fixtures/robstride/`: the worked examples and
+//! the reply matrix of docs/protocols/robstride.md): the driver
 //! sends exactly the fixture's request bytes and decodes the fixture's replies to the fields
 //! written beside them. A scripted node on the virtual bus plays the motor.
 
@@ -6,6 +7,7 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 use std::time::Duration;
 
+use bus::fixtures::Vector;
 use bus::virtual_bus::{VirtualBus, VirtualBusConfig};
 use bus::{CanBus, CanFrame};
 use driver::robstride::codec::{self, Incoming};
@@ -14,68 +16,36 @@ use driver::robstride::{
     RangeTable, RobstrideDriver, RobstrideError,
 };
 
-#[derive(Debug, Clone)]
-struct Vector {
-    fields: BTreeMap<String, String>,
-    frame: CanFrame,
-}
-
+/// The vectors of one fixture file (a missing file or a malformed line fails).
 fn parse_fixture(name: &str) -> Vec<Vector> {
-    let path = format!(
-        "{}/../fixtures/robstride/{name}",
-        env!("CARGO_MANIFEST_DIR")
-    );
-    let text = std::fs::read_to_string(path).expect("fixture readable");
-    let mut out = Vec::new();
-    let mut fields = BTreeMap::new();
-    for line in text.lines().map(str::trim).filter(|line| !line.is_empty()) {
-        if let Some(comment) = line.strip_prefix('#') {
-            fields.extend(comment.split_whitespace().filter_map(|pair| {
-                pair.split_once('=')
-                    .map(|(k, v)| (k.to_owned(), v.to_owned()))
-            }));
-            continue;
-        }
-        let token = line.split_whitespace().last().expect("frame token");
-        let (id, hex) = token.split_once('#').expect("id#data");
-        let data: Vec<u8> = hex
-            .as_bytes()
-            .chunks(2)
-            .map(|pair| u8::from_str_radix(std::str::from_utf8(pair).unwrap(), 16).unwrap())
-            .collect();
-        let raw = u32::from_str_radix(id, 16).unwrap();
-        let frame = if id.len() == 8 {
-            CanFrame::extended(raw, &data)
-        } else {
-            CanFrame::standard(raw as u16, &data)
-        }
-        .unwrap();
-        out.push(Vector {
-            fields: std::mem::take(&mut fields),
-            frame,
-        });
-    }
-    out
+    bus::fixtures::read_file(bus::fixtures::repo_path("robstride").join(name))
+        .unwrap_or_else(|e| panic!("{e}"))
 }
 
+/// Both RobStride fixture files by vector name; a name used twice fails.
 fn fixtures() -> BTreeMap<String, Vector> {
-    parse_fixture("spec_examples.log")
+    let mut all = BTreeMap::new();
+    for v in parse_fixture("spec_examples.log")
         .into_iter()
         .chain(parse_fixture("reply_matrix.log"))
-        .map(|v| (v.fields["name"].clone(), v))
-        .collect()
+    {
+        if let Some(old) = all.insert(v.name.clone(), v) {
+            panic!("{}: vector name {} used twice", old.at, old.name);
+        }
+    }
+    all
 }
 
 fn num(v: &Vector, key: &str) -> f64 {
-    let text = &v.fields[key];
-    match text.strip_prefix("0x") {
-        Some(hex) => i64::from_str_radix(hex, 16).unwrap() as f64,
-        None => text.parse().unwrap(),
+    // Integers (hex allowed) first; reals such as `angle_rad=3.812` otherwise.
+    match v.int(key) {
+        Ok(int) => int as f64,
+        Err(_) => v.float(key).unwrap_or_else(|e| panic!("{e}")),
     }
 }
 
 fn model_of(v: &Vector) -> Model {
-    Model::parse(&v.fields["model"]).expect("model field")
+    Model::parse(v.text("model").unwrap_or_else(|e| panic!("{e}"))).expect("model field")
 }
 
 #[test]
@@ -93,10 +63,7 @@ fn status_fixtures_decode_to_their_fields() {
         let ranges = model_of(v).ranges(RangeTable::Manual);
         let decoded = codec::decode(&v.frame, 0xFD, Duration::ZERO, |_| Some(ranges));
         let Some(Incoming::Feedback(fb)) = decoded else {
-            panic!(
-                "{} did not decode as feedback: {decoded:?}",
-                v.fields["name"]
-            );
+            panic!("{} did not decode as feedback: {decoded:?}", v.name);
         };
         let tol = num(v, "tol");
         assert_eq!(f64::from(fb.motor_id), num(v, "motor"));
@@ -106,7 +73,7 @@ fn status_fixtures_decode_to_their_fields() {
             MotorMode::Run => 2.0,
             MotorMode::Brake => 3.0,
         };
-        assert_eq!(mode, num(v, "state"), "{}", v.fields["name"]);
+        assert_eq!(mode, num(v, "state"), "{}", v.name);
         assert_eq!(f64::from(fb.faults.0), num(v, "faults"));
         assert!(
             (f64::from(fb.angle_rad) - num(v, "angle_rad")).abs() <= tol,
@@ -353,4 +320,52 @@ async fn read_failures_and_write_refusals_are_typed() {
         "{write:?}"
     );
     responder.await.unwrap().unwrap();
+}
+
+/// Every vector, whichever other test replays it: a request is never taken for a reply, and a
+/// reply decodes to the message its type names, from the motor its annotation names. A
+/// vector without a direction or type, or with an unknown one, fails.
+#[test]
+fn every_vector_decodes_by_its_direction_and_type() {
+    let all = fixtures();
+    assert!(all.len() >= 35, "{} vectors", all.len());
+    for v in all.values() {
+        let int = |key: &str| v.int(key).unwrap_or_else(|e| panic!("{e}"));
+        let ranges = v
+            .has("model")
+            .then(|| model_of(v).ranges(RangeTable::Manual));
+        let decoded = codec::decode(&v.frame, 0xFD, Duration::ZERO, |_| ranges);
+        let dir = v.text("dir").unwrap_or_else(|e| panic!("{e}"));
+        if dir == "h2m" {
+            assert_eq!(decoded, None, "{v}: a request decoded as a reply");
+            continue;
+        }
+        assert_eq!(dir, "m2h", "{v}: unknown direction");
+        let incoming = decoded.unwrap_or_else(|| panic!("{v}: reply not decoded"));
+        assert_eq!(i64::from(incoming.motor_id()), int("motor"), "{v}");
+        match (int("type"), incoming) {
+            (0, Incoming::DeviceId { uid, .. }) => {
+                let hex: String = uid.iter().map(|b| format!("{b:02X}")).collect();
+                assert_eq!(hex, v.text("uid").unwrap(), "{v}");
+            }
+            (2, Incoming::Version { version, .. }) => {
+                let text = version.map(|b| b.to_string()).join(".");
+                assert_eq!(text, v.text("version").unwrap(), "{v}");
+            }
+            (2 | 24, Incoming::Feedback(fb)) => {
+                assert_eq!(f64::from(fb.faults.0), num(v, "faults"), "{v}");
+            }
+            (17, Incoming::Param { ok, index, .. }) => {
+                assert_eq!(ok, int("status") == 0, "{v}");
+                if v.has("index") {
+                    assert_eq!(i64::from(index), int("index"), "{v}");
+                }
+            }
+            (21, Incoming::Fault { report, .. }) => {
+                assert_eq!(i64::from(report.fault_word), int("fault_word"), "{v}");
+                assert_eq!(i64::from(report.warning_word), int("warning_word"), "{v}");
+            }
+            (kind, other) => panic!("{v}: type {kind} decoded as {other:?}"),
+        }
+    }
 }

@@ -15,10 +15,10 @@ use sim::piper::codec::host::{self, HostCommand, MotorSelect, MoveCPoint, QuickS
 use sim::piper::codec::mit;
 use sim::piper::profile::MitPacking;
 use sim::piper::FirmwareProfile;
-use vectors::{load, Vector};
+use vectors::{load, PiperVector, Vector};
 
 fn profile_for(v: &Vector) -> FirmwareProfile {
-    let t12 = v.fields.get("packing").is_some_and(|p| p == "t12");
+    let t12 = v.text("packing") == Ok("t12");
     let mode6 = v.name == "mode_ctrl" && v.get("move_mode") == 0x06;
     if t12 || mode6 {
         FirmwareProfile::V1_8_8
@@ -39,12 +39,19 @@ fn opt(v: &Vector, key: &str, unchanged: i64) -> Option<i64> {
 /// Checks a host → arm vector; returns false for names this test does not know.
 fn check_host(v: &Vector) -> bool {
     let at = v.at();
-    if let Some(expect) = v.expect() {
-        // The firmware ignores malformed frames and undefined enum values alike.
-        if expect != "ignore" {
-            assert!(decode(v).is_err(), "{at}: expected rejection ({expect})");
+    match v.expect() {
+        // A valid frame only the driver must not act on (its own query looped back): the
+        // firmware decodes it like any other.
+        Some("ignore") => {
+            assert!(decode(v).is_ok(), "{at}: a valid frame");
+            return true;
         }
-        return true;
+        // The firmware ignores malformed frames and undefined enum values alike.
+        Some(expect) => {
+            assert!(decode(v).is_err(), "{at}: expected rejection ({expect})");
+            return true;
+        }
+        None => {}
     }
     let cmd = decode(v).unwrap_or_else(|e| panic!("{at}: {e}"));
     match (v.name.as_str(), cmd) {
@@ -80,7 +87,7 @@ fn check_host(v: &Vector) -> bool {
             assert_eq!(i64::from(m.install_position), v.get("install_pos"), "{at}");
         }
         (name, HostCommand::EndPose { first, second, .. }) if name.starts_with("end_pose_cmd") => {
-            let keys = match v.id {
+            let keys = match v.id16() {
                 0x152 => ["x_um", "y_um"],
                 0x153 => ["z_um", "rx_mdeg"],
                 _ => ["ry_mdeg", "rz_mdeg"],
@@ -328,8 +335,11 @@ fn check_host(v: &Vector) -> bool {
 /// Checks an arm → host vector by encoding it; returns false for names not produced here.
 fn check_arm(v: &Vector, firmware_parts: &mut BTreeMap<i64, Vec<CanFrame>>) -> bool {
     let at = v.at();
-    if v.expect().is_some() {
-        // Malformed arm frames are the driver's concern; the emulator never produces them.
+    if let Some(expect) = v.expect() {
+        // The emulator never produces malformed arm frames; seeing one on the bus (another
+        // arm, a bad driver) it must not take it for a command.
+        let decoded = decode(v);
+        assert!(decoded.is_err(), "{at} ({expect}): decoded as {decoded:?}");
         return true;
     }
     let g = |k: &str| v.get(k);
@@ -344,15 +354,15 @@ fn check_arm(v: &Vector, firmware_parts: &mut BTreeMap<i64, Vec<CanFrame>>) -> b
             limit_bits: g("limit_err_mask") as u8,
             comm_bits: g("comm_err_mask") as u8,
         }
-        .encode(v.id),
-        "end_pose_1" => arm::encode_pair(v.id, g("x_um") as i32, g("y_um") as i32),
-        "end_pose_2" => arm::encode_pair(v.id, g("z_um") as i32, g("rx_mdeg") as i32),
-        "end_pose_3" => arm::encode_pair(v.id, g("ry_mdeg") as i32, g("rz_mdeg") as i32),
-        "joints_12" => arm::encode_pair(v.id, g("j1_mdeg") as i32, g("j2_mdeg") as i32),
-        "joints_34" => arm::encode_pair(v.id, g("j3_mdeg") as i32, g("j4_mdeg") as i32),
-        "joints_56" => arm::encode_pair(v.id, g("j5_mdeg") as i32, g("j6_mdeg") as i32),
+        .encode(v.id16()),
+        "end_pose_1" => arm::encode_pair(v.id16(), g("x_um") as i32, g("y_um") as i32),
+        "end_pose_2" => arm::encode_pair(v.id16(), g("z_um") as i32, g("rx_mdeg") as i32),
+        "end_pose_3" => arm::encode_pair(v.id16(), g("ry_mdeg") as i32, g("rz_mdeg") as i32),
+        "joints_12" => arm::encode_pair(v.id16(), g("j1_mdeg") as i32, g("j2_mdeg") as i32),
+        "joints_34" => arm::encode_pair(v.id16(), g("j3_mdeg") as i32, g("j4_mdeg") as i32),
+        "joints_56" => arm::encode_pair(v.id16(), g("j5_mdeg") as i32, g("j6_mdeg") as i32),
         "gripper" => arm::encode_gripper(
-            v.id,
+            v.id16(),
             g("stroke_um") as i32,
             g("torque_mnm") as i16,
             g("status") as u8,
@@ -392,13 +402,19 @@ fn check_arm(v: &Vector, firmware_parts: &mut BTreeMap<i64, Vec<CanFrame>>) -> b
         }
         "ack" => {
             if g("pkg_status") != 0 || g("name_index") != 0 || g("crc16") != 0 {
-                // Trajectory-package acks are produced by the firmware; checked in piper_protocol.
+                // Trajectory-package acks have no encoder of their own: the firmware builds them
+                // while running, checked byte for byte by the exchanges (piper_protocol). The
+                // vector must be one of those checked replies.
+                assert!(
+                    exchange_replies().contains(&v.frame),
+                    "{at}: no emulator exchange produces this ack"
+                );
                 return true;
             }
             arm::encode_ack(g("cmd") as u8, g("zero_ok") == 1, g("traj_index") as u8)
         }
         "end_params" => arm::encode_four_u16(
-            v.id,
+            v.id16(),
             [
                 "lin_vel_mm_s",
                 "ang_vel_mrad_s",
@@ -408,7 +424,7 @@ fn check_arm(v: &Vector, firmware_parts: &mut BTreeMap<i64, Vec<CanFrame>>) -> b
             .map(|k| g(k) as u16),
         ),
         "collision" | "assist" => arm::encode_six_u8(
-            v.id,
+            v.id16(),
             std::array::from_fn(|j| g(&format!("j{}", j + 1)) as u8),
         ),
         "gripper_teach" => arm::encode_gripper_teach(
@@ -451,10 +467,19 @@ fn check_arm(v: &Vector, firmware_parts: &mut BTreeMap<i64, Vec<CanFrame>>) -> b
     true
 }
 
+/// Arm frames the emulator is shown to send in the `## exchange` blocks.
+fn exchange_replies() -> Vec<CanFrame> {
+    load()
+        .into_iter()
+        .filter(|v| v.block.is_some() && !is_host(v))
+        .map(|v| v.frame)
+        .collect()
+}
+
 fn is_host(v: &Vector) -> bool {
-    matches!(v.id, 0x121 | 0x150..=0x15F | 0x191 | 0x422 | 0x470..=0x472 | 0x474 | 0x475 | 0x477 | 0x479 | 0x47A | 0x47D | 0x487)
-        || (v.id == 0x4AF && v.name == "firmware_query")
-        || (matches!(v.id, 0x181..=0x187) && v.fields.get("mode").is_some_and(|m| m != "a"))
+    matches!(v.id16(), 0x121 | 0x150..=0x15F | 0x191 | 0x422 | 0x470..=0x472 | 0x474 | 0x475 | 0x477 | 0x479 | 0x47A | 0x47D | 0x487)
+        || (v.id16() == 0x4AF && v.name == "firmware_query")
+        || (matches!(v.id16(), 0x181..=0x187) && v.text("mode").is_ok_and(|m| m != "a"))
 }
 
 #[test]
@@ -477,7 +502,7 @@ fn every_fixture_vector_matches_the_emulator_codec() {
         }
     }
     assert!(unknown.is_empty(), "vectors without a check: {unknown:#?}");
-    assert!(checked > 150, "{checked} vectors checked");
+    assert_eq!(checked, vectors.len(), "every vector checked");
     eprintln!("fixture vectors checked: {checked}");
 }
 

@@ -12,6 +12,7 @@ use bus::virtual_bus::{VirtualBus, VirtualNode};
 use bus::{CanBus, CanFrame};
 use piper_common::{collect, last, spawn_emulator};
 use sim::piper::{FirmwareProfile, PiperConfig, PiperHandle};
+use vectors::PiperVector;
 
 fn is_periodic(id: u32) -> bool {
     matches!(id, 0x2A1..=0x2A8 | 0x2B1..=0x2B8 | 0x2C1..=0x2C8 | 0x251..=0x256 | 0x261..=0x266 | 0x481..=0x486)
@@ -22,9 +23,9 @@ fn start(config: PiperConfig) -> (VirtualBus, VirtualNode, PiperHandle) {
 }
 
 fn is_host_frame(v: &vectors::Vector) -> bool {
-    matches!(v.id, 0x121 | 0x150..=0x15F | 0x191 | 0x422 | 0x470..=0x472 | 0x474 | 0x475 | 0x477 | 0x479 | 0x47A | 0x47D | 0x487)
-        || (v.id == 0x4AF && v.name == "firmware_query")
-        || (matches!(v.id, 0x181..=0x187) && v.fields.get("mode").is_some_and(|m| m != "a"))
+    matches!(v.id16(), 0x121 | 0x150..=0x15F | 0x191 | 0x422 | 0x470..=0x472 | 0x474 | 0x475 | 0x477 | 0x479 | 0x47A | 0x47D | 0x487)
+        || (v.id16() == 0x4AF && v.name == "firmware_query")
+        || (matches!(v.id16(), 0x181..=0x187) && v.text("mode").is_ok_and(|m| m != "a"))
 }
 
 #[tokio::test(start_paused = true)]
@@ -32,16 +33,14 @@ async fn exchanges_reply_byte_for_byte() {
     let all = vectors::load();
     let mut blocks: Vec<(String, Vec<CanFrame>, Vec<CanFrame>)> = Vec::new();
     let mut last_line = (String::new(), 0usize);
-    for v in all
-        .iter()
-        .filter(|v| v.file.starts_with("emu_") && !v.block.is_empty())
-    {
+    for v in &all {
+        let Some(block) = &v.block else { continue };
         // Two comments on one frame yield two vectors for the same line: keep one.
-        if (v.file.clone(), v.frame_line) == last_line {
+        if (v.at.file.clone(), v.frame_line) == last_line {
             continue;
         }
-        if blocks.last().is_none_or(|b| b.0 != v.block) {
-            blocks.push((v.block.clone(), Vec::new(), Vec::new()));
+        if blocks.last().is_none_or(|b| &b.0 != block) {
+            blocks.push((block.clone(), Vec::new(), Vec::new()));
         }
         let block = blocks.last_mut().unwrap();
         if is_host_frame(v) {
@@ -49,7 +48,7 @@ async fn exchanges_reply_byte_for_byte() {
         } else {
             block.2.push(v.frame);
         }
-        last_line = (v.file.clone(), v.frame_line);
+        last_line = (v.at.file.clone(), v.frame_line);
     }
     assert!(blocks.len() >= 10, "{} exchange blocks", blocks.len());
     for (name, requests, expected) in blocks {

@@ -1,5 +1,6 @@
-//! Emulator conformance against the shared fixtures (spec §15 worked examples and the reply
-//! matrix): the emulator must send exactly the fixture's reply bytes.
+//! Emulator conformance against the shared fixtures (`fixtures/robstride/`: the worked examples
+//! and the reply matrix of docs/protocols/robstride.md): the emulator must send exactly the
+//! fixture's reply bytes, and every vector's identifier must split into its annotated fields.
 
 use std::collections::BTreeMap;
 
@@ -7,70 +8,26 @@ use bus::CanFrame;
 use rand::{Rng, SeedableRng};
 use sim::robstride::{codec, Actuator, Fault, Load, ModeState, Model, MotorConfig, Phase};
 
-/// One fixture entry: the decoded fields from its comment lines and the frame.
-#[derive(Debug, Clone)]
-struct Vector {
-    fields: BTreeMap<String, String>,
-    frame: CanFrame,
-}
+use bus::fixtures::Vector;
 
+/// Every vector of one fixture file, by name; a missing file or a repeated name fails.
 fn load(name: &str) -> BTreeMap<String, Vector> {
-    let path = format!(
-        "{}/../fixtures/robstride/{name}",
-        env!("CARGO_MANIFEST_DIR")
-    );
-    let text = std::fs::read_to_string(&path).expect("fixture file exists");
+    let path = bus::fixtures::repo_path("robstride").join(name);
     let mut out = BTreeMap::new();
-    let mut fields = BTreeMap::new();
-    for line in text.lines() {
-        let line = line.trim();
-        if let Some(comment) = line.strip_prefix('#') {
-            for pair in comment.split_whitespace() {
-                if let Some((key, value)) = pair.split_once('=') {
-                    fields.insert(key.to_owned(), value.to_owned());
-                }
-            }
-            continue;
+    for v in bus::fixtures::read_file(&path).unwrap_or_else(|e| panic!("{e}")) {
+        if let Some(old) = out.insert(v.name.clone(), v) {
+            panic!("{}: vector name {} used twice", old.at, old.name);
         }
-        if line.is_empty() {
-            continue;
-        }
-        // candump -L: "(time) iface ID#DATA"
-        let text_frame = line
-            .split_whitespace()
-            .nth(2)
-            .expect("candump line has a frame");
-        let (id, data) = text_frame.split_once('#').expect("frame has #");
-        let id = u32::from_str_radix(id, 16).expect("hex id");
-        let bytes: Vec<u8> = (0..data.len())
-            .step_by(2)
-            .map(|i| u8::from_str_radix(&data[i..i + 2], 16).expect("hex byte"))
-            .collect();
-        let frame = if id_is_extended(text_frame) {
-            CanFrame::extended(id, &bytes)
-        } else {
-            CanFrame::standard(id as u16, &bytes)
-        }
-        .expect("valid frame");
-        let name = fields.get("name").cloned().expect("vector has a name");
-        out.insert(
-            name,
-            Vector {
-                fields: std::mem::take(&mut fields),
-                frame,
-            },
-        );
     }
     out
 }
 
-fn id_is_extended(text: &str) -> bool {
-    text.split('#').next().map(str::len) == Some(8)
-}
-
 fn vectors() -> BTreeMap<String, Vector> {
     let mut all = load("spec_examples.log");
-    all.extend(load("reply_matrix.log"));
+    for (name, v) in load("reply_matrix.log") {
+        assert!(!all.contains_key(&name), "{}: {name} in both files", v.at);
+        all.insert(name, v);
+    }
     all
 }
 
@@ -81,7 +38,7 @@ fn frame(all: &BTreeMap<String, Vector>, name: &str) -> CanFrame {
 }
 
 fn field_f64(all: &BTreeMap<String, Vector>, name: &str, key: &str) -> f64 {
-    all[name].fields[key].parse().expect("numeric field")
+    all[name].float(key).unwrap_or_else(|e| panic!("{e}"))
 }
 
 fn motor(can_id: u8, model: Model) -> Actuator {
@@ -399,4 +356,52 @@ fn other_motors_frames_and_malformed_frames_are_ignored_without_panic() {
     let mut other = motor(0x02, Model::RS03);
     let ping = CanFrame::extended(0x0000_FD01, &[0; 8]).unwrap();
     assert!(other.handle_frame(&ping).is_empty());
+}
+
+/// Every vector, whichever other test replays it: the identifier splits into the fields the
+/// annotation lists (type, host, motor, status bits). A vector without a direction, type or
+/// motor, or with an unknown direction, fails.
+#[test]
+fn every_vector_identifier_matches_its_annotation() {
+    let all = vectors();
+    assert!(all.len() >= 35, "{} vectors", all.len());
+    for v in all.values() {
+        let int = |key: &str| v.int(key).unwrap_or_else(|e| panic!("{e}"));
+        let id = codec::ExtId::parse(v.frame.raw_id());
+        assert!(v.frame.is_extended(), "{v}");
+        assert_eq!(i64::from(id.comm.bits()), int("type"), "{v}");
+        match v.text("dir").unwrap_or_else(|e| panic!("{e}")) {
+            "h2m" => {
+                assert_eq!(i64::from(id.dst), int("motor"), "{v}");
+                // Type 1 carries the feed-forward torque where other requests name the host.
+                if v.has("host") {
+                    assert_eq!(i64::from(id.low_data2()), int("host"), "{v}");
+                }
+                if v.has("new_id") {
+                    assert_eq!(i64::from(id.high_data2()), int("new_id"), "{v}");
+                }
+            }
+            "m2h" => {
+                assert_eq!(i64::from(id.low_data2()), int("motor"), "{v}");
+                let dst = if v.has("dst") {
+                    int("dst")
+                } else {
+                    int("host")
+                };
+                assert_eq!(i64::from(id.dst), dst, "{v}");
+                if v.has("state") {
+                    let faults = if v.has("faults") { int("faults") } else { 0 };
+                    assert_eq!(
+                        i64::from(id.high_data2()),
+                        int("state") << 6 | faults,
+                        "{v}"
+                    );
+                }
+                if v.has("status") {
+                    assert_eq!(i64::from(id.high_data2()), int("status"), "{v}");
+                }
+            }
+            other => panic!("{v}: unknown direction {other}"),
+        }
+    }
 }
