@@ -79,7 +79,7 @@ fn field_accessors_report_typed_errors() {
 fn every_malformed_line_is_a_typed_error_with_its_line() {
     let frame = "(1.000000) can0 2A5#00\n";
     let cases: Vec<(String, usize, SyntaxError)> = vec![
-        (format!("{frame}"), 1, SyntaxError::Unannotated),
+        (frame.to_string(), 1, SyntaxError::Unannotated),
         ("## x\n# 2A5 j: a=1\n".into(), 2, SyntaxError::Dangling),
         (format!("#\n{frame}"), 1, SyntaxError::EmptyAnnotation),
         (
