@@ -14,6 +14,7 @@ pub struct StateFeed {
     latest: watch::Receiver<Option<Arc<ArmState>>>,
     samples: broadcast::Sender<Arc<ArmState>>,
     decode_errors: Arc<AtomicU64>,
+    local_addr: Option<std::net::SocketAddr>,
     task: JoinHandle<()>,
 }
 
@@ -61,13 +62,15 @@ impl StateFeed {
             latest,
             samples,
             decode_errors,
+            local_addr: None,
             task,
         }
     }
 
     /// Receives datagrams on a bound UDP socket (real time).
     pub fn from_socket(socket: UdpSocket, unit: JointSpeedUnit) -> Self {
-        Self::start(unit, |p| {
+        let local_addr = socket.local_addr().ok();
+        let mut feed = Self::start(unit, |p| {
             tokio::spawn(async move {
                 let mut buf = vec![0u8; 65_536];
                 loop {
@@ -77,7 +80,14 @@ impl StateFeed {
                     }
                 }
             })
-        })
+        });
+        feed.local_addr = local_addr;
+        feed
+    }
+
+    /// The local address of the UDP socket (None for a channel feed).
+    pub fn local_addr(&self) -> Option<std::net::SocketAddr> {
+        self.local_addr
     }
 
     /// Binds `addr` (e.g. `0.0.0.0:8089`) and receives on it.

@@ -833,7 +833,7 @@ pub struct PushSettings {
 
 /// `set_realtime_push`; the reply's result key is `state`.
 pub fn set_realtime_push(s: &PushSettings) -> Result<Request, EncodeError> {
-    if s.period_ms == 0 || s.period_ms % 5 != 0 {
+    if s.period_ms == 0 || !s.period_ms.is_multiple_of(5) {
         return Err(EncodeError::OutOfRange {
             field: "period_ms (multiple of 5)",
             value: s.period_ms as i64,
