@@ -230,6 +230,72 @@ async fn realman_timeout_is_exactly_500_ms_and_configurable() {
 }
 
 #[tokio::test(start_paused = true)]
+async fn realman_late_reply_is_not_given_to_the_next_request() {
+    let request = "{\"command\":\"get_joint_degree\"}\r\n".to_string();
+    let reply =
+        |deg: i64| format!("{{\"state\":\"joint_degree\",\"joint\":[{deg},0,0,0,0,0]}}\r\n");
+    let steps = vec![
+        Step {
+            request: request.clone(),
+            actions: vec![
+                Action::Sleep(Duration::from_millis(700)),
+                Action::Write(reply(1000)),
+            ],
+        },
+        Step {
+            request: request.clone(),
+            actions: vec![Action::Write(reply(2000))],
+        },
+    ];
+    let (client, _log) = start(steps, ClientConfig::default()).await;
+    assert!(matches!(
+        client.joint_positions().await,
+        Err(RealmanError::Timeout { .. })
+    ));
+    // The second request is sent at 500 ms; the first reply (1°) arrives at 700 ms, then 2°.
+    let j = client.joint_positions().await.unwrap();
+    assert!(
+        (j[0] - 2f64.to_radians()).abs() < 1e-12,
+        "got the stale reply: {j:?}"
+    );
+}
+
+#[tokio::test(start_paused = true)]
+async fn realman_a_lost_reply_costs_one_request_not_a_chain() {
+    let request = "{\"command\":\"get_joint_degree\"}\r\n".to_string();
+    let reply = "{\"state\":\"joint_degree\",\"joint\":[0,0,0,0,0,0]}\r\n".to_string();
+    let answer = |delay_ms: u64| Step {
+        request: request.clone(),
+        actions: vec![
+            Action::Sleep(Duration::from_millis(delay_ms)),
+            Action::Write(reply.clone()),
+        ],
+    };
+    // The first request is never answered; the second is answered (after 100 ms), so the
+    // client wrongly takes that reply for the late first one; the third must work again.
+    let steps = vec![
+        Step {
+            request: request.clone(),
+            actions: vec![],
+        },
+        answer(100),
+        answer(0),
+        answer(0),
+    ];
+    let (client, _log) = start(steps, ClientConfig::default()).await;
+    assert!(matches!(
+        client.joint_positions().await,
+        Err(RealmanError::Timeout { .. })
+    ));
+    assert!(matches!(
+        client.joint_positions().await,
+        Err(RealmanError::Timeout { .. })
+    ));
+    assert!(client.joint_positions().await.is_ok());
+    assert!(client.joint_positions().await.is_ok());
+}
+
+#[tokio::test(start_paused = true)]
 async fn realman_refusals_are_typed() {
     let e = load("errors");
     let steps = [

@@ -8,6 +8,7 @@ use std::sync::{Arc, Mutex};
 
 use tokio::io::{AsyncRead, AsyncReadExt};
 use tokio::sync::{broadcast, oneshot, watch};
+use tokio::time::Instant;
 
 use crate::realman::codec::decode::Body;
 use crate::realman::codec::types::Arrival;
@@ -28,11 +29,19 @@ struct Waiter {
     id: u64,
     tag: Tag,
     tx: oneshot::Sender<Delivery>,
+    /// A reply with this tag was dropped as late while this request waited. If the guess was
+    /// wrong (the old reply was lost, this was ours) and this request times out, it must not
+    /// mark yet another reply as late: one lost reply costs one request, not a chain.
+    passed_over: bool,
 }
 
 /// State shared by the client handle and the reader task.
 pub(crate) struct Shared {
     waiters: Mutex<Vec<Waiter>>,
+    /// Tags of requests that timed out, until when their late reply is expected. The controller
+    /// answers in order, so a late reply comes before the reply to a newer request with the
+    /// same tag; it is dropped instead of being handed to the newer request.
+    late: Mutex<Vec<(Tag, Instant)>>,
     next_id: AtomicU64,
     /// Arrival events with the sequence number of the message.
     pub(crate) arrivals: broadcast::Sender<(u64, Arrival)>,
@@ -48,6 +57,7 @@ impl Shared {
     pub(crate) fn new() -> Arc<Self> {
         Arc::new(Self {
             waiters: Mutex::new(Vec::new()),
+            late: Mutex::new(Vec::new()),
             next_id: AtomicU64::new(1),
             arrivals: broadcast::channel(64).0,
             notices: broadcast::channel(64).0,
@@ -66,13 +76,49 @@ impl Shared {
     pub(crate) fn wait_for(&self, tag: Tag) -> (u64, oneshot::Receiver<Delivery>) {
         let id = self.next_id.fetch_add(1, Ordering::Relaxed);
         let (tx, rx) = oneshot::channel();
-        self.lock().push(Waiter { id, tag, tx });
+        self.lock().push(Waiter {
+            id,
+            tag,
+            tx,
+            passed_over: false,
+        });
         (id, rx)
     }
 
-    /// Drops a waiter (timeout or write failure).
+    /// Drops a waiter (write failure).
     pub(crate) fn forget(&self, id: u64) {
         self.lock().retain(|w| w.id != id);
+    }
+
+    /// Drops a waiter whose reply did not come in time; a reply with its tag arriving before
+    /// `until` is taken to be that late reply and discarded.
+    pub(crate) fn timed_out(&self, id: u64, tag: Tag, until: Instant) {
+        let mut waiters = self.lock();
+        let Some(pos) = waiters.iter().position(|w| w.id == id) else {
+            // Its reply was delivered in the meantime: nothing is late.
+            return;
+        };
+        if !waiters.remove(pos).passed_over {
+            self.late
+                .lock()
+                .unwrap_or_else(|p| p.into_inner())
+                .push((tag, until));
+        }
+    }
+
+    /// True (and the entry consumed) when a reply with `tag` is the late reply of a request
+    /// that already timed out.
+    fn is_late(&self, tag: &crate::realman::codec::ReplyTag) -> bool {
+        let now = Instant::now();
+        let mut late = self.late.lock().unwrap_or_else(|p| p.into_inner());
+        late.retain(|(_, until)| *until > now);
+        match late.iter().position(|(t, _)| tag.is(*t)) {
+            Some(p) => {
+                late.remove(p);
+                true
+            }
+            None => false,
+        }
     }
 
     /// Fails every waiting request (connection lost or replaced).
@@ -85,6 +131,13 @@ impl Shared {
     fn deliver(&self, seq: u64, message: Message) {
         match message {
             Message::Reply { tag, body } => {
+                if self.is_late(&tag) {
+                    tracing::debug!(?tag, "late reply to a timed-out request dropped");
+                    if let Some(w) = self.lock().iter_mut().find(|w| tag.is(w.tag)) {
+                        w.passed_over = true;
+                    }
+                    return;
+                }
                 let waiter = {
                     let mut waiters = self.lock();
                     let pos = waiters.iter().position(|w| tag.is(w.tag));

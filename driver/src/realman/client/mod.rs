@@ -32,6 +32,9 @@ pub struct ClientConfig {
     pub motion_timeout: Duration,
     /// Longest accepted message, bytes.
     pub max_frame: usize,
+    /// After a reply timeout, how long a reply with the same tag is taken to be the late
+    /// answer (and dropped) rather than the answer to a newer request.
+    pub late_reply_window: Duration,
 }
 
 impl Default for ClientConfig {
@@ -40,6 +43,7 @@ impl Default for ClientConfig {
             reply_timeout: Duration::from_millis(500),
             motion_timeout: Duration::from_secs(120),
             max_frame: DEFAULT_MAX_FRAME,
+            late_reply_window: Duration::from_secs(2),
         }
     }
 }
@@ -206,7 +210,8 @@ impl RealmanClient {
         let after = self.inner.config.reply_timeout;
         match tokio::time::timeout(after, rx).await {
             Err(_) => {
-                self.inner.shared.forget(id);
+                let until = tokio::time::Instant::now() + self.inner.config.late_reply_window;
+                self.inner.shared.timed_out(id, tag, until);
                 Err(RealmanError::Timeout { command, after })
             }
             Ok(Err(_)) | Ok(Ok(Delivery::Disconnected)) => {
