@@ -718,3 +718,73 @@ fn realman_legacy_and_current_error_forms_decode_alike() {
         vec![ControllerError::Collision, ControllerError::Unknown(20000)]
     );
 }
+
+#[test]
+fn realman_decoders_survive_mangled_vectors() {
+    // Every prefix and every single-byte corruption of every reply: no panic, and a corrupted
+    // reply is either still a valid message or a typed error.
+    let transcripts = load_dir(realman_fixtures_dir()).unwrap();
+    let mut cases = 0usize;
+    for t in &transcripts {
+        for v in &t.vectors {
+            for reply in &v.replies {
+                let bytes = reply.as_bytes();
+                for cut in 0..bytes.len() {
+                    let mut sp = Splitter::new(256);
+                    sp.push(&bytes[..cut]);
+                    while let Some(f) = sp.next_frame() {
+                        if let Frame::Object(text) = f {
+                            let _ = decode_message(&text);
+                        }
+                    }
+                    let _ = decode_push(&bytes[..cut], JointSpeedUnit::default());
+                    cases += 1;
+                }
+                for (i, junk) in [b'}', b'"', b'x', b'\\', b'{']
+                    .iter()
+                    .cycle()
+                    .take(bytes.len())
+                    .enumerate()
+                {
+                    let mut mangled = bytes.to_vec();
+                    mangled[i] = *junk;
+                    let mut sp = Splitter::new(4096);
+                    sp.push(&mangled);
+                    while let Some(f) = sp.next_frame() {
+                        if let Frame::Object(text) = f {
+                            if let Ok(Message::Reply { body, .. }) = decode_message(&text) {
+                                let _ = d::arm_snapshot(&body);
+                                let _ = d::push_config(&body);
+                                let _ = d::dh_table(&body);
+                                let _ = d::all_state(&body);
+                            }
+                        }
+                    }
+                    let _ = decode_push(&mangled, JointSpeedUnit::default());
+                    cases += 1;
+                }
+            }
+        }
+    }
+    assert!(cases > 10_000, "{cases} cases");
+}
+
+#[test]
+fn realman_cartesian_trajectory_reports_a_pose() {
+    let text = r#"{"state":"arm_current_trajectory","type":"movel","data":[-355660,-134710,660810,1607,8,-881]}"#;
+    let Message::Reply { body, .. } = decode_message(text).unwrap() else {
+        panic!()
+    };
+    let t = d::current_trajectory(&body).unwrap();
+    assert_eq!(t.kind, TrajectoryKind::MoveL);
+    let p = t.pose.unwrap();
+    assert!((p.position_m[2] - 0.66081).abs() < 1e-12 && (p.euler_rad[0] - 1.607).abs() < 1e-12);
+    let odd = r#"{"state":"arm_current_trajectory","type":"re_trajectory","data":[0,0,0,0,0,0]}"#;
+    let Message::Reply { body, .. } = decode_message(odd).unwrap() else {
+        panic!()
+    };
+    assert_eq!(
+        d::current_trajectory(&body).unwrap().kind,
+        TrajectoryKind::Unknown("re_trajectory".into())
+    );
+}
