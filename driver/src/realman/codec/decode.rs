@@ -210,7 +210,10 @@ pub fn push_config(body: &Body) -> Result<PushConfig, DecodeError> {
         _ => BTreeMap::new(),
     };
     Ok(PushConfig {
-        period_ms: u32::try_from(cycle * 5).map_err(|_| DecodeError::Field("cycle"))?,
+        period_ms: cycle
+            .checked_mul(5)
+            .and_then(|ms| u32::try_from(ms).ok())
+            .ok_or(DecodeError::Field("cycle"))?,
         enable: boolean(body, "enable")?,
         port: u16::try_from(port).map_err(|_| DecodeError::Field("port"))?,
         force_coordinate: body
@@ -503,4 +506,45 @@ pub fn collision_stage(body: &Body) -> Result<u8, DecodeError> {
 /// Decodes `get_self_collision_enable`.
 pub fn self_collision(body: &Body) -> Result<bool, DecodeError> {
     boolean(body, "enable_state")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn body(text: &str) -> Body {
+        serde_json::from_str(text).unwrap()
+    }
+
+    #[test]
+    fn hostile_numbers_are_errors_not_panics() {
+        let huge = body(
+            r#"{"command":"get_realtime_push","cycle":9223372036854775807,"enable":true,"port":8089}"#,
+        );
+        assert_eq!(push_config(&huge), Err(DecodeError::Field("cycle")));
+        let port = body(r#"{"command":"get_realtime_push","cycle":1,"enable":true,"port":70000}"#);
+        assert_eq!(push_config(&port), Err(DecodeError::Field("port")));
+        let stage = body(r#"{"state":"get_collision_stage","collision_stage":-1}"#);
+        assert_eq!(
+            collision_stage(&stage),
+            Err(DecodeError::Field("collision_stage"))
+        );
+        let short = body(
+            r#"{"state":"current_arm_state","arm_state":{"joint":[0],"pose":[1,2],"err":[]}}"#,
+        );
+        assert_eq!(arm_snapshot(&short), Err(DecodeError::Field("pose")));
+    }
+
+    #[test]
+    fn software_info_models() {
+        let b = body(
+            r#"{"command":"arm_software_info","Product_version":"RML63III-6F","robot_controller_version":"4.0"}"#,
+        );
+        let s = software_info(&b).unwrap();
+        assert_eq!((s.model, s.dof, s.generation), (Some("RML63III"), 6, 4));
+        let b = body(r#"{"command":"arm_software_info","Product_version":"GEN72-B"}"#);
+        assert_eq!(software_info(&b).unwrap().dof, 7);
+        let b = body(r#"{"command":"arm_software_info","Product_version":"XYZ"}"#);
+        assert_eq!(software_info(&b).unwrap().model, None);
+    }
 }
