@@ -9,6 +9,7 @@
 //! - [`fixtures`]: the annotated candump test vectors in `fixtures/` that drivers and emulators
 //!   are both checked against.
 //! - [`timing`]: how many bit times a frame occupies.
+//! - [`transcript`]: the reader for JSON test-vector transcripts (Realman fixtures).
 
 pub mod candump;
 mod error;
@@ -20,6 +21,7 @@ pub mod recorder;
 #[cfg(target_os = "linux")]
 pub mod socketcan_bus;
 pub mod timing;
+pub mod transcript;
 pub mod virtual_bus;
 
 pub use error::BusError;

@@ -3,6 +3,8 @@
 //!
 //! - [`piper`]: AgileX Piper arm (CAN, 11-bit IDs).
 //! - [`robstride`]: RobStride actuators (CAN, 29-bit IDs).
+//! - [`realman`]: Realman arm controllers (JSON over TCP, state over UDP).
 
 pub mod piper;
+pub mod realman;
 pub mod robstride;
