@@ -27,5 +27,6 @@
 // ---- realman-kin: kinematics, planning, physics plant (begin) ----
 pub mod kinematics;
 pub mod model;
+mod path;
 pub mod planner;
 // ---- realman-kin (end) ----
