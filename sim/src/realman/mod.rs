@@ -8,6 +8,8 @@
 //!   inverse kinematics ([`kinematics::inverse`]), poses as x, y, z + intrinsic Z-Y-X Euler.
 //! - [`planner`]: `movej` / `movel` / `movec` / `moves` trajectories and blending of
 //!   connected segments.
+//! - [`plant`]: the physical arm, `urdf/rm65b.urdf` in the rapier world at 1 kHz with
+//!   torque-driven joint controllers, brakes, currents, temperatures and bus voltage.
 //!
 //! ```
 //! use sim::realman::{kinematics, model::ArmModel, planner};
@@ -29,4 +31,5 @@ pub mod kinematics;
 pub mod model;
 mod path;
 pub mod planner;
+pub mod plant;
 // ---- realman-kin (end) ----
