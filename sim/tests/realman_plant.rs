@@ -7,47 +7,70 @@ use sim::physics::{ArmModel as UrdfModel, ArmWorld, WorldConfig};
 use sim::realman::kinematics::forward_isometry;
 use sim::realman::model::ArmModel;
 use sim::realman::planner::plan_joint;
-use sim::realman::plant::{ArmPlant, PlantError, AMBIENT_C, RM65B_URDF, TORQUE_CONSTANT_NM_PER_A};
+use sim::realman::plant::{
+    urdf_for, ArmPlant, PlantError, AMBIENT_C, RM65B_URDF, TORQUE_CONSTANT_NM_PER_A,
+};
 
 fn deg(v: &[f64]) -> Vec<f64> {
     v.iter().map(|d| d.to_radians()).collect()
 }
 
 #[test]
-fn urdf_link6_is_the_mdh_flange() {
-    let model = ArmModel::rm65b();
-    let urdf = UrdfModel::from_urdf_str(RM65B_URDF).expect("urdf");
-    let mut world = ArmWorld::from_urdf_str(RM65B_URDF, WorldConfig::default()).expect("world");
-    let mut rng = SmallRng::seed_from_u64(65);
-    let (mut worst_urdf, mut worst_rapier) = (0.0_f64, 0.0_f64);
-    for _ in 0..200 {
-        let q: Vec<f64> = (0..6)
-            .map(|j| {
-                rng.random_range(model.joint_min_deg[j]..model.joint_max_deg[j])
-                    .to_radians()
-            })
-            .collect();
-        let mdh = forward_isometry(&model, &q);
-        let ours = urdf.link_pose("Link6", &q).expect("fk").expect("Link6");
-        let dp = (ours.translation.vector - mdh.translation.vector).norm();
-        let dr = (ours.rotation * mdh.rotation.inverse()).angle();
-        worst_urdf = worst_urdf.max(dp).max(dr);
-        world.set_joint_positions(&q).expect("in limits");
-        let rapier = world.link_pose("Link6").expect("Link6");
-        let dp = (rapier.translation.vector - mdh.translation.vector).norm();
-        let dr = (rapier.rotation * mdh.rotation.inverse()).angle();
-        worst_rapier = worst_rapier.max(dp).max(dr);
+fn urdf_flange_link_is_the_mdh_flange() {
+    for model in [ArmModel::rm65b(), ArmModel::rm75b()] {
+        let text = urdf_for(&model).expect("urdf");
+        let urdf = UrdfModel::from_urdf_str(text).expect("urdf");
+        let mut world = ArmWorld::from_urdf_str(text, WorldConfig::default()).expect("world");
+        let tip = format!("Link{}", model.dof);
+        let mut rng = SmallRng::seed_from_u64(65);
+        let (mut worst_urdf, mut worst_rapier) = (0.0_f64, 0.0_f64);
+        for _ in 0..200 {
+            let q: Vec<f64> = (0..model.dof)
+                .map(|j| {
+                    rng.random_range(model.joint_min_deg[j]..model.joint_max_deg[j])
+                        .to_radians()
+                })
+                .collect();
+            let mdh = forward_isometry(&model, &q);
+            let ours = urdf.link_pose(&tip, &q).expect("fk").expect("tip link");
+            let dp = (ours.translation.vector - mdh.translation.vector).norm();
+            let dr = (ours.rotation * mdh.rotation.inverse()).angle();
+            worst_urdf = worst_urdf.max(dp).max(dr);
+            world.set_joint_positions(&q).expect("in limits");
+            let rapier = world.link_pose(&tip).expect("tip link");
+            let dp = (rapier.translation.vector - mdh.translation.vector).norm();
+            let dr = (rapier.rotation * mdh.rotation.inverse()).angle();
+            worst_rapier = worst_rapier.max(dp).max(dr);
+        }
+        println!(
+            "{} {tip} vs MDH flange: URDF chain {worst_urdf:.2e}, rapier (f32) {worst_rapier:.2e} (m or rad)",
+            model.name
+        );
+        assert!(worst_urdf < 1e-12, "{worst_urdf}");
+        assert!(worst_rapier < 1e-5, "{worst_rapier}");
     }
-    println!("Link6 vs MDH flange: URDF chain {worst_urdf:.2e}, rapier (f32) {worst_rapier:.2e} (m or rad)");
-    assert!(worst_urdf < 1e-12, "{worst_urdf}");
-    assert!(worst_rapier < 1e-5, "{worst_rapier}");
 }
 
 #[test]
 fn urdf_limits_efforts_and_masses_match_the_model() {
-    let model = ArmModel::rm65b();
+    for (model, efforts) in [
+        (ArmModel::rm65b(), vec![60.0, 60.0, 30.0, 10.0, 10.0, 10.0]),
+        (
+            ArmModel::rm75b(),
+            vec![60.0, 60.0, 30.0, 30.0, 10.0, 10.0, 10.0],
+        ),
+    ] {
+        check_urdf_tables(&model, &efforts);
+    }
+    // RM65: moving links (CAD table) + base = the spec sheet's 7.2 kg.
     let urdf = UrdfModel::from_urdf_str(RM65B_URDF).expect("urdf");
-    let efforts = [60.0, 60.0, 30.0, 10.0, 10.0, 10.0];
+    let total: f64 = urdf.inertials().iter().map(|i| i.mass_kg).sum();
+    assert!((total - 7.2).abs() < 1e-9, "{total}");
+}
+
+fn check_urdf_tables(model: &ArmModel, efforts: &[f64]) {
+    let urdf = UrdfModel::from_urdf_str(urdf_for(model).expect("urdf")).expect("urdf");
+    assert_eq!(urdf.joints().len(), model.dof);
     for (j, info) in urdf.joints().iter().enumerate() {
         assert!((info.lower.to_degrees() - model.joint_min_deg[j]).abs() < 1e-9);
         assert!((info.upper.to_degrees() - model.joint_max_deg[j]).abs() < 1e-9);
@@ -57,9 +80,6 @@ fn urdf_limits_efforts_and_masses_match_the_model() {
         let link = urdf.link_index(&info.child_link).expect("link");
         assert_eq!(urdf.inertials()[link].mass_kg, model.link_masses_kg[j]);
     }
-    // Moving links (CAD table) + base = the spec sheet's 7.2 kg.
-    let total: f64 = urdf.inertials().iter().map(|i| i.mass_kg).sum();
-    assert!((total - 7.2).abs() < 1e-9, "{total}");
 }
 
 /// Streams `traj` to the plant for its duration plus `settle_s`.
@@ -75,9 +95,23 @@ fn follow(plant: &mut ArmPlant, traj: &sim::realman::planner::Trajectory, settle
 
 #[test]
 fn plant_follows_a_planned_movej_to_within_a_tenth_of_a_degree() {
-    let model = ArmModel::rm65b();
-    let from = deg(&[0.0, 20.0, 40.0, 0.0, 30.0, 0.0]);
-    let to = deg(&[60.0, 80.0, 50.0, -90.0, 70.0, 120.0]);
+    movej_arrives(
+        &ArmModel::rm65b(),
+        &deg(&[0.0, 20.0, 40.0, 0.0, 30.0, 0.0]),
+        &deg(&[60.0, 80.0, 50.0, -90.0, 70.0, 120.0]),
+        &[60.0, 60.0, 30.0, 10.0, 10.0, 10.0],
+    );
+    movej_arrives(
+        &ArmModel::rm75b(),
+        &deg(&[0.0, 20.0, 0.0, 40.0, 0.0, 30.0, 0.0]),
+        &deg(&[60.0, 70.0, -30.0, 80.0, 90.0, -60.0, 120.0]),
+        &[60.0, 60.0, 30.0, 30.0, 10.0, 10.0, 10.0],
+    );
+}
+
+fn movej_arrives(model: &ArmModel, from: &[f64], to: &[f64], limits: &[f64]) {
+    let model = model.clone();
+    let (from, to) = (from.to_vec(), to.to_vec());
     let mut plant = ArmPlant::new(&model, &from).expect("plant");
     let traj = plan_joint(&model, &from, &to, 100.0).expect("plan");
     // Tracking error while moving, and arrival error 0.2 s after the plan ends.
@@ -103,16 +137,16 @@ fn plant_follows_a_planned_movej_to_within_a_tenth_of_a_degree() {
         .map(|(a, b)| (a - b).abs().to_degrees())
         .fold(0.0, f64::max);
     println!(
-        "movej 100 %: {:.3} s, worst tracking error {:.3}°, arrival error {arrival:.4}°",
+        "{} movej 100 %: {:.3} s, worst tracking error {:.3}°, arrival error {arrival:.4}°",
+        model.name,
         traj.duration_s(),
         worst_track.to_degrees()
     );
     assert!(arrival < 0.1, "{arrival}°");
     assert!(plant.speeds_rad_s().iter().all(|v| v.abs() < 1e-3));
     // Effort limits are never exceeded.
-    let limits = [60.0, 60.0, 30.0, 10.0, 10.0, 10.0];
     for (t, l) in plant.torques_nm().iter().zip(limits) {
-        assert!(t.abs() <= l);
+        assert!(t.abs() <= *l);
     }
 }
 
@@ -247,8 +281,10 @@ fn bad_inputs_are_refused_or_ignored() {
         ArmPlant::new(&model, &deg(&[0.0, 140.0, 0.0, 0.0, 0.0, 0.0])),
         Err(PlantError::Physics(_))
     ));
+    let mut five = ArmModel::rm65b();
+    five.dof = 5;
     assert!(matches!(
-        ArmPlant::new(&ArmModel::rm75b(), &[0.0; 7]),
+        ArmPlant::new(&five, &[0.0; 5]),
         Err(PlantError::NoUrdf { .. })
     ));
     let q = deg(&[0.0, 30.0, 30.0, 0.0, 30.0, 0.0]);

@@ -1,4 +1,4 @@
-//! The arm's physical plant: the rapier world of `urdf/rm65b.urdf` stepped at 1 kHz, one
+//! The arm's physical plant: the rapier world of `urdf/rm65b.urdf` (or `rm75b.urdf`) stepped at 1 kHz, one
 //! position controller per joint driving it with torque, joint brakes, and the motor currents,
 //! temperatures and bus voltage the controller reports.
 //!
@@ -27,6 +27,8 @@ use super::model::ArmModel;
 
 /// The RM65-B URDF (authored by the project, see `urdf/README.md`).
 pub const RM65B_URDF: &str = include_str!("../../../urdf/rm65b.urdf");
+/// The RM75-B URDF (authored by the project, see `urdf/README.md`).
+pub const RM75B_URDF: &str = include_str!("../../../urdf/rm75b.urdf");
 
 /// Output torque per phase ampere, N·m/A, per joint (J1..J6; J7 of an RM75 uses the last).
 /// **Assumed**: chosen so that the effort limit takes about 12 A on J1–J2 (60 N·m),
@@ -59,7 +61,7 @@ const BRAKE_HOLD_PER_EFFORT: f64 = 1.5;
 /// Why a plant cannot be built.
 #[derive(Debug, thiserror::Error)]
 pub enum PlantError {
-    /// The model has no URDF (only the RM65 family has one).
+    /// The model has no URDF (only the RM65 and RM75 families have one).
     #[error("no URDF for {model} ({dof} joints)")]
     NoUrdf {
         /// Model name.
@@ -104,10 +106,15 @@ impl std::fmt::Debug for ArmPlant {
     }
 }
 
-fn urdf_for(model: &ArmModel) -> Option<&'static str> {
+/// The URDF of a model, by joint count (RM65 family: 6, RM75 family: 7).
+pub fn urdf_for(model: &ArmModel) -> Option<&'static str> {
     // The -6F variants move the flange 28.5 mm out and add 0.248 kg there; the plant keeps
     // the -B URDF (the flange pose comes from the MDH model, not from the plant).
-    (model.dof == 6).then_some(RM65B_URDF)
+    match model.dof {
+        6 => Some(RM65B_URDF),
+        7 => Some(RM75B_URDF),
+        _ => None,
+    }
 }
 
 impl ArmPlant {
