@@ -38,14 +38,18 @@ pub struct ModelFacts {
 impl ModelFacts {
     /// Read the facts out of a model.
     pub fn of(model: &ArmModel) -> Self {
+        let last = model.mdh.len().saturating_sub(1);
         let dh = model
             .mdh
             .iter()
-            .map(|r| DhRow {
-                alpha_deg: r[1].to_degrees(),
-                a_m: r[0],
-                d_m: r[2],
-                offset_deg: r[3].to_degrees(),
+            .enumerate()
+            .map(|(i, r)| DhRow {
+                alpha_deg: r.alpha_rad.to_degrees(),
+                a_m: r.a_m,
+                // The model keeps the flange distance apart; the controller reports it as the
+                // last row's d.
+                d_m: if i == last { r.d_m + model.flange_d_m } else { r.d_m },
+                offset_deg: r.offset_rad.to_degrees(),
             })
             .collect();
         Self {

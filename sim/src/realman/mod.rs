@@ -6,7 +6,23 @@
 //! - [`server`]: the transport — TCP listener in real time or in-memory duplex streams in
 //!   virtual time, request framing ([`framing`]), per-client reply streams, the UDP push
 //!   ([`push`]) and transport faults ([`faults`]).
-//! - [`model`], [`kinematics`], [`planner`], [`plant`]: the arm itself.
+//! - [`model`], [`kinematics`], [`planner`], [`plant`]: the arm itself (models, FK/IK,
+//!   trajectories with blending, the rapier3d plant).
+//!
+//! ```
+//! use sim::realman::{kinematics, model::ArmModel, planner};
+//!
+//! let arm = ArmModel::rm65b();
+//! let home = vec![0.0; 6];
+//! let target: Vec<f64> = [10.0_f64, 20.0, 30.0, 40.0, 50.0, 60.0].iter().map(|d| d.to_radians()).collect();
+//! let pose = kinematics::forward(&arm, &target);
+//! let back = kinematics::inverse(&arm, &pose, &target)?;
+//! assert!((back[2] - target[2]).abs() < 1e-6);
+//! let movej = planner::plan_joint(&arm, &home, &target, 50.0)?;
+//! assert_eq!(movej.kind(), planner::MotionKind::Joint);
+//! assert!((movej.sample(movej.duration_s())[0] - target[0]).abs() < 1e-12);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 
 pub mod controller;
 pub mod facts;
