@@ -7,6 +7,7 @@
 //! - `socketcan_bus` (Linux only): real SocketCAN interfaces such as `vcan0` or `can0`.
 //! - [`candump`], [`pcap`] and [`recorder`]: logs for can-utils and Wireshark, and a reader.
 //! - [`timing`]: how many bit times a frame occupies.
+//! - [`transcript`]: the reader for JSON test-vector transcripts (Realman fixtures).
 
 pub mod candump;
 mod error;
@@ -17,6 +18,7 @@ pub mod recorder;
 #[cfg(target_os = "linux")]
 pub mod socketcan_bus;
 pub mod timing;
+pub mod transcript;
 pub mod virtual_bus;
 
 pub use error::BusError;
