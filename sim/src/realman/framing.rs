@@ -6,6 +6,11 @@
 //! outside string literals (escapes respected); CR, LF and other whitespace between objects are
 //! skipped. Any other byte outside an object is junk: it is collected up to the next line end and
 //! handed out as such, so the caller can log it.
+//!
+//! A CR LF pair outside a string always ends a request, as on the controller: an object still
+//! open at that point was truncated, and is handed out as junk instead of swallowing the
+//! requests that follow. Pretty-printed requests use bare LF inside the object (cJSON), so
+//! they are unaffected.
 
 /// Longest request (or junk line) kept in memory; a longer one closes the connection.
 pub const MAX_REQUEST_BYTES: usize = 1 << 20;
@@ -115,6 +120,11 @@ impl Splitter {
                 in_string,
                 escaped,
             } => {
+                if byte == b'\n' && !in_string && self.current.last() == Some(&b'\r') {
+                    out.push(Unit::Junk(std::mem::take(&mut self.current)));
+                    self.scan = Scan::Idle;
+                    return;
+                }
                 self.current.push(byte);
                 self.scan = match (in_string, escaped, byte) {
                     (true, true, _) => Scan::Object {
@@ -205,6 +215,18 @@ mod tests {
         assert_eq!(
             units,
             vec![Unit::Junk(b"hello\r".to_vec()), obj("{\"a\":1}")]
+        );
+    }
+
+    #[test]
+    fn crlf_inside_an_open_object_ends_it_as_junk() {
+        let units = split(&[b"{\"command\":\"get_joint_degree\"\r\n{\"a\":1}\r\n"]);
+        assert_eq!(
+            units,
+            vec![
+                Unit::Junk(b"{\"command\":\"get_joint_degree\"\r".to_vec()),
+                obj("{\"a\":1}")
+            ]
         );
     }
 

@@ -67,7 +67,11 @@ pub struct PushCustom {
 }
 
 impl PushCustom {
-    /// Wire key and value of every flag, in the controller's order.
+    /// The documented flags, always reported by `get_realtime_push`.
+    pub const DOCUMENTED: usize = 5;
+
+    /// Wire key and value of every flag, in the controller's order (the documented ones
+    /// first, then the SDK's extra keys).
     pub fn entries(&self) -> [(&'static str, bool); 8] {
         [
             ("joint_speed", self.joint_speed),
@@ -160,7 +164,7 @@ pub struct Params {
     pub tool_frames: Vec<Frame>,
     /// Index of the current tool frame.
     pub current_tool: usize,
-    /// Work frames (the first is the default `World`).
+    /// Work frames (the first is the default `Base`).
     pub work_frames: Vec<Frame>,
     /// Index of the current work frame.
     pub current_work: usize,
@@ -190,7 +194,7 @@ impl Params {
             max_acc_deg_s2: facts.max_acc_deg_s2.clone(),
             tool_frames: vec![Frame::identity("Arm_Tip")],
             current_tool: 0,
-            work_frames: vec![Frame::identity("World")],
+            work_frames: vec![Frame::identity("Base")],
             current_work: 0,
             install_pose_deg: [0.0; 3],
             push: PushConfig::default(),

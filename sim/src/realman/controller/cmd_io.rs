@@ -2,6 +2,7 @@
 
 use std::net::Ipv4Addr;
 
+use super::super::params::PushCustom;
 use super::super::wire::{ack, Obj, Req};
 use super::{Answer, ClientId, Controller};
 
@@ -185,8 +186,11 @@ fn set_push(c: &mut Controller, req: Req) -> bool {
 fn push_reply(c: &Controller) -> String {
     let p = &c.params.push;
     let mut custom = Obj::new();
-    for (key, on) in p.custom.entries() {
-        custom = custom.bool(key, on);
+    // The SDK's extra keys (hand, rm_plus_*) are reported only once switched on.
+    for (i, (key, on)) in p.custom.entries().into_iter().enumerate() {
+        if i < PushCustom::DOCUMENTED || on {
+            custom = custom.bool(key, on);
+        }
     }
     Obj::command("get_realtime_push")
         .int("cycle", i64::from(p.cycle))

@@ -221,7 +221,8 @@ fn read_table(c: &Controller, table: Table) -> Vec<i64> {
     }
 }
 
-/// Store one joint's value (wire units); false for a bad joint, value or a moving arm.
+/// Store one joint's value (wire units); false for a bad joint or value, or a joint that is
+/// still enabled (the controller writes joint parameters only to a disabled joint, §9).
 fn write_table(c: &mut Controller, table: Table, joint: i64, value: i64) -> bool {
     let Some(j) = usize::try_from(joint)
         .ok()
@@ -230,7 +231,7 @@ fn write_table(c: &mut Controller, table: Table, joint: i64, value: i64) -> bool
     else {
         return false;
     };
-    if c.motion.busy() {
+    if c.enabled[j] {
         return false;
     }
     let p = &mut c.params;

@@ -433,6 +433,8 @@ impl Controller {
         self.motion.jog = None;
         self.motion.stream = None;
         if self.motion.queue.is_empty() {
+            // Nothing to brake: the arm is at rest (also ends a pause).
+            self.discard_motion();
             return;
         }
         self.motion.scale_target = 0.0;
