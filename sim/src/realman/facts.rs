@@ -48,7 +48,11 @@ impl ModelFacts {
                 a_m: r.a_m,
                 // The model keeps the flange distance apart; the controller reports it as the
                 // last row's d.
-                d_m: if i == last { r.d_m + model.flange_d_m } else { r.d_m },
+                d_m: if i == last {
+                    r.d_m + model.flange_d_m
+                } else {
+                    r.d_m
+                },
                 offset_deg: r.offset_rad.to_degrees(),
             })
             .collect();
