@@ -329,3 +329,215 @@ mod joint_moves {
         ));
     }
 }
+
+mod cartesian_moves {
+    use super::{deg, pose_distance};
+    use nalgebra::Vector3;
+    use sim::realman::kinematics::{forward, forward_isometry, Pose};
+    use sim::realman::model::ArmModel;
+    use sim::realman::planner::{
+        blend, plan_circle, plan_linear, plan_spline, CartesianLimits, MotionKind, PlanError,
+        Trajectory,
+    };
+
+    fn start() -> (ArmModel, Vec<f64>, Pose) {
+        let model = ArmModel::rm65b();
+        let q0 = deg(&[0.0, 30.0, 60.0, 0.0, 60.0, 0.0]);
+        let p0 = forward(&model, &q0);
+        (model, q0, p0)
+    }
+
+    fn offset(p: &Pose, d: [f64; 3], r: [f64; 3]) -> Pose {
+        Pose::new(
+            [
+                p.position_m[0] + d[0],
+                p.position_m[1] + d[1],
+                p.position_m[2] + d[2],
+            ],
+            [
+                p.euler_rad[0] + r[0],
+                p.euler_rad[1] + r[1],
+                p.euler_rad[2] + r[2],
+            ],
+        )
+    }
+
+    /// Flange positions every millisecond of the trajectory.
+    fn flange_track(model: &ArmModel, traj: &Trajectory) -> Vec<Vector3<f64>> {
+        let n = (traj.duration_s() * 1000.0).ceil() as usize;
+        (0..=n)
+            .map(|i| {
+                let t = (i as f64 * 0.001).min(traj.duration_s());
+                forward_isometry(model, &traj.sample(t)).translation.vector
+            })
+            .collect()
+    }
+
+    #[test]
+    fn movel_is_a_straight_line_at_v_percent_of_line_speed() {
+        let (model, q0, p0) = start();
+        let to = offset(&p0, [0.10, 0.08, -0.12], [0.1, -0.1, 0.2]);
+        let limits = CartesianLimits::default();
+        let traj = plan_linear(&model, &q0, &to, 50.0, &limits).expect("plan");
+        assert_eq!(traj.kind(), MotionKind::Linear);
+        let a = Vector3::from(p0.position_m);
+        let b = Vector3::from(to.position_m);
+        let dir = (b - a).normalize();
+        let track = flange_track(&model, &traj);
+        let mut worst_off_line = 0.0_f64;
+        let mut peak_speed = 0.0_f64;
+        for w in track.windows(2) {
+            let rel = w[1] - a;
+            worst_off_line = worst_off_line.max((rel - dir * rel.dot(&dir)).norm());
+            peak_speed = peak_speed.max((w[1] - w[0]).norm() / 0.001);
+        }
+        println!(
+            "movel: {:.3} s, off-line {:.4} mm, peak speed {peak_speed:.4} m/s",
+            traj.duration_s(),
+            worst_off_line * 1000.0
+        );
+        assert!(worst_off_line < 1e-5, "{worst_off_line}");
+        // 50 % of 0.25 m/s; the last 1 ms step may be a shorter one.
+        assert!(peak_speed <= 0.125 * 1.001, "{peak_speed}");
+        assert!(peak_speed >= 0.125 * 0.99, "{peak_speed}");
+        let (dp, dr) = pose_distance(&forward(&model, &traj.sample(traj.duration_s())), &to);
+        assert!(dp < 1e-5 && dr < 1e-6, "{dp} {dr}");
+        // The duration is at least distance / speed.
+        assert!(traj.duration_s() >= (b - a).norm() / 0.125);
+    }
+
+    #[test]
+    fn movel_out_of_reach_is_refused_before_moving() {
+        let (model, q0, p0) = start();
+        let limits = CartesianLimits::default();
+        let far = Pose::new([2.0, 0.0, 0.3], p0.euler_rad);
+        match plan_linear(&model, &q0, &far, 50.0, &limits) {
+            Err(PlanError::Unreachable { fraction, .. }) => assert_eq!(fraction, 1.0),
+            other => panic!("expected Unreachable, got {other:?}"),
+        }
+        let bad = CartesianLimits {
+            line_speed_m_s: 0.0,
+            ..limits
+        };
+        let to = offset(&p0, [0.01, 0.0, 0.0], [0.0; 3]);
+        assert!(matches!(
+            plan_linear(&model, &q0, &to, 50.0, &bad),
+            Err(PlanError::BadInput { .. })
+        ));
+    }
+
+    #[test]
+    fn movel_through_the_shoulder_singularity_is_refused() {
+        // The doc's shoulder singularity: the wrist centre on the J1 axis. A line that passes
+        // it 2 mm to the side needs J1 to swing about 180° within a few millimetres.
+        let model = ArmModel::rm65b();
+        let singular = deg(&[0.0, 43.4, -105.7, 0.0, -30.0, 0.0]);
+        let ps = forward(&model, &singular);
+        let at = |dx: f64| offset(&ps, [dx, 0.002, 0.0], [0.0; 3]);
+        let q0 = sim::realman::kinematics::inverse(&model, &at(-0.05), &singular).expect("start");
+        let err = plan_linear(&model, &q0, &at(0.05), 50.0, &CartesianLimits::default());
+        println!(
+            "2 mm past the J1 axis: {:?}",
+            err.as_ref().map(|t| t.duration_s())
+        );
+        assert!(
+            matches!(err, Err(PlanError::Singular { .. })),
+            "{:?}",
+            err.err()
+        );
+    }
+
+    #[test]
+    fn movec_follows_the_circle_through_via() {
+        let (model, q0, p0) = start();
+        let via = offset(&p0, [0.05, 0.05, 0.0], [0.0; 3]);
+        let to = offset(&p0, [0.10, 0.0, 0.0], [0.0; 3]);
+        let limits = CartesianLimits::default();
+        let traj = plan_circle(&model, &q0, &via, &to, 100.0, 0, &limits).expect("plan");
+        assert_eq!(traj.kind(), MotionKind::Circle);
+        // Centre at p0 + (0.05, 0, 0), radius 0.05.
+        let c = Vector3::from(p0.position_m) + Vector3::new(0.05, 0.0, 0.0);
+        let track = flange_track(&model, &traj);
+        let worst = track
+            .iter()
+            .map(|p| ((p - c).norm() - 0.05).abs())
+            .fold(0.0, f64::max);
+        let via_gap = track
+            .iter()
+            .map(|p| (p - Vector3::from(via.position_m)).norm())
+            .fold(f64::INFINITY, f64::min);
+        println!(
+            "movec: off-circle {:.4} mm, via missed by {:.4} mm",
+            worst * 1e3,
+            via_gap * 1e3
+        );
+        assert!(worst < 1e-5 && via_gap < 2e-4);
+        let end = track[track.len() - 1];
+        assert!((end - Vector3::from(to.position_m)).norm() < 1e-5);
+
+        // One extra loop: 3 half circles instead of 1, so three times the cruise.
+        let looped = plan_circle(&model, &q0, &via, &to, 100.0, 1, &limits).expect("loop");
+        let cruise = |t: &Trajectory, len: f64| t.duration_s() - len / 0.25;
+        let half = std::f64::consts::PI * 0.05;
+        assert!((cruise(&traj, half) - cruise(&looped, 3.0 * half)).abs() < 1e-3);
+
+        let collinear = offset(&p0, [0.05, 0.0, 0.0], [0.0; 3]);
+        assert_eq!(
+            plan_circle(&model, &q0, &collinear, &to, 50.0, 0, &limits),
+            Err(PlanError::DegenerateArc)
+        );
+    }
+
+    #[test]
+    fn moves_passes_through_every_point() {
+        let (model, q0, p0) = start();
+        let pts = [
+            offset(&p0, [0.03, 0.03, 0.02], [0.05, 0.0, 0.0]),
+            offset(&p0, [0.06, 0.0, 0.04], [0.1, 0.0, 0.0]),
+            offset(&p0, [0.09, -0.03, 0.02], [0.1, 0.1, 0.0]),
+        ];
+        let limits = CartesianLimits::default();
+        let traj = plan_spline(&model, &q0, &pts, 80.0, &limits).expect("plan");
+        assert_eq!(traj.kind(), MotionKind::Spline);
+        let track = flange_track(&model, &traj);
+        for p in &pts[..2] {
+            let gap = track
+                .iter()
+                .map(|x| (x - Vector3::from(p.position_m)).norm())
+                .fold(f64::INFINITY, f64::min);
+            // 1 ms samples at up to 0.2 m/s are 0.2 mm apart.
+            assert!(gap < 1.1e-4, "missed a point by {} mm", gap * 1e3);
+        }
+        let (dp, dr) = pose_distance(&forward(&model, &traj.sample(traj.duration_s())), &pts[2]);
+        assert!(dp < 1e-5 && dr < 1e-6);
+        assert!(matches!(
+            plan_spline(&model, &q0, &pts[..2], 80.0, &limits),
+            Err(PlanError::TooFewPoints { needed: 3, got: 2 })
+        ));
+    }
+
+    #[test]
+    fn blended_lines_round_the_corner() {
+        let (model, q0, p0) = start();
+        let limits = CartesianLimits::default();
+        let mid = offset(&p0, [0.1, 0.0, 0.0], [0.0; 3]);
+        let end = offset(&p0, [0.1, 0.1, 0.0], [0.0; 3]);
+        let a = plan_linear(&model, &q0, &mid, 50.0, &limits).expect("a");
+        let b = plan_linear(&model, a.end_rad(), &end, 50.0, &limits).expect("b");
+        let sharp = blend(&a, &b, 0.0).expect("sharp");
+        let round = blend(&a, &b, 100.0).expect("round");
+        assert!(round.duration_s() < sharp.duration_s());
+        assert_eq!(round.kind_at(0.0), MotionKind::Linear);
+        // The rounded path cuts the corner: it never reaches `mid`.
+        let track = flange_track(&model, &round);
+        let corner = Vector3::from(mid.position_m);
+        let closest = track
+            .iter()
+            .map(|p| (p - corner).norm())
+            .fold(f64::INFINITY, f64::min);
+        println!("blend r=100: corner cut by {:.2} mm", closest * 1e3);
+        assert!(closest > 1e-3);
+        let last = track[track.len() - 1];
+        assert!((last - Vector3::from(end.position_m)).norm() < 1e-5);
+    }
+}

@@ -31,6 +31,7 @@ pub mod framing;
 pub mod kinematics;
 pub mod model;
 pub mod params;
+mod path;
 pub mod planner;
 pub mod plant;
 pub mod profile;
