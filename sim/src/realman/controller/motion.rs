@@ -5,7 +5,7 @@ use std::collections::VecDeque;
 
 use super::super::faults::codes;
 use super::super::kinematics::{self, Pose};
-use super::super::planner::{self, CartesianLimits, Trajectory};
+use super::super::planner::{self, CartesianLimits, PlanError, Trajectory};
 use super::super::wire::Obj;
 use super::{ClientId, Controller, Event, STEP_S};
 
@@ -284,23 +284,26 @@ impl Controller {
                 }
                 planner::plan_joint(model, from, to, speed_percent)
             }
-            Goal::Linear(to) => {
-                self.solve(to, from)?;
-                planner::plan_linear(model, from, to, speed_percent, &limits)
-            }
+            Goal::Linear(to) => planner::plan_linear(model, from, to, speed_percent, &limits),
             Goal::Circle { via, to, loops } => {
                 planner::plan_circle(model, from, via, to, speed_percent, *loops, &limits)
-                    .map_err(|_| codes::ARC_PLANNING)
-                    .map(Ok)?
             }
             Goal::Spline(points) => {
                 planner::plan_spline(model, from, points, speed_percent, &limits)
             }
         };
-        result.map_err(|e| {
+        let traj = result.map_err(|e| {
             tracing::debug!(error = %e, "Realman motion refused by the planner");
-            codes::UNREACHABLE
-        })
+            refusal_code(&e)
+        })?;
+        // The planner knows the model's limits; the controller's may have been narrowed.
+        if self
+            .beyond_limits(&traj.sample(traj.duration_s()))
+            .is_some()
+        {
+            return Err(codes::BEYOND_JOINT_LIMIT);
+        }
+        Ok(traj)
     }
 
     /// Where the last accepted move ends (the start of the next one).
@@ -331,9 +334,34 @@ impl Controller {
         }
         let from = self.tail_rad();
         let end_rad = match &goal {
-            // A spline point is checked for reachability only; the spline is planned when the
-            // group is complete.
-            Goal::Spline(points) => self.solve(points.last().ok_or(codes::UNREACHABLE)?, &from)?,
+            // Spline points are planned together when the group's last point arrives.
+            Goal::Spline(_) if connect => from,
+            Goal::Spline(last) => {
+                let mut points: Vec<Pose> = self
+                    .motion
+                    .pending
+                    .iter()
+                    .filter_map(|s| match &s.goal {
+                        Goal::Spline(p) => Some(p.iter().copied()),
+                        _ => None,
+                    })
+                    .flatten()
+                    .collect();
+                points.extend(last.iter().copied());
+                let limits = self.cartesian_limits();
+                let planned =
+                    planner::plan_spline(&self.model, &from, &points, speed_percent, &limits);
+                match planned {
+                    Ok(traj) => traj.sample(traj.duration_s()),
+                    Err(e) => {
+                        tracing::debug!(error = %e, "Realman spline refused by the planner");
+                        self.motion
+                            .pending
+                            .retain(|s| !matches!(s.goal, Goal::Spline(_)));
+                        return Err(refusal_code(&e));
+                    }
+                }
+            }
             _ => {
                 let traj = self.plan(&from, &goal, speed_percent)?;
                 traj.sample(traj.duration_s())
@@ -600,6 +628,19 @@ impl Controller {
         if done && stream.idle_ms > STREAM_IDLE_MS {
             self.motion.stream = None;
         }
+    }
+}
+
+/// The error a planning failure reports (docs/protocols/realman.md §12).
+fn refusal_code(e: &PlanError) -> Refusal {
+    match e {
+        PlanError::OutOfLimits { .. }
+        | PlanError::Unreachable {
+            source: kinematics::IkError::OutOfLimits { .. },
+            ..
+        } => codes::BEYOND_JOINT_LIMIT,
+        PlanError::DegenerateArc => codes::ARC_PLANNING,
+        _ => codes::UNREACHABLE,
     }
 }
 
