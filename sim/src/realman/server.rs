@@ -3,9 +3,9 @@
 //!
 //! Every connection runs the same generic code over `AsyncRead + AsyncWrite`: a reader that
 //! splits requests ([`Splitter`]), answers them under the controller lock and queues the reply,
-//! and a writer that writes each queued message (reply or event) as its own write, compact JSON
-//! + CRLF. Replies and events share the client's queue, so an acknowledgement always precedes
-//! the arrival event of its move and the two never share a write.
+//! and a writer that writes each queued message (reply or event) as its own write (compact JSON
+//! and CRLF). Replies and events share the client's queue, so an acknowledgement always
+//! precedes the arrival event of its move and the two never share a write.
 
 use std::collections::BTreeMap;
 use std::net::{IpAddr, SocketAddr};
@@ -569,7 +569,7 @@ async fn core_loop(shared: Arc<Shared>, sink: PushSink, ticks_per_wake: u64) {
             for _ in 0..run {
                 core.tick();
                 done += 1;
-                push_due |= done % cycle_ms == 0;
+                push_due |= done.is_multiple_of(cycle_ms);
             }
         }
         // Skip what could not be caught up rather than bursting it later.
