@@ -76,9 +76,7 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
         "armhil sim realman: {} ({}) on tcp://{bound} (Ctrl-C to stop)",
         args.model, args.firmware
     );
-    tokio::signal::ctrl_c()
-        .await
-        .context("cannot wait for Ctrl-C")?;
+    wait_for_stop().await?;
     let stats = emu.stats();
     emu.shutdown().await;
     tracing::info!(
@@ -89,4 +87,24 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
         "Realman emulator stopped"
     );
     Ok(ExitCode::SUCCESS)
+}
+
+/// Ctrl-C, or SIGTERM on Unix (how CI runners and process managers stop a service).
+async fn wait_for_stop() -> anyhow::Result<()> {
+    #[cfg(unix)]
+    {
+        use tokio::signal::unix::{signal, SignalKind};
+        let mut term = signal(SignalKind::terminate()).context("cannot watch SIGTERM")?;
+        tokio::select! {
+            r = tokio::signal::ctrl_c() => r.context("cannot wait for Ctrl-C")?,
+            _ = term.recv() => {}
+        }
+        Ok(())
+    }
+    #[cfg(not(unix))]
+    {
+        tokio::signal::ctrl_c()
+            .await
+            .context("cannot wait for Ctrl-C")
+    }
 }
