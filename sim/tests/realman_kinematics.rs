@@ -541,3 +541,46 @@ mod cartesian_moves {
         assert!((last - Vector3::from(end.position_m)).norm() < 1e-5);
     }
 }
+
+mod mixed {
+    use super::{deg, pose_distance};
+    use sim::realman::kinematics::{forward, Pose};
+    use sim::realman::model::ArmModel;
+    use sim::realman::planner::{
+        blend, plan_joint_to_pose, plan_linear, CartesianLimits, MotionKind, PlanError,
+    };
+
+    #[test]
+    fn movej_p_then_movel_report_their_kinds_in_turn() {
+        let model = ArmModel::rm65b();
+        let q0 = deg(&[0.0, 30.0, 60.0, 0.0, 60.0, 0.0]);
+        let p0 = forward(&model, &q0);
+        let target = Pose::new(
+            [
+                p0.position_m[0] + 0.05,
+                p0.position_m[1] + 0.1,
+                p0.position_m[2],
+            ],
+            p0.euler_rad,
+        );
+        let a = plan_joint_to_pose(&model, &q0, &target, 30.0).expect("movej_p");
+        assert_eq!(a.kind(), MotionKind::Joint);
+        let (dp, dr) = pose_distance(&forward(&model, a.end_rad()), &target);
+        assert!(dp < 1e-5 && dr < 1e-6);
+        let back = plan_linear(&model, a.end_rad(), &p0, 30.0, &CartesianLimits::default())
+            .expect("movel back");
+        let both = blend(&a, &back, 30.0).expect("blend");
+        assert_eq!(both.kind_at(0.1), MotionKind::Joint);
+        assert_eq!(both.kind_at(both.duration_s() - 0.01), MotionKind::Linear);
+        let ends = both.segment_end_times_s();
+        assert!(
+            ends[0] > both.duration_s() - back.duration_s(),
+            "segments overlap"
+        );
+        let far = Pose::new([1.5, 0.0, 0.2], p0.euler_rad);
+        assert!(matches!(
+            plan_joint_to_pose(&model, &q0, &far, 30.0),
+            Err(PlanError::Unreachable { fraction, .. }) if fraction == 1.0
+        ));
+    }
+}

@@ -6,8 +6,16 @@
 //! - [`server`]: the transport — TCP listener in real time or in-memory duplex streams in
 //!   virtual time, request framing ([`framing`]), per-client reply streams, the UDP push
 //!   ([`push`]) and transport faults ([`faults`]).
-//! - [`model`], [`kinematics`], [`planner`], [`plant`]: the arm itself (models, FK/IK,
-//!   trajectories with blending, the rapier3d plant).
+//!
+//! The motion core is independent of the wire protocol:
+//!
+//! - [`model`]: the arm models (MDH table, flange, joint ranges, speeds, masses).
+//! - [`kinematics`]: flange forward kinematics ([`kinematics::forward`]) and numerical
+//!   inverse kinematics ([`kinematics::inverse`]), poses as x, y, z + intrinsic Z-Y-X Euler.
+//! - [`planner`]: `movej` / `movel` / `movec` / `moves` trajectories and blending of
+//!   connected segments.
+//! - [`plant`]: the physical arm, `urdf/rm65b.urdf` in the rapier world at 1 kHz with
+//!   torque-driven joint controllers, brakes, currents, temperatures and bus voltage.
 //!
 //! ```
 //! use sim::realman::{kinematics, model::ArmModel, planner};
