@@ -5,7 +5,7 @@
 //! (described in `fixtures/realman/README.md`): one JSON object per line, `#` comments, fields
 //! `name`, `request`, `replies`, `compare`, `notes`, and the optional `channel` and `profile`.
 //!
-//! [`matches`] implements the two comparison modes so an emulator test and a driver test judge a
+//! [`matches()`] implements the two comparison modes so an emulator test and a driver test judge a
 //! reply the same way.
 
 use std::collections::HashMap;
