@@ -2,7 +2,7 @@
 //!
 //! - [`physics`]: URDF loading into rapier3d, fixed-step stepping, torque-driven joints.
 //! - [`piper`]: the AgileX Piper arm's firmware (CAN, 11-bit IDs).
-//! - [`realman`]: the Realman RM65/RM75 arm controller (JSON over TCP/UDP).
+//! - [`realman`]: the Realman arm controller (JSON over TCP, realtime push over UDP).
 //! - [`robstride`]: RobStride quasi-direct-drive actuators (CAN, 29-bit IDs).
 
 pub mod physics;

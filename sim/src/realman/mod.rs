@@ -1,5 +1,37 @@
-//! Realman RM65-B / RM75-B arm controller emulator (JSON over TCP, UDP realtime push;
-//! protocol in `docs/protocols/realman.md`).
+//! Realman arm-controller emulator (RM65-B and kin; JSON over TCP, realtime push over UDP;
+//! protocol in docs/protocols/realman.md).
+//!
+//! - [`controller`]: the synchronous controller state machine on an [`plant::ArmPlant`]
+//!   (1 kHz), answering requests and producing arrival events.
+//! - [`server`]: the transport — TCP listener in real time or in-memory duplex streams in
+//!   virtual time, request framing ([`framing`]), per-client reply streams, the UDP push
+//!   ([`push`]) and transport faults ([`faults`]).
+//!
+//! # Harness API
+//!
+//! ```no_run
+//! # async fn demo() -> Result<(), Box<dyn std::error::Error>> {
+//! use sim::realman::model::ArmModel;
+//! use sim::realman::{ControllerConfig, EmulatorConfig, RealmanEmulator, RealmanFault, Transport};
+//! use tokio::io::AsyncWriteExt;
+//!
+//! // Virtual time (paused clock): in-memory streams, datagrams on a channel.
+//! let emu = RealmanEmulator::spawn(
+//!     EmulatorConfig::new(ControllerConfig::new(ArmModel::rm65b())),
+//!     Transport::InMemory,
+//! )
+//! .await?;
+//! let mut stream = emu.connect("192.168.1.10".parse()?)?;
+//! stream.write_all(b"{\"command\":\"get_joint_degree\"}\r\n").await?;
+//! let mut datagrams = emu.take_datagrams().expect("in-memory push");
+//! emu.inject(RealmanFault::Collision)?;
+//! println!("{:?} {:?}", emu.snapshot().joints_rad, datagrams.recv().await);
+//! emu.shutdown().await;
+//! # Ok(()) }
+//! ```
+//!
+//! `Transport::Tcp(addr)` serves the same controller on a real TCP listener (and pushes over
+//! UDP) for external clients such as the vendor SDK (`armhil sim realman`).
 //!
 //! The motion core is independent of the wire protocol:
 //!
@@ -26,10 +58,24 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-// ---- realman-kin: kinematics, planning, physics plant (begin) ----
+pub mod controller;
+pub mod facts;
+pub mod faults;
+pub mod framing;
 pub mod kinematics;
 pub mod model;
+pub mod params;
 mod path;
 pub mod planner;
 pub mod plant;
-// ---- realman-kin (end) ----
+pub mod profile;
+pub mod push;
+pub mod server;
+pub mod wire;
+
+pub use controller::{Answer, ClientId, Controller, ControllerConfig, ControllerError, Event};
+pub use faults::{FaultError, RealmanFault, RealmanFaultKind};
+pub use profile::FirmwareProfile;
+pub use server::{
+    EmulatorConfig, RealmanEmulator, RealmanHandle, ServerError, ServerStats, Transport,
+};
