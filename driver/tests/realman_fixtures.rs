@@ -101,12 +101,12 @@ fn request_for(name: &str) -> Option<Request> {
         "get_gripper_state" => rq::get_gripper_state(),
         // Motion.
         "movej_blocking" => rq::movej(&rad(&Q1), MoveOpts::speed(20)).ok()?,
-        "movel_blocking" => rq::movel(&q1_pose_z(0.66081), MoveOpts::speed(20)).ok()?,
+        "movel_blocking" => rq::movel(&q1_pose_z(0.56081), MoveOpts::speed(20)).ok()?,
         "movej_p_blocking" => rq::movej_p(&q1_pose_z(0.61081), MoveOpts::speed(20)).ok()?,
         "movec_blocking" | "movec_pretty_request" => {
-            let via = pose(-0.35566, -0.10471, 0.63081, 1.607, 0.008, -0.881);
+            let via = pose(-0.35566, -0.10471, 0.59081, 1.607, 0.008, -0.881);
             let to = if name == "movec_blocking" {
-                q1_pose_z(0.65081)
+                q1_pose_z(0.57081)
             } else {
                 q1_pose_z(0.61081)
             };
@@ -118,14 +118,14 @@ fn request_for(name: &str) -> Option<Request> {
         )
         .ok()?,
         "movej_queue_last" => rq::movej(&rad(&Q1), opts(20, 0, start)).ok()?,
-        "moves_point_1" => rq::moves(&q1_pose_z(0.63081), opts(20, 0, queue)).ok()?,
+        "moves_point_1" => rq::moves(&q1_pose_z(0.59081), opts(20, 0, queue)).ok()?,
         "moves_point_2" => rq::moves(
-            &pose(-0.34566, -0.12471, 0.64081, 1.607, 0.008, -0.881),
+            &pose(-0.34566, -0.12471, 0.58081, 1.607, 0.008, -0.881),
             opts(20, 0, queue),
         )
         .ok()?,
         "moves_point_3" => rq::moves(
-            &pose(-0.33566, -0.13471, 0.65081, 1.607, 0.008, -0.881),
+            &pose(-0.33566, -0.13471, 0.57081, 1.607, 0.008, -0.881),
             opts(20, 0, start),
         )
         .ok()?,
@@ -771,14 +771,14 @@ fn realman_decoders_survive_mangled_vectors() {
 
 #[test]
 fn realman_cartesian_trajectory_reports_a_pose() {
-    let text = r#"{"state":"arm_current_trajectory","type":"movel","data":[-355660,-134710,660810,1607,8,-881]}"#;
+    let text = r#"{"state":"arm_current_trajectory","type":"movel","data":[-355660,-134710,560810,1607,8,-881]}"#;
     let Message::Reply { body, .. } = decode_message(text).unwrap() else {
         panic!()
     };
     let t = d::current_trajectory(&body).unwrap();
     assert_eq!(t.kind, TrajectoryKind::MoveL);
     let p = t.pose.unwrap();
-    assert!((p.position_m[2] - 0.66081).abs() < 1e-12 && (p.euler_rad[0] - 1.607).abs() < 1e-12);
+    assert!((p.position_m[2] - 0.56081).abs() < 1e-12 && (p.euler_rad[0] - 1.607).abs() < 1e-12);
     let odd = r#"{"state":"arm_current_trajectory","type":"re_trajectory","data":[0,0,0,0,0,0]}"#;
     let Message::Reply { body, .. } = decode_message(odd).unwrap() else {
         panic!()

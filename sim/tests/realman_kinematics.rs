@@ -584,3 +584,129 @@ mod mixed {
         ));
     }
 }
+
+/// The q1 anchor of the fixtures (°).
+const Q1_DEG: [f64; 6] = [10.0, 20.0, 30.0, 40.0, 50.0, 60.0];
+
+/// Distance of the RM65-B's wrist centre (where J4, J5, J6 meet: the flange pulled back by its
+/// 144 mm along the tool z) from the shoulder (J2 axis on J1), and the most it can be
+/// (upper arm a3 + forearm d4), m. A pose whose wrist centre is farther is out of reach
+/// whatever the joints.
+fn wrist_reach(model: &ArmModel, pose: &Pose) -> (f64, f64) {
+    let iso = pose.to_isometry();
+    let wrist = iso.translation.vector - iso.rotation * nalgebra::Vector3::z() * model.flange_d_m;
+    let shoulder = nalgebra::Vector3::new(0.0, 0.0, model.shoulder_height_m());
+    let most = model.mdh[2].a_m.abs() + model.mdh[3].d_m.abs();
+    ((wrist - shoulder).norm(), most)
+}
+
+#[test]
+fn ik_solves_poses_near_q1_seeded_from_q1() {
+    // FK(q1) shifted by ±20..50 mm along x, y and z, same orientation, seeded from q1 as the
+    // controller does: every pose whose wrist centre is within reach (1 mm margin) solves to
+    // 0.01 mm; every one beyond it (q1 is nearly stretched out: 450 of 466 mm) is refused.
+    let model = ArmModel::rm65b();
+    let q1 = deg(&Q1_DEG);
+    let home = forward(&model, &q1);
+    let (mut solved, mut refused) = (0, 0);
+    for axis in 0..3 {
+        for shift_mm in [-50.0, -40.0, -30.0, -20.0, 20.0, 30.0, 40.0, 50.0] {
+            let mut target = home;
+            target.position_m[axis] += shift_mm * 1e-3;
+            let (dist, most) = wrist_reach(&model, &target);
+            let (result, stats) = inverse_with_stats(&model, &target, &q1);
+            let label = format!("axis {axis} {shift_mm:+} mm (wrist {:.1} mm)", dist * 1e3);
+            if dist < most - 1e-3 {
+                let sol = result.unwrap_or_else(|e| panic!("{label}: {e}"));
+                let (dp, dr) = pose_distance(&forward(&model, &sol), &target);
+                assert!(dp < 1e-5 && dr < 1e-6, "{label}: {dp} m {dr} rad");
+                assert_eq!(stats.attempts, 1, "{label}: the q1 seed alone must do");
+                solved += 1;
+            } else if dist > most + 1e-3 {
+                assert_eq!(result, Err(IkError::NoSolution), "{label}");
+                refused += 1;
+            }
+        }
+    }
+    println!("near q1: {solved} solved, {refused} out of reach");
+    assert!(
+        solved >= 12 && refused >= 3,
+        "{solved} solved, {refused} refused"
+    );
+}
+
+#[test]
+fn cartesian_moves_from_q1_plan_below_and_refuse_above() {
+    use sim::realman::planner::{
+        plan_circle, plan_linear, plan_spline, CartesianLimits, PlanError,
+    };
+    let model = ArmModel::rm65b();
+    let q1 = deg(&Q1_DEG);
+    let limits = CartesianLimits::default();
+    let at = |dx_mm: f64, dy_mm: f64, dz_mm: f64| {
+        let mut p = forward(&model, &q1);
+        p.position_m[0] += dx_mm * 1e-3;
+        p.position_m[1] += dy_mm * 1e-3;
+        p.position_m[2] += dz_mm * 1e-3;
+        p
+    };
+    let ends_at = |traj: &sim::realman::planner::Trajectory, want: &Pose| {
+        let (dp, dr) = pose_distance(&forward(&model, &traj.sample(traj.duration_s())), want);
+        assert!(dp < 1e-5 && dr < 1e-6, "ends {dp} m {dr} rad off");
+    };
+    // The motions of the shared vectors: down from q1, where the wrist has room.
+    let down = at(0.0, 0.0, -50.0);
+    ends_at(
+        &plan_linear(&model, &q1, &down, 20.0, &limits).expect("movel"),
+        &down,
+    );
+    let (via, to) = (at(0.0, 30.0, -20.0), at(0.0, 0.0, -40.0));
+    ends_at(
+        &plan_circle(&model, &q1, &via, &to, 20.0, 0, &limits).expect("movec"),
+        &to,
+    );
+    let points = [
+        at(0.0, 0.0, -20.0),
+        at(10.0, 10.0, -30.0),
+        at(20.0, 0.0, -40.0),
+    ];
+    ends_at(
+        &plan_spline(&model, &q1, &points, 20.0, &limits).expect("moves"),
+        &points[2],
+    );
+    // The same moves mirrored upwards stretch the wrist centre beyond reach: refused at the
+    // target, before anything moves.
+    let up = at(0.0, 0.0, 50.0);
+    assert!(wrist_reach(&model, &up).0 > wrist_reach(&model, &up).1);
+    for result in [
+        plan_linear(&model, &q1, &up, 20.0, &limits),
+        plan_circle(
+            &model,
+            &q1,
+            &at(0.0, 30.0, 20.0),
+            &at(0.0, 0.0, 40.0),
+            20.0,
+            0,
+            &limits,
+        ),
+        plan_spline(
+            &model,
+            &q1,
+            &[
+                at(0.0, 0.0, 20.0),
+                at(10.0, 10.0, 30.0),
+                at(20.0, 0.0, 40.0),
+            ],
+            20.0,
+            &limits,
+        ),
+    ] {
+        match result {
+            Err(PlanError::Unreachable { fraction, source }) => {
+                assert_eq!(fraction, 1.0);
+                assert_eq!(source, IkError::NoSolution);
+            }
+            other => panic!("expected Unreachable, got {other:?}"),
+        }
+    }
+}
