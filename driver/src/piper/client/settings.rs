@@ -207,12 +207,12 @@ impl Piper {
         self.send_frame(params.encode_set()).await
     }
 
-    /// Set joint assistance levels (0x487, [AGX] only; meaning undocumented, no ack).
+    /// Set joint assistance levels (0x487, \[AGX\] only; meaning undocumented, no ack).
     pub async fn set_assist_levels(&self, levels: [u8; 6]) -> Result<(), PiperError> {
         self.send_frame(AssistLevels { levels }.encode_set()).await
     }
 
-    /// LED colour of joint 1–6 (0x121, documented only in [DOC]): one LED (`Some(index)`,
+    /// LED colour of joint 1–6 (0x121, documented only in \[DOC\]): one LED (`Some(index)`,
     /// 0–254) or all of them (`None`).
     pub async fn set_led(
         &self,
