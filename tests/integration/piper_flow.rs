@@ -176,17 +176,17 @@ async fn full_flow(profile: FirmwareProfile) {
         .await
         .expect("acked");
     assert_eq!(
-        piper
-            .query_collision_levels()
-            .await
-            .expect("collision"),
+        piper.query_collision_levels().await.expect("collision"),
         [8, 7, 6, 5, 4, 3]
     );
     piper.set_joint_max_speed(1, 2.0).await.expect("acked");
     let limits = piper.query_joint_limits(1).await.expect("limits");
     assert!(close(limits.max_speed_rad_s, 2.0), "{limits:?}");
     // Only the speed was sent: the angle limits kept their flash values.
-    assert!(close(limits.max_rad, ddeg(flash.max_angle_ddeg[0])), "{limits:?}");
+    assert!(
+        close(limits.max_rad, ddeg(flash.max_angle_ddeg[0])),
+        "{limits:?}"
+    );
 
     // Disable, confirmed.
     piper
