@@ -179,7 +179,7 @@ fn unknown_action_lists_the_actions() {
     let e = error_of(&text);
     assert!(
         e.starts_with(
-            "broken.yaml:5:5: unknown step `move_z`; expected one of: wait_ms, enable, disable"
+            "broken.yaml:5:5: unknown step `move_z`; expected one of: wait_ms, inject, clear_faults, expect, wait_until, enable, disable"
         ),
         "{e}"
     );

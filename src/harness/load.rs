@@ -4,13 +4,34 @@ use std::path::{Path, PathBuf};
 
 use super::error::{from_yaml_error, LoadError};
 use super::model::Scenario;
-use super::raw::RawScenario;
+use super::raw::{RawBench, RawScenario, S};
+
+/// The bench alone (every other key ignored).
+#[derive(serde::Deserialize)]
+struct RawHead {
+    bench: S<RawBench>,
+}
 use super::validate::{validate, Ctx};
 
 /// Parse and validate scenario text; `path` is used for error messages and relative URDFs.
 pub fn parse_scenario(path: &Path, text: &str) -> Result<Scenario, LoadError> {
-    let raw: RawScenario = serde_saphyr::from_str(text)
-        .map_err(|error| LoadError::Invalid(Box::new(from_yaml_error(path, text, &error))))?;
+    // The bench first: its device kinds decide which vocabulary the steps are read with. When
+    // it does not parse, the full parse below reports the error.
+    let kinds = serde_saphyr::from_str::<RawHead>(text).ok().map(|head| {
+        head.bench
+            .value
+            .devices
+            .value
+            .values()
+            .map(|d| d.value.kind_name())
+            .collect::<Vec<_>>()
+    });
+    let parse = || serde_saphyr::from_str::<RawScenario>(text);
+    let raw = match kinds {
+        Some(kinds) => crate::devices::with_bench_kinds(kinds, parse),
+        None => parse(),
+    }
+    .map_err(|error| LoadError::Invalid(Box::new(from_yaml_error(path, text, &error))))?;
     let mut ctx = Ctx::new(path, text);
     validate(&mut ctx, raw).map_err(LoadError::Invalid)
 }

@@ -7,6 +7,7 @@ use super::model::*;
 use super::parse_scenario;
 use super::report::{junit_xml, write_atomic};
 use super::result::{Outcome, ScenarioResult, StepResult, Verdict};
+use crate::devices::piper::model::{Check as PiperCheck, PiperAction};
 
 fn parse(text: &str) -> Scenario {
     parse_scenario(Path::new("t.yaml"), text).unwrap_or_else(|e| panic!("{e}"))
@@ -70,10 +71,10 @@ fn defaults_and_units_are_applied() {
     assert_eq!(*timeout, Duration::from_millis(250));
     assert_eq!(
         checks,
-        &vec![Check::JointsNear {
+        &vec![Check::Piper(PiperCheck::JointsNear {
             targets_deg: vec![Some(90.0), None, None, None, None, None],
             tolerance_deg: 0.5
-        }]
+        })]
     );
 }
 
@@ -109,10 +110,10 @@ fn arm_status_accepts_names_and_codes() {
         };
         assert_eq!(
             checks,
-            &vec![Check::Status {
+            &vec![Check::Piper(PiperCheck::Status {
                 field: "arm_status",
                 value: "angle_limit".to_owned()
-            }]
+            })]
         );
     }
 }

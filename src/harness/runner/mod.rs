@@ -1,6 +1,5 @@
 //! Runs a scenario: builds the bench, executes the steps, applies faults, samples the state.
 
-mod eval;
 mod faults;
 mod recorder;
 mod trace;
@@ -28,7 +27,7 @@ pub enum Clock {
     /// In-process emulator and virtual bus on the real clock.
     Realtime,
     /// Real time on a SocketCAN interface, against a separate emulator process
-    /// (`armhil sim piper --iface IF`). Bus and emulator faults are unavailable.
+    /// (`armhil sim <kind> --iface IF`). Bus and emulator faults are unavailable.
     Iface(String),
 }
 
@@ -346,14 +345,14 @@ async fn run_step(
             let Some(dev) = device(*index) else {
                 return (missing_device(*index), Vec::new());
             };
-            if let Err((expected, actual)) = eval::evaluate(checks, &dev.observe()) {
+            if let Err((expected, actual)) = dev.evaluate(checks) {
                 return (Outcome::Failed { expected, actual }, Vec::new());
             }
             if let Some(hold) = hold {
                 let start = Instant::now();
                 while start.elapsed() < *hold {
                     tokio::time::sleep(POLL).await;
-                    if let Err((expected, actual)) = eval::evaluate(checks, &dev.observe()) {
+                    if let Err((expected, actual)) = dev.evaluate(checks) {
                         let at = start.elapsed().as_millis();
                         return (
                             Outcome::Failed {
@@ -378,7 +377,7 @@ async fn run_step(
             let timeout = options.deadline(*timeout);
             let start = Instant::now();
             loop {
-                let last = match eval::evaluate(checks, &dev.observe()) {
+                let last = match dev.evaluate(checks) {
                     Ok(()) => return (Outcome::Passed, Vec::new()),
                     Err((_, actual)) => actual,
                 };
@@ -386,7 +385,11 @@ async fn run_step(
                     return (
                         Outcome::TimedOut {
                             waited: start.elapsed(),
-                            expected: eval::describe(checks),
+                            expected: checks
+                                .iter()
+                                .map(crate::devices::Check::describe)
+                                .collect::<Vec<_>>()
+                                .join("; "),
                             actual: last,
                         },
                         Vec::new(),
@@ -395,7 +398,7 @@ async fn run_step(
                 tokio::time::sleep(POLL).await;
             }
         }
-        StepKind::Inject { fault, duration } => match faults.apply(fault, *duration) {
+        StepKind::Inject { fault, duration } => match faults.apply(fault, *duration).await {
             Ok(()) => (Outcome::Passed, Vec::new()),
             Err(e) => (
                 Outcome::Failed {
@@ -405,7 +408,7 @@ async fn run_step(
                 Vec::new(),
             ),
         },
-        StepKind::ClearFaults { device: index } => match faults.clear_all(*index) {
+        StepKind::ClearFaults { device: index } => match faults.clear_all(*index).await {
             Ok(()) => (Outcome::Passed, Vec::new()),
             Err(e) => (
                 Outcome::Failed {
