@@ -45,6 +45,43 @@ pub fn load_scenario(path: &Path) -> Result<Scenario, LoadError> {
     parse_scenario(path, &text)
 }
 
+/// A scenario file of a suite and the folder its outputs go to, relative to the output root:
+/// its path under the folder it was found in, without extension (`piper/move_l` for
+/// `scenarios/piper/move_l.yaml` found under `scenarios/`), or its stem for a file named
+/// directly. Two files never share a folder unless they were named as the same path.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SuiteFile {
+    /// The scenario file.
+    pub path: PathBuf,
+    /// Output folder relative to the output root.
+    pub out_dir: PathBuf,
+}
+
+/// Like [`discover`], with each file's output folder.
+pub fn discover_suite(paths: &[PathBuf]) -> Result<Vec<SuiteFile>, LoadError> {
+    let mut found = Vec::new();
+    for root in paths {
+        if root.is_dir() {
+            let mut files = Vec::new();
+            walk(root, &mut files)?;
+            for path in files {
+                let rel = path.strip_prefix(root).unwrap_or(&path).with_extension("");
+                found.push(SuiteFile { out_dir: rel, path });
+            }
+        } else {
+            let stem = root.file_stem().map_or_else(
+                || PathBuf::from("scenario"),
+                |s| PathBuf::from(s.to_os_string()),
+            );
+            found.push(SuiteFile {
+                path: root.clone(),
+                out_dir: stem,
+            });
+        }
+    }
+    Ok(found)
+}
+
 /// Expand files and folders into the scenario files they hold (`*.yaml`, `*.yml`, searched
 /// recursively, sorted by path so suites run in a stable order).
 pub fn discover(paths: &[PathBuf]) -> Result<Vec<PathBuf>, LoadError> {

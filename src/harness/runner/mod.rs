@@ -204,7 +204,14 @@ async fn run_async(scenario: &Scenario, clock: &Clock, options: &RunOptions) -> 
         dev.shutdown().await;
     }
     let stats = bus.as_ref().map(bus::virtual_bus::VirtualBus::stats);
-    let (frames, _missed) = recorder.finish().await;
+    let (frames, missed) = recorder.finish().await;
+    if missed > 0 {
+        tracing::warn!(
+            scenario = %scenario.name,
+            missed,
+            "the recorder missed frames: bus.log, bus.pcap and the frame counts are incomplete"
+        );
+    }
 
     let mut frames_by_id = BTreeMap::new();
     for f in &frames {
@@ -216,6 +223,7 @@ async fn run_async(scenario: &Scenario, clock: &Clock, options: &RunOptions) -> 
         load_percent: stats.as_ref().map(|s| s.load_percent),
         errors: stats.as_ref().map_or(0, |s| s.errors),
         dropped: stats.as_ref().map_or(0, |s| s.dropped),
+        recorder_missed: missed,
     };
     let verdict = if let Some(err) = fault_errors.first() {
         failed = true;
