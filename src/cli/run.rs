@@ -327,7 +327,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         println!("{write_errors} scenario(s) could not write their outputs");
     }
     if let Some(path) = &args.junit {
-        write_atomic(path, junit_xml("armhil", &results).as_bytes())?;
+        write_atomic(path, junit_xml("armhil", &results)?.as_bytes())?;
         println!("junit: {}", path.display());
     }
     Ok(if failed == 0 && errors == 0 && write_errors == 0 {
