@@ -34,18 +34,16 @@ async fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         let state = piper.state();
         let status = state.arm_status.map(|s| s.value);
-        let joints_deg = state
-            .joints
-            .map(|j| j.value.angles_mdeg.map(|m| f64::from(m) / 1000.0));
+        let joints_deg = state.joints_rad().map(|q| q.map(f64::to_degrees));
         let gripper_mm = state.gripper_stroke_m().map(|m| m * 1000.0);
         println!(
-            "ok={} {:.0} frames/s | mode={:?} status={:?} move={:?} motion={:?} | joints(deg)={:?} | gripper(mm)={:?} | enabled={:?}",
+            "ok={} {:.0} frames/s | mode={} status={} move={} motion={} | joints(deg)={:?} | gripper(mm)={:?} | enabled={:?}",
             piper.is_ok(),
             state.link.frames_per_s,
-            status.map(|s| s.ctrl_mode),
-            status.map(|s| s.arm_status),
-            status.map(|s| s.mode_feed),
-            status.map(|s| s.motion_status),
+            name(status.map(|s| s.ctrl_mode)),
+            name(status.map(|s| s.status)),
+            name(status.map(|s| s.move_mode)),
+            name(status.map(|s| s.motion)),
             joints_deg,
             gripper_mm,
             state.enabled_mask().joints(),
@@ -62,6 +60,12 @@ async fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     piper.disconnect().await;
     Ok(())
+}
+
+/// A status value's name from the driver's table, `-` before the first 0x2A1 frame.
+#[cfg(target_os = "linux")]
+fn name<T: std::fmt::Display>(value: Option<T>) -> String {
+    value.map_or_else(|| "-".to_owned(), |v| v.to_string())
 }
 
 #[cfg(not(target_os = "linux"))]

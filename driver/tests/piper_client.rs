@@ -94,7 +94,10 @@ fn spawn_arm(bus: &VirtualBus, options: ArmOptions) -> Arc<Mutex<ArmModel>> {
                     0x477 if d[0] == 1 => {
                         vec![f(0x478, &[0x03, 0xE8, 0x03, 0xE8, 0x03, 0xE8, 0x03, 0xE8])]
                     }
+                    0x477 if d[0] == 4 => vec![f(0x47E, &[100, 70, 1, 0, 0, 0, 0, 0])],
                     0x474 => vec![f(0x476, &[0x74, 0, 0, 0, 0, 0, 0, 0])],
+                    0x479 => vec![f(0x476, &[0x79, 0, 0, 0, 0, 0, 0, 0])],
+                    0x47A => vec![f(0x476, &[0x7A, 0, 0, 0, 0, 0, 0, 0])],
                     0x475 => vec![f(0x476, &[0x75, u8::from(d[1] == 0xAE), 0, 0, 0, 0, 0, 0])],
                     _ => vec![],
                 }
@@ -178,7 +181,6 @@ async fn connect_detects_firmware_and_streams_state() {
         piper.firmware_version(),
         Some(FirmwareVersion::new(1, 8, 8))
     );
-    assert_eq!(piper.mit_packing(), MitPacking::Torque12);
     assert_eq!(
         piper.state().firmware.map(|f| f.hardware),
         Some("H-V1.2-1".to_owned())
@@ -225,7 +227,7 @@ async fn enable_move_and_disable_are_confirmed() {
     }
     assert_eq!(
         model.lock().expect("model").target_mdeg,
-        target.map(rad_to_mdeg)
+        target.map(|rad: f64| (rad.to_degrees() * 1000.0).round() as i32)
     );
     piper.disable(MotorSelect::All).await.expect("disable");
     assert_eq!(piper.state().enabled_mask().0, 0);
@@ -237,23 +239,25 @@ async fn queries_return_typed_replies() {
     let (_bus, _model, host) = setup(ARM);
     let piper = PiperBuilder::new(host).connect().await.expect("connect");
     let limits = piper.query_all_joint_limits().await.expect("limits");
+    // The fake arm answers ±150.0° (0.1° units) and 3.00 rad/s (0.01 rad/s units).
     for (i, l) in limits.iter().enumerate() {
-        assert_eq!(
-            (
-                l.joint,
-                l.max_angle_ddeg,
-                l.min_angle_ddeg,
-                l.max_speed_crad_s
-            ),
-            (i as u8 + 1, 1500, -1500, 300)
-        );
+        assert_eq!(l.joint, i as u8 + 1);
+        assert!((l.max_rad - 150f64.to_radians()).abs() < 1e-12, "{l:?}");
+        assert!((l.min_rad + 150f64.to_radians()).abs() < 1e-12, "{l:?}");
+        assert!((l.max_speed_rad_s - 3.0).abs() < 1e-12, "{l:?}");
     }
     let acc = piper.query_joint_max_acc(4).await.expect("acc");
-    assert_eq!((acc.joint, acc.max_acc_crad_s2), (4, 500));
-    let end = piper.query_end_params().await.expect("end params");
-    assert_eq!(end.lin_vel_mm_s, 1000);
-    piper.set_joint_max_speed(2, 250).await.expect("acked");
-    piper.set_joint_zero(3).await.expect("zero acked");
+    assert!((acc - 5.0).abs() < 1e-12, "{acc}");
+    let end = piper.query_end_limits().await.expect("end limits");
+    assert!((end.linear_m_s - 1.0).abs() < 1e-12, "{end:?}");
+    assert_eq!(piper.state().end_limits, Some(end));
+    let teach = piper.query_gripper_teach_params().await.expect("teach");
+    assert!((teach.max_stroke_m - 0.07).abs() < 1e-12, "{teach:?}");
+    piper.set_joint_max_speed(2, 2.5).await.expect("acked");
+    piper
+        .set_joint_zero(JointSelect::Joint(3))
+        .await
+        .expect("zero acked");
     // The fake arm does not answer 0x47B: a typed timeout after the query deadline.
     let start = Instant::now();
     let result = piper.query_collision_levels().await;
@@ -471,6 +475,150 @@ async fn a_closed_interface_is_reopened_through_the_opener() {
         .await
         .expect("queries work on the new endpoint");
     piper.disconnect().await;
+}
+
+fn sent(model: &Arc<Mutex<ArmModel>>, id: u16) -> Vec<Vec<u8>> {
+    model
+        .lock()
+        .expect("model")
+        .received
+        .iter()
+        .filter(|f| f.raw_id() == u32::from(id))
+        .map(|f| f.data().to_vec())
+        .collect()
+}
+
+#[tokio::test(start_paused = true)]
+async fn si_arguments_and_keep_fields_reach_the_wire_as_the_spec_says() {
+    let (_bus, model, host) = setup(ARM);
+    let piper = PiperBuilder::new(host).connect().await.expect("connect");
+    // Only the speed changes: both angle fields carry the 0x7FFF "unchanged" code.
+    piper
+        .set_joint_limits(
+            1,
+            JointLimitsUpdate {
+                max_speed_rad_s: Some(1.5),
+                ..JointLimitsUpdate::default()
+            },
+        )
+        .await
+        .expect("acked");
+    assert_eq!(
+        sent(&model, 0x474).last().map(Vec::as_slice),
+        Some(&[1, 0x7F, 0xFF, 0x7F, 0xFF, 0x00, 150, 0][..])
+    );
+    piper
+        .set_end_limits(EndLimitsUpdate {
+            angular_rad_s: Some(0.8),
+            ..EndLimitsUpdate::default()
+        })
+        .await
+        .expect("acked");
+    assert_eq!(
+        sent(&model, 0x479).last().map(Vec::as_slice),
+        Some(&[0x7F, 0xFF, 0x03, 0x20, 0x7F, 0xFF, 0x7F, 0xFF][..])
+    );
+    piper
+        .set_collision_levels([Some(3), None, None, None, None, Some(0)])
+        .await
+        .expect("acked");
+    assert_eq!(
+        sent(&model, 0x47A).last().map(Vec::as_slice),
+        Some(&[3, 0xFF, 0xFF, 0xFF, 0xFF, 0, 0, 0][..])
+    );
+    // 0x47D has no "keep" code: the fields left out come from the arm's current values.
+    piper
+        .set_gripper_teach_params(GripperTeachUpdate {
+            friction: Some(5),
+            ..GripperTeachUpdate::default()
+        })
+        .await
+        .expect("sent");
+    // No ack for 0x47D: give the frame time to cross the bus.
+    tokio::time::sleep(Duration::from_millis(5)).await;
+    assert_eq!(
+        sent(&model, 0x47D).last().map(Vec::as_slice),
+        Some(&[100, 70, 5, 0, 0, 0, 0, 0][..])
+    );
+    // S-V1.8-8 (the fake arm's firmware) uses MOVE code 0x06 for MIT; the echo matches.
+    piper
+        .set_move_mode(MoveKind::Mit, 30)
+        .await
+        .expect("mode sent");
+    let state = piper
+        .wait_for_move_mode(MoveKind::Mit, Duration::from_millis(50))
+        .await
+        .expect("echo");
+    assert_eq!(
+        sent(&model, 0x151).last().map(Vec::as_slice),
+        Some(&[0x01, 0x06, 30, 0xAD, 0, 0, 0, 0][..])
+    );
+    let status = state.arm_status.expect("status").value;
+    assert_eq!(status.move_mode, ActiveMove::Mit);
+    assert_eq!(status.move_mode.to_string(), "m");
+    assert_eq!(status.ctrl_mode.to_string(), "can");
+    // A pose in m and rad becomes µm and millidegrees.
+    piper
+        .end_pose(Pose {
+            position_m: [0.25, -0.1, 0.3],
+            orientation_rad: [0.0, 90f64.to_radians(), -45f64.to_radians()],
+        })
+        .await
+        .expect("sent");
+    tokio::time::sleep(Duration::from_millis(5)).await;
+    let mut pose = sent(&model, 0x152);
+    pose.extend(sent(&model, 0x154));
+    assert_eq!(
+        pose,
+        vec![
+            [250_000i32.to_be_bytes(), (-100_000i32).to_be_bytes()].concat(),
+            [90_000i32.to_be_bytes(), (-45_000i32).to_be_bytes()].concat(),
+        ]
+    );
+    // Values the wire cannot carry are typed errors, and nothing is sent for them.
+    let before = sent(&model, 0x474).len();
+    let result = piper
+        .set_joint_max_speed(1, f64::NAN)
+        .await
+        .map_err(|e| e.to_string());
+    assert!(result.is_err(), "{result:?}");
+    assert!(matches!(
+        piper.set_joint_max_acc(JointSelect::All, -1.0).await,
+        Err(PiperError::InvalidValue {
+            field: "max_acc_rad_s2",
+            ..
+        })
+    ));
+    assert_eq!(sent(&model, 0x474).len(), before);
+    piper.disconnect().await;
+}
+
+#[test]
+fn status_and_flag_names_come_from_one_table() {
+    assert_eq!(
+        ArmStatusCode::TargetAngleOverLimit.to_string(),
+        "angle_limit"
+    );
+    assert_eq!(
+        ArmStatusCode::from_name("angle_limit"),
+        Some(ArmStatusCode::TargetAngleOverLimit)
+    );
+    assert_eq!(ArmStatusCode::from(0x2A).to_string(), "unknown(0x2A)");
+    assert_eq!(ArmStatusCode::ALL.len(), 16);
+    assert_eq!(
+        CtrlMode::ALL.iter().map(|m| m.to_string()).nth(1),
+        Some("can".to_owned())
+    );
+    assert_eq!(MotionStatus::Moving.name(), Some("moving"));
+    // 0x9C: bit 2 over_current, bit 3 driver_over_temp, bit 4 collision, bit 7 stall.
+    assert_eq!(
+        DriverStatus(0xDC).faults(),
+        ["over_current", "driver_over_temp", "collision", "stall"]
+    );
+    assert!(DriverStatus(0xDC).names().contains(&"enabled"));
+    assert_eq!(GripperStatus(0xC1).faults(), ["under_voltage"]);
+    assert_eq!(DriverStatus::fault_names().count(), 7);
+    assert_eq!(GripperStatus::fault_names().count(), 6);
 }
 
 /// The driver's futures can run on a multi-thread runtime (real-time mode, `tokio::spawn`).

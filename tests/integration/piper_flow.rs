@@ -6,8 +6,8 @@ use std::time::Duration;
 use bus::virtual_bus::{VirtualBus, VirtualBusConfig};
 use bus::CanBus;
 use driver::piper::{
-    CollisionLevels, FirmwareVersion, GripperCommand, LimitPolicy, MitCommand, MitPacking,
-    MotorSelect, MoveKind, Piper, PiperBuilder, PiperError, Timeouts,
+    FirmwareVersion, GripperCommand, LimitPolicy, MitCommand, MotorSelect, MoveKind, Piper,
+    PiperBuilder, PiperError, Timeouts,
 };
 use sim::piper::flash::Flash;
 use sim::piper::{FirmwareProfile, PiperConfig, PiperEmulator, PiperHandle};
@@ -58,12 +58,6 @@ async fn full_flow(profile: FirmwareProfile) {
     assert_eq!(piper.firmware_version(), Some(version_of(profile)));
     let info = piper.query_firmware().await.expect("firmware query");
     assert_eq!(info.software, profile.version_string());
-    let expected_packing = if profile >= FirmwareProfile::V1_8_8 {
-        MitPacking::Torque12
-    } else {
-        MitPacking::Torque8Crc
-    };
-    assert_eq!(piper.mit_packing(), expected_packing);
 
     // Enable, confirmed by the 0x26x bits; the emulator agrees.
     piper
@@ -105,7 +99,7 @@ async fn full_flow(profile: FirmwareProfile) {
     let state = piper.state();
     let fk = piper.forward_kinematics().expect("fk")[5];
     let pose = state.end_pose.expect("end pose").value;
-    let [x, y, z] = pose.position_m();
+    let [x, y, z] = pose.position_m;
     assert!((fk.x_mm - x * 1000.0).abs() < 1.0, "fk {fk:?} vs {pose:?}");
     assert!((fk.y_mm - y * 1000.0).abs() < 1.0, "fk {fk:?} vs {pose:?}");
     assert!((fk.z_mm - z * 1000.0).abs() < 1.0, "fk {fk:?} vs {pose:?}");
@@ -134,68 +128,64 @@ async fn full_flow(profile: FirmwareProfile) {
     // Queries return what the emulator was configured with.
     let flash = configured_flash();
     let limits = piper.query_all_joint_limits().await.expect("limits");
+    // The flash holds wire units (0.1°, 0.01 rad/s, 0.01 rad/s², 0.001 m/s …); the driver
+    // answers in SI.
+    let close = |a: f64, b: f64| (a - b).abs() < 1e-9;
+    let ddeg = |d: i16| (f64::from(d) / 10.0).to_radians();
     for (i, l) in limits.iter().enumerate() {
-        assert_eq!(l.max_angle_ddeg, flash.max_angle_ddeg[i]);
-        assert_eq!(l.min_angle_ddeg, flash.min_angle_ddeg[i]);
-        assert_eq!(l.max_speed_crad_s, flash.max_speed_crad_s[i]);
+        assert!(close(l.max_rad, ddeg(flash.max_angle_ddeg[i])), "{l:?}");
+        assert!(close(l.min_rad, ddeg(flash.min_angle_ddeg[i])), "{l:?}");
+        let speed = f64::from(flash.max_speed_crad_s[i]) / 100.0;
+        assert!(close(l.max_speed_rad_s, speed), "{l:?}");
     }
     let acc = piper.query_all_joint_max_acc().await.expect("max acc");
-    assert_eq!(acc.map(|a| a.max_acc_crad_s2), flash.max_acc_crad_s2);
-    let end = piper.query_end_params().await.expect("end params");
-    assert_eq!(
-        [
-            end.lin_vel_mm_s,
-            end.ang_vel_mrad_s,
-            end.lin_acc_mm_s2,
-            end.ang_acc_mrad_s2
-        ],
-        flash.end_vel_acc
-    );
+    for (a, crad) in acc.iter().zip(flash.max_acc_crad_s2) {
+        assert!(close(*a, f64::from(crad) / 100.0), "{acc:?}");
+    }
+    let end = piper.query_end_limits().await.expect("end limits");
+    let got = [
+        end.linear_m_s,
+        end.angular_rad_s,
+        end.linear_acc_m_s2,
+        end.angular_acc_rad_s2,
+    ];
+    for (g, milli) in got.iter().zip(flash.end_vel_acc) {
+        assert!(close(*g, f64::from(milli) / 1000.0), "{end:?}");
+    }
     let collision = piper
         .query_collision_levels()
         .await
         .expect("collision levels");
-    assert_eq!(collision.levels, flash.collision_levels);
+    assert_eq!(collision, flash.collision_levels);
     let gripper = piper
         .query_gripper_teach_params()
         .await
         .expect("gripper/teach");
     assert_eq!(
-        (
-            gripper.teach_coef_pct,
-            gripper.max_stroke_mm,
-            gripper.friction
-        ),
-        (
-            flash.pendant_travel_pct,
-            flash.gripper_max_stroke_mm,
-            flash.pendant_friction
-        )
+        (gripper.teach_coefficient_pct, gripper.friction),
+        (flash.pendant_travel_pct, flash.pendant_friction)
     );
+    assert!(close(
+        gripper.max_stroke_m,
+        f64::from(flash.gripper_max_stroke_mm) / 1000.0
+    ));
 
     // Acknowledged settings change what the next query reports.
     piper
-        .set_collision_levels(CollisionLevels {
-            levels: [8, 7, 6, 5, 4, 3],
-        })
+        .set_collision_levels([8, 7, 6, 5, 4, 3].map(Some))
         .await
         .expect("acked");
     assert_eq!(
-        piper
-            .query_collision_levels()
-            .await
-            .expect("collision")
-            .levels,
+        piper.query_collision_levels().await.expect("collision"),
         [8, 7, 6, 5, 4, 3]
     );
-    piper.set_joint_max_speed(1, 200).await.expect("acked");
-    assert_eq!(
-        piper
-            .query_joint_limits(1)
-            .await
-            .expect("limits")
-            .max_speed_crad_s,
-        200
+    piper.set_joint_max_speed(1, 2.0).await.expect("acked");
+    let limits = piper.query_joint_limits(1).await.expect("limits");
+    assert!(close(limits.max_speed_rad_s, 2.0), "{limits:?}");
+    // Only the speed was sent: the angle limits kept their flash values.
+    assert!(
+        close(limits.max_rad, ddeg(flash.max_angle_ddeg[0])),
+        "{limits:?}"
     );
 
     // Disable, confirmed.
@@ -369,16 +359,14 @@ async fn piper_trajectory_transfer_is_acknowledged() {
             .trajectory_transfer_point(index)
             .await
             .expect("point acked");
-        assert_eq!(ack.traj_index, index);
+        assert_eq!(ack.point, index);
     }
     let ack = piper
         .trajectory_transfer_end(2, 0x1234, 0xBEEF)
         .await
         .expect("package acked");
-    assert_eq!(
-        (ack.pkg_status, ack.name_index, ack.crc16),
-        (0xAE, 0x1234, 0xBEEF)
-    );
+    // A package CRC failure would be `PiperError::Rejected`: Ok means the arm said 0xAE.
+    assert_eq!((ack.name_index, ack.crc16), (0x1234, 0xBEEF));
     piper.disconnect().await;
     emulator.shutdown().await;
 }

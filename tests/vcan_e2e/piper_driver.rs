@@ -108,9 +108,9 @@ async fn piper_driver_flow_over_vcan() {
     assert!(limits
         .iter()
         .enumerate()
-        .all(|(i, l)| usize::from(l.joint) == i + 1 && l.max_speed_crad_s > 0));
-    let end = piper.query_end_params().await.expect("end params");
-    assert!(end.lin_vel_mm_s > 0);
+        .all(|(i, l)| usize::from(l.joint) == i + 1 && l.max_speed_rad_s > 0.0));
+    let end = piper.query_end_limits().await.expect("end limits");
+    assert!(end.linear_m_s > 0.0);
     assert!(piper.is_ok());
 
     piper

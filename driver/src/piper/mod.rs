@@ -1,6 +1,10 @@
 //! AgileX Piper driver (CAN, 11-bit ids), written from the protocol specification.
 //!
-//! - [`codec`]: pure encoders / decoders for every frame of the protocol.
+//! - The API speaks SI units (rad, rad/s, m, N·m, s) and typed enums; every "keep the
+//!   current value" is an `Option`. Status and flag names come from the enums themselves
+//!   (`name()`, `Display`, `ALL`, `BITS`).
+//! - [`codec`]: pure encoders / decoders for every frame of the protocol, with the wire
+//!   integers, sentinels and per-firmware codes (for tools and byte-level tests).
 //! - [`PiperBuilder`] → [`Piper`]: one connection per bus, a receive task that keeps a
 //!   timestamped [`PiperState`], commands, enable with confirmation, queries with timeouts.
 //! - [`kinematics`]: forward kinematics from the SDK's DH tables.
@@ -37,20 +41,25 @@ mod error;
 pub mod kinematics;
 pub mod limits;
 mod state;
+mod types;
 
 pub use client::{
-    BusOpener, DhSelection, FirmwareSelection, GripperCommand, MoveKind, Piper, PiperBuilder,
-    PiperConfig, Reply, Timeouts,
+    BusOpener, DhSelection, FirmwareSelection, Piper, PiperBuilder, PiperConfig, Timeouts,
 };
+// Typed enums and value types of the codec that the API uses as they are: they carry no
+// scaled integers and no sentinels.
 pub use codec::{
-    AckedCommand, CollisionLevels, EndParams, EndPoseTarget, FirmwareInfo, FirmwareVersion,
-    GripperTeachParams, JointLimits, JointMaxAcc, LeaderHome, MitCommand, MitPacking, MotorSelect,
-    ParamCommand,
+    AckedCommand, ArmStatusCode, CtrlMode, DriverStatus, FirmwareInfo, FirmwareVersion,
+    GripperStatus, JointMask, LeaderHome, MitCommand, MotionStatus, MotorSelect, TeachStatus,
+    TrackCommand,
 };
 pub use error::{LimitedAxis, PiperError};
 pub use kinematics::{forward_kinematics, DhVariant, LinkPose};
 pub use limits::{ClientLimits, LimitPolicy};
-pub use state::{
-    is_abnormal, mdeg_to_rad, rad_to_mdeg, BusFault, EndPose, JointAngles, LinkHealth, PiperState,
-    Stamped,
+pub use state::{BusFault, JointAngles, LinkHealth, PiperState, Stamped};
+pub use types::{
+    ActiveMove, ArmRole, ArmStatus, CirclePoint, DriverState, EndLimits, EndLimitsUpdate,
+    EndMotion, EndPayload, EndPose, GripperCommand, GripperState, GripperTeachParams,
+    GripperTeachUpdate, IdShift, Install, JointLimits, JointLimitsUpdate, JointSelect, LeaderMode,
+    ModeCommand, MotorState, MoveKind, Pose, RoleOffsets, TrajectoryAck,
 };

@@ -6,10 +6,10 @@ use std::time::Duration;
 
 use tokio::time::Instant;
 
-use super::codec::{
-    Ack, ArmStatus, CollisionLevels, DriverStatus, EndParams, EndPosePart, EndVelAccFeedback,
-    FirmwareInfo, GripperCtrl, GripperFeedback, GripperTeachParams, HighSpeedFeedback, JointLimits,
-    JointMask, JointMaxAcc, JointPair, LowSpeedFeedback, Message, ModeCtrl,
+use super::codec::{self, si, EndPosePart, FirmwareInfo, JointMask, JointPair, Message};
+use super::types::{
+    ArmStatus, DriverState, EndLimits, EndMotion, EndPose, GripperCommand, GripperState,
+    GripperTeachParams, JointLimits, LeaderMode, MotorState,
 };
 
 /// A value with the time it arrived.
@@ -36,72 +36,18 @@ fn stamp<T>(slot: &mut Option<Stamped<T>>, value: T, bus_time: Duration, now: In
     });
 }
 
-/// Joint angles J1–J6 in millidegrees (feedback 0x2A5–0x2A7 or a leader's 0x155–0x157).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+/// Joint angles J1–J6 in rad (feedback 0x2A5–0x2A7 or a leader's 0x155–0x157).
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
 pub struct JointAngles {
-    /// Angles, millidegrees.
-    pub angles_mdeg: [i32; 6],
-}
-
-/// Millidegrees to radians.
-pub fn mdeg_to_rad(mdeg: i32) -> f64 {
-    (f64::from(mdeg) / 1000.0).to_radians()
-}
-
-/// Radians to millidegrees, rounded to the nearest integer and saturated to i32.
-pub fn rad_to_mdeg(rad: f64) -> i32 {
-    (rad.to_degrees() * 1000.0).round() as i32
+    /// Angles of joints 1–6, rad.
+    pub rad: [f64; 6],
 }
 
 impl JointAngles {
-    /// Angles in rad.
-    pub fn to_rad(&self) -> [f64; 6] {
-        self.angles_mdeg.map(mdeg_to_rad)
-    }
-
     fn apply(&mut self, pair: &JointPair) {
         let first = usize::from(pair.first_joint.clamp(1, 5)) - 1;
-        self.angles_mdeg[first] = pair.a_mdeg;
-        self.angles_mdeg[first + 1] = pair.b_mdeg;
-    }
-}
-
-/// Flange pose reported by the arm (0x2A2–0x2A4).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
-pub struct EndPose {
-    /// X, µm.
-    pub x_um: i32,
-    /// Y, µm.
-    pub y_um: i32,
-    /// Z, µm.
-    pub z_um: i32,
-    /// RX, millidegrees.
-    pub rx_mdeg: i32,
-    /// RY, millidegrees.
-    pub ry_mdeg: i32,
-    /// RZ, millidegrees.
-    pub rz_mdeg: i32,
-}
-
-impl EndPose {
-    /// Position in m.
-    pub fn position_m(&self) -> [f64; 3] {
-        [self.x_um, self.y_um, self.z_um].map(|um| f64::from(um) * 1e-6)
-    }
-
-    /// ZYX Euler angles (RX, RY, RZ) in rad.
-    pub fn orientation_rad(&self) -> [f64; 3] {
-        [self.rx_mdeg, self.ry_mdeg, self.rz_mdeg].map(mdeg_to_rad)
-    }
-
-    fn apply(&mut self, part: &EndPosePart) {
-        match *part {
-            EndPosePart::Xy { x_um, y_um } => (self.x_um, self.y_um) = (x_um, y_um),
-            EndPosePart::ZRx { z_um, rx_mdeg } => (self.z_um, self.rx_mdeg) = (z_um, rx_mdeg),
-            EndPosePart::RyRz { ry_mdeg, rz_mdeg } => {
-                (self.ry_mdeg, self.rz_mdeg) = (ry_mdeg, rz_mdeg)
-            }
-        }
+        self.rad[first] = si::mdeg_to_rad(pair.a_mdeg);
+        self.rad[first + 1] = si::mdeg_to_rad(pair.b_mdeg);
     }
 }
 
@@ -154,33 +100,33 @@ pub struct PiperState {
     /// 0x2A5–0x2A7 joint angles.
     pub joints: Option<Stamped<JointAngles>>,
     /// 0x2A8 gripper.
-    pub gripper: Option<Stamped<GripperFeedback>>,
+    pub gripper: Option<Stamped<GripperState>>,
     /// 0x251–0x256 per joint (index 0 = joint 1).
-    pub high_speed: [Option<Stamped<HighSpeedFeedback>>; 6],
+    pub high_speed: [Option<Stamped<MotorState>>; 6],
     /// 0x261–0x266 per joint (index 0 = joint 1).
-    pub low_speed: [Option<Stamped<LowSpeedFeedback>>; 6],
+    pub low_speed: [Option<Stamped<DriverState>>; 6],
     /// 0x481–0x486 per joint, when switched on.
-    pub end_vel_acc: [Option<Stamped<EndVelAccFeedback>>; 6],
+    pub end_vel_acc: [Option<Stamped<EndMotion>>; 6],
     /// 0x151 seen on the bus (a leader arm's mode).
-    pub mode_echo: Option<Stamped<ModeCtrl>>,
+    pub mode_echo: Option<Stamped<LeaderMode>>,
     /// 0x155–0x157 seen on the bus (a leader arm's joints).
     pub joint_cmd_echo: Option<Stamped<JointAngles>>,
     /// 0x159 seen on the bus (a leader arm's gripper).
-    pub gripper_cmd_echo: Option<Stamped<GripperCtrl>>,
+    pub gripper_cmd_echo: Option<Stamped<GripperCommand>>,
     /// Last firmware reply.
     pub firmware: Option<FirmwareInfo>,
     /// Last 0x473 reply per joint.
     pub joint_limits: [Option<JointLimits>; 6],
-    /// Last 0x47C reply per joint.
-    pub joint_max_acc: [Option<JointMaxAcc>; 6],
+    /// Last 0x47C reply per joint: max acceleration, rad/s².
+    pub joint_max_acc_rad_s2: [Option<f64>; 6],
     /// Last 0x478 reply.
-    pub end_params: Option<EndParams>,
-    /// Last 0x47B reply.
-    pub collision_levels: Option<CollisionLevels>,
+    pub end_limits: Option<EndLimits>,
+    /// Last 0x47B reply: collision-protection level 0–8 per joint.
+    pub collision_levels: Option<[u8; 6]>,
     /// Last 0x47E reply.
     pub gripper_teach: Option<GripperTeachParams>,
-    /// Last 0x476 acknowledgement.
-    pub last_ack: Option<Stamped<Ack>>,
+    /// The command of the last 0x476 acknowledgement.
+    pub last_ack: Option<Stamped<codec::AckedCommand>>,
     /// Link health.
     pub link: LinkHealth,
 }
@@ -203,37 +149,35 @@ impl PiperState {
     }
 
     /// Driver status bits of joint 1–6, if seen.
-    pub fn driver_status(&self, joint: u8) -> Option<DriverStatus> {
+    pub fn driver_status(&self, joint: u8) -> Option<codec::DriverStatus> {
         let index = usize::from(joint.checked_sub(1)?);
         self.low_speed.get(index)?.as_ref().map(|s| s.value.status)
     }
 
     /// Joint angles in rad, if seen.
     pub fn joints_rad(&self) -> Option<[f64; 6]> {
-        self.joints.as_ref().map(|j| j.value.to_rad())
+        self.joints.as_ref().map(|j| j.value.rad)
     }
 
     /// Gripper stroke in m, if seen.
     pub fn gripper_stroke_m(&self) -> Option<f64> {
-        self.gripper
-            .as_ref()
-            .map(|g| f64::from(g.value.stroke_um) * 1e-6)
+        self.gripper.as_ref().map(|g| g.value.stroke_m)
     }
 
     /// Motor speeds in rad/s (None for joints not seen).
     pub fn joint_speeds_rad_s(&self) -> [Option<f64>; 6] {
-        self.high_speed
-            .map(|h| h.map(|h| f64::from(h.value.speed_mrad_s) * 1e-3))
+        self.high_speed.map(|h| h.map(|h| h.value.speed_rad_s))
     }
 
-    /// Apply one decoded message received at bus time `bus_time` and local time `now` (what
-    /// the receive task does for every frame). Returns false for messages that carry no state.
+    /// Apply one decoded codec message received at bus time `bus_time` and local time `now`
+    /// (what the receive task does for every frame; public for tools and benchmarks that
+    /// decode recordings). Returns false for messages that carry no state.
     pub fn apply(&mut self, message: &Message, bus_time: Duration, now: Instant) -> bool {
         match message {
-            Message::ArmStatus(s) => stamp(&mut self.arm_status, *s, bus_time, now),
+            Message::ArmStatus(s) => stamp(&mut self.arm_status, si::arm_status(s), bus_time, now),
             Message::EndPose(part) => {
                 let mut pose = self.end_pose.map(|p| p.value).unwrap_or_default();
-                pose.apply(part);
+                si::apply_end_pose(&mut pose, part);
                 stamp(&mut self.end_pose, pose, bus_time, now);
             }
             Message::Joints(pair) => {
@@ -241,43 +185,48 @@ impl PiperState {
                 joints.apply(pair);
                 stamp(&mut self.joints, joints, bus_time, now);
             }
-            Message::Gripper(g) => stamp(&mut self.gripper, *g, bus_time, now),
+            Message::Gripper(g) => stamp(&mut self.gripper, si::gripper_state(g), bus_time, now),
             Message::HighSpeed(h) => {
                 if let Some(slot) = joint_slot(&mut self.high_speed, h.joint) {
-                    stamp(slot, *h, bus_time, now);
+                    stamp(slot, si::motor_state(h), bus_time, now);
                 }
             }
             Message::LowSpeed(l) => {
                 if let Some(slot) = joint_slot(&mut self.low_speed, l.joint) {
-                    stamp(slot, *l, bus_time, now);
+                    stamp(slot, si::driver_state(l), bus_time, now);
                 }
             }
             Message::EndVelAcc(e) => {
                 if let Some(slot) = joint_slot(&mut self.end_vel_acc, e.joint) {
-                    stamp(slot, *e, bus_time, now);
+                    stamp(slot, si::end_motion(e), bus_time, now);
                 }
             }
-            Message::ModeEcho(m) => stamp(&mut self.mode_echo, *m, bus_time, now),
+            Message::ModeEcho(m) => stamp(&mut self.mode_echo, si::leader_mode(m), bus_time, now),
             Message::JointCmdEcho(pair) => {
                 let mut joints = self.joint_cmd_echo.map(|j| j.value).unwrap_or_default();
                 joints.apply(pair);
                 stamp(&mut self.joint_cmd_echo, joints, bus_time, now);
             }
-            Message::GripperCmdEcho(g) => stamp(&mut self.gripper_cmd_echo, *g, bus_time, now),
+            Message::GripperCmdEcho(g) => stamp(
+                &mut self.gripper_cmd_echo,
+                si::gripper_command(g),
+                bus_time,
+                now,
+            ),
             Message::JointLimits(l) => {
-                if let Some(slot) = self.joint_limits.get_mut(usize::from(l.joint) - 1) {
-                    *slot = Some(*l);
+                if let Some(slot) = joint_slot(&mut self.joint_limits, l.joint) {
+                    *slot = Some(si::joint_limits(l));
                 }
             }
             Message::JointMaxAcc(a) => {
-                if let Some(slot) = self.joint_max_acc.get_mut(usize::from(a.joint) - 1) {
-                    *slot = Some(*a);
+                if let Some(slot) = joint_slot(&mut self.joint_max_acc_rad_s2, a.joint) {
+                    *slot = Some(si::max_acc(a.max_acc_crad_s2));
                 }
             }
-            Message::Ack(a) => stamp(&mut self.last_ack, *a, bus_time, now),
-            Message::EndParams(p) => self.end_params = Some(*p),
-            Message::Collision(c) => self.collision_levels = Some(*c),
-            Message::GripperTeach(g) => self.gripper_teach = Some(*g),
+            Message::Ack(a) => stamp(&mut self.last_ack, a.cmd, bus_time, now),
+            Message::EndParams(p) => self.end_limits = Some(si::end_limits(p)),
+            Message::Collision(c) => self.collision_levels = Some(c.levels),
+            Message::GripperTeach(g) => self.gripper_teach = Some(si::gripper_teach(g)),
             Message::Assist(_) | Message::FirmwarePart(_) | Message::Cpv(_) => return false,
         }
         true
@@ -291,7 +240,7 @@ fn joint_slot<T>(slots: &mut [Option<T>; 6], joint: u8) -> Option<&mut Option<T>
 /// The SDK's "abnormal data" filter (spec §11): true when the message carries values no real
 /// arm reports (|X|,|Y|,|Z| > 1 m; |angle| > 361°; |joint| > 3000°; |stroke| > 150 mm) and
 /// must be dropped.
-pub fn is_abnormal(message: &Message) -> bool {
+pub(crate) fn is_abnormal(message: &Message) -> bool {
     const MAX_POS_UM: i32 = 1_000_000;
     const MAX_ROT_MDEG: i32 = 361_000;
     const MAX_JOINT_MDEG: i32 = 3_000_000;
@@ -337,7 +286,8 @@ mod tests {
         assert!(state.apply(&a, Duration::from_millis(1), now));
         assert!(state.apply(&b, Duration::from_millis(2), now));
         let joints = state.joints.expect("joints");
-        assert_eq!(joints.value.angles_mdeg, [90_000, -90_000, 0, 0, 1, 2]);
+        let expected = [90_000, -90_000, 0, 0, 1, 2].map(si::mdeg_to_rad);
+        assert_eq!(joints.value.rad, expected);
         assert_eq!((joints.seq, joints.bus_time), (2, Duration::from_millis(2)));
         let rad = state.joints_rad().expect("rad");
         assert!((rad[0] - std::f64::consts::FRAC_PI_2).abs() < 1e-12);

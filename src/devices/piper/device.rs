@@ -6,7 +6,7 @@ use async_trait::async_trait;
 use driver::piper::Piper;
 
 use super::model::EmulatorFault;
-use super::{checks, trace, wire};
+use super::{checks, observe, trace};
 use crate::devices::{Action, Check, DeviceFault};
 use crate::harness::model::Signal;
 use crate::harness::{Device, DeviceError, Reply, RunOptions, TraceColumn};
@@ -130,6 +130,6 @@ fn piper_fault<'f>(fault: &'f DeviceFault, name: &str) -> Result<&'f EmulatorFau
 impl PiperDevice {
     /// The driver's current state in scenario units.
     fn observe(&self) -> super::observe::Observation {
-        wire::observe(&self.driver.state(), tokio::time::Instant::now())
+        observe::observe(&self.driver.state(), tokio::time::Instant::now())
     }
 }

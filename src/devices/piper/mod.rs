@@ -1,5 +1,6 @@
 //! The AgileX Piper arm (`kind: piper`): a CAN device on the bench's bus.
 
+mod actions;
 mod checks;
 mod device;
 mod emulator;
@@ -9,7 +10,6 @@ pub(crate) mod raw;
 mod trace;
 pub(crate) mod validate;
 pub mod vocab;
-mod wire;
 
 use std::sync::Arc;
 

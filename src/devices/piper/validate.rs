@@ -1044,8 +1044,8 @@ pub(crate) fn checks(ctx: &Ctx<'_>, c: &RawConds, step: &str, at: Pos) -> Res<Ve
         });
     }
     if let Some(s) = &c.arm_status {
-        let name = vocab::resolve(&vocab::ARM_STATUS, &s.value).ok_or_else(|| {
-            let names: Vec<&str> = vocab::ARM_STATUS.iter().map(|(_, n)| *n).collect();
+        let name = vocab::resolve_arm_status(&s.value).ok_or_else(|| {
+            let names = vocab::arm_status_names();
             ctx.err(
                 pos(s),
                 format!(
@@ -1061,8 +1061,8 @@ pub(crate) fn checks(ctx: &Ctx<'_>, c: &RawConds, step: &str, at: Pos) -> Res<Ve
         });
     }
     if let Some(s) = &c.ctrl_mode {
-        let name = vocab::resolve(&vocab::CTRL_MODE, &s.value).ok_or_else(|| {
-            let names: Vec<&str> = vocab::CTRL_MODE.iter().map(|(_, n)| *n).collect();
+        let name = vocab::resolve_ctrl_mode(&s.value).ok_or_else(|| {
+            let names = vocab::ctrl_mode_names();
             ctx.err(
                 pos(s),
                 format!(
@@ -1078,9 +1078,9 @@ pub(crate) fn checks(ctx: &Ctx<'_>, c: &RawConds, step: &str, at: Pos) -> Res<Ve
         });
     }
     for (key, field, table) in [
-        (&c.move_mode, "move_mode", &vocab::MOVE_MODE[..]),
-        (&c.motion, "motion", &vocab::MOTION[..]),
-        (&c.feedback, "feedback", &vocab::FEEDBACK[..]),
+        (&c.move_mode, "move_mode", vocab::move_mode_names()),
+        (&c.motion, "motion", vocab::motion_names()),
+        (&c.feedback, "feedback", vocab::FEEDBACK.to_vec()),
     ] {
         if let Some(s) = key {
             if !table.contains(&s.value.as_str()) {
@@ -1132,7 +1132,7 @@ pub(crate) fn checks(ctx: &Ctx<'_>, c: &RawConds, step: &str, at: Pos) -> Res<Ve
                     format!("`joint_faults`: joint index {joint} out of range, expected 1..=6"),
                 ));
             }
-            let flags = flag_list(ctx, flags, &vocab::JOINT_FLAGS, "joint_faults")?;
+            let flags = flag_list(ctx, flags, &vocab::joint_flags(), "joint_faults")?;
             out.push(Check::JointFaults {
                 joint: *joint as u8,
                 flags,
@@ -1143,7 +1143,7 @@ pub(crate) fn checks(ctx: &Ctx<'_>, c: &RawConds, step: &str, at: Pos) -> Res<Ve
         out.push(Check::GripperFaults(flag_list(
             ctx,
             &flags.value,
-            &vocab::GRIPPER_FLAGS,
+            &vocab::gripper_flags(),
             "gripper_faults",
         )?));
     }

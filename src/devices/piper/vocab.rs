@@ -1,84 +1,81 @@
-//! Names scenarios use for Piper status values and fault flags (protocol §4.1, §4.4, §4.6).
+//! Names scenarios use for Piper status values and fault flags. Every name comes from the
+//! driver's typed enums (one table, in the driver); only `feedback` is the harness's own.
 
-/// 0x2A1 byte 1 (arm status) values and their scenario names.
-pub const ARM_STATUS: [(u8, &str); 16] = [
-    (0x00, "normal"),
-    (0x01, "estop"),
-    (0x02, "no_solution"),
-    (0x03, "singularity"),
-    (0x04, "angle_limit"),
-    (0x05, "joint_comm_error"),
-    (0x06, "brake_not_released"),
-    (0x07, "collision"),
-    (0x08, "drag_over_speed"),
-    (0x09, "joint_status_abnormal"),
-    (0x0A, "other"),
-    (0x0B, "teach_record"),
-    (0x0C, "teach_execute"),
-    (0x0D, "teach_pause"),
-    (0x0E, "main_ntc_over_temp"),
-    (0x0F, "brake_ntc_over_temp"),
-];
-
-/// 0x2A1 byte 0 (control mode) values and their scenario names.
-pub const CTRL_MODE: [(u8, &str); 8] = [
-    (0x00, "standby"),
-    (0x01, "can"),
-    (0x02, "teach"),
-    (0x03, "ethernet"),
-    (0x04, "wifi"),
-    (0x05, "remote"),
-    (0x06, "linkage_teach"),
-    (0x07, "offline_trajectory"),
-];
-
-/// Active MOVE mode names (0x2A1 byte 2; MIT is `m` whatever its firmware code).
-pub const MOVE_MODE: [&str; 6] = ["p", "j", "l", "c", "m", "cpv"];
-
-/// Motion status names (0x2A1 byte 4).
-pub const MOTION: [&str; 2] = ["reached", "moving"];
+use driver::piper::{
+    ActiveMove, ArmStatusCode, CtrlMode, DriverStatus, GripperStatus, MotionStatus,
+};
 
 /// Feedback liveness as the driver sees it.
 pub const FEEDBACK: [&str; 2] = ["alive", "lost"];
 
-/// Joint driver fault flags (0x261‑0x266 byte 5, without the enable bit).
-pub const JOINT_FLAGS: [&str; 7] = [
-    "under_voltage",
-    "motor_over_temp",
-    "over_current",
-    "driver_over_temp",
-    "collision",
-    "driver_error",
-    "stall",
-];
-
-/// Gripper fault flags (0x2A8 byte 6, without the enable and homed bits).
-pub const GRIPPER_FLAGS: [&str; 6] = [
-    "under_voltage",
-    "motor_over_temp",
-    "over_current",
-    "driver_over_temp",
-    "sensor_fault",
-    "driver_error",
-];
-
-/// The name of a coded value, or `unknown(0xNN)`.
-pub fn name_of(table: &[(u8, &'static str)], code: u8) -> String {
-    table.iter().find(|(c, _)| *c == code).map_or_else(
-        || format!("unknown(0x{code:02X})"),
-        |(_, n)| (*n).to_owned(),
-    )
+/// Arm status names (0x2A1 byte 1), in code order.
+pub fn arm_status_names() -> Vec<&'static str> {
+    ArmStatusCode::ALL.iter().filter_map(|c| c.name()).collect()
 }
 
-/// Resolve a name or a number written in a scenario (`angle_limit`, `0x04`, `4`) to the
-/// canonical name.
-pub fn resolve(table: &[(u8, &'static str)], text: &str) -> Option<&'static str> {
-    if let Some((_, name)) = table.iter().find(|(_, n)| *n == text) {
-        return Some(name);
+/// Control mode names (0x2A1 byte 0), in code order.
+pub fn ctrl_mode_names() -> Vec<&'static str> {
+    CtrlMode::ALL.iter().filter_map(|c| c.name()).collect()
+}
+
+/// Active MOVE mode names (MIT is `m` whatever its firmware code).
+pub fn move_mode_names() -> Vec<&'static str> {
+    ActiveMove::ALL.iter().filter_map(|m| m.name()).collect()
+}
+
+/// Motion status names.
+pub fn motion_names() -> Vec<&'static str> {
+    MotionStatus::ALL.iter().filter_map(|m| m.name()).collect()
+}
+
+/// Joint driver fault flags (without the enable bit).
+pub fn joint_flags() -> Vec<&'static str> {
+    DriverStatus::fault_names().collect()
+}
+
+/// Gripper fault flags (without the enable and homed bits).
+pub fn gripper_flags() -> Vec<&'static str> {
+    GripperStatus::fault_names().collect()
+}
+
+/// A number written in a scenario (`0x04` or `4`).
+fn number(text: &str) -> Option<u8> {
+    match text.strip_prefix("0x").or_else(|| text.strip_prefix("0X")) {
+        Some(hex) => u8::from_str_radix(hex, 16).ok(),
+        None => text.parse::<u8>().ok(),
     }
-    let number = match text.strip_prefix("0x").or_else(|| text.strip_prefix("0X")) {
-        Some(hex) => u8::from_str_radix(hex, 16).ok()?,
-        None => text.parse::<u8>().ok()?,
-    };
-    table.iter().find(|(c, _)| *c == number).map(|(_, n)| *n)
+}
+
+/// Resolve an arm status written as a name or a code (`angle_limit`, `0x04`, `4`) to its
+/// canonical name.
+pub fn resolve_arm_status(text: &str) -> Option<&'static str> {
+    ArmStatusCode::from_name(text)
+        .or_else(|| number(text).map(ArmStatusCode::from))
+        .and_then(ArmStatusCode::name)
+}
+
+/// Resolve a control mode written as a name or a code to its canonical name.
+pub fn resolve_ctrl_mode(text: &str) -> Option<&'static str> {
+    CtrlMode::from_name(text)
+        .or_else(|| number(text).map(CtrlMode::from))
+        .and_then(CtrlMode::name)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_and_codes_resolve_through_the_driver_tables() {
+        assert_eq!(resolve_arm_status("angle_limit"), Some("angle_limit"));
+        assert_eq!(resolve_arm_status("0x04"), Some("angle_limit"));
+        assert_eq!(resolve_arm_status("7"), Some("collision"));
+        assert_eq!(resolve_arm_status("0x2A"), None);
+        assert_eq!(resolve_ctrl_mode("1"), Some("can"));
+        assert_eq!(arm_status_names().len(), 16);
+        assert_eq!(move_mode_names(), ["p", "j", "l", "c", "m", "cpv"]);
+        assert_eq!(motion_names(), ["reached", "moving"]);
+        assert!(joint_flags().contains(&"stall") && !joint_flags().contains(&"enabled"));
+        assert_eq!(gripper_flags().len(), 6);
+    }
 }

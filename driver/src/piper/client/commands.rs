@@ -1,54 +1,31 @@
-//! Commands (seed interface V2): motion, mode, enable with confirmation, gripper, MIT, config.
+//! Commands (seed interface V2): motion, mode, enable with confirmation, gripper, MIT. Every
+//! argument is SI or typed; `codec::si` builds the frames.
 
 use std::time::Duration;
 
 use tokio::time::{sleep_until, Instant};
 
 use super::{lock, Piper};
-use crate::piper::codec::FirmwareVersion;
+use crate::piper::codec::si::{self, RangeError};
 use crate::piper::codec::{
-    encode_motor_enable, encode_move_c_point, AckedCommand, AssistLevels, CollisionLevels,
-    CpvFrame, CtrlMode, EmergencyStop, EndParams, EndPoseTarget, GripperCtrl, GripperTeachParams,
-    InstallPosition, JointConfig, JointLimits, JointMask, JointTargets, LeaderFollowerConfig,
-    LeaderHome, LedCtrl, MitCommand, MitMode, ModeCtrl, MotionCtrl1, MotionStatus, MotorSelect,
-    MoveCPoint, MoveMode, ParamCommand, UNCHANGED_U16,
+    encode_motor_enable, encode_move_c_point, CtrlMode, EmergencyStop, FirmwareVersion,
+    GripperCtrl, JointMask, MitCommand, MotionCtrl1, MotionStatus, MotorSelect, TeachStatus,
+    TrackCommand,
 };
 use crate::piper::error::PiperError;
-use crate::piper::state::{mdeg_to_rad, rad_to_mdeg, PiperState};
+use crate::piper::state::PiperState;
+use crate::piper::types::{CirclePoint, GripperCommand, Install, ModeCommand, MoveKind, Pose};
 
-/// A MOVE mode as the caller means it; the driver picks the firmware's wire code.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum MoveKind {
-    /// MOVE P (Cartesian point to point, firmware IK).
-    P,
-    /// MOVE J (joint space, smoothed).
-    J,
-    /// MOVE L (linear).
-    L,
-    /// MOVE C (circular, points via [`Piper::move_c_point`]).
-    C,
-    /// MIT pass-through (0x04, or 0x06 from S-V1.8-8), with the 0xAD flag.
-    Mit,
-    /// MOVE CPV.
-    Cpv,
-    /// "High-follow": joint targets passed through without smoothing (MOVE J + 0xAD).
-    HighFollow,
+impl From<RangeError> for PiperError {
+    fn from(error: RangeError) -> Self {
+        PiperError::InvalidValue {
+            field: error.field,
+            value: error.value,
+        }
+    }
 }
 
-/// A gripper command in SI units.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct GripperCommand {
-    /// Target stroke (jaw opening), m.
-    pub stroke_m: f64,
-    /// Torque limit, N·m (0–5 in the SDK).
-    pub effort_nm: f64,
-    /// Enable the gripper driver.
-    pub enable: bool,
-    /// Clear the gripper error.
-    pub clear_error: bool,
-}
-
-fn check_joint(joint: u8) -> Result<u8, PiperError> {
+pub(crate) fn check_joint(joint: u8) -> Result<u8, PiperError> {
     if (1..=6).contains(&joint) {
         Ok(joint)
     } else {
@@ -104,73 +81,67 @@ impl Piper {
         self.resume().await
     }
 
-    /// Any 0x150 command (offline trajectory, drag teach).
-    pub async fn motion_ctrl_1(&self, command: MotionCtrl1) -> Result<(), PiperError> {
-        self.send_frame(command.encode()).await
+    /// Drag-teach command (0x150 byte 2: record, execute, pause, …).
+    pub async fn drag_teach(&self, command: TeachStatus) -> Result<(), PiperError> {
+        self.send_frame(
+            MotionCtrl1 {
+                drag_teach: command,
+                ..MotionCtrl1::estop(EmergencyStop::None)
+            }
+            .encode(),
+        )
+        .await
     }
 
-    /// Any 0x151 mode command, as given.
-    pub async fn mode_ctrl(&self, command: ModeCtrl) -> Result<(), PiperError> {
+    /// Offline-trajectory command (0x150 byte 1: pause, continue, clear, …). Transfers go
+    /// through [`Piper::trajectory_transfer_point`] and [`Piper::trajectory_transfer_end`].
+    pub async fn trajectory_command(&self, command: TrackCommand) -> Result<(), PiperError> {
+        self.send_frame(
+            MotionCtrl1 {
+                track: command,
+                ..MotionCtrl1::estop(EmergencyStop::None)
+            }
+            .encode(),
+        )
+        .await
+    }
+
+    /// Mode command (0x151): control mode, MOVE mode (the driver picks the firmware's code),
+    /// speed, MIT flag and installation position.
+    pub async fn set_mode(&self, command: ModeCommand) -> Result<(), PiperError> {
         check_speed(command.speed_pct)?;
-        self.send_frame(command.encode()).await
+        let frame = si::mode_ctrl(&command, self.firmware_version()).encode();
+        self.send_frame(frame).await
     }
 
     /// CAN-command mode with `kind` at `speed_pct` (0–100).
     pub async fn set_move_mode(&self, kind: MoveKind, speed_pct: u8) -> Result<(), PiperError> {
-        let (move_mode, mit_mode) = self.move_mode_code(kind);
-        self.mode_ctrl(ModeCtrl {
-            ctrl_mode: CtrlMode::CanCommand,
-            move_mode,
-            speed_pct: check_speed(speed_pct)?,
-            mit_mode,
-            dwell_s: 0,
-            install_pos: InstallPosition::Unchanged,
+        self.set_mode(ModeCommand {
+            control: CtrlMode::CanCommand,
+            move_kind: kind,
+            speed_pct,
+            mit_flag: None,
+            install: None,
         })
         .await
     }
 
     /// Set the installation position (fw >= V1.5-2) without changing the move mode.
-    pub async fn set_install_position(&self, position: InstallPosition) -> Result<(), PiperError> {
-        self.mode_ctrl(ModeCtrl {
-            ctrl_mode: CtrlMode::CanCommand,
-            move_mode: MoveMode::Unchanged,
-            speed_pct: 0,
-            mit_mode: MitMode::Ignore,
-            dwell_s: 0,
-            install_pos: position,
-        })
-        .await
+    pub async fn set_install_position(&self, position: Install) -> Result<(), PiperError> {
+        self.send_frame(si::install_only(position).encode()).await
     }
 
-    /// The wire MOVE-mode code and MIT flag of `kind` for the firmware in use.
-    pub fn move_mode_code(&self, kind: MoveKind) -> (MoveMode, MitMode) {
-        match kind {
-            MoveKind::P => (MoveMode::P, MitMode::PositionVelocity),
-            MoveKind::J => (MoveMode::J, MitMode::PositionVelocity),
-            MoveKind::L => (MoveMode::L, MitMode::PositionVelocity),
-            MoveKind::C => (MoveMode::C, MitMode::PositionVelocity),
-            MoveKind::Cpv => (MoveMode::Cpv, MitMode::PositionVelocity),
-            MoveKind::HighFollow => (MoveMode::J, MitMode::Mit),
-            MoveKind::Mit => {
-                let code = self
-                    .firmware_version()
-                    .map_or(MoveMode::Mit, |v| v.mit_move_mode());
-                (code, MitMode::Mit)
-            }
-        }
-    }
-
-    /// Wait until 0x2A1 reports CAN-command mode with the MOVE mode of `kind`.
+    /// Wait until 0x2A1 reports CAN-command mode with the MOVE mode of `kind` (MIT matches
+    /// whichever code the firmware uses).
     pub async fn wait_for_move_mode(
         &self,
         kind: MoveKind,
         timeout: Duration,
     ) -> Result<PiperState, PiperError> {
-        let (code, _) = self.move_mode_code(kind);
         self.wait_for(
             move |s| {
                 s.arm_status.as_ref().is_some_and(|a| {
-                    a.value.ctrl_mode == CtrlMode::CanCommand && a.value.mode_feed == code
+                    a.value.ctrl_mode == CtrlMode::CanCommand && a.value.move_mode.matches(kind)
                 })
             },
             timeout,
@@ -249,14 +220,20 @@ impl Piper {
         }
     }
 
-    /// Send the end-pose target frames 0x152–0x154 as given.
-    pub async fn end_pose(&self, target: EndPoseTarget) -> Result<(), PiperError> {
-        self.send_frames(&target.encode()).await
-    }
-
-    /// Send joint targets (0x155–0x157) in millidegrees, after the client-side limits.
-    pub async fn joints_mdeg(&self, angles_mdeg: [i32; 6]) -> Result<(), PiperError> {
-        self.joints_rad(angles_mdeg.map(mdeg_to_rad)).await
+    /// Send a Cartesian target (0x152–0x154): position in m, ZYX Euler angles in rad.
+    pub async fn end_pose(&self, target: Pose) -> Result<(), PiperError> {
+        for (field, value) in target
+            .position_m
+            .iter()
+            .chain(target.orientation_rad.iter())
+            .map(|v| ("pose", *v))
+        {
+            if !value.is_finite() {
+                return Err(PiperError::InvalidValue { field, value });
+            }
+        }
+        self.send_frames(&si::end_pose_target(&target).encode())
+            .await
     }
 
     /// Send joint targets in rad, after the client-side limits (clamp or reject).
@@ -265,10 +242,8 @@ impl Piper {
         let checked = config
             .limits
             .check_joints(targets_rad, config.joint_limit_policy)?;
-        let angles_mdeg = checked.map(rad_to_mdeg);
-        *lock(&self.inner.last_joint_target_mdeg) = Some(angles_mdeg);
-        self.send_frames(&JointTargets { angles_mdeg }.encode())
-            .await
+        *lock(&self.inner.last_joint_target_rad) = Some(checked);
+        self.send_frames(&si::joint_targets(checked).encode()).await
     }
 
     /// MOVE J: CAN mode + MOVE J at `speed_pct`, then the joint targets (rad).
@@ -293,18 +268,20 @@ impl Piper {
         tolerance_rad: f64,
         timeout: Duration,
     ) -> Result<PiperState, PiperError> {
-        let target = *lock(&self.inner.last_joint_target_mdeg);
+        // Compare with what the wire carried (millidegree resolution), not the f64 asked for.
+        let target = lock(&self.inner.last_joint_target_rad)
+            .map(|t| t.map(|r| si::mdeg_to_rad(si::rad_to_mdeg(r))));
         self.wait_for(
             move |s| {
                 let reached = s
                     .arm_status
                     .as_ref()
-                    .is_some_and(|a| a.value.motion_status == MotionStatus::Reached);
+                    .is_some_and(|a| a.value.motion == MotionStatus::Reached);
                 let close = match (target, s.joints_rad()) {
                     (Some(target), Some(now)) => target
                         .iter()
                         .zip(now.iter())
-                        .all(|(t, n)| (mdeg_to_rad(*t) - n).abs() <= tolerance_rad),
+                        .all(|(t, n)| (t - n).abs() <= tolerance_rad),
                     (None, _) => true,
                     (Some(_), None) => false,
                 };
@@ -316,9 +293,10 @@ impl Piper {
         .await
     }
 
-    /// MOVE C point index (0x158), sent after the pose of that point.
-    pub async fn move_c_point(&self, point: MoveCPoint) -> Result<(), PiperError> {
-        self.send_frame(encode_move_c_point(point)).await
+    /// MOVE C point marker (0x158), sent after the pose of that point.
+    pub async fn move_c_point(&self, point: CirclePoint) -> Result<(), PiperError> {
+        self.send_frame(encode_move_c_point(si::circle_point(point)))
+            .await
     }
 
     /// Gripper command in SI units, after the client-side gripper limit.
@@ -333,31 +311,23 @@ impl Piper {
                 value: command.effort_nm,
             });
         }
-        self.gripper_ctrl(GripperCtrl {
-            stroke_um: (stroke_m * 1e6).round() as i32,
-            effort_mnm: (command.effort_nm * 1000.0).round() as u16,
-            enable: command.enable,
-            clear_error: command.clear_error,
-            set_zero: false,
-        })
-        .await
-    }
-
-    /// Raw 0x159 gripper control.
-    pub async fn gripper_ctrl(&self, command: GripperCtrl) -> Result<(), PiperError> {
-        self.send_frame(command.encode()).await
+        let frame = si::gripper_ctrl(&GripperCommand {
+            stroke_m,
+            ..command
+        })?;
+        self.send_frame(frame.encode()).await
     }
 
     /// Set the gripper's current position as zero (sent with the gripper disabled, spec §5.6).
     pub async fn gripper_set_zero(&self) -> Result<(), PiperError> {
-        self.gripper_ctrl(GripperCtrl {
+        let frame = GripperCtrl {
             stroke_um: 0,
             effort_mnm: 0,
             enable: false,
             clear_error: false,
             set_zero: true,
-        })
-        .await
+        };
+        self.send_frame(frame.encode()).await
     }
 
     /// MIT command for joint 1–6 (SI units), packed for the firmware in use. The MIT mode must
@@ -384,175 +354,6 @@ impl Piper {
         };
         self.send_frame(command.quantise(packing).encode(joint, packing))
             .await
-    }
-
-    /// Leader/follower configuration (0x470; no reply exists).
-    pub async fn set_leader_follower(
-        &self,
-        config: LeaderFollowerConfig,
-    ) -> Result<(), PiperError> {
-        self.send_frame(config.encode()).await
-    }
-
-    /// Leader-arm homing (0x191, fw >= V1.7-4).
-    pub async fn leader_home(&self, request: LeaderHome) -> Result<(), PiperError> {
-        self.send_frame(request.encode()).await
-    }
-
-    /// Set a joint's angle limits and max speed (0x474) and wait for the 0x476 ack.
-    pub async fn set_joint_limits(&self, limits: JointLimits) -> Result<(), PiperError> {
-        check_joint(limits.joint)?;
-        self.send_acked(limits.encode_set(), AckedCommand::SetJointLimits)
-            .await
-            .map(|_| ())
-    }
-
-    /// Set a joint's max speed only (angles unchanged), 0.01 rad/s, acked.
-    pub async fn set_joint_max_speed(
-        &self,
-        joint: u8,
-        max_speed_crad_s: u16,
-    ) -> Result<(), PiperError> {
-        let unchanged = UNCHANGED_U16 as i16;
-        self.set_joint_limits(JointLimits {
-            joint,
-            max_angle_ddeg: unchanged,
-            min_angle_ddeg: unchanged,
-            max_speed_crad_s,
-        })
-        .await
-    }
-
-    /// Set the max speed of all six joints, acked one by one.
-    pub async fn set_max_speed_all(&self, max_speed_crad_s: u16) -> Result<(), PiperError> {
-        for joint in 1..=6 {
-            self.set_joint_max_speed(joint, max_speed_crad_s).await?;
-        }
-        Ok(())
-    }
-
-    /// Raw 0x475 joint configuration, acked (a failed zero-set is [`PiperError::Rejected`]).
-    pub async fn joint_config(&self, config: JointConfig) -> Result<(), PiperError> {
-        if config.joint != 7 {
-            check_joint(config.joint)?;
-        }
-        let ack = self
-            .send_acked(config.encode(), AckedCommand::JointConfig)
-            .await?;
-        if config.set_zero && !ack.zero_ok {
-            return Err(PiperError::Rejected {
-                command: AckedCommand::JointConfig,
-                reason: "zero not set",
-            });
-        }
-        Ok(())
-    }
-
-    /// Set the current position of joint 1–6 (7 = all) as its zero.
-    pub async fn set_joint_zero(&self, joint: u8) -> Result<(), PiperError> {
-        self.joint_config(JointConfig {
-            joint,
-            set_zero: true,
-            apply_acc: false,
-            max_acc_crad_s2: UNCHANGED_U16,
-            clear_error: false,
-        })
-        .await
-    }
-
-    /// Set the max acceleration of joint 1–6 (7 = all), 0.01 rad/s² (0–500).
-    pub async fn set_joint_max_acc(
-        &self,
-        joint: u8,
-        max_acc_crad_s2: u16,
-    ) -> Result<(), PiperError> {
-        self.joint_config(JointConfig {
-            joint,
-            set_zero: false,
-            apply_acc: true,
-            max_acc_crad_s2,
-            clear_error: false,
-        })
-        .await
-    }
-
-    /// Clear the error of joint 1–6 (7 = all).
-    pub async fn clear_joint_error(&self, joint: u8) -> Result<(), PiperError> {
-        self.joint_config(JointConfig {
-            joint,
-            set_zero: false,
-            apply_acc: false,
-            max_acc_crad_s2: UNCHANGED_U16,
-            clear_error: true,
-        })
-        .await
-    }
-
-    /// 0x477 settings (reset to defaults, 0x48X feedback switch, payload), acked. Queries go
-    /// through the `query_*` methods.
-    pub async fn param_settings(&self, command: ParamCommand) -> Result<(), PiperError> {
-        let command = ParamCommand {
-            query: None,
-            ..command
-        };
-        if !command.expects_ack() {
-            return Err(PiperError::InvalidValue {
-                field: "param_settings (nothing to set)",
-                value: 0.0,
-            });
-        }
-        self.send_acked(command.encode(), AckedCommand::ParamSettings)
-            .await
-            .map(|_| ())
-    }
-
-    /// Set end-effector max velocity / acceleration (0x479; 0x7FFF fields unchanged), acked.
-    pub async fn set_end_params(&self, params: EndParams) -> Result<(), PiperError> {
-        self.send_acked(params.encode_set(), AckedCommand::SetEndParams)
-            .await
-            .map(|_| ())
-    }
-
-    /// Set collision-protection levels 0–8 per joint (0xFF = unchanged), acked.
-    pub async fn set_collision_levels(&self, levels: CollisionLevels) -> Result<(), PiperError> {
-        for level in levels.levels {
-            if level > 8 && level != 0xFF {
-                return Err(PiperError::InvalidValue {
-                    field: "collision level",
-                    value: f64::from(level),
-                });
-            }
-        }
-        self.send_acked(levels.encode_set(), AckedCommand::SetCollision)
-            .await
-            .map(|_| ())
-    }
-
-    /// Set gripper / teach-pendant parameters (0x47D; the arm sends no ack).
-    pub async fn set_gripper_teach_params(
-        &self,
-        params: GripperTeachParams,
-    ) -> Result<(), PiperError> {
-        self.send_frame(params.encode_set()).await
-    }
-
-    /// Set joint assistance levels (0x487, [AGX] only; no ack).
-    pub async fn set_assist_levels(&self, levels: AssistLevels) -> Result<(), PiperError> {
-        self.send_frame(levels.encode_set()).await
-    }
-
-    /// LED control (0x121, documented only in [DOC]).
-    pub async fn led(&self, command: LedCtrl) -> Result<(), PiperError> {
-        check_joint(command.joint)?;
-        self.send_frame(command.encode()).await
-    }
-
-    /// Write a CPV parameter (0x180 + motor; no documented ack).
-    pub async fn cpv_write(&self, frame: CpvFrame) -> Result<(), PiperError> {
-        if !(1..=7).contains(&frame.motor) {
-            return Err(PiperError::InvalidJoint { joint: frame.motor });
-        }
-        self.send_frame(frame.encode()).await
     }
 }
 

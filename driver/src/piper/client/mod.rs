@@ -5,9 +5,10 @@ mod builder;
 mod commands;
 mod link;
 mod queries;
+mod settings;
 
 use std::collections::BTreeSet;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU8, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard, RwLock};
 use std::time::Duration;
 
@@ -17,7 +18,6 @@ use tokio::task::JoinHandle;
 use tokio::time::{sleep, Instant};
 
 pub use builder::{BusOpener, DhSelection, FirmwareSelection, PiperBuilder, PiperConfig, Timeouts};
-pub use commands::{GripperCommand, MoveKind};
 
 use super::codec::{FirmwareAssembler, FirmwareInfo, FirmwareVersion, Message, MitPacking};
 use super::error::PiperError;
@@ -28,7 +28,7 @@ use link::Counters;
 
 /// A reply to a query, as the receive task hands it to waiting callers.
 #[derive(Debug, Clone, PartialEq)]
-pub enum Reply {
+pub(crate) enum Reply {
     /// A decoded reply frame (0x473, 0x476, 0x478, 0x47B, 0x47C, 0x47E, 0x488, CPV).
     Frame(Message),
     /// A complete 11-frame firmware reply.
@@ -55,7 +55,8 @@ pub(crate) struct Inner {
     replies: broadcast::Sender<Reply>,
     firmware: Mutex<FirmwareAssembler>,
     firmware_version: Mutex<Option<FirmwareVersion>>,
-    last_joint_target_mdeg: Mutex<Option<[i32; 6]>>,
+    last_joint_target_rad: Mutex<Option<[f64; 6]>>,
+    led_counter: AtomicU8,
     counters: Mutex<Counters>,
     query_lock: tokio::sync::Mutex<()>,
     tasks: Mutex<Vec<JoinHandle<()>>>,
@@ -131,7 +132,8 @@ impl Piper {
             replies: broadcast::channel(256).0,
             firmware: Mutex::new(FirmwareAssembler::new()),
             firmware_version: Mutex::new(forced),
-            last_joint_target_mdeg: Mutex::new(None),
+            last_joint_target_rad: Mutex::new(None),
+            led_counter: AtomicU8::new(0),
             counters: Mutex::new(Counters::default()),
             query_lock: tokio::sync::Mutex::new(()),
             tasks: Mutex::new(Vec::new()),
@@ -225,7 +227,9 @@ impl Piper {
         }
     }
 
-    /// Send one frame, retrying while the transmit queue is full (up to the send timeout).
+    /// Send one raw frame, retrying while the transmit queue is full (up to the send
+    /// timeout). The escape hatch for frames the typed API does not cover; build them with
+    /// [`super::codec`].
     pub async fn send_frame(&self, frame: CanFrame) -> Result<(), PiperError> {
         self.ensure_connected()?;
         let deadline = Instant::now() + self.inner.config.timeouts.send;
@@ -262,8 +266,9 @@ impl Piper {
         self.inner.state.subscribe()
     }
 
-    /// Every decoded message as it arrives, stamped with the frame count since connect as `seq`
-    /// (a lagging receiver loses the oldest).
+    /// Every decoded codec message as it arrives, stamped with the frame count since connect
+    /// as `seq` (a lagging receiver loses the oldest). A wire-level tap for tools and
+    /// recorders; [`Piper::state`] carries the same information in SI units.
     pub fn subscribe_messages(&self) -> broadcast::Receiver<Stamped<Message>> {
         self.inner.messages.subscribe()
     }
@@ -280,7 +285,7 @@ impl Piper {
     }
 
     /// The MIT packing in use: from the firmware, 8-bit + check nibble while unknown.
-    pub fn mit_packing(&self) -> MitPacking {
+    pub(crate) fn mit_packing(&self) -> MitPacking {
         self.firmware_version()
             .map_or(MitPacking::Torque8Crc, FirmwareVersion::mit_packing)
     }

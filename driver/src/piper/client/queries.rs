@@ -6,11 +6,20 @@ use tokio::time::Instant;
 
 use super::{lock, Piper, Reply};
 use crate::piper::codec::{
-    encode_firmware_query, encode_joint_query, Ack, AckedCommand, CollisionLevels, CpvFrame,
-    CpvMode, EmergencyStop, EndParams, FirmwareInfo, GripperTeachParams, JointLimits, JointMaxAcc,
-    JointQuery, Message, MotionCtrl1, ParamCommand, ParamQuery, TrackCommand,
+    encode_firmware_query, encode_joint_query, si, Ack, AckedCommand, CpvFrame, CpvMode,
+    EmergencyStop, FirmwareInfo, GripperTeachParams as WireGripperTeach, JointQuery, Message,
+    MotionCtrl1, ParamCommand, ParamQuery, TrackCommand,
 };
 use crate::piper::error::PiperError;
+use crate::piper::types::{EndLimits, GripperTeachParams, JointLimits, TrajectoryAck};
+
+fn trajectory_ack(ack: Ack) -> TrajectoryAck {
+    TrajectoryAck {
+        point: ack.traj_index,
+        name_index: ack.name_index,
+        crc16: ack.crc16,
+    }
+}
 
 impl Piper {
     /// Send `frames`, then wait for replies until `collect` returns `Some` (one query at a
@@ -53,7 +62,7 @@ impl Piper {
     }
 
     /// Send a set command and wait for its 0x476 acknowledgement.
-    pub async fn send_acked(
+    pub(crate) async fn send_acked(
         &self,
         frame: CanFrame,
         command: AckedCommand,
@@ -102,7 +111,9 @@ impl Piper {
             "0x473 joint limits",
             || {},
             |reply| match reply {
-                Reply::Frame(Message::JointLimits(l)) if l.joint == joint => Some(*l),
+                Reply::Frame(Message::JointLimits(l)) if l.joint == joint => {
+                    Some(si::joint_limits(l))
+                }
                 _ => None,
             },
         )
@@ -121,7 +132,7 @@ impl Piper {
             || {},
             |reply| {
                 if let Reply::Frame(Message::JointLimits(l)) = reply {
-                    got[usize::from(l.joint - 1)] = Some(*l);
+                    got[usize::from(l.joint - 1)] = Some(si::joint_limits(l));
                 }
                 all(&got)
             },
@@ -129,34 +140,36 @@ impl Piper {
         .await
     }
 
-    /// Max acceleration of joint 1–6 (0x472 → 0x47C).
-    pub async fn query_joint_max_acc(&self, joint: u8) -> Result<JointMaxAcc, PiperError> {
+    /// Max acceleration of joint 1–6, rad/s² (0x472 → 0x47C).
+    pub async fn query_joint_max_acc(&self, joint: u8) -> Result<f64, PiperError> {
         check(joint)?;
         self.query(
             &[encode_joint_query(joint, JointQuery::MaxAcc)],
             "0x47C joint max acc",
             || {},
             |reply| match reply {
-                Reply::Frame(Message::JointMaxAcc(a)) if a.joint == joint => Some(*a),
+                Reply::Frame(Message::JointMaxAcc(a)) if a.joint == joint => {
+                    Some(si::max_acc(a.max_acc_crad_s2))
+                }
                 _ => None,
             },
         )
         .await
     }
 
-    /// Max acceleration of all six joints.
-    pub async fn query_all_joint_max_acc(&self) -> Result<[JointMaxAcc; 6], PiperError> {
+    /// Max acceleration of all six joints, rad/s².
+    pub async fn query_all_joint_max_acc(&self) -> Result<[f64; 6], PiperError> {
         let frames: Vec<_> = (1..=6)
             .map(|j| encode_joint_query(j, JointQuery::MaxAcc))
             .collect();
-        let mut got: [Option<JointMaxAcc>; 6] = [None; 6];
+        let mut got: [Option<f64>; 6] = [None; 6];
         self.query(
             &frames,
             "0x47C joint max acc (all)",
             || {},
             |reply| {
                 if let Reply::Frame(Message::JointMaxAcc(a)) = reply {
-                    got[usize::from(a.joint - 1)] = Some(*a);
+                    got[usize::from(a.joint - 1)] = Some(si::max_acc(a.max_acc_crad_s2));
                 }
                 all(&got)
             },
@@ -179,26 +192,26 @@ impl Piper {
         self.query(&[frame], what, || {}, pick).await
     }
 
-    /// End-effector max velocity / acceleration (0x477 `01` → 0x478).
-    pub async fn query_end_params(&self) -> Result<EndParams, PiperError> {
+    /// End-effector velocity / acceleration limits (0x477 `01` → 0x478).
+    pub async fn query_end_limits(&self) -> Result<EndLimits, PiperError> {
         self.param_query(
             ParamQuery::EndParams,
             "0x478 end params",
             |reply| match reply {
-                Reply::Frame(Message::EndParams(p)) => Some(*p),
+                Reply::Frame(Message::EndParams(p)) => Some(si::end_limits(p)),
                 _ => None,
             },
         )
         .await
     }
 
-    /// Collision-protection levels (0x477 `02` → 0x47B).
-    pub async fn query_collision_levels(&self) -> Result<CollisionLevels, PiperError> {
+    /// Collision-protection levels 0–8 per joint (0x477 `02` → 0x47B).
+    pub async fn query_collision_levels(&self) -> Result<[u8; 6], PiperError> {
         self.param_query(
             ParamQuery::Collision,
             "0x47B collision levels",
             |reply| match reply {
-                Reply::Frame(Message::Collision(c)) => Some(*c),
+                Reply::Frame(Message::Collision(c)) => Some(c.levels),
                 _ => None,
             },
         )
@@ -207,6 +220,12 @@ impl Piper {
 
     /// Gripper / teach-pendant parameters (0x477 `04` → 0x47E, fw >= V1.5-2).
     pub async fn query_gripper_teach_params(&self) -> Result<GripperTeachParams, PiperError> {
+        self.query_gripper_teach_wire()
+            .await
+            .map(|wire| si::gripper_teach(&wire))
+    }
+
+    pub(crate) async fn query_gripper_teach_wire(&self) -> Result<WireGripperTeach, PiperError> {
         self.param_query(
             ParamQuery::GripperTeach,
             "0x47E gripper/teach params",
@@ -219,13 +238,13 @@ impl Piper {
     }
 
     /// Current offline-trajectory index (0x477 `03` → 0x476 with the index in bytes 4–7).
-    pub async fn query_trajectory_index(&self) -> Result<Ack, PiperError> {
+    pub async fn query_trajectory_index(&self) -> Result<TrajectoryAck, PiperError> {
         self.param_query(
             ParamQuery::TrajectoryIndex,
             "0x476 trajectory index",
             |reply| match reply {
                 Reply::Frame(Message::Ack(ack)) if ack.cmd == AckedCommand::ParamSettings => {
-                    Some(*ack)
+                    Some(trajectory_ack(*ack))
                 }
                 _ => None,
             },
@@ -236,7 +255,7 @@ impl Piper {
     /// Offline-trajectory transfer of point `index` (0x150 `00 07 00 N`): waits for the
     /// 0x476 acknowledgement of that point (the caller resends on [`PiperError::Timeout`],
     /// as the spec asks).
-    pub async fn trajectory_transfer_point(&self, index: u8) -> Result<Ack, PiperError> {
+    pub async fn trajectory_transfer_point(&self, index: u8) -> Result<TrajectoryAck, PiperError> {
         let frame = MotionCtrl1 {
             track: TrackCommand::Transfer,
             traj_index: index,
@@ -251,7 +270,7 @@ impl Piper {
                 Reply::Frame(Message::Ack(ack))
                     if ack.cmd == AckedCommand::TrajectoryPoint && ack.traj_index == index =>
                 {
-                    Some(*ack)
+                    Some(trajectory_ack(*ack))
                 }
                 _ => None,
             },
@@ -266,7 +285,7 @@ impl Piper {
         last_index: u8,
         name_index: u16,
         crc16: u16,
-    ) -> Result<Ack, PiperError> {
+    ) -> Result<TrajectoryAck, PiperError> {
         let frame = MotionCtrl1 {
             track: TrackCommand::TransferEnd,
             traj_index: last_index,
@@ -291,7 +310,7 @@ impl Piper {
             )
             .await?;
         if ack.pkg_status == 0xAE {
-            Ok(ack)
+            Ok(trajectory_ack(ack))
         } else {
             Err(PiperError::Rejected {
                 command: AckedCommand::TrajectoryPoint,
@@ -302,21 +321,22 @@ impl Piper {
 
     /// Wait for the next 0x476 acknowledgement of `command` without sending anything (for
     /// commands sent with [`Piper::send_frame`]).
-    pub async fn wait_ack(&self, command: AckedCommand) -> Result<Ack, PiperError> {
+    pub async fn wait_ack(&self, command: AckedCommand) -> Result<(), PiperError> {
         self.query(
             &[],
             "0x476 acknowledgement",
             || {},
             |reply| match reply {
-                Reply::Frame(Message::Ack(ack)) if ack.cmd == command => Some(*ack),
+                Reply::Frame(Message::Ack(ack)) if ack.cmd == command => Some(()),
                 _ => None,
             },
         )
         .await
     }
 
-    /// Read a CPV parameter of motor 1–7 (`'r'` → `'a'` on the same id).
-    pub async fn cpv_read(&self, motor: u8, param: [u8; 2]) -> Result<CpvFrame, PiperError> {
+    /// Read a CPV parameter of motor 1–7 (`'r'` → `'a'` on the same id). CPV parameters are
+    /// undocumented vendor registers: the value is returned as the arm sent it.
+    pub async fn cpv_read(&self, motor: u8, param: [u8; 2]) -> Result<i32, PiperError> {
         if !(1..=7).contains(&motor) {
             return Err(PiperError::InvalidJoint { joint: motor });
         }
@@ -332,7 +352,7 @@ impl Piper {
             || {},
             |reply| match reply {
                 Reply::Frame(Message::Cpv(cpv)) if cpv.motor == motor && cpv.param == param => {
-                    Some(*cpv)
+                    Some(cpv.value)
                 }
                 _ => None,
             },

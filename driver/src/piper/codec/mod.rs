@@ -2,13 +2,16 @@
 //! typed commands into [`CanFrame`]s and received frames into typed [`Message`]s.
 //!
 //! Scaled integers stay here: every field carries its wire unit in its name (`_mdeg`, `_um`,
-//! `_mrad_s` …) and the state layer converts to SI.
+//! `_mrad_s` …). The client API never shows them: `si` converts to and from the SI types of
+//! the public API, and decides the "unchanged" codes and per-firmware MIT codes. This module
+//! is public for tools and byte-level tests; applications use [`super::Piper`].
 
 mod command;
 mod config;
 mod feedback;
 mod firmware;
 mod mit;
+pub(crate) mod si;
 mod types;
 
 pub use command::*;
@@ -16,6 +19,7 @@ pub use config::*;
 pub use feedback::*;
 pub use firmware::*;
 pub use mit::*;
+pub use si::{mdeg_to_rad, rad_to_mdeg};
 pub use types::*;
 
 use bus::{CanFrame, CanId};
