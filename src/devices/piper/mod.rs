@@ -16,8 +16,10 @@ use std::sync::Arc;
 use bus::CanBus;
 use driver::piper::{PiperBuilder, Timeouts};
 
-pub use model::{EmulatorFault as Fault, PiperAction as Action, PiperSettings as Settings};
+pub use model::{PiperAction as Action, PiperSettings as Settings};
 pub use observe::Observation;
+/// A Piper emulator fault: the emulator's own type, named by [`sim::piper::FaultKind`].
+pub use sim::piper::PiperFault as Fault;
 pub use validate::DEFAULT_FIRMWARE;
 
 /// A Piper condition.
@@ -28,9 +30,9 @@ use crate::harness::{Clock, Device, RunOptions, HOST_NODE};
 use device::PiperDevice;
 use emulator::PiperSim;
 
-/// Short description of a fault for logs and reports.
+/// Short description of a fault for logs and reports (the emulator's: `name joint N value`).
 pub fn describe_fault(fault: &Fault) -> String {
-    fault.describe()
+    fault.to_string()
 }
 
 /// What a condition wants, for reports.
