@@ -136,7 +136,11 @@ fn unknown_piper_fault_names_the_emulator_faults_and_suggests_one() {
     assert!(err.starts_with("broken.yaml:5:"), "{err}");
     assert!(err.contains("unknown fault `comm_los`"), "{err}");
     for kind in sim::piper::FaultKind::ALL {
-        assert!(err.contains(kind.name()), "{} missing from: {err}", kind.name());
+        assert!(
+            err.contains(kind.name()),
+            "{} missing from: {err}",
+            kind.name()
+        );
     }
     assert!(err.ends_with("did you mean `comm_loss`?"), "{err}");
 }
