@@ -128,3 +128,30 @@ fn error_display_shows_the_source_line_with_a_caret() {
         "{shown}"
     );
 }
+
+#[test]
+fn unknown_piper_fault_names_the_emulator_faults_and_suggests_one() {
+    let text = format!("{BENCH}steps:\n  - inject: {{fault: {{comm_los: {{joint: 3}}}}}}\n");
+    let err = error_of(&text);
+    assert!(err.starts_with("broken.yaml:5:"), "{err}");
+    assert!(err.contains("unknown fault `comm_los`"), "{err}");
+    for kind in sim::piper::FaultKind::ALL {
+        assert!(
+            err.contains(kind.name()),
+            "{} missing from: {err}",
+            kind.name()
+        );
+    }
+    assert!(err.ends_with("did you mean `comm_loss`?"), "{err}");
+}
+
+#[test]
+fn piper_fault_with_a_required_joint_cannot_be_written_bare() {
+    let text = format!("{BENCH}faults:\n  - {{at_ms: 100, fault: stall}}\nsteps:\n  - estop\n");
+    let err = error_of(&text);
+    assert!(err.starts_with("broken.yaml:5:"), "{err}");
+    assert!(
+        err.contains("`stall` needs arguments: write `stall: { ... }`"),
+        "{err}"
+    );
+}

@@ -8,7 +8,7 @@ use bus::virtual_bus::{VirtualBus, VirtualNode};
 use bus::{CanBus, CanFrame};
 use piper_common::{collect, last, spawn_emulator};
 use sim::physics::ObstacleShape;
-use sim::piper::{FirmwareProfile, PiperConfig, PiperFault, PiperFaultKind, PiperHandle};
+use sim::piper::{FirmwareProfile, NtcBoard, PiperConfig, PiperFault, PiperHandle};
 
 fn f8(id: u16, data: [u8; 8]) -> CanFrame {
     CanFrame::standard(id, &data).unwrap()
@@ -36,7 +36,7 @@ async fn joint_comm_loss_silences_that_joint() {
     let (_bus, host, emu) = start();
     enable(&host).await;
     collect(&host, Duration::from_millis(50)).await;
-    emu.inject(PiperFault::JointCommLoss { joint: 3 }).unwrap();
+    emu.inject(PiperFault::CommLoss { joint: 3 }).unwrap();
     // Frames already queued on the bus before the fault still arrive.
     collect(&host, Duration::from_millis(10)).await;
     let frames = collect(&host, Duration::from_millis(100)).await;
@@ -44,8 +44,7 @@ async fn joint_comm_loss_silences_that_joint() {
     assert_eq!((status[1], status[7]), (0x05, 0b100));
     assert!(last(&frames, 0x253).is_none() && last(&frames, 0x263).is_none());
     assert!(last(&frames, 0x252).is_some() && last(&frames, 0x264).is_some());
-    emu.clear(PiperFaultKind::JointCommLoss { joint: 3 })
-        .unwrap();
+    emu.clear(PiperFault::CommLoss { joint: 3 }).unwrap();
     let frames = collect(&host, Duration::from_millis(100)).await;
     let status = last(&frames, 0x2A1).unwrap();
     assert_eq!((status[1], status[7]), (0x00, 0));
@@ -107,10 +106,16 @@ async fn temperatures_under_voltage_and_board_ntc() {
         (85, 0x08)
     );
     assert_eq!(last(&frames, 0x2A1).unwrap()[1], 0x09);
-    emu.clear(PiperFaultKind::MotorOverTemp { joint: 4 })
-        .unwrap();
-    emu.clear(PiperFaultKind::DriverOverTemp { joint: 5 })
-        .unwrap();
+    emu.clear(PiperFault::MotorOverTemp {
+        joint: 4,
+        temp_c: 0.0,
+    })
+    .unwrap();
+    emu.clear(PiperFault::DriverOverTemp {
+        joint: 5,
+        temp_c: 0.0,
+    })
+    .unwrap();
     emu.inject(PiperFault::UnderVoltage { voltage_v: 18.0 })
         .unwrap();
     let frames = collect(&host, Duration::from_millis(60)).await;
@@ -127,15 +132,28 @@ async fn temperatures_under_voltage_and_board_ntc() {
         0x01,
         "gripper under-voltage bit"
     );
-    emu.clear(PiperFaultKind::UnderVoltage).unwrap();
-    emu.inject(PiperFault::MainControlOverTemp).unwrap();
+    emu.clear(PiperFault::UnderVoltage { voltage_v: 0.0 })
+        .unwrap();
+    emu.inject(PiperFault::NtcOverTemp {
+        board: NtcBoard::Main,
+    })
+    .unwrap();
     let frames = collect(&host, Duration::from_millis(30)).await;
     assert_eq!(last(&frames, 0x2A1).unwrap()[1], 0x0E);
-    emu.clear(PiperFaultKind::MainControlOverTemp).unwrap();
-    emu.inject(PiperFault::ResistorOverTemp).unwrap();
+    emu.clear(PiperFault::NtcOverTemp {
+        board: NtcBoard::Main,
+    })
+    .unwrap();
+    emu.inject(PiperFault::NtcOverTemp {
+        board: NtcBoard::BrakeResistor,
+    })
+    .unwrap();
     let frames = collect(&host, Duration::from_millis(30)).await;
     assert_eq!(last(&frames, 0x2A1).unwrap()[1], 0x0F);
-    emu.clear(PiperFaultKind::ResistorOverTemp).unwrap();
+    emu.clear(PiperFault::NtcOverTemp {
+        board: NtcBoard::BrakeResistor,
+    })
+    .unwrap();
     let frames = collect(&host, Duration::from_millis(30)).await;
     assert_eq!(last(&frames, 0x2A1).unwrap()[1], 0x00);
     emu.shutdown().await;
@@ -170,8 +188,11 @@ async fn external_torque_beyond_the_level_threshold_is_a_collision() {
         0x10,
         "collision bit"
     );
-    emu.clear(PiperFaultKind::ExternalTorque { joint: 1 })
-        .unwrap();
+    emu.clear(PiperFault::ExternalTorque {
+        joint: 1,
+        torque_nm: 0.0,
+    })
+    .unwrap();
     host.send(f8(0x150, [2, 0, 0, 0, 0, 0, 0, 0]))
         .await
         .unwrap();
@@ -232,10 +253,10 @@ async fn estop_and_teach_button_and_gripper_sensor() {
     emu.inject(PiperFault::TeachButton).unwrap();
     let frames = collect(&host, Duration::from_millis(30)).await;
     assert_eq!(last(&frames, 0x2A1).unwrap()[0], 0x02, "teach mode");
-    emu.clear(PiperFaultKind::TeachButton).unwrap();
+    emu.clear(PiperFault::TeachButton).unwrap();
     let frames = collect(&host, Duration::from_millis(30)).await;
     assert_eq!(last(&frames, 0x2A1).unwrap()[0], 0x00);
-    emu.inject(PiperFault::EStop).unwrap();
+    emu.inject(PiperFault::Estop).unwrap();
     let frames = collect(&host, Duration::from_millis(30)).await;
     assert_eq!(last(&frames, 0x2A1).unwrap()[1], 0x01);
     host.send(f8(0x150, [2, 0, 0, 0, 0, 0, 0, 0]))

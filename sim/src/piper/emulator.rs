@@ -14,7 +14,7 @@ use tokio::task::JoinHandle;
 use tokio::time::{interval, sleep, MissedTickBehavior};
 
 use super::config::{PiperConfig, PiperError};
-use super::faults::{FaultError, PiperFault, PiperFaultKind};
+use super::faults::{FaultError, PiperFault};
 use super::firmware::{Firmware, STEP_S};
 use super::state::PiperSimState;
 use crate::physics::{ObstacleId, ObstacleShape};
@@ -171,9 +171,9 @@ impl PiperHandle {
         lock(&self.core).inject(fault)
     }
 
-    /// Remove a fault's cause.
-    pub fn clear(&self, kind: PiperFaultKind) -> Result<(), FaultError> {
-        lock(&self.core).clear(kind)
+    /// Remove a fault's cause (the values in `fault`, such as a temperature, do not matter).
+    pub fn clear(&self, fault: PiperFault) -> Result<(), FaultError> {
+        lock(&self.core).clear(fault)
     }
 
     /// Place a static obstacle in the physics world (position of its centre in the base

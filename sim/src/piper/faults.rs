@@ -1,159 +1,346 @@
-//! Faults the harness can trigger at run time ([`PiperFault`]) and how they show on the wire.
-//!
-//! | Fault | Wire effect | Cleared by |
-//! |---|---|---|
-//! | `JointCommLoss` | 0x2A1 byte 7 bit, arm_status 0x05, that joint's 0x25x/0x26x stop, motor off | `clear` |
-//! | `MotorOverTemp` / `DriverOverTemp` | temperature forced above threshold: 0x26x bit 1 / bit 3, driver disables, arm_status 0x09 | `clear` (temperature returns to the thermal model); re-enable |
-//! | `OverCurrent`, `DriverError`, `Stall` | latched 0x26x bit 2 / 5 / 7, driver disables, arm_status 0x09 | 0x475 clear error, 0x150 reset or `clear` |
-//! | `UnderVoltage` | bus voltage in 0x26x drops, bit 0 on every joint, drivers disable, arm_status 0x09 | `clear`; re-enable |
-//! | `ExternalTorque` | torque applied in the physics world; above the collision threshold the arm stops with arm_status 0x07 and 0x26x bit 4 | `clear` removes the torque; the collision latch clears with 0x150 reset or 0x475 clear error |
-//! | `Collision` | forced collision latch on a joint | as above |
-//! | `EStop` | physical e-stop: damping mode, arm_status 0x01 | 0x150 reset or `clear` |
-//! | `MainControlOverTemp` / `ResistorOverTemp` | arm_status 0x0E / 0x0F, motion stops | `clear` |
-//! | `GripperSensorFault` | 0x2A8 bit 4, gripper stops | `clear` |
-//! | `TeachButton` | ctrl_mode 0x02, arm compliant (gravity compensation) | `clear` (button pressed again → standby) |
+//! Faults the harness can trigger at run time: [`PiperFault`] with its values, [`FaultKind`] the
+//! table of kinds. This is the one description of the Piper's faults: [`FaultKind::name`] is a
+//! fault's name in scenario files, [`FaultKind::params`] its parameters and
+//! [`FaultKind::description`] what it does on the wire and what clears it.
 
 /// A fault the harness injects into a running emulator. Joints are numbered 1–6 as on the wire.
+///
+/// This type, with [`FaultKind`], is the one description of the Piper's faults: scenario files,
+/// reports and plots use [`FaultKind::name`] and this type's `Display`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum PiperFault {
-    /// The master loses contact with one joint driver.
-    JointCommLoss {
+    /// See [`FaultKind::CommLoss`].
+    CommLoss {
         /// Joint 1–6.
         joint: u8,
     },
-    /// Motor winding over-temperature (temperature forced to `temp_c`).
+    /// See [`FaultKind::MotorOverTemp`].
     MotorOverTemp {
         /// Joint 1–6.
         joint: u8,
         /// Forced winding temperature, °C.
         temp_c: f64,
     },
-    /// Driver over-temperature (temperature forced to `temp_c`).
+    /// See [`FaultKind::DriverOverTemp`].
     DriverOverTemp {
         /// Joint 1–6.
         joint: u8,
         /// Forced driver temperature, °C.
         temp_c: f64,
     },
-    /// Driver over-current protection trips (latched).
+    /// See [`FaultKind::OverCurrent`].
     OverCurrent {
         /// Joint 1–6.
         joint: u8,
     },
-    /// Supply voltage sags to `voltage_v` (all joints).
+    /// See [`FaultKind::UnderVoltage`].
     UnderVoltage {
         /// Bus voltage, V.
         voltage_v: f64,
     },
-    /// Generic driver error (latched).
+    /// See [`FaultKind::DriverError`].
     DriverError {
         /// Joint 1–6.
         joint: u8,
     },
-    /// Stall protection trips (latched).
+    /// See [`FaultKind::Stall`].
     Stall {
         /// Joint 1–6.
         joint: u8,
     },
-    /// A persistent external torque on a joint, applied in the physics world.
+    /// See [`FaultKind::ExternalTorque`].
     ExternalTorque {
         /// Joint 1–6.
         joint: u8,
         /// Torque, N·m.
         torque_nm: f64,
     },
-    /// Collision protection triggered on a joint without a physical cause.
+    /// See [`FaultKind::Collision`].
     Collision {
         /// Joint 1–6.
         joint: u8,
     },
+    /// See [`FaultKind::Estop`].
+    Estop,
+    /// See [`FaultKind::NtcOverTemp`].
+    NtcOverTemp {
+        /// Which board's sensor.
+        board: NtcBoard,
+    },
+    /// See [`FaultKind::GripperSensorFault`].
+    GripperSensorFault,
+    /// See [`FaultKind::TeachButton`].
+    TeachButton,
+}
+
+/// Boards with an NTC temperature sensor.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum NtcBoard {
+    /// Main-control board (arm status 0x0E).
+    Main,
+    /// Brake resistor (arm status 0x0F).
+    BrakeResistor,
+}
+
+impl NtcBoard {
+    /// Both boards.
+    pub const ALL: [NtcBoard; 2] = [NtcBoard::Main, NtcBoard::BrakeResistor];
+
+    /// The board's name in scenario files and reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            NtcBoard::Main => "main",
+            NtcBoard::BrakeResistor => "brake_resistor",
+        }
+    }
+}
+
+/// The kinds of [`PiperFault`], without their values: one row per fault of the table above.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum FaultKind {
+    /// The master loses contact with one joint driver.
+    CommLoss,
+    /// Motor winding over-temperature (temperature forced).
+    MotorOverTemp,
+    /// Driver over-temperature (temperature forced).
+    DriverOverTemp,
+    /// Driver over-current protection trips (latched).
+    OverCurrent,
+    /// Supply voltage sags (all joints).
+    UnderVoltage,
+    /// Generic driver error (latched).
+    DriverError,
+    /// Stall protection trips (latched).
+    Stall,
+    /// A persistent external torque on a joint, applied in the physics world.
+    ExternalTorque,
+    /// Collision protection triggered on a joint without a physical cause.
+    Collision,
     /// The physical e-stop.
-    EStop,
-    /// Main-control board NTC over-temperature.
-    MainControlOverTemp,
-    /// Brake-resistor NTC over-temperature.
-    ResistorOverTemp,
+    Estop,
+    /// NTC over-temperature of the main-control board or the brake resistor.
+    NtcOverTemp,
     /// Gripper sensor fault.
     GripperSensorFault,
     /// The teach (drag) button on the arm is pressed.
     TeachButton,
 }
 
-/// Which fault to clear: the same variants as [`PiperFault`] without their values.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
-pub enum PiperFaultKind {
-    /// See [`PiperFault::JointCommLoss`].
-    JointCommLoss {
-        /// Joint 1–6.
-        joint: u8,
-    },
-    /// See [`PiperFault::MotorOverTemp`].
-    MotorOverTemp {
-        /// Joint 1–6.
-        joint: u8,
-    },
-    /// See [`PiperFault::DriverOverTemp`].
-    DriverOverTemp {
-        /// Joint 1–6.
-        joint: u8,
-    },
-    /// See [`PiperFault::OverCurrent`].
-    OverCurrent {
-        /// Joint 1–6.
-        joint: u8,
-    },
-    /// See [`PiperFault::UnderVoltage`].
-    UnderVoltage,
-    /// See [`PiperFault::DriverError`].
-    DriverError {
-        /// Joint 1–6.
-        joint: u8,
-    },
-    /// See [`PiperFault::Stall`].
-    Stall {
-        /// Joint 1–6.
-        joint: u8,
-    },
-    /// See [`PiperFault::ExternalTorque`].
-    ExternalTorque {
-        /// Joint 1–6.
-        joint: u8,
-    },
-    /// See [`PiperFault::Collision`].
-    Collision {
-        /// Joint 1–6.
-        joint: u8,
-    },
-    /// See [`PiperFault::EStop`].
-    EStop,
-    /// See [`PiperFault::MainControlOverTemp`].
-    MainControlOverTemp,
-    /// See [`PiperFault::ResistorOverTemp`].
-    ResistorOverTemp,
-    /// See [`PiperFault::GripperSensorFault`].
-    GripperSensorFault,
-    /// See [`PiperFault::TeachButton`].
-    TeachButton,
+/// One parameter of a fault kind.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FaultParam {
+    /// Its name in scenario files (units in the name).
+    pub name: &'static str,
+    /// What it sets.
+    pub description: &'static str,
+    /// Whether a scenario must give it.
+    pub required: bool,
+    /// The numeric value when omitted (`None` for required and non-numeric parameters).
+    pub default: Option<f64>,
+}
+
+/// The joint a fault acts on.
+const JOINT: FaultParam = FaultParam {
+    name: "joint",
+    description: "joint 1–6",
+    required: true,
+    default: None,
+};
+
+/// Forced temperature of the over-temperature faults, °C (the default is above every
+/// threshold).
+const TEMP_C: FaultParam = FaultParam {
+    name: "temp_c",
+    description: "forced temperature, °C",
+    required: false,
+    default: Some(90.0),
+};
+
+impl FaultKind {
+    /// Every fault the emulator can inject.
+    pub const ALL: [FaultKind; 13] = [
+        FaultKind::CommLoss,
+        FaultKind::MotorOverTemp,
+        FaultKind::DriverOverTemp,
+        FaultKind::OverCurrent,
+        FaultKind::UnderVoltage,
+        FaultKind::DriverError,
+        FaultKind::Stall,
+        FaultKind::ExternalTorque,
+        FaultKind::Collision,
+        FaultKind::Estop,
+        FaultKind::NtcOverTemp,
+        FaultKind::GripperSensorFault,
+        FaultKind::TeachButton,
+    ];
+
+    /// The fault's name in scenario files, logs and reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            FaultKind::CommLoss => "comm_loss",
+            FaultKind::MotorOverTemp => "motor_over_temp",
+            FaultKind::DriverOverTemp => "driver_over_temp",
+            FaultKind::OverCurrent => "over_current",
+            FaultKind::UnderVoltage => "under_voltage",
+            FaultKind::DriverError => "driver_error",
+            FaultKind::Stall => "stall",
+            FaultKind::ExternalTorque => "external_torque",
+            FaultKind::Collision => "collision",
+            FaultKind::Estop => "estop",
+            FaultKind::NtcOverTemp => "ntc_over_temp",
+            FaultKind::GripperSensorFault => "gripper_sensor_fault",
+            FaultKind::TeachButton => "teach_button",
+        }
+    }
+
+    /// The kind with this [`name`](FaultKind::name).
+    pub fn from_name(name: &str) -> Option<FaultKind> {
+        FaultKind::ALL.into_iter().find(|k| k.name() == name)
+    }
+
+    /// Its parameters, in the order `Display` prints them.
+    pub fn params(self) -> &'static [FaultParam] {
+        match self {
+            FaultKind::CommLoss
+            | FaultKind::OverCurrent
+            | FaultKind::DriverError
+            | FaultKind::Stall
+            | FaultKind::Collision => &[JOINT],
+            FaultKind::MotorOverTemp | FaultKind::DriverOverTemp => &[JOINT, TEMP_C],
+            FaultKind::UnderVoltage => &[FaultParam {
+                name: "voltage_v",
+                description: "bus voltage, V (nominal 48 V; drivers trip below 20 V)",
+                required: false,
+                default: Some(18.0),
+            }],
+            FaultKind::ExternalTorque => &[
+                JOINT,
+                FaultParam {
+                    name: "torque_nm",
+                    description: "torque, N·m",
+                    required: true,
+                    default: None,
+                },
+            ],
+            FaultKind::NtcOverTemp => &[FaultParam {
+                name: "board",
+                description: "`main` (default) or `brake_resistor`",
+                required: false,
+                default: None,
+            }],
+            FaultKind::Estop | FaultKind::GripperSensorFault | FaultKind::TeachButton => &[],
+        }
+    }
+
+    /// Whether the fault can be written without arguments (no parameter is required).
+    pub fn bare_ok(self) -> bool {
+        self.params().iter().all(|p| !p.required)
+    }
+
+    /// One line on what the fault does on the wire (spec §4) and what clears it; `clear` (the
+    /// harness removing the cause) always does.
+    pub fn description(self) -> &'static str {
+        match self {
+            FaultKind::CommLoss => {
+                "master loses a joint driver: 0x2A1 byte 7 bit, arm status 0x05, its 0x25x/0x26x stop, motor off"
+            }
+            FaultKind::MotorOverTemp => {
+                "winding temperature forced high: 0x26x bit 1, driver disables, arm status 0x09; re-enable after clear"
+            }
+            FaultKind::DriverOverTemp => {
+                "driver temperature forced high: 0x26x bit 3, driver disables, arm status 0x09; re-enable after clear"
+            }
+            FaultKind::OverCurrent => {
+                "latched 0x26x bit 2, driver disables, arm status 0x09; 0x475 clear error or 0x150 reset"
+            }
+            FaultKind::UnderVoltage => {
+                "bus voltage in 0x26x drops, bit 0 on every joint, drivers disable, arm status 0x09; re-enable after clear"
+            }
+            FaultKind::DriverError => {
+                "latched 0x26x bit 5, driver disables, arm status 0x09; 0x475 clear error or 0x150 reset"
+            }
+            FaultKind::Stall => {
+                "latched 0x26x bit 7, driver disables, arm status 0x09; 0x475 clear error or 0x150 reset"
+            }
+            FaultKind::ExternalTorque => {
+                "torque in the physics world; above the collision threshold arm status 0x07 and 0x26x bit 4, latched until 0x150 reset or 0x475"
+            }
+            FaultKind::Collision => {
+                "forced collision latch: 0x26x bit 4, arm status 0x07; 0x150 reset or 0x475 clear error"
+            }
+            FaultKind::Estop => "physical e-stop: damping mode, arm status 0x01; 0x150 reset",
+            FaultKind::NtcOverTemp => {
+                "board NTC over-temperature: arm status 0x0E (main) / 0x0F (brake resistor), motion stops"
+            }
+            FaultKind::GripperSensorFault => "0x2A8 bit 4, the gripper stops",
+            FaultKind::TeachButton => {
+                "ctrl_mode 0x02, arm compliant (gravity compensation); clear presses it again (standby)"
+            }
+        }
+    }
 }
 
 impl PiperFault {
-    /// The kind, for [`crate::piper::PiperHandle::clear`].
-    pub fn kind(&self) -> PiperFaultKind {
+    /// Its kind.
+    pub fn kind(&self) -> FaultKind {
+        match self {
+            Self::CommLoss { .. } => FaultKind::CommLoss,
+            Self::MotorOverTemp { .. } => FaultKind::MotorOverTemp,
+            Self::DriverOverTemp { .. } => FaultKind::DriverOverTemp,
+            Self::OverCurrent { .. } => FaultKind::OverCurrent,
+            Self::UnderVoltage { .. } => FaultKind::UnderVoltage,
+            Self::DriverError { .. } => FaultKind::DriverError,
+            Self::Stall { .. } => FaultKind::Stall,
+            Self::ExternalTorque { .. } => FaultKind::ExternalTorque,
+            Self::Collision { .. } => FaultKind::Collision,
+            Self::Estop => FaultKind::Estop,
+            Self::NtcOverTemp { .. } => FaultKind::NtcOverTemp,
+            Self::GripperSensorFault => FaultKind::GripperSensorFault,
+            Self::TeachButton => FaultKind::TeachButton,
+        }
+    }
+
+    /// The joint it acts on, for per-joint faults.
+    pub fn joint(&self) -> Option<u8> {
         match *self {
-            Self::JointCommLoss { joint } => PiperFaultKind::JointCommLoss { joint },
-            Self::MotorOverTemp { joint, .. } => PiperFaultKind::MotorOverTemp { joint },
-            Self::DriverOverTemp { joint, .. } => PiperFaultKind::DriverOverTemp { joint },
-            Self::OverCurrent { joint } => PiperFaultKind::OverCurrent { joint },
-            Self::UnderVoltage { .. } => PiperFaultKind::UnderVoltage,
-            Self::DriverError { joint } => PiperFaultKind::DriverError { joint },
-            Self::Stall { joint } => PiperFaultKind::Stall { joint },
-            Self::ExternalTorque { joint, .. } => PiperFaultKind::ExternalTorque { joint },
-            Self::Collision { joint } => PiperFaultKind::Collision { joint },
-            Self::EStop => PiperFaultKind::EStop,
-            Self::MainControlOverTemp => PiperFaultKind::MainControlOverTemp,
-            Self::ResistorOverTemp => PiperFaultKind::ResistorOverTemp,
-            Self::GripperSensorFault => PiperFaultKind::GripperSensorFault,
-            Self::TeachButton => PiperFaultKind::TeachButton,
+            Self::CommLoss { joint }
+            | Self::MotorOverTemp { joint, .. }
+            | Self::DriverOverTemp { joint, .. }
+            | Self::OverCurrent { joint }
+            | Self::DriverError { joint }
+            | Self::Stall { joint }
+            | Self::ExternalTorque { joint, .. }
+            | Self::Collision { joint } => Some(joint),
+            _ => None,
+        }
+    }
+
+    /// Whether `other` is the same fault in the same place (values such as a temperature
+    /// aside): clearing one clears the other.
+    pub fn same_site(&self, other: &PiperFault) -> bool {
+        let board = |f: &PiperFault| match *f {
+            Self::NtcOverTemp { board } => Some(board),
+            _ => None,
+        };
+        self.kind() == other.kind() && self.joint() == other.joint() && board(self) == board(other)
+    }
+}
+
+/// `name joint N value unit`, e.g. `motor_over_temp joint 2 90 C`, for logs and reports.
+impl std::fmt::Display for PiperFault {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.kind().name())?;
+        if let Some(joint) = self.joint() {
+            write!(f, " joint {joint}")?;
+        }
+        match *self {
+            Self::MotorOverTemp { temp_c, .. } | Self::DriverOverTemp { temp_c, .. } => {
+                write!(f, " {temp_c} C")
+            }
+            Self::UnderVoltage { voltage_v } => write!(f, " {voltage_v} V"),
+            Self::ExternalTorque { torque_nm, .. } => write!(f, " {torque_nm} Nm"),
+            Self::NtcOverTemp { board } => write!(f, " {}", board.name()),
+            _ => Ok(()),
         }
     }
 }
@@ -205,4 +392,77 @@ pub mod gripper_bits {
     pub const ENABLED: u8 = 1 << 6;
     /// Has been zeroed.
     pub const HOMED: u8 = 1 << 7;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_kind_has_its_own_name_and_a_description() {
+        for (i, a) in FaultKind::ALL.iter().enumerate() {
+            assert_eq!(FaultKind::from_name(a.name()), Some(*a));
+            assert!(!a.description().is_empty());
+            for b in &FaultKind::ALL[i + 1..] {
+                assert_ne!(a.name(), b.name());
+            }
+        }
+        assert_eq!(FaultKind::from_name("comm_los"), None);
+    }
+
+    #[test]
+    fn display_starts_with_the_kind_name_and_lists_the_values() {
+        let f = PiperFault::MotorOverTemp {
+            joint: 2,
+            temp_c: 90.0,
+        };
+        assert_eq!(f.to_string(), "motor_over_temp joint 2 90 C");
+        let ntc = PiperFault::NtcOverTemp {
+            board: NtcBoard::BrakeResistor,
+        };
+        assert_eq!(ntc.to_string(), "ntc_over_temp brake_resistor");
+        assert_eq!(PiperFault::Estop.to_string(), "estop");
+        assert_eq!(
+            PiperFault::UnderVoltage { voltage_v: 18.5 }.to_string(),
+            "under_voltage 18.5 V"
+        );
+    }
+
+    #[test]
+    fn same_site_ignores_values_but_not_joints_or_boards() {
+        let hot = PiperFault::DriverOverTemp {
+            joint: 3,
+            temp_c: 95.0,
+        };
+        let any = PiperFault::DriverOverTemp {
+            joint: 3,
+            temp_c: 0.0,
+        };
+        let other_joint = PiperFault::DriverOverTemp {
+            joint: 4,
+            temp_c: 95.0,
+        };
+        assert!(hot.same_site(&any));
+        assert!(!hot.same_site(&other_joint));
+        assert!(!hot.same_site(&PiperFault::MotorOverTemp {
+            joint: 3,
+            temp_c: 95.0
+        }));
+        let main = PiperFault::NtcOverTemp {
+            board: NtcBoard::Main,
+        };
+        let resistor = PiperFault::NtcOverTemp {
+            board: NtcBoard::BrakeResistor,
+        };
+        assert!(!main.same_site(&resistor));
+    }
+
+    #[test]
+    fn only_faults_without_required_parameters_may_be_written_bare() {
+        assert!(FaultKind::Estop.bare_ok());
+        assert!(FaultKind::UnderVoltage.bare_ok());
+        assert!(FaultKind::NtcOverTemp.bare_ok());
+        assert!(!FaultKind::CommLoss.bare_ok());
+        assert!(!FaultKind::ExternalTorque.bare_ok());
+    }
 }

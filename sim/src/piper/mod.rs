@@ -5,14 +5,14 @@
 //! ```no_run
 //! # async fn demo(bus: std::sync::Arc<dyn bus::CanBus>) -> Result<(), Box<dyn std::error::Error>> {
 //! use sim::physics::ObstacleShape;
-//! use sim::piper::{FirmwareProfile, PiperConfig, PiperEmulator, PiperFault, PiperFaultKind};
+//! use sim::piper::{FirmwareProfile, PiperConfig, PiperEmulator, PiperFault};
 //! let emu = PiperEmulator::spawn(bus, PiperConfig {
 //!     firmware: FirmwareProfile::V1_8_2,
 //!     initial_joints_rad: [0.0, 0.5, -0.5, 0.0, 0.0, 0.0],
 //!     ..PiperConfig::default()
 //! })?;
-//! emu.inject(PiperFault::JointCommLoss { joint: 3 })?;
-//! emu.clear(PiperFaultKind::JointCommLoss { joint: 3 })?;
+//! emu.inject(PiperFault::CommLoss { joint: 3 })?;
+//! emu.clear(PiperFault::CommLoss { joint: 3 })?;
 //! let wall = emu.add_obstacle(ObstacleShape::Sphere { radius_m: 0.05 }, [0.3, 0.0, 0.2]);
 //! let state = emu.snapshot(); // true joints, velocities, torques, currents, status bytes, flash
 //! println!("{:?} {:?}", state.joint_positions_rad, state.status);
@@ -64,7 +64,7 @@ pub mod trajectory;
 
 pub use config::{PiperConfig, PiperError, BUNDLED_URDF};
 pub use emulator::{PiperEmulator, PiperHandle};
-pub use faults::{FaultError, PiperFault, PiperFaultKind};
+pub use faults::{FaultError, FaultKind, FaultParam, NtcBoard, PiperFault};
 pub use firmware::Firmware;
 pub use flash::Flash;
 pub use profile::FirmwareProfile;

@@ -5,19 +5,19 @@ use std::time::Duration;
 use async_trait::async_trait;
 use driver::piper::Piper;
 
-use super::model::EmulatorFault;
 use super::{checks, observe, trace};
 use crate::devices::{Action, Check, DeviceFault};
 use crate::harness::model::Signal;
 use crate::harness::{Device, DeviceError, Reply, RunOptions, TraceColumn};
+use sim::piper::PiperFault;
 
 /// Control of an in-process emulator (the seam between the harness and `sim::piper`).
 #[async_trait]
 pub(crate) trait EmulatorControl: Send + Sync {
     /// Apply a fault.
-    fn inject(&self, fault: &EmulatorFault) -> Result<(), String>;
+    fn inject(&self, fault: &PiperFault) -> Result<(), String>;
     /// Clear one fault, or all.
-    fn clear(&self, fault: Option<&EmulatorFault>) -> Result<(), String>;
+    fn clear(&self, fault: Option<&PiperFault>) -> Result<(), String>;
     /// Stop the emulator.
     async fn shutdown(&self);
 }
@@ -116,7 +116,7 @@ impl Device for PiperDevice {
 }
 
 /// The Piper fault inside a device fault (validation routes only Piper faults here).
-fn piper_fault<'f>(fault: &'f DeviceFault, name: &str) -> Result<&'f EmulatorFault, DeviceError> {
+fn piper_fault<'f>(fault: &'f DeviceFault, name: &str) -> Result<&'f PiperFault, DeviceError> {
     match fault {
         DeviceFault::Piper(f) => Ok(f),
         other => Err(DeviceError::unsupported(format!(

@@ -5,47 +5,16 @@ use std::sync::{Arc, Mutex, PoisonError};
 use async_trait::async_trait;
 use bus::CanBus;
 use sim::physics::ObstacleShape as SimShape;
-use sim::piper::{
-    FirmwareProfile, Flash, PiperConfig, PiperEmulator, PiperFault, PiperFaultKind, PiperHandle,
-};
+use sim::piper::{FirmwareProfile, Flash, PiperConfig, PiperEmulator, PiperFault, PiperHandle};
 
 use super::device::EmulatorControl;
-use super::model::{EmulatorFault, NtcBoard, ObstacleShape, PiperSettings};
+use super::model::{ObstacleShape, PiperSettings};
 
 /// A running in-process Piper emulator.
 pub(crate) struct PiperSim {
     handle: Mutex<Option<PiperHandle>>,
     /// Faults injected and not yet cleared, so `clear_faults` can undo all of them.
-    active: Mutex<Vec<PiperFaultKind>>,
-}
-
-fn to_sim(fault: &EmulatorFault) -> PiperFault {
-    match *fault {
-        EmulatorFault::CommLoss { joint } => PiperFault::JointCommLoss { joint },
-        EmulatorFault::MotorOverTemp { joint, temp_c } => {
-            PiperFault::MotorOverTemp { joint, temp_c }
-        }
-        EmulatorFault::DriverOverTemp { joint, temp_c } => {
-            PiperFault::DriverOverTemp { joint, temp_c }
-        }
-        EmulatorFault::OverCurrent { joint } => PiperFault::OverCurrent { joint },
-        EmulatorFault::UnderVoltage { voltage_v } => PiperFault::UnderVoltage { voltage_v },
-        EmulatorFault::DriverError { joint } => PiperFault::DriverError { joint },
-        EmulatorFault::Stall { joint } => PiperFault::Stall { joint },
-        EmulatorFault::ExternalTorque { joint, torque_nm } => {
-            PiperFault::ExternalTorque { joint, torque_nm }
-        }
-        EmulatorFault::Collision { joint } => PiperFault::Collision { joint },
-        EmulatorFault::Estop => PiperFault::EStop,
-        EmulatorFault::NtcOverTemp {
-            board: NtcBoard::Main,
-        } => PiperFault::MainControlOverTemp,
-        EmulatorFault::NtcOverTemp {
-            board: NtcBoard::BrakeResistor,
-        } => PiperFault::ResistorOverTemp,
-        EmulatorFault::GripperSensor => PiperFault::GripperSensorFault,
-        EmulatorFault::TeachButton => PiperFault::TeachButton,
-    }
+    active: Mutex<Vec<PiperFault>>,
 }
 
 impl PiperSim {
@@ -93,31 +62,29 @@ impl PiperSim {
 
 #[async_trait]
 impl EmulatorControl for PiperSim {
-    fn inject(&self, fault: &EmulatorFault) -> Result<(), String> {
-        let sim_fault = to_sim(fault);
-        self.with(|h| h.inject(sim_fault).map_err(|e| e.to_string()))?;
+    fn inject(&self, fault: &PiperFault) -> Result<(), String> {
+        self.with(|h| h.inject(*fault).map_err(|e| e.to_string()))?;
         self.active
             .lock()
             .unwrap_or_else(PoisonError::into_inner)
-            .push(sim_fault.kind());
+            .push(*fault);
         Ok(())
     }
 
-    fn clear(&self, fault: Option<&EmulatorFault>) -> Result<(), String> {
-        let kinds: Vec<PiperFaultKind> = {
+    fn clear(&self, fault: Option<&PiperFault>) -> Result<(), String> {
+        let faults: Vec<PiperFault> = {
             let mut active = self.active.lock().unwrap_or_else(PoisonError::into_inner);
             match fault {
                 Some(f) => {
-                    let kind = to_sim(f).kind();
-                    active.retain(|k| *k != kind);
-                    vec![kind]
+                    active.retain(|a| !a.same_site(f));
+                    vec![*f]
                 }
                 None => std::mem::take(&mut *active),
             }
         };
         self.with(|h| {
-            for kind in kinds {
-                h.clear(kind).map_err(|e| e.to_string())?;
+            for fault in faults {
+                h.clear(fault).map_err(|e| e.to_string())?;
             }
             Ok(())
         })

@@ -16,8 +16,10 @@ use std::sync::Arc;
 use bus::CanBus;
 use driver::piper::{PiperBuilder, Timeouts};
 
-pub use model::{EmulatorFault as Fault, PiperAction as Action, PiperSettings as Settings};
+pub use model::{PiperAction as Action, PiperSettings as Settings};
 pub use observe::Observation;
+/// A Piper emulator fault: the emulator's own type, named by [`sim::piper::FaultKind`].
+pub use sim::piper::PiperFault as Fault;
 pub use validate::DEFAULT_FIRMWARE;
 
 /// A Piper condition.
@@ -28,9 +30,9 @@ use crate::harness::{Clock, Device, RunOptions, HOST_NODE};
 use device::PiperDevice;
 use emulator::PiperSim;
 
-/// Short description of a fault for logs and reports.
+/// Short description of a fault for logs and reports (the emulator's: `name joint N value`).
 pub fn describe_fault(fault: &Fault) -> String {
-    fault.describe()
+    fault.to_string()
 }
 
 /// What a condition wants, for reports.
@@ -119,5 +121,40 @@ pub(crate) async fn build(
             )))
         }
         (None, _) => Err(format!("device `{name}`: no bus to attach to")),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use sim::piper::FaultKind;
+
+    /// The scenario guide's fault table is written by hand: it must name every fault of the
+    /// emulator's table, with its parameters and their defaults.
+    #[test]
+    fn the_scenario_guide_lists_every_emulator_fault_with_its_parameters() {
+        let guide = include_str!("../../../scenarios/README.md");
+        let rows: Vec<&str> = guide
+            .lines()
+            .skip_while(|l| !l.starts_with("| Emulator fault |"))
+            .take_while(|l| l.starts_with('|'))
+            .collect();
+        for kind in FaultKind::ALL {
+            let name = format!("`{}`", kind.name());
+            let row = rows
+                .iter()
+                .find(|r| r.split('|').nth(1).is_some_and(|c| c.contains(&name)))
+                .unwrap_or_else(|| panic!("no row for {name} in scenarios/README.md"));
+            let args = row.split('|').nth(2).unwrap_or_default();
+            for p in kind.params() {
+                assert!(args.contains(p.name), "{name}: `{}` not listed", p.name);
+                if let Some(d) = p.default {
+                    let shown = format!("`{}` ({d})", p.name);
+                    assert!(args.contains(&shown), "{name}: default {shown} not shown");
+                }
+            }
+            if kind.params().is_empty() {
+                assert_eq!(args.trim(), "—", "{name} takes no arguments");
+            }
+        }
     }
 }

@@ -5,7 +5,9 @@ use std::collections::BTreeMap;
 
 use serde::Deserialize;
 
-use crate::harness::onekey::one_key_enum;
+use sim::piper::FaultKind;
+
+use crate::harness::onekey::{one_key_enum, OneKey};
 use crate::harness::raw::S;
 
 #[derive(Debug, Deserialize)]
@@ -40,22 +42,52 @@ pub(crate) struct RawEmuArgs {
     pub board: Option<S<String>>,
 }
 
-one_key_enum! {
-    /// The Piper emulator's faults.
-    pub(crate) enum RawFault ("fault") {
-        "comm_loss" => CommLoss(RawEmuArgs),
-        "motor_over_temp" => MotorOverTemp(RawEmuArgs),
-        "driver_over_temp" => DriverOverTemp(RawEmuArgs),
-        "over_current" => OverCurrent(RawEmuArgs),
-        "under_voltage" => UnderVoltage(RawEmuArgs) [bare],
-        "driver_error" => DriverError(RawEmuArgs),
-        "stall" => Stall(RawEmuArgs),
-        "external_torque" => ExternalTorque(RawEmuArgs),
-        "collision" => Collision(RawEmuArgs),
-        "estop" => Estop(RawEmuArgs) [bare],
-        "ntc_over_temp" => NtcOverTemp(RawEmuArgs) [bare],
-        "gripper_sensor_fault" => GripperSensor(RawEmuArgs) [bare],
-        "teach_button" => TeachButton(RawEmuArgs) [bare],
+/// A Piper emulator fault as written: its kind (named by the emulator's own table,
+/// [`sim::piper::FaultKind`]) and arguments.
+#[derive(Debug)]
+pub(crate) struct RawFault {
+    pub kind: FaultKind,
+    pub args: RawEmuArgs,
+}
+
+impl RawFault {
+    /// The fault of `kind` without arguments, if it may be written bare.
+    fn bare_of<E: serde::de::Error>(kind: FaultKind) -> Result<Self, E> {
+        if kind.bare_ok() {
+            Ok(Self {
+                kind,
+                args: RawEmuArgs::default(),
+            })
+        } else {
+            let key = kind.name();
+            Err(E::custom(format!(
+                "`{key}` needs arguments: write `{key}: {{ ... }}`"
+            )))
+        }
+    }
+}
+
+impl OneKey for RawFault {
+    fn keys() -> Vec<&'static str> {
+        FaultKind::ALL.iter().map(|k| k.name()).collect()
+    }
+
+    fn bare<E: serde::de::Error>(key: &str) -> Option<Result<Self, E>> {
+        FaultKind::from_name(key).map(Self::bare_of)
+    }
+
+    fn entry<'de, A: serde::de::MapAccess<'de>>(
+        key: &str,
+        map: &mut A,
+    ) -> Option<Result<Self, A::Error>> {
+        let kind = FaultKind::from_name(key)?;
+        Some(
+            map.next_value::<Option<RawEmuArgs>>()
+                .and_then(|args| match args {
+                    Some(args) => Ok(Self { kind, args }),
+                    None => Self::bare_of(kind),
+                }),
+        )
     }
 }
 

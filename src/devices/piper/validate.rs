@@ -2,6 +2,8 @@
 
 use std::path::PathBuf;
 
+use sim::piper::{FaultKind, NtcBoard, PiperFault};
+
 use super::model::*;
 use super::raw::*;
 use super::vocab;
@@ -214,16 +216,18 @@ pub(crate) fn settings(ctx: &Ctx<'_>, d: &RawSettings, _at: Pos) -> Res<PiperSet
     })
 }
 
-/// Emulator fault arguments: reject the ones a fault does not take, fill defaults.
+/// Emulator fault arguments: reject the ones a fault does not take, fill defaults from the
+/// emulator's table ([`FaultKind::params`]).
 struct EmuArgs<'c, 'a> {
     ctx: &'c Ctx<'a>,
     args: &'c RawEmuArgs,
-    name: &'static str,
+    kind: FaultKind,
     at: Pos,
 }
 
 impl EmuArgs<'_, '_> {
-    fn allow(&self, allowed: &[&str]) -> Res<()> {
+    fn allow(&self) -> Res<()> {
+        let allowed: Vec<&str> = self.kind.params().iter().map(|p| p.name).collect();
         let present: [(&str, Option<Pos>); 5] = [
             ("joint", self.args.joint.as_ref().map(pos)),
             ("temp_c", self.args.temp_c.as_ref().map(pos)),
@@ -241,7 +245,10 @@ impl EmuArgs<'_, '_> {
                     };
                     return Err(self.ctx.err(
                         at,
-                        format!("`{}` takes no `{key}` (it takes: {takes})", self.name),
+                        format!(
+                            "`{}` takes no `{key}` (it takes: {takes})",
+                            self.kind.name()
+                        ),
                     ));
                 }
             }
@@ -251,117 +258,83 @@ impl EmuArgs<'_, '_> {
 
     fn joint(&self) -> Res<u8> {
         self.ctx
-            .joint_required(&self.args.joint, self.name, self.at, false)
+            .joint_required(&self.args.joint, self.kind.name(), self.at, false)
     }
 
-    fn number(&self, value: &Option<S<f64>>, key: &str, default: f64) -> Res<f64> {
-        value
-            .as_ref()
-            .map_or(Ok(default), |v| self.ctx.finite(v, key))
+    /// A numeric parameter: the value written, else the table's default, else an error.
+    fn number(&self, value: &Option<S<f64>>, key: &str) -> Res<f64> {
+        match value {
+            Some(v) => self.ctx.finite(v, key),
+            None => {
+                let default = self
+                    .kind
+                    .params()
+                    .iter()
+                    .find(|p| p.name == key)
+                    .and_then(|p| p.default);
+                match default {
+                    Some(d) => Ok(d),
+                    None => {
+                        let v = self.ctx.required(value, key, self.kind.name(), self.at)?;
+                        self.ctx.finite(v, key)
+                    }
+                }
+            }
+        }
     }
 }
 
-/// Default forced temperature of the over-temperature faults (above every threshold).
-const DEFAULT_OVER_TEMP_C: f64 = 90.0;
-/// Default supply voltage of the under-voltage fault (nominal 48 V; drivers trip well above).
-const DEFAULT_UNDER_VOLTAGE_V: f64 = 18.0;
-
 /// A Piper emulator fault (`fpos`: where the fault is written).
-pub(crate) fn fault(ctx: &Ctx<'_>, raw: &RawFault, fpos: Pos) -> Res<EmulatorFault> {
-    fn emu<'c, 'a>(
-        ctx: &'c Ctx<'a>,
-        args: &'c RawEmuArgs,
-        name: &'static str,
-        at: Pos,
-        allowed: &[&str],
-    ) -> Res<EmuArgs<'c, 'a>> {
-        let e = EmuArgs {
-            ctx,
-            args,
-            name,
-            at,
-        };
-        e.allow(allowed)?;
-        Ok(e)
-    }
-    let emulator = Ok::<EmulatorFault, Box<crate::harness::ScenarioError>>;
-    match raw {
-        RawFault::CommLoss(a) => emulator(EmulatorFault::CommLoss {
-            joint: emu(ctx, a, "comm_loss", fpos, &["joint"])?.joint()?,
-        }),
-        RawFault::MotorOverTemp(a) => {
-            let e = emu(ctx, a, "motor_over_temp", fpos, &["joint", "temp_c"])?;
-            emulator(EmulatorFault::MotorOverTemp {
-                joint: e.joint()?,
-                temp_c: e.number(&a.temp_c, "temp_c", DEFAULT_OVER_TEMP_C)?,
-            })
-        }
-        RawFault::DriverOverTemp(a) => {
-            let e = emu(ctx, a, "driver_over_temp", fpos, &["joint", "temp_c"])?;
-            emulator(EmulatorFault::DriverOverTemp {
-                joint: e.joint()?,
-                temp_c: e.number(&a.temp_c, "temp_c", DEFAULT_OVER_TEMP_C)?,
-            })
-        }
-        RawFault::OverCurrent(a) => emulator(EmulatorFault::OverCurrent {
-            joint: emu(ctx, a, "over_current", fpos, &["joint"])?.joint()?,
-        }),
-        RawFault::UnderVoltage(a) => {
-            let e = emu(ctx, a, "under_voltage", fpos, &["voltage_v"])?;
-            let voltage_v = e.number(&a.voltage_v, "voltage_v", DEFAULT_UNDER_VOLTAGE_V)?;
+pub(crate) fn fault(ctx: &Ctx<'_>, raw: &RawFault, fpos: Pos) -> Res<PiperFault> {
+    let e = EmuArgs {
+        ctx,
+        args: &raw.args,
+        kind: raw.kind,
+        at: fpos,
+    };
+    e.allow()?;
+    let a = &raw.args;
+    Ok(match raw.kind {
+        FaultKind::CommLoss => PiperFault::CommLoss { joint: e.joint()? },
+        FaultKind::MotorOverTemp => PiperFault::MotorOverTemp {
+            joint: e.joint()?,
+            temp_c: e.number(&a.temp_c, "temp_c")?,
+        },
+        FaultKind::DriverOverTemp => PiperFault::DriverOverTemp {
+            joint: e.joint()?,
+            temp_c: e.number(&a.temp_c, "temp_c")?,
+        },
+        FaultKind::OverCurrent => PiperFault::OverCurrent { joint: e.joint()? },
+        FaultKind::UnderVoltage => {
+            let voltage_v = e.number(&a.voltage_v, "voltage_v")?;
             if voltage_v < 0.0 {
                 return Err(ctx.err(
                     a.voltage_v.as_ref().map_or(fpos, pos),
                     "`voltage_v` must be >= 0",
                 ));
             }
-            emulator(EmulatorFault::UnderVoltage { voltage_v })
+            PiperFault::UnderVoltage { voltage_v }
         }
-        RawFault::DriverError(a) => emulator(EmulatorFault::DriverError {
-            joint: emu(ctx, a, "driver_error", fpos, &["joint"])?.joint()?,
-        }),
-        RawFault::Stall(a) => emulator(EmulatorFault::Stall {
-            joint: emu(ctx, a, "stall", fpos, &["joint"])?.joint()?,
-        }),
-        RawFault::ExternalTorque(a) => {
-            let e = emu(ctx, a, "external_torque", fpos, &["joint", "torque_nm"])?;
-            let t = ctx.required(&a.torque_nm, "torque_nm", "external_torque", fpos)?;
-            emulator(EmulatorFault::ExternalTorque {
-                joint: e.joint()?,
-                torque_nm: ctx.finite(t, "torque_nm")?,
-            })
-        }
-        RawFault::Collision(a) => emulator(EmulatorFault::Collision {
-            joint: emu(ctx, a, "collision", fpos, &["joint"])?.joint()?,
-        }),
-        RawFault::Estop(a) => {
-            emu(ctx, a, "estop", fpos, &[])?;
-            emulator(EmulatorFault::Estop)
-        }
-        RawFault::NtcOverTemp(a) => {
-            emu(ctx, a, "ntc_over_temp", fpos, &["board"])?;
-            let board = match &a.board {
+        FaultKind::DriverError => PiperFault::DriverError { joint: e.joint()? },
+        FaultKind::Stall => PiperFault::Stall { joint: e.joint()? },
+        FaultKind::ExternalTorque => PiperFault::ExternalTorque {
+            joint: e.joint()?,
+            torque_nm: e.number(&a.torque_nm, "torque_nm")?,
+        },
+        FaultKind::Collision => PiperFault::Collision { joint: e.joint()? },
+        FaultKind::Estop => PiperFault::Estop,
+        FaultKind::NtcOverTemp => PiperFault::NtcOverTemp {
+            board: match &a.board {
                 None => NtcBoard::Main,
-                Some(b) => ctx.choice(
-                    b,
-                    "board",
-                    &[
-                        (NtcBoard::Main, "main"),
-                        (NtcBoard::BrakeResistor, "brake_resistor"),
-                    ],
-                )?,
-            };
-            emulator(EmulatorFault::NtcOverTemp { board })
-        }
-        RawFault::GripperSensor(a) => {
-            emu(ctx, a, "gripper_sensor_fault", fpos, &[])?;
-            emulator(EmulatorFault::GripperSensor)
-        }
-        RawFault::TeachButton(a) => {
-            emu(ctx, a, "teach_button", fpos, &[])?;
-            emulator(EmulatorFault::TeachButton)
-        }
-    }
+                Some(b) => {
+                    let boards = NtcBoard::ALL.map(|b| (b, b.name()));
+                    ctx.choice(b, "board", &boards)?
+                }
+            },
+        },
+        FaultKind::GripperSensorFault => PiperFault::GripperSensorFault,
+        FaultKind::TeachButton => PiperFault::TeachButton,
+    })
 }
 
 fn pose(

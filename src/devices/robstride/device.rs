@@ -2,8 +2,6 @@
 //! in-process `sim::robstride` emulator (or a separate emulator process on a real interface).
 
 use std::collections::BTreeMap;
-use std::path::PathBuf;
-use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::Duration;
 
@@ -45,9 +43,6 @@ pub(crate) struct RsEmulator {
     pub config: RobstrideConfig,
 }
 
-/// Distinguishes the state files of concurrent runs in one process.
-static STATE_FILES: AtomicU64 = AtomicU64::new(0);
-
 /// A bus of RobStride motors: one driver, one handle per motor, and the emulator.
 pub(crate) struct RobstrideDevice {
     name: String,
@@ -60,7 +55,8 @@ pub(crate) struct RobstrideDevice {
     active: Mutex<Vec<RsFault>>,
     emulator: Option<RsEmulator>,
     handle: tokio::sync::Mutex<Option<RobstrideHandle>>,
-    state_dir: Option<PathBuf>,
+    /// The emulator's state folder; dropping it deletes the folder.
+    state_dir: Mutex<Option<tempfile::TempDir>>,
 }
 
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
@@ -82,15 +78,12 @@ impl RobstrideDevice {
         let mut emulator = None;
         let mut handle = None;
         if let Some(bus) = emulator_bus {
-            let dir = std::env::temp_dir().join(format!(
-                "armhil-rs-{}-{}-{name}",
-                std::process::id(),
-                STATE_FILES.fetch_add(1, Ordering::Relaxed)
-            ));
-            std::fs::create_dir_all(&dir)
+            let dir = tempfile::Builder::new()
+                .prefix(&format!("armhil-rs-{name}-"))
+                .tempdir()
                 .map_err(|e| format!("device `{name}`: state directory: {e}"))?;
             let mut config = RobstrideConfig::new(settings.motors.clone());
-            config.state_file = Some(dir.join("state.json"));
+            config.state_file = Some(dir.path().join("state.json"));
             config.bus_bitrate_bps = bitrate_bps;
             let node: Arc<dyn CanBus> = Arc::new(bus.attach(name));
             handle = Some(
@@ -134,7 +127,7 @@ impl RobstrideDevice {
             active: Mutex::new(Vec::new()),
             emulator,
             handle: tokio::sync::Mutex::new(handle),
-            state_dir,
+            state_dir: Mutex::new(state_dir),
         })
     }
 
@@ -447,10 +440,8 @@ impl Device for RobstrideDevice {
             handle.shutdown().await;
         }
         lock(&self.motors).clear();
-        if let Some(dir) = &self.state_dir {
-            // Best effort: a leftover temp directory is harmless.
-            let _ = std::fs::remove_dir_all(dir);
-        }
+        // Deletes the state folder (best effort: a leftover temp folder is harmless).
+        drop(lock(&self.state_dir).take());
     }
 }
 

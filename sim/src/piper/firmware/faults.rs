@@ -2,7 +2,7 @@
 
 use super::Firmware;
 use crate::piper::codec::host::CtrlMode;
-use crate::piper::faults::{driver_bits, FaultError, PiperFault, PiperFaultKind};
+use crate::piper::faults::{driver_bits, FaultError, NtcBoard, PiperFault};
 use crate::piper::motor::{JointMotor, DRIVER_OVER_TEMP_C, MOTOR_OVER_TEMP_C, TEMP_HYSTERESIS_C};
 
 /// A motor pinned at its torque limit while (almost) not moving for this long trips the stall
@@ -42,6 +42,14 @@ impl FaultState {
         Self {
             nominal_voltage_v,
             ..Self::default()
+        }
+    }
+
+    /// The over-temperature flag of a board's NTC sensor.
+    fn ntc(&mut self, board: NtcBoard) -> &mut bool {
+        match board {
+            NtcBoard::Main => &mut self.main_ntc,
+            NtcBoard::BrakeResistor => &mut self.resistor_ntc,
         }
     }
 
@@ -174,7 +182,7 @@ impl Firmware {
         tracing::info!(?fault, t_s = self.time_s(), "Piper fault injected");
         let f = &mut self.faults;
         match fault {
-            PiperFault::JointCommLoss { joint } => f.comm_loss[joint_index(joint)?] = true,
+            PiperFault::CommLoss { joint } => f.comm_loss[joint_index(joint)?] = true,
             PiperFault::MotorOverTemp { joint, temp_c } => {
                 f.forced_motor_temp[joint_index(joint)?] = Some(finite(temp_c)?);
             }
@@ -190,13 +198,12 @@ impl Firmware {
                 self.apply_external_torques();
             }
             PiperFault::Collision { joint } => f.collision[joint_index(joint)?] = true,
-            PiperFault::EStop => {
+            PiperFault::Estop => {
                 self.estop = true;
                 self.motion = None;
                 self.settling = false;
             }
-            PiperFault::MainControlOverTemp => f.main_ntc = true,
-            PiperFault::ResistorOverTemp => f.resistor_ntc = true,
+            PiperFault::NtcOverTemp { board } => *f.ntc(board) = true,
             PiperFault::GripperSensorFault => f.gripper_sensor_fault = true,
             PiperFault::TeachButton => {
                 self.ctrl_mode = CtrlMode::Teach;
@@ -208,32 +215,32 @@ impl Firmware {
         Ok(())
     }
 
-    /// Remove a fault's cause (see [`crate::piper::faults`] for what clears each one).
-    pub fn clear(&mut self, kind: PiperFaultKind) -> Result<(), FaultError> {
-        tracing::info!(?kind, t_s = self.time_s(), "Piper fault cleared");
+    /// Remove `fault`'s cause (its values, such as a temperature, do not matter; see
+    /// [`crate::piper::faults::FaultKind::description`] for what else clears each one).
+    pub fn clear(&mut self, fault: PiperFault) -> Result<(), FaultError> {
+        tracing::info!(?fault, t_s = self.time_s(), "Piper fault cleared");
         let f = &mut self.faults;
-        match kind {
-            PiperFaultKind::JointCommLoss { joint } => f.comm_loss[joint_index(joint)?] = false,
-            PiperFaultKind::MotorOverTemp { joint } => {
+        match fault {
+            PiperFault::CommLoss { joint } => f.comm_loss[joint_index(joint)?] = false,
+            PiperFault::MotorOverTemp { joint, .. } => {
                 f.forced_motor_temp[joint_index(joint)?] = None;
             }
-            PiperFaultKind::DriverOverTemp { joint } => {
+            PiperFault::DriverOverTemp { joint, .. } => {
                 f.forced_driver_temp[joint_index(joint)?] = None;
             }
-            PiperFaultKind::OverCurrent { joint } => f.over_current[joint_index(joint)?] = false,
-            PiperFaultKind::UnderVoltage => f.forced_voltage_v = None,
-            PiperFaultKind::DriverError { joint } => f.driver_error[joint_index(joint)?] = false,
-            PiperFaultKind::Stall { joint } => f.stall[joint_index(joint)?] = false,
-            PiperFaultKind::ExternalTorque { joint } => {
+            PiperFault::OverCurrent { joint } => f.over_current[joint_index(joint)?] = false,
+            PiperFault::UnderVoltage { .. } => f.forced_voltage_v = None,
+            PiperFault::DriverError { joint } => f.driver_error[joint_index(joint)?] = false,
+            PiperFault::Stall { joint } => f.stall[joint_index(joint)?] = false,
+            PiperFault::ExternalTorque { joint, .. } => {
                 f.external_torque_nm[joint_index(joint)?] = 0.0;
                 self.apply_external_torques();
             }
-            PiperFaultKind::Collision { joint } => f.collision[joint_index(joint)?] = false,
-            PiperFaultKind::EStop => self.estop = false,
-            PiperFaultKind::MainControlOverTemp => f.main_ntc = false,
-            PiperFaultKind::ResistorOverTemp => f.resistor_ntc = false,
-            PiperFaultKind::GripperSensorFault => f.gripper_sensor_fault = false,
-            PiperFaultKind::TeachButton => {
+            PiperFault::Collision { joint } => f.collision[joint_index(joint)?] = false,
+            PiperFault::Estop => self.estop = false,
+            PiperFault::NtcOverTemp { board } => *f.ntc(board) = false,
+            PiperFault::GripperSensorFault => f.gripper_sensor_fault = false,
+            PiperFault::TeachButton => {
                 if self.ctrl_mode == CtrlMode::Teach {
                     self.ctrl_mode = CtrlMode::Standby;
                     self.hold_here();
