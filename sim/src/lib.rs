@@ -2,8 +2,10 @@
 //!
 //! - [`physics`]: URDF loading into rapier3d, fixed-step stepping, torque-driven joints.
 //! - [`piper`]: the AgileX Piper arm's firmware (CAN, 11-bit IDs).
+//! - [`realman`]: the Realman arm controller (JSON over TCP, realtime push over UDP).
 //! - [`robstride`]: RobStride quasi-direct-drive actuators (CAN, 29-bit IDs).
 
 pub mod physics;
 pub mod piper;
+pub mod realman;
 pub mod robstride;

@@ -5,7 +5,7 @@
 //! URDF links, and it computes gravity torques with our own code, so tests can check the
 //! rapier world against an independent reference.
 
-use nalgebra::{Isometry3, Matrix3, Point3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{DMatrix, Isometry3, Matrix3, Point3, Translation3, UnitQuaternion, Vector3};
 
 use super::error::PhysicsError;
 
@@ -478,5 +478,48 @@ impl ArmModel {
             }
         }
         Ok(tau)
+    }
+
+    /// The joint-space mass matrix at `q` (n × n over the actuated joints; kg·m², kg·m or kg
+    /// depending on the joint kinds): `M = Σ_l m_l·J_v,lᵀ·J_v,l + J_ω,lᵀ·I_l·J_ω,l` over the
+    /// links, with `J_v,l`, `J_ω,l` the Jacobians of link `l`'s COM and `I_l` its inertia
+    /// about the COM in world axes. Motor controllers use it to decouple the joints. Mimic
+    /// followers are treated as independent joints.
+    pub fn mass_matrix(&self, q: &[f64]) -> Result<DMatrix<f64>, PhysicsError> {
+        let poses = self.link_poses(q)?;
+        let n = self.joints.len();
+        // Axis and pivot of every actuated joint in the world.
+        let mut axes = vec![(TreeJointKind::Fixed, Vector3::zeros(), Vector3::zeros()); n];
+        for j in &self.tree {
+            if let Some(a) = j.actuated {
+                let frame = poses[j.parent] * j.origin;
+                axes[a] = (j.kind, frame.rotation * j.axis, frame.translation.vector);
+            }
+        }
+        let mut m = DMatrix::zeros(n, n);
+        for (l, inertial) in self.inertials.iter().enumerate() {
+            let com_w = (poses[l] * Point3::from(inertial.com_m)).coords;
+            let rot = poses[l].rotation.to_rotation_matrix();
+            let inertia_w = rot.matrix() * inertial.inertia_kg_m2 * rot.matrix().transpose();
+            let mut jv = DMatrix::zeros(3, n);
+            let mut jw = DMatrix::zeros(3, n);
+            for &a in &self.ancestors[l] {
+                let (kind, axis, pivot) = axes[a];
+                let (lin, ang) = match kind {
+                    TreeJointKind::Revolute => (axis.cross(&(com_w - pivot)), axis),
+                    _ => (axis, Vector3::zeros()),
+                };
+                jv.set_column(a, &lin);
+                jw.set_column(a, &ang);
+            }
+            m += jv.transpose() * &jv * inertial.mass_kg + jw.transpose() * inertia_w * &jw;
+        }
+        Ok(m)
+    }
+
+    /// Diagonal of [`ArmModel::mass_matrix`]: the inertia (kg·m², revolute) or mass (kg,
+    /// prismatic) a joint's motor drives when the other joints are held still.
+    pub fn mass_matrix_diagonal(&self, q: &[f64]) -> Result<Vec<f64>, PhysicsError> {
+        Ok(self.mass_matrix(q)?.diagonal().iter().copied().collect())
     }
 }

@@ -297,3 +297,44 @@ fn time_advances_by_whole_steps() {
     assert_eq!(world.steps(), 250);
     assert!((world.time_s() - 0.5).abs() < 1e-12);
 }
+
+#[test]
+fn mass_matrix_diagonal_is_m_l_squared_plus_own_inertia() {
+    let model = ArmModel::from_urdf_str(PENDULUM).expect("pendulum");
+    // 2 kg at 0.5 m about a Y hinge, plus the bob's own iyy 1e-4.
+    let m = model.mass_matrix_diagonal(&[0.3]).expect("diag");
+    assert!((m[0] - (2.0 * 0.25 + 1e-4)).abs() < 1e-12, "{m:?}");
+    let slider = ArmModel::from_urdf_str(SLIDER).expect("slider");
+    let m = slider.mass_matrix_diagonal(&[0.1]).expect("diag");
+    assert!((m[0] - 1.5).abs() < 1e-12, "{m:?}");
+    // The Piper's full matrix is symmetric positive definite and its kinetic energy
+    // ½·q̇ᵀMq̇ matches a finite-difference sum over the links' COM speeds.
+    let piper = ArmModel::from_urdf_str(PIPER).expect("piper");
+    let q = [0.2, 1.0, -1.0, 0.3, 0.4, 0.5, 0.01, -0.01];
+    let m = piper.mass_matrix(&q).expect("M");
+    assert!((&m - m.transpose()).amax() < 1e-12);
+    assert!(m.clone().cholesky().is_some());
+    let qd = [0.3, -0.2, 0.5, 0.1, -0.4, 0.2, 0.0, 0.0];
+    let h = 1e-7;
+    let q2: Vec<f64> = q.iter().zip(&qd).map(|(a, b)| a + b * h).collect();
+    let (p1, p2) = (
+        piper.link_poses(&q).expect("p"),
+        piper.link_poses(&q2).expect("p"),
+    );
+    let mut energy = 0.0;
+    for (l, inertial) in piper.inertials().iter().enumerate() {
+        let c1 = p1[l] * nalgebra::Point3::from(inertial.com_m);
+        let c2 = p2[l] * nalgebra::Point3::from(inertial.com_m);
+        let v = (c2 - c1) / h;
+        let w = (p2[l].rotation * p1[l].rotation.inverse()).scaled_axis() / h;
+        let rot = p1[l].rotation.to_rotation_matrix();
+        let i_w = rot.matrix() * inertial.inertia_kg_m2 * rot.matrix().transpose();
+        energy += 0.5 * inertial.mass_kg * v.norm_squared() + 0.5 * w.dot(&(i_w * w));
+    }
+    let qd = nalgebra::DVector::from_column_slice(&qd);
+    let from_m = 0.5 * (qd.transpose() * &m * &qd)[(0, 0)];
+    assert!(
+        (energy - from_m).abs() < 1e-5 * from_m.max(1e-3),
+        "{energy} vs {from_m}"
+    );
+}

@@ -5,6 +5,7 @@ use std::process::ExitCode;
 use clap::Subcommand;
 
 pub mod piper;
+pub mod realman;
 pub mod robstride;
 
 /// Arguments of `armhil sim`.
@@ -18,6 +19,8 @@ pub struct Args {
 enum Device {
     /// AgileX Piper 6-DoF arm (CAN, 11-bit IDs).
     Piper(piper::Args),
+    /// Realman arm controller (JSON over TCP, realtime push over UDP).
+    Realman(realman::Args),
     /// RobStride actuators (CAN, 29-bit IDs), any number on one bus.
     Robstride(robstride::Args),
 }
@@ -26,6 +29,7 @@ enum Device {
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     match args.device {
         Device::Piper(args) => piper::run(args),
+        Device::Realman(args) => realman::run(args),
         Device::Robstride(args) => robstride::run(args),
     }
 }

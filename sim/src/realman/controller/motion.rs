@@ -1,0 +1,654 @@
+//! The motion queue: planned moves (with `trajectory_connect` groups), pause/continue/stop as
+//! a ramp of the path speed, teach jogs and streamed (passthrough) targets.
+
+use std::collections::VecDeque;
+
+use super::super::faults::codes;
+use super::super::kinematics::{self, Pose};
+use super::super::planner::{self, CartesianLimits, PlanError, Trajectory};
+use super::super::wire::Obj;
+use super::{ClientId, Controller, Event, STEP_S};
+
+/// Path-speed change per second when pausing / continuing (full speed to rest in 0.2 s).
+const PAUSE_RAMP_PER_S: f64 = 5.0;
+/// Quick stop (`set_arm_stop`): rest in 50 ms.
+const STOP_RAMP_PER_S: f64 = 20.0;
+/// Slow stop (`set_arm_slow_stop`): rest in 0.5 s.
+const SLOW_STOP_RAMP_PER_S: f64 = 2.0;
+/// A move has arrived when every joint is this close to its end point, rad (0.01°).
+const ARRIVED_TOLERANCE_RAD: f64 = 1.75e-4;
+/// Longest wait for the arm to settle after the path's end, ms.
+const SETTLE_TIMEOUT_MS: u32 = 300;
+/// A streamed target that no new frame refreshes is dropped after this long, ms.
+const STREAM_IDLE_MS: u32 = 200;
+
+/// What a move aims at.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Goal {
+    /// Joint positions, rad.
+    Joint(Vec<f64>),
+    /// Straight line to a pose.
+    Linear(Pose),
+    /// Arc through `via` to `to`, `loops` full turns first.
+    Circle {
+        /// Via point.
+        via: Pose,
+        /// End point.
+        to: Pose,
+        /// Extra full circles.
+        loops: u32,
+    },
+    /// Spline through the points.
+    Spline(Vec<Pose>),
+}
+
+/// Trajectory type reported by `get_arm_current_trajectory`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TrajectoryType {
+    /// At rest.
+    None,
+    /// Joint-space move (data = joints).
+    MoveJ,
+    /// Linear move (data = pose).
+    MoveL,
+    /// Arc (data = pose).
+    MoveC,
+    /// Spline (data = pose).
+    MoveS,
+}
+
+impl TrajectoryType {
+    /// Wire name.
+    pub fn wire(self) -> &'static str {
+        match self {
+            Self::None => "none",
+            Self::MoveJ => "movej",
+            Self::MoveL => "movel",
+            Self::MoveC => "movec",
+            Self::MoveS => "moves",
+        }
+    }
+
+    /// `arm_current_status` string while this runs.
+    pub fn status(self) -> &'static str {
+        match self {
+            Self::None => "idle",
+            Self::MoveJ => "move_J",
+            Self::MoveL => "move_L",
+            Self::MoveC => "move_C",
+            Self::MoveS => "move_S",
+        }
+    }
+
+    /// Whether the reported data is a pose (else joints).
+    pub fn reports_pose(self) -> bool {
+        matches!(self, Self::MoveL | Self::MoveC | Self::MoveS)
+    }
+}
+
+/// One accepted move.
+#[derive(Debug, Clone)]
+struct Segment {
+    goal: Goal,
+    speed_percent: f64,
+    kind: TrajectoryType,
+    client: Option<ClientId>,
+    /// Arrival events owed when it ends (a spline stands for all its `moves` commands).
+    events: u32,
+    group: u64,
+    /// Where it ends, rad (planned at acceptance; the start of the next one).
+    end_rad: Vec<f64>,
+    traj: Option<Trajectory>,
+    t_s: f64,
+    settle_ms: u32,
+}
+
+/// What happens when the path speed reaches zero.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+enum AtRest {
+    #[default]
+    Nothing,
+    /// Stay paused.
+    Pause,
+    /// Drop every move (stop / slow stop).
+    Discard,
+}
+
+/// A teach jog (`set_*_teach`): moves until `set_stop_teach` or a limit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Jog {
+    /// One joint (index), direction ±1, speed rad/s.
+    Joint {
+        /// Joint index.
+        joint: usize,
+        /// Signed speed, rad/s.
+        speed_rad_s: f64,
+    },
+    /// Along a base axis (0..3 = x,y,z), signed speed m/s.
+    Position {
+        /// Axis 0..3.
+        axis: usize,
+        /// Signed speed, m/s.
+        speed_m_s: f64,
+    },
+    /// About a base axis, signed speed rad/s.
+    Orientation {
+        /// Axis 0..3.
+        axis: usize,
+        /// Signed speed, rad/s.
+        speed_rad_s: f64,
+    },
+}
+
+/// A streamed target (`movej_canfd`, `movep_canfd`, `*_follow`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Stream {
+    /// Target joints, rad.
+    pub target_rad: Vec<f64>,
+    /// `arm_current_status` while streaming.
+    pub status: &'static str,
+    /// ms since the last frame.
+    pub idle_ms: u32,
+}
+
+/// The queue and its modifiers.
+#[derive(Debug, Clone)]
+pub struct Motion {
+    queue: VecDeque<Segment>,
+    pending: Vec<Segment>,
+    next_group: u64,
+    scale: f64,
+    scale_target: f64,
+    ramp_per_s: f64,
+    at_rest: AtRest,
+    stop_label: Option<&'static str>,
+    jog: Option<Jog>,
+    stream: Option<Stream>,
+}
+
+impl Default for Motion {
+    fn default() -> Self {
+        Self {
+            queue: VecDeque::new(),
+            pending: Vec::new(),
+            next_group: 1,
+            scale: 1.0,
+            scale_target: 1.0,
+            ramp_per_s: PAUSE_RAMP_PER_S,
+            at_rest: AtRest::Nothing,
+            stop_label: None,
+            jog: None,
+            stream: None,
+        }
+    }
+}
+
+impl Motion {
+    /// The running move's type (`None` at rest, also while jogging or streaming).
+    pub fn current_type(&self) -> TrajectoryType {
+        self.queue.front().map_or(TrajectoryType::None, |s| s.kind)
+    }
+
+    /// `arm_current_status` string.
+    pub fn status(&self) -> &'static str {
+        if let Some(label) = self.stop_label {
+            return label;
+        }
+        if self.at_rest == AtRest::Pause {
+            return "pause";
+        }
+        if let Some(s) = &self.stream {
+            return s.status;
+        }
+        self.current_type().status()
+    }
+
+    /// Moves accepted and not finished (queued + waiting for a `trajectory_connect` 0).
+    pub fn plan_count(&self) -> usize {
+        self.queue.len() + self.pending.len()
+    }
+
+    /// Whether the arm is paused.
+    pub fn paused(&self) -> bool {
+        self.at_rest == AtRest::Pause
+    }
+
+    pub(super) fn forget_client(&mut self, client: ClientId) {
+        for seg in self.queue.iter_mut().chain(self.pending.iter_mut()) {
+            if seg.client == Some(client) {
+                seg.client = None;
+            }
+        }
+    }
+
+    pub(super) fn set_jog(&mut self, jog: Option<Jog>) {
+        self.jog = jog;
+    }
+
+    pub(super) fn set_stream(&mut self, target_rad: Vec<f64>, status: &'static str) {
+        self.stream = Some(Stream {
+            target_rad,
+            status,
+            idle_ms: 0,
+        });
+    }
+
+    /// Whether a planned move or jog is running (streaming does not count).
+    pub fn busy(&self) -> bool {
+        !self.queue.is_empty() || self.jog.is_some()
+    }
+}
+
+/// A refused motion: the error code to report.
+pub(super) type Refusal = u16;
+
+impl Controller {
+    fn cartesian_limits(&self) -> CartesianLimits {
+        CartesianLimits {
+            line_speed_m_s: self.params.line_speed_m_s,
+            line_acc_m_s2: self.params.line_acc_m_s2,
+            angular_speed_rad_s: self.params.angular_speed_rad_s,
+            angular_acc_rad_s2: self.params.angular_acc_rad_s2,
+        }
+    }
+
+    /// The joint index and value of the first joint outside its limits, if any.
+    pub(super) fn beyond_limits(&self, joints_rad: &[f64]) -> Option<usize> {
+        joints_rad.iter().enumerate().position(|(j, q)| {
+            let deg = q.to_degrees();
+            !deg.is_finite()
+                || deg < self.params.min_deg[j] - 1e-6
+                || deg > self.params.max_deg[j] + 1e-6
+        })
+    }
+
+    /// Joints reaching `pose` from `seed`, or the error code.
+    pub(super) fn solve(&self, pose: &Pose, seed: &[f64]) -> Result<Vec<f64>, Refusal> {
+        let q = kinematics::inverse(&self.model, pose, seed).map_err(|e| match e {
+            kinematics::IkError::OutOfLimits { .. } => codes::BEYOND_JOINT_LIMIT,
+            _ => codes::UNREACHABLE,
+        })?;
+        match self.beyond_limits(&q) {
+            Some(_) => Err(codes::BEYOND_JOINT_LIMIT),
+            None => Ok(q),
+        }
+    }
+
+    fn plan(&self, from: &[f64], goal: &Goal, speed_percent: f64) -> Result<Trajectory, Refusal> {
+        let limits = self.cartesian_limits();
+        let model = &self.model;
+        let result = match goal {
+            Goal::Joint(to) => {
+                if self.beyond_limits(to).is_some() {
+                    return Err(codes::BEYOND_JOINT_LIMIT);
+                }
+                planner::plan_joint(model, from, to, speed_percent)
+            }
+            Goal::Linear(to) => planner::plan_linear(model, from, to, speed_percent, &limits),
+            Goal::Circle { via, to, loops } => {
+                planner::plan_circle(model, from, via, to, speed_percent, *loops, &limits)
+            }
+            Goal::Spline(points) => {
+                planner::plan_spline(model, from, points, speed_percent, &limits)
+            }
+        };
+        let traj = result.map_err(|e| {
+            tracing::debug!(error = %e, "Realman motion refused by the planner");
+            refusal_code(&e)
+        })?;
+        // The planner knows the model's limits; the controller's may have been narrowed.
+        if self
+            .beyond_limits(&traj.sample(traj.duration_s()))
+            .is_some()
+        {
+            return Err(codes::BEYOND_JOINT_LIMIT);
+        }
+        Ok(traj)
+    }
+
+    /// Where the last accepted move ends (the start of the next one).
+    pub(super) fn tail_rad(&self) -> Vec<f64> {
+        self.motion
+            .pending
+            .last()
+            .or(self.motion.queue.back())
+            .map_or_else(|| self.setpoint_rad.clone(), |s| s.end_rad.clone())
+    }
+
+    /// Accept or refuse a move. `connect` = `trajectory_connect` 1: plan it together with the
+    /// following moves and start only when a 0 arrives.
+    pub(super) fn submit(
+        &mut self,
+        client: ClientId,
+        goal: Goal,
+        kind: TrajectoryType,
+        speed_percent: f64,
+        connect: bool,
+    ) -> Result<(), Refusal> {
+        if !self.can_move() {
+            return Err(if self.power_on {
+                codes::JOINT_DISABLED
+            } else {
+                0
+            });
+        }
+        let from = self.tail_rad();
+        let end_rad = match &goal {
+            // Spline points are planned together when the group's last point arrives.
+            Goal::Spline(_) if connect => from,
+            Goal::Spline(last) => {
+                let mut points: Vec<Pose> = self
+                    .motion
+                    .pending
+                    .iter()
+                    .filter_map(|s| match &s.goal {
+                        Goal::Spline(p) => Some(p.iter().copied()),
+                        _ => None,
+                    })
+                    .flatten()
+                    .collect();
+                points.extend(last.iter().copied());
+                let limits = self.cartesian_limits();
+                let planned =
+                    planner::plan_spline(&self.model, &from, &points, speed_percent, &limits);
+                match planned {
+                    Ok(traj) => traj.sample(traj.duration_s()),
+                    Err(e) => {
+                        tracing::debug!(error = %e, "Realman spline refused by the planner");
+                        self.motion
+                            .pending
+                            .retain(|s| !matches!(s.goal, Goal::Spline(_)));
+                        return Err(refusal_code(&e));
+                    }
+                }
+            }
+            _ => {
+                let traj = self.plan(&from, &goal, speed_percent)?;
+                traj.sample(traj.duration_s())
+            }
+        };
+        self.errors.planning = None;
+        self.motion.jog = None;
+        self.motion.stream = None;
+        let group = self.motion.next_group;
+        self.motion.pending.push(Segment {
+            goal,
+            speed_percent,
+            kind,
+            client: Some(client),
+            events: 1,
+            group,
+            end_rad,
+            traj: None,
+            t_s: 0.0,
+            settle_ms: 0,
+        });
+        if !connect {
+            self.commit_group();
+        }
+        Ok(())
+    }
+
+    /// A `trajectory_connect` 0 arrived: the pending group starts (spline points merged).
+    fn commit_group(&mut self) {
+        let pending = std::mem::take(&mut self.motion.pending);
+        for seg in pending {
+            let merged = match (self.motion.queue.back_mut(), &seg.goal) {
+                (Some(last), Goal::Spline(points))
+                    if last.group == seg.group && last.traj.is_none() =>
+                {
+                    if let Goal::Spline(all) = &mut last.goal {
+                        all.extend(points.iter().copied());
+                        last.events += 1;
+                        last.end_rad.clone_from(&seg.end_rad);
+                        true
+                    } else {
+                        false
+                    }
+                }
+                _ => false,
+            };
+            if !merged {
+                self.motion.queue.push_back(seg);
+            }
+        }
+        self.motion.next_group += 1;
+    }
+
+    /// The running move failed (fault): `trajectory_state:false` to its client, queue dropped.
+    pub(super) fn abort_motion(&mut self) {
+        if let Some(seg) = self.motion.queue.front() {
+            if let Some(client) = seg.client {
+                self.events.push(Event {
+                    to: client,
+                    text: arrival(false, 0, 0),
+                });
+            }
+        }
+        self.discard_motion();
+    }
+
+    /// Drop every move silently (stop commands; clients learn from `get_arm_current_trajectory`).
+    pub(super) fn discard_motion(&mut self) {
+        self.motion.queue.clear();
+        self.motion.pending.clear();
+        self.motion.jog = None;
+        self.motion.stream = None;
+        self.motion.scale = 1.0;
+        self.motion.scale_target = 1.0;
+        self.motion.at_rest = AtRest::Nothing;
+        self.motion.stop_label = None;
+    }
+
+    pub(super) fn pause(&mut self) {
+        self.motion.scale_target = 0.0;
+        self.motion.ramp_per_s = PAUSE_RAMP_PER_S;
+        self.motion.at_rest = AtRest::Pause;
+    }
+
+    pub(super) fn resume(&mut self) -> bool {
+        if self.motion.at_rest != AtRest::Pause {
+            return false;
+        }
+        self.motion.scale_target = 1.0;
+        self.motion.ramp_per_s = PAUSE_RAMP_PER_S;
+        self.motion.at_rest = AtRest::Nothing;
+        true
+    }
+
+    pub(super) fn stop(&mut self, slow: bool) {
+        self.motion.pending.clear();
+        self.motion.jog = None;
+        self.motion.stream = None;
+        if self.motion.queue.is_empty() {
+            // Nothing to brake: the arm is at rest (also ends a pause).
+            self.discard_motion();
+            return;
+        }
+        self.motion.scale_target = 0.0;
+        self.motion.ramp_per_s = if slow {
+            SLOW_STOP_RAMP_PER_S
+        } else {
+            STOP_RAMP_PER_S
+        };
+        self.motion.at_rest = AtRest::Discard;
+        self.motion.stop_label = Some(if slow { "slow_stop" } else { "stop" });
+    }
+
+    /// Delete the running move (only while paused).
+    pub(super) fn delete_current(&mut self) -> bool {
+        if !self.motion.paused() {
+            return false;
+        }
+        self.motion.queue.pop_front();
+        true
+    }
+
+    /// Delete every move (only while paused).
+    pub(super) fn delete_all(&mut self) -> bool {
+        if !self.motion.paused() {
+            return false;
+        }
+        self.motion.queue.clear();
+        self.motion.pending.clear();
+        true
+    }
+
+    pub(super) fn tick_motion(&mut self) {
+        let m = &mut self.motion;
+        let step = m.ramp_per_s * STEP_S;
+        m.scale = if m.scale < m.scale_target {
+            (m.scale + step).min(m.scale_target)
+        } else {
+            (m.scale - step).max(m.scale_target)
+        };
+        if m.scale <= 0.0 && m.at_rest == AtRest::Discard {
+            self.discard_motion();
+            return;
+        }
+        if !self.motion.queue.is_empty() {
+            self.tick_segment();
+        } else if let Some(jog) = self.motion.jog {
+            self.tick_jog(jog);
+        } else if self.motion.stream.is_some() {
+            self.tick_stream();
+        }
+    }
+
+    fn tick_segment(&mut self) {
+        let from = self.setpoint_rad.clone();
+        let Some(seg) = self.motion.queue.front() else {
+            return;
+        };
+        if seg.traj.is_none() {
+            let planned = self.plan(&from, &seg.goal, seg.speed_percent);
+            match planned {
+                Ok(traj) => {
+                    if let Some(seg) = self.motion.queue.front_mut() {
+                        seg.traj = Some(traj);
+                    }
+                }
+                Err(code) => {
+                    self.errors.planning = Some(code);
+                    self.abort_motion();
+                    return;
+                }
+            }
+        }
+        let scale = self.motion.scale;
+        let Some(seg) = self.motion.queue.front_mut() else {
+            return;
+        };
+        let Some(traj) = &seg.traj else {
+            return;
+        };
+        let duration = traj.duration_s();
+        seg.t_s = (seg.t_s + STEP_S * scale).min(duration);
+        self.setpoint_rad = traj.sample(seg.t_s);
+        if seg.t_s < duration {
+            return;
+        }
+        seg.settle_ms += 1;
+        let settled = self
+            .plant
+            .positions_rad()
+            .iter()
+            .zip(&self.setpoint_rad)
+            .all(|(q, s)| (q - s).abs() < ARRIVED_TOLERANCE_RAD);
+        if settled || seg.settle_ms >= SETTLE_TIMEOUT_MS {
+            self.finish_segment();
+        }
+    }
+
+    fn finish_segment(&mut self) {
+        let Some(seg) = self.motion.queue.pop_front() else {
+            return;
+        };
+        let more_in_group = self
+            .motion
+            .queue
+            .front()
+            .is_some_and(|next| next.group == seg.group);
+        if let Some(client) = seg.client {
+            for i in 0..seg.events {
+                let connect = u8::from(i + 1 < seg.events || more_in_group);
+                self.events.push(Event {
+                    to: client,
+                    text: arrival(true, 0, connect),
+                });
+            }
+        }
+    }
+
+    fn tick_jog(&mut self, jog: Jog) {
+        let mut next = self.setpoint_rad.clone();
+        match jog {
+            Jog::Joint { joint, speed_rad_s } => next[joint] += speed_rad_s * STEP_S,
+            Jog::Position { axis, speed_m_s } => {
+                let mut pose = kinematics::forward(&self.model, &next);
+                pose.position_m[axis] += speed_m_s * STEP_S;
+                match self.solve(&pose, &next) {
+                    Ok(q) => next = q,
+                    Err(_) => next.clone_from(&self.setpoint_rad),
+                }
+            }
+            Jog::Orientation { axis, speed_rad_s } => {
+                let mut pose = kinematics::forward(&self.model, &next);
+                pose.euler_rad[axis] += speed_rad_s * STEP_S;
+                match self.solve(&pose, &next) {
+                    Ok(q) => next = q,
+                    Err(_) => next.clone_from(&self.setpoint_rad),
+                }
+            }
+        }
+        if self.beyond_limits(&next).is_some() || next == self.setpoint_rad {
+            // A jog ends at a joint limit or where the arm cannot go further.
+            self.motion.jog = None;
+            return;
+        }
+        self.setpoint_rad = next;
+    }
+
+    fn tick_stream(&mut self) {
+        let Some(stream) = &mut self.motion.stream else {
+            return;
+        };
+        stream.idle_ms += 1;
+        let mut done = true;
+        for (j, q) in self.setpoint_rad.iter_mut().enumerate() {
+            let target = stream.target_rad[j].clamp(
+                self.params.min_deg[j].to_radians(),
+                self.params.max_deg[j].to_radians(),
+            );
+            let max_step = self.params.max_speed_deg_s[j].to_radians() * STEP_S;
+            let delta = (target - *q).clamp(-max_step, max_step);
+            *q += delta;
+            done &= (target - *q).abs() < 1e-9;
+        }
+        if done && stream.idle_ms > STREAM_IDLE_MS {
+            self.motion.stream = None;
+        }
+    }
+}
+
+/// The error a planning failure reports (docs/protocols/realman.md §12).
+fn refusal_code(e: &PlanError) -> Refusal {
+    match e {
+        PlanError::OutOfLimits { .. }
+        | PlanError::Unreachable {
+            source: kinematics::IkError::OutOfLimits { .. },
+            ..
+        } => codes::BEYOND_JOINT_LIMIT,
+        PlanError::DegenerateArc => codes::ARC_PLANNING,
+        _ => codes::UNREACHABLE,
+    }
+}
+
+/// `current_trajectory_state` event text.
+pub(super) fn arrival(ok: bool, device: u8, connect: u8) -> String {
+    Obj::state("current_trajectory_state")
+        .bool("trajectory_state", ok)
+        .int("device", i64::from(device))
+        .int("trajectory_connect", i64::from(connect))
+        .finish()
+}

@@ -1,0 +1,222 @@
+//! Faults a scenario can schedule on a running Realman emulator, and how each shows on the wire.
+//!
+//! | Fault (`name()`) | Wire effect | Cleared by |
+//! |---|---|---|
+//! | `connection_drop` | every TCP connection (or the one from an IP) is closed by the controller | — (one-shot; clients reconnect) |
+//! | `reply_delay` | every TCP reply is written `delay_ms` late (events too) | `clear` |
+//! | `malformed_reply` | the next `count` replies are cut in half (still CRLF-terminated) | after `count` replies, or `clear` |
+//! | `udp_loss` | each push datagram is dropped with probability `permille`/1000 (seeded) | `clear` |
+//! | `udp_reorder` | datagrams are sent in swapped pairs | `clear` |
+//! | `joint_error` | joint `err_flag`/`joint_err_code` = `code`, error 0x1001 in `err`, that joint disabled, motion aborts with `trajectory_state:false` | `clear_system_err` + `set_joint_clear_err`, or `clear` |
+//! | `power_loss` | arm power off: joints disabled, brakes on, motion aborts (`trajectory_state:false`), `power_state` 0 | `set_arm_power` 1, or `clear` |
+//! | `collision` | error 0x100D (4109), arm stops on its path, motion aborts | `clear_system_err`, or `clear` |
+//! | `estop` | emergency stop: brakes on, joints disabled, error 0x1010, motion aborts; moves refused | `clear` then `clear_system_err` |
+//! | `gripper_fault` | gripper `error` bit (default stall), error 0x2001, gripper commands answer `state:false` | `clear` |
+
+/// A fault injected into a running emulator. Joints are numbered from 1 as on the wire.
+#[derive(Debug, Clone, PartialEq)]
+pub enum RealmanFault {
+    /// The controller closes TCP connections (all of them, or those from `peer_ip`).
+    ConnectionDrop {
+        /// Only connections from this IP; `None` = all.
+        peer_ip: Option<std::net::IpAddr>,
+    },
+    /// Replies and events are written this late.
+    ReplyDelay {
+        /// Delay, ms.
+        delay_ms: u64,
+    },
+    /// The next replies are truncated mid-object.
+    MalformedReply {
+        /// How many replies.
+        count: u32,
+    },
+    /// UDP push datagrams are lost at random (seeded, reproducible).
+    UdpLoss {
+        /// Loss probability in 1/1000.
+        permille: u16,
+    },
+    /// UDP push datagrams arrive in swapped pairs.
+    UdpReorder,
+    /// A joint reports an error code (any joint error bit of docs/protocols/realman.md §12).
+    JointError {
+        /// Joint, 1-based.
+        joint: u8,
+        /// Joint error bits (e.g. 0x0008 over-temperature).
+        code: u16,
+    },
+    /// Arm power lost.
+    PowerLoss,
+    /// Collision detected (0x100D).
+    Collision,
+    /// Emergency stop pressed.
+    EStop,
+    /// Gripper fault (error bits, 0x2001).
+    GripperFault {
+        /// Gripper `error` bits (bit0 stall, bit1 over-temp, bit2 over-current, bit3 driver,
+        /// bit4 comms).
+        bits: u8,
+    },
+}
+
+/// Which fault to clear: [`RealmanFault`] without its values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum RealmanFaultKind {
+    /// See [`RealmanFault::ConnectionDrop`].
+    ConnectionDrop,
+    /// See [`RealmanFault::ReplyDelay`].
+    ReplyDelay,
+    /// See [`RealmanFault::MalformedReply`].
+    MalformedReply,
+    /// See [`RealmanFault::UdpLoss`].
+    UdpLoss,
+    /// See [`RealmanFault::UdpReorder`].
+    UdpReorder,
+    /// See [`RealmanFault::JointError`].
+    JointError,
+    /// See [`RealmanFault::PowerLoss`].
+    PowerLoss,
+    /// See [`RealmanFault::Collision`].
+    Collision,
+    /// See [`RealmanFault::EStop`].
+    EStop,
+    /// See [`RealmanFault::GripperFault`].
+    GripperFault,
+}
+
+impl RealmanFaultKind {
+    /// Every kind, in a stable order.
+    pub const ALL: [Self; 10] = [
+        Self::ConnectionDrop,
+        Self::ReplyDelay,
+        Self::MalformedReply,
+        Self::UdpLoss,
+        Self::UdpReorder,
+        Self::JointError,
+        Self::PowerLoss,
+        Self::Collision,
+        Self::EStop,
+        Self::GripperFault,
+    ];
+
+    /// Stable snake_case name (scenario files, traces).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::ConnectionDrop => "connection_drop",
+            Self::ReplyDelay => "reply_delay",
+            Self::MalformedReply => "malformed_reply",
+            Self::UdpLoss => "udp_loss",
+            Self::UdpReorder => "udp_reorder",
+            Self::JointError => "joint_error",
+            Self::PowerLoss => "power_loss",
+            Self::Collision => "collision",
+            Self::EStop => "estop",
+            Self::GripperFault => "gripper_fault",
+        }
+    }
+
+    /// One-line description of the wire effect.
+    pub fn description(self) -> &'static str {
+        match self {
+            Self::ConnectionDrop => "the controller closes TCP connections; clients must reconnect",
+            Self::ReplyDelay => "every TCP reply and event is written late (e.g. 600 ms, beyond the SDK's 500 ms timeout)",
+            Self::MalformedReply => "the next replies are truncated mid-object (CRLF-terminated)",
+            Self::UdpLoss => "realtime push datagrams are dropped at random (seeded)",
+            Self::UdpReorder => "realtime push datagrams arrive in swapped pairs",
+            Self::JointError => "a joint reports an error code; error 0x1001, joint disabled, motion aborted",
+            Self::PowerLoss => "arm power lost: joints disabled, brakes on, motion aborted, power_state 0",
+            Self::Collision => "collision detected (0x100D): the arm stops, motion aborted",
+            Self::EStop => "emergency stop: brakes on, joints disabled, motion aborted, moves refused",
+            Self::GripperFault => "gripper error bits set (0x2001); gripper commands answer false",
+        }
+    }
+
+    /// The kind with this name.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|k| k.name() == name)
+    }
+}
+
+impl RealmanFault {
+    /// This fault's kind.
+    pub fn kind(&self) -> RealmanFaultKind {
+        match self {
+            Self::ConnectionDrop { .. } => RealmanFaultKind::ConnectionDrop,
+            Self::ReplyDelay { .. } => RealmanFaultKind::ReplyDelay,
+            Self::MalformedReply { .. } => RealmanFaultKind::MalformedReply,
+            Self::UdpLoss { .. } => RealmanFaultKind::UdpLoss,
+            Self::UdpReorder => RealmanFaultKind::UdpReorder,
+            Self::JointError { .. } => RealmanFaultKind::JointError,
+            Self::PowerLoss => RealmanFaultKind::PowerLoss,
+            Self::Collision => RealmanFaultKind::Collision,
+            Self::EStop => RealmanFaultKind::EStop,
+            Self::GripperFault { .. } => RealmanFaultKind::GripperFault,
+        }
+    }
+
+    /// Stable snake_case name of the kind.
+    pub fn name(&self) -> &'static str {
+        self.kind().name()
+    }
+}
+
+/// A fault with values the emulator cannot apply.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum FaultError {
+    /// Joint number outside 1..=dof.
+    #[error("joint {joint} does not exist (this arm has joints 1–{dof})")]
+    NoSuchJoint {
+        /// The joint given.
+        joint: u8,
+        /// Joints of the arm.
+        dof: usize,
+    },
+    /// A joint error with no bit set.
+    #[error("joint error code 0 is not an error")]
+    ZeroCode,
+    /// A loss probability above 1000 ‰.
+    #[error("loss probability {permille}‰ is above 1000‰")]
+    BadProbability {
+        /// The value given.
+        permille: u16,
+    },
+}
+
+/// System / arm error codes (docs/protocols/realman.md §12).
+pub mod codes {
+    /// Joint communication abnormal.
+    pub const JOINT_COMM: u16 = 0x1001;
+    /// Target beyond a joint limit.
+    pub const BEYOND_JOINT_LIMIT: u16 = 0x1002;
+    /// Unreachable / singular.
+    pub const UNREACHABLE: u16 = 0x1003;
+    /// Collision detected.
+    pub const COLLISION: u16 = 0x100D;
+    /// No such work frame.
+    pub const NO_WORK_FRAME: u16 = 0x100E;
+    /// No such tool frame.
+    pub const NO_TOOL_FRAME: u16 = 0x100F;
+    /// Joint disabled (enable lost).
+    pub const JOINT_DISABLED: u16 = 0x1010;
+    /// Arc planning error.
+    pub const ARC_PLANNING: u16 = 0x1011;
+    /// Gripper fault.
+    pub const GRIPPER: u16 = 0x2001;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_are_unique_and_round_trip() {
+        let mut names: Vec<_> = RealmanFaultKind::ALL.iter().map(|k| k.name()).collect();
+        for kind in RealmanFaultKind::ALL {
+            assert_eq!(RealmanFaultKind::from_name(kind.name()), Some(kind));
+            assert!(!kind.description().is_empty());
+        }
+        names.sort_unstable();
+        names.dedup();
+        assert_eq!(names.len(), RealmanFaultKind::ALL.len());
+    }
+}

@@ -1,0 +1,55 @@
+//! Realman arm-controller emulator (RM65-B and kin; JSON over TCP, realtime push over UDP;
+//! protocol in docs/protocols/realman.md).
+//!
+//! - [`controller`]: the synchronous controller state machine on an [`plant::ArmPlant`]
+//!   (1 kHz), answering requests and producing arrival events.
+//! - [`server`]: the transport — TCP listener in real time or in-memory duplex streams in
+//!   virtual time, request framing ([`framing`]), per-client reply streams, the UDP push
+//!   ([`push`]) and transport faults ([`faults`]).
+//!
+//! The motion core is independent of the wire protocol:
+//!
+//! - [`model`]: the arm models (MDH table, flange, joint ranges, speeds, masses).
+//! - [`kinematics`]: flange forward kinematics ([`kinematics::forward`]) and numerical
+//!   inverse kinematics ([`kinematics::inverse`]), poses as x, y, z + intrinsic Z-Y-X Euler.
+//! - [`planner`]: `movej` / `movel` / `movec` / `moves` trajectories and blending of
+//!   connected segments.
+//! - [`plant`]: the physical arm, `urdf/rm65b.urdf` in the rapier world at 1 kHz with
+//!   torque-driven joint controllers, brakes, currents, temperatures and bus voltage.
+//!
+//! ```
+//! use sim::realman::{kinematics, model::ArmModel, planner};
+//!
+//! let arm = ArmModel::rm65b();
+//! let home = vec![0.0; 6];
+//! let target: Vec<f64> = [10.0_f64, 20.0, 30.0, 40.0, 50.0, 60.0].iter().map(|d| d.to_radians()).collect();
+//! let pose = kinematics::forward(&arm, &target);
+//! let back = kinematics::inverse(&arm, &pose, &target)?;
+//! assert!((back[2] - target[2]).abs() < 1e-6);
+//! let movej = planner::plan_joint(&arm, &home, &target, 50.0)?;
+//! assert_eq!(movej.kind(), planner::MotionKind::Joint);
+//! assert!((movej.sample(movej.duration_s())[0] - target[0]).abs() < 1e-12);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+pub mod controller;
+pub mod facts;
+pub mod faults;
+pub mod framing;
+pub mod kinematics;
+pub mod model;
+pub mod params;
+mod path;
+pub mod planner;
+pub mod plant;
+pub mod profile;
+pub mod push;
+pub mod server;
+pub mod wire;
+
+pub use controller::{Answer, ClientId, Controller, ControllerConfig, ControllerError, Event};
+pub use faults::{FaultError, RealmanFault, RealmanFaultKind};
+pub use profile::FirmwareProfile;
+pub use server::{
+    EmulatorConfig, RealmanEmulator, RealmanHandle, ServerError, ServerStats, Transport,
+};

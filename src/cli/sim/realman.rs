@@ -1,0 +1,110 @@
+//! `armhil sim realman`: the Realman arm-controller emulator in real time on TCP (JSON
+//! commands) and UDP (realtime push), for the vendor SDK or any other client.
+
+use std::net::{IpAddr, SocketAddr};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::Context;
+use sim::realman::model::ArmModel;
+use sim::realman::{ControllerConfig, EmulatorConfig, FirmwareProfile, RealmanEmulator, Transport};
+
+/// Arguments of `armhil sim realman`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Address to listen on.
+    #[arg(long, default_value = "127.0.0.1")]
+    pub bind: IpAddr,
+    /// TCP port of the JSON command server (the controller's is 8080).
+    #[arg(long, default_value_t = 8080)]
+    pub port: u16,
+    /// Arm model reported as Product_version (RM65-B, RM75-B).
+    #[arg(long, default_value = "RM65-B")]
+    pub model: String,
+    /// Controller firmware to impersonate: V1.7.0 (`err` arrays) or V1.6.5 (`arm_err`/`sys_err`).
+    #[arg(long, default_value = "V1.7.0")]
+    pub firmware: FirmwareProfile,
+    /// JSON file keeping the controller's settings and the arm's pose across runs (written
+    /// atomically by `save_device_info_all` and at exit).
+    #[arg(long)]
+    pub state_file: Option<PathBuf>,
+    /// Joint angles at power-on when the state file has none, degrees, comma-separated.
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+    pub initial_joints_deg: Option<Vec<f64>>,
+    /// Most simultaneous TCP clients; further connections are closed at once.
+    #[arg(long, default_value_t = sim::realman::server::DEFAULT_MAX_CONNECTIONS)]
+    pub max_connections: usize,
+    /// Physics steps (1 ms each) per wake-up of the emulator (1 = every millisecond).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=10))]
+    pub ticks_per_wake: u32,
+    /// Run without a gripper on the flange.
+    #[arg(long)]
+    pub no_gripper: bool,
+}
+
+/// Run the emulator until Ctrl-C.
+pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+        .context("cannot start the tokio runtime")?;
+    runtime.block_on(serve(args))
+}
+
+async fn serve(args: Args) -> anyhow::Result<ExitCode> {
+    let model = ArmModel::from_product(&args.model)
+        .with_context(|| format!("unknown Realman model {:?} (try RM65-B)", args.model))?;
+    let mut controller = ControllerConfig::new(model);
+    controller.firmware = args.firmware;
+    controller.state_file = args.state_file.clone();
+    controller.gripper = !args.no_gripper;
+    controller.initial_joints_rad = args
+        .initial_joints_deg
+        .as_ref()
+        .map(|deg| deg.iter().map(|d| d.to_radians()).collect());
+    let mut config = EmulatorConfig::new(controller);
+    config.max_connections = args.max_connections;
+    config.ticks_per_wake = args.ticks_per_wake;
+    let addr = SocketAddr::new(args.bind, args.port);
+    let emu = RealmanEmulator::spawn(config, Transport::Tcp(addr))
+        .await
+        .with_context(|| format!("cannot start the Realman emulator on {addr}"))?;
+    let bound = emu.local_addr().unwrap_or(addr);
+    tracing::info!(%bound, model = %args.model, firmware = %args.firmware, "Realman emulator running; Ctrl-C to stop");
+    eprintln!(
+        "armhil sim realman: {} ({}) on tcp://{bound} (Ctrl-C to stop)",
+        args.model, args.firmware
+    );
+    wait_for_stop().await?;
+    let stats = emu.stats();
+    emu.shutdown().await;
+    tracing::info!(
+        accepted = stats.accepted,
+        refused = stats.refused,
+        overruns = stats.overruns,
+        datagrams = stats.push.sent,
+        "Realman emulator stopped"
+    );
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Ctrl-C, or SIGTERM on Unix (how CI runners and process managers stop a service).
+async fn wait_for_stop() -> anyhow::Result<()> {
+    #[cfg(unix)]
+    {
+        use tokio::signal::unix::{signal, SignalKind};
+        let mut term = signal(SignalKind::terminate()).context("cannot watch SIGTERM")?;
+        tokio::select! {
+            r = tokio::signal::ctrl_c() => r.context("cannot wait for Ctrl-C")?,
+            _ = term.recv() => {}
+        }
+        Ok(())
+    }
+    #[cfg(not(unix))]
+    {
+        tokio::signal::ctrl_c()
+            .await
+            .context("cannot wait for Ctrl-C")
+    }
+}

@@ -1,0 +1,170 @@
+"""The vendor's Python SDK (Robotic_Arm 1.1.6, unchanged) against `armhil sim realman`.
+
+Run (after `cargo build -p armhil`):
+
+    pip install Robotic_Arm==1.1.6 pytest
+    ARMHIL_BIN=target/debug/armhil python -m pytest -v tests/sdk/test_realman_sdk.py
+
+The emulator is started on a free 127.0.0.1 port for this module and stopped with SIGINT at the
+end. Every SDK call below is what a user's program would make; nothing is patched.
+"""
+
+import json
+import math
+import os
+import signal
+import socket
+import subprocess
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+sdk = pytest.importorskip("Robotic_Arm.rm_robot_interface")
+
+REPO = Path(__file__).resolve().parents[2]
+BIN = os.environ.get("ARMHIL_BIN", str(REPO / "target" / "debug" / "armhil"))
+
+
+# ctypes callbacks handed to the SDK (freeing one the SDK still calls crashes the process).
+KEEP_ALIVE = []
+
+
+def free_port(kind=socket.SOCK_STREAM):
+    with socket.socket(socket.AF_INET, kind) as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture(scope="module")
+def emulator():
+    """`armhil sim realman` on a free port; yields the port."""
+    if not Path(BIN).exists():
+        pytest.fail(f"armhil binary not found at {BIN} (set ARMHIL_BIN or cargo build -p armhil)")
+    port = free_port()
+    proc = subprocess.Popen(
+        [BIN, "sim", "realman", "--bind", "127.0.0.1", "--port", str(port)],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    deadline = time.monotonic() + 20
+    while True:
+        try:
+            socket.create_connection(("127.0.0.1", port), timeout=0.2).close()
+            break
+        except OSError:
+            if proc.poll() is not None or time.monotonic() > deadline:
+                proc.kill()
+                pytest.fail(f"emulator did not start: {proc.stderr.read()}")
+            time.sleep(0.05)
+    yield port
+    proc.send_signal(signal.SIGINT)
+    try:
+        proc.wait(timeout=10)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait()
+
+
+@pytest.fixture(scope="module")
+def arm(emulator):
+    """One SDK handle in triple mode (TCP + event thread + UDP push thread)."""
+    robot = sdk.RoboticArm(sdk.rm_thread_mode_e.RM_TRIPLE_MODE_E)
+    handle = robot.rm_create_robot_arm("127.0.0.1", emulator)
+    assert handle.id >= 1, "the SDK's 11-query handshake failed"
+    yield robot
+    # Only a handle that connected may be deleted: the SDK hangs on a failed one.
+    robot.rm_delete_robot_arm()
+
+
+def joints(robot):
+    code, state = robot.rm_get_current_arm_state()
+    assert code == 0
+    return state["joint"], state["pose"], state["err"]
+
+
+def test_handshake_gives_a_handle_and_the_model(arm):
+    code, info = arm.rm_get_arm_software_info()
+    assert code == 0
+    assert info["product_version"] == "RM65-B"
+
+
+def test_blocking_movej_arrives_at_the_target(arm):
+    target = [10.0, 20.0, 30.0, 0.0, 40.0, 0.0]
+    assert arm.rm_movej(target, 50, 0, 0, 1) == 0
+    q, _, err = joints(arm)
+    assert q == pytest.approx(target, abs=0.05)
+    assert err["err"] == ["0"]
+
+
+def test_blocking_movel_arrives_at_the_pose(arm):
+    assert arm.rm_movej([0.0, 30.0, 60.0, 0.0, 60.0, 0.0], 50, 0, 0, 1) == 0
+    _, pose, _ = joints(arm)
+    target = list(pose)
+    target[0] += 0.05  # 5 cm along x, same orientation
+    assert arm.rm_movel(target, 30, 0, 0, 1) == 0
+    _, reached, _ = joints(arm)
+    assert reached[:3] == pytest.approx(target[:3], abs=0.001)
+    for got, want in zip(reached[3:], target[3:]):
+        # Euler angles near ±π may come back with the other sign: compare on the circle.
+        assert abs(math.remainder(got - want, 2 * math.pi)) < 0.01, (reached, target)
+
+
+def test_out_of_limit_movej_is_refused_and_the_arm_stays(arm):
+    before, _, _ = joints(arm)
+    assert arm.rm_movej([0.0, 200.0, 0.0, 0.0, 0.0, 0.0], 50, 0, 0, 1) == 1
+    time.sleep(0.3)
+    after, _, err = joints(arm)
+    assert after == pytest.approx(before, abs=0.01)
+    assert "4098" in err["err"]
+
+
+def test_realtime_push_reaches_the_callback(arm):
+    port = free_port(socket.SOCK_DGRAM)
+    custom = sdk.rm_udp_custom_config_t(joint_speed=0, arm_current_status=1)
+    config = sdk.rm_realtime_push_config_t(1, True, port, -1, "127.0.0.1", custom)
+    assert arm.rm_set_realtime_push(config) == 0
+    code, current = arm.rm_get_realtime_push()
+    assert code == 0 and current["port"] == port and current["cycle"] == 1
+    received = []
+    lock = threading.Lock()
+
+    def on_state(data):
+        with lock:
+            received.append(data.errCode)
+
+    callback = sdk.rm_realtime_arm_state_callback_ptr(on_state)
+    # The C library keeps calling it after this test: it must outlive the module.
+    KEEP_ALIVE.append(callback)
+    arm.rm_realtime_arm_state_call_back(callback)
+    time.sleep(0.3)
+    with lock:
+        received.clear()
+    time.sleep(1.0)
+    with lock:
+        count = len(received)
+        codes = set(received)
+    # cycle 1 = every 5 ms = 200 per second; allow for scheduling on a busy machine.
+    assert count > 120, f"{count} datagrams in 1 s"
+    assert codes == {0}, f"callback error codes {codes}"
+
+
+def raw_request(port, payload: bytes, timeout=2.0):
+    with socket.create_connection(("127.0.0.1", port), timeout=timeout) as s:
+        s.sendall(payload)
+        data = b""
+        while b"\r\n" not in data:
+            chunk = s.recv(4096)
+            if not chunk:
+                break
+            data += chunk
+    return json.loads(data.split(b"\r\n")[0])
+
+
+def test_raw_socket_pretty_printed_and_unterminated_requests_get_replies(emulator):
+    pretty = b'{\n\t"command":\t"get_joint_degree"\n}\r\n'
+    assert raw_request(emulator, pretty)["state"] == "joint_degree"
+    bare = b'{"command":"get_arm_power_state"}'
+    assert raw_request(emulator, bare) == {"state": "arm_power_state", "power_state": 1}
