@@ -375,3 +375,41 @@ async fn passthrough_gets_no_reply_and_moves_the_arm() {
     let q = joints_deg(&c.ask(r#"{"command":"get_current_arm_state"}"#).await);
     assert!((q[0] - 1.0).abs() < 0.05, "{q:?}");
 }
+
+/// Virtual time from the second ack to the group's final event for two connected moves.
+async fn connected_pair_duration(r: i64) -> (Duration, Vec<i64>) {
+    let emu = emulator().await;
+    let mut c = client(&emu);
+    c.ask(&format!(
+        r#"{{"command":"movej","joint":[30000,0,0,0,0,0],"v":50,"r":{r},"trajectory_connect":1}}"#
+    ))
+    .await;
+    let start = tokio::time::Instant::now();
+    c.ask(
+        r#"{"command":"movej","joint":[30000,30000,0,0,0,0],"v":50,"r":0,"trajectory_connect":0}"#,
+    )
+    .await;
+    let mut connects = Vec::new();
+    loop {
+        let (event, _) = wait_event(&mut c, Duration::from_secs(10)).await;
+        let connect = event.expect("event")["trajectory_connect"]
+            .as_i64()
+            .unwrap();
+        connects.push(connect);
+        if connect == 0 {
+            return (start.elapsed(), connects);
+        }
+    }
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_blend_radius_joins_connected_moves_without_stopping() {
+    let (stop_between, events_plain) = connected_pair_duration(0).await;
+    let (blended, events_blended) = connected_pair_duration(80).await;
+    assert_eq!(events_plain, vec![1, 0]);
+    assert_eq!(events_blended, vec![1, 0]);
+    assert!(
+        blended + Duration::from_millis(50) < stop_between,
+        "blended {blended:?} vs stopping {stop_between:?}"
+    );
+}

@@ -3,7 +3,7 @@
 
 use super::super::kinematics::{self, Pose};
 use super::super::wire::{self, ack, Obj, Req};
-use super::motion::{Goal, Jog, TrajectoryType};
+use super::motion::{Goal, Jog, MoveCommand, TrajectoryType};
 use super::{Answer, ClientId, Controller};
 
 /// Answer a motion command, or `None` if `name` is not one.
@@ -67,6 +67,7 @@ fn planned_move(c: &mut Controller, client: ClientId, name: &str, req: Req) -> b
         return false;
     };
     let connect = req.int("trajectory_connect").unwrap_or(0) != 0;
+    let blend_r = req.int("r").unwrap_or(0).clamp(0, 100) as f64;
     let goal = match name {
         "movej" => match req.ints("joint") {
             Some(j) if j.len() == c.facts.dof => Some((
@@ -111,18 +112,29 @@ fn planned_move(c: &mut Controller, client: ClientId, name: &str, req: Req) -> b
     let Some((goal, kind)) = goal else {
         return false;
     };
-    submit_or_refuse(c, client, goal, kind, v, connect)
+    let cmd = MoveCommand {
+        goal,
+        kind,
+        speed_percent: v,
+        blend_r,
+        connect,
+    };
+    submit_or_refuse(c, client, cmd)
 }
 
-fn submit_or_refuse(
-    c: &mut Controller,
-    client: ClientId,
-    goal: Goal,
-    kind: TrajectoryType,
-    v: f64,
-    connect: bool,
-) -> bool {
-    match c.submit(client, goal, kind, v, connect) {
+/// A single move that stops at its end (steps).
+fn single(goal: Goal, kind: TrajectoryType, speed_percent: f64) -> MoveCommand {
+    MoveCommand {
+        goal,
+        kind,
+        speed_percent,
+        blend_r: 0.0,
+        connect: false,
+    }
+}
+
+fn submit_or_refuse(c: &mut Controller, client: ClientId, cmd: MoveCommand) -> bool {
+    match c.submit(client, cmd) {
         Ok(()) => true,
         Err(code) => {
             if code != 0 {
@@ -148,7 +160,8 @@ fn step(c: &mut Controller, client: ClientId, name: &str, req: Req) -> bool {
         };
         let mut to = tail;
         to[j] += wire::mdeg_to_rad(js[1]);
-        return submit_or_refuse(c, client, Goal::Joint(to), TrajectoryType::MoveJ, v, false);
+        let cmd = single(Goal::Joint(to), TrajectoryType::MoveJ, v);
+        return submit_or_refuse(c, client, cmd);
     }
     let (Some(kind), Some(step)) = (req.str("step_type"), req.int("step")) else {
         return false;
@@ -168,7 +181,7 @@ fn step(c: &mut Controller, client: ClientId, name: &str, req: Req) -> bool {
         return false;
     }
     let goal = Goal::Linear(c.flange_target(&pose));
-    submit_or_refuse(c, client, goal, TrajectoryType::MoveL, v, false)
+    submit_or_refuse(c, client, single(goal, TrajectoryType::MoveL, v))
 }
 
 fn joint_index(c: &Controller, joint: i64) -> Option<usize> {

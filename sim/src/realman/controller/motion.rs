@@ -86,21 +86,39 @@ impl TrajectoryType {
     }
 }
 
-/// One accepted move.
+/// One accepted motion command.
 #[derive(Debug, Clone)]
-struct Segment {
+struct Part {
     goal: Goal,
     speed_percent: f64,
+    /// Blend radius toward the next part of its group, % (0 = stop in between).
+    blend_r: f64,
     kind: TrajectoryType,
     client: Option<ClientId>,
     /// Arrival events owed when it ends (a spline stands for all its `moves` commands).
     events: u32,
-    group: u64,
     /// Where it ends, rad (planned at acceptance; the start of the next one).
     end_rad: Vec<f64>,
+}
+
+/// A group of parts planned together (one part unless `trajectory_connect` joined several):
+/// one blended trajectory, with an arrival event as each part ends.
+#[derive(Debug, Clone)]
+struct Run {
+    parts: Vec<Part>,
     traj: Option<Trajectory>,
+    /// When each part ends on the trajectory, s.
+    part_ends_s: Vec<f64>,
+    /// Parts whose events have been sent.
+    done_parts: usize,
     t_s: f64,
     settle_ms: u32,
+}
+
+impl Run {
+    fn current_part(&self) -> Option<&Part> {
+        self.parts.get(self.done_parts).or(self.parts.last())
+    }
 }
 
 /// What happens when the path speed reaches zero.
@@ -154,9 +172,8 @@ pub struct Stream {
 /// The queue and its modifiers.
 #[derive(Debug, Clone)]
 pub struct Motion {
-    queue: VecDeque<Segment>,
-    pending: Vec<Segment>,
-    next_group: u64,
+    queue: VecDeque<Run>,
+    pending: Vec<Part>,
     scale: f64,
     scale_target: f64,
     ramp_per_s: f64,
@@ -171,7 +188,6 @@ impl Default for Motion {
         Self {
             queue: VecDeque::new(),
             pending: Vec::new(),
-            next_group: 1,
             scale: 1.0,
             scale_target: 1.0,
             ramp_per_s: PAUSE_RAMP_PER_S,
@@ -186,7 +202,10 @@ impl Default for Motion {
 impl Motion {
     /// The running move's type (`None` at rest, also while jogging or streaming).
     pub fn current_type(&self) -> TrajectoryType {
-        self.queue.front().map_or(TrajectoryType::None, |s| s.kind)
+        self.queue
+            .front()
+            .and_then(Run::current_part)
+            .map_or(TrajectoryType::None, |p| p.kind)
     }
 
     /// `arm_current_status` string.
@@ -205,7 +224,7 @@ impl Motion {
 
     /// Moves accepted and not finished (queued + waiting for a `trajectory_connect` 0).
     pub fn plan_count(&self) -> usize {
-        self.queue.len() + self.pending.len()
+        self.queue.iter().map(|r| r.parts.len()).sum::<usize>() + self.pending.len()
     }
 
     /// Whether the arm is paused.
@@ -214,9 +233,10 @@ impl Motion {
     }
 
     pub(super) fn forget_client(&mut self, client: ClientId) {
-        for seg in self.queue.iter_mut().chain(self.pending.iter_mut()) {
-            if seg.client == Some(client) {
-                seg.client = None;
+        let queued = self.queue.iter_mut().flat_map(|r| r.parts.iter_mut());
+        for part in queued.chain(self.pending.iter_mut()) {
+            if part.client == Some(client) {
+                part.client = None;
             }
         }
     }
@@ -241,6 +261,21 @@ impl Motion {
 
 /// A refused motion: the error code to report.
 pub(super) type Refusal = u16;
+
+/// A planned-motion command as the controller accepts it.
+#[derive(Debug, Clone)]
+pub(super) struct MoveCommand {
+    /// Target.
+    pub goal: Goal,
+    /// Reported trajectory type.
+    pub kind: TrajectoryType,
+    /// Speed, % of the limits.
+    pub speed_percent: f64,
+    /// Blend radius toward the next connected move, %.
+    pub blend_r: f64,
+    /// `trajectory_connect` 1: wait for the group's 0.
+    pub connect: bool,
+}
 
 impl Controller {
     fn cartesian_limits(&self) -> CartesianLimits {
@@ -311,20 +346,20 @@ impl Controller {
         self.motion
             .pending
             .last()
-            .or(self.motion.queue.back())
-            .map_or_else(|| self.setpoint_rad.clone(), |s| s.end_rad.clone())
+            .or(self.motion.queue.back().and_then(|r| r.parts.last()))
+            .map_or_else(|| self.setpoint_rad.clone(), |p| p.end_rad.clone())
     }
 
     /// Accept or refuse a move. `connect` = `trajectory_connect` 1: plan it together with the
     /// following moves and start only when a 0 arrives.
-    pub(super) fn submit(
-        &mut self,
-        client: ClientId,
-        goal: Goal,
-        kind: TrajectoryType,
-        speed_percent: f64,
-        connect: bool,
-    ) -> Result<(), Refusal> {
+    pub(super) fn submit(&mut self, client: ClientId, cmd: MoveCommand) -> Result<(), Refusal> {
+        let MoveCommand {
+            goal,
+            kind,
+            speed_percent,
+            blend_r,
+            connect,
+        } = cmd;
         if !self.can_move() {
             return Err(if self.power_on {
                 codes::JOINT_DISABLED
@@ -370,18 +405,14 @@ impl Controller {
         self.errors.planning = None;
         self.motion.jog = None;
         self.motion.stream = None;
-        let group = self.motion.next_group;
-        self.motion.pending.push(Segment {
+        self.motion.pending.push(Part {
             goal,
             speed_percent,
+            blend_r,
             kind,
             client: Some(client),
             events: 1,
-            group,
             end_rad,
-            traj: None,
-            t_s: 0.0,
-            settle_ms: 0,
         });
         if !connect {
             self.commit_group();
@@ -391,34 +422,51 @@ impl Controller {
 
     /// A `trajectory_connect` 0 arrived: the pending group starts (spline points merged).
     fn commit_group(&mut self) {
-        let pending = std::mem::take(&mut self.motion.pending);
-        for seg in pending {
-            let merged = match (self.motion.queue.back_mut(), &seg.goal) {
-                (Some(last), Goal::Spline(points))
-                    if last.group == seg.group && last.traj.is_none() =>
-                {
+        let mut parts: Vec<Part> = Vec::new();
+        for part in std::mem::take(&mut self.motion.pending) {
+            match (parts.last_mut(), &part.goal) {
+                (Some(last), Goal::Spline(points)) if matches!(last.goal, Goal::Spline(_)) => {
                     if let Goal::Spline(all) = &mut last.goal {
                         all.extend(points.iter().copied());
-                        last.events += 1;
-                        last.end_rad.clone_from(&seg.end_rad);
-                        true
-                    } else {
-                        false
                     }
+                    last.events += part.events;
+                    last.end_rad = part.end_rad;
                 }
-                _ => false,
-            };
-            if !merged {
-                self.motion.queue.push_back(seg);
+                _ => parts.push(part),
             }
         }
-        self.motion.next_group += 1;
+        self.motion.queue.push_back(Run {
+            parts,
+            traj: None,
+            part_ends_s: Vec::new(),
+            done_parts: 0,
+            t_s: 0.0,
+            settle_ms: 0,
+        });
+    }
+
+    /// Plan a group from `from`: each part from where the previous one ends, blended into one
+    /// trajectory with the previous part's radius.
+    fn plan_run(&self, from: &[f64], parts: &[Part]) -> Result<Trajectory, Refusal> {
+        let mut whole: Option<Trajectory> = None;
+        let mut start = from.to_vec();
+        let mut radius = 0.0;
+        for part in parts {
+            let next = self.plan(&start, &part.goal, part.speed_percent)?;
+            start = next.sample(next.duration_s());
+            whole = Some(match whole {
+                None => next,
+                Some(prev) => planner::blend(&prev, &next, radius).map_err(|e| refusal_code(&e))?,
+            });
+            radius = part.blend_r;
+        }
+        whole.ok_or(codes::UNREACHABLE)
     }
 
     /// The running move failed (fault): `trajectory_state:false` to its client, queue dropped.
     pub(super) fn abort_motion(&mut self) {
-        if let Some(seg) = self.motion.queue.front() {
-            if let Some(client) = seg.client {
+        if let Some(part) = self.motion.queue.front().and_then(Run::current_part) {
+            if let Some(client) = part.client {
                 self.events.push(Event {
                     to: client,
                     text: arrival(false, 0, 0),
@@ -517,15 +565,15 @@ impl Controller {
 
     fn tick_segment(&mut self) {
         let from = self.setpoint_rad.clone();
-        let Some(seg) = self.motion.queue.front() else {
+        let Some(run) = self.motion.queue.front() else {
             return;
         };
-        if seg.traj.is_none() {
-            let planned = self.plan(&from, &seg.goal, seg.speed_percent);
-            match planned {
+        if run.traj.is_none() {
+            match self.plan_run(&from, &run.parts) {
                 Ok(traj) => {
-                    if let Some(seg) = self.motion.queue.front_mut() {
-                        seg.traj = Some(traj);
+                    if let Some(run) = self.motion.queue.front_mut() {
+                        run.part_ends_s = traj.segment_end_times_s();
+                        run.traj = Some(traj);
                     }
                 }
                 Err(code) => {
@@ -536,47 +584,71 @@ impl Controller {
             }
         }
         let scale = self.motion.scale;
-        let Some(seg) = self.motion.queue.front_mut() else {
+        let Some(run) = self.motion.queue.front_mut() else {
             return;
         };
-        let Some(traj) = &seg.traj else {
+        let Some(traj) = &run.traj else {
             return;
         };
         let duration = traj.duration_s();
-        seg.t_s = (seg.t_s + STEP_S * scale).min(duration);
-        self.setpoint_rad = traj.sample(seg.t_s);
-        if seg.t_s < duration {
+        run.t_s = (run.t_s + STEP_S * scale).min(duration);
+        self.setpoint_rad = traj.sample(run.t_s);
+        // Parts that ended inside a blended group: their events (connect 1) go out now.
+        let last = run.parts.len().saturating_sub(1);
+        let mut passed = Vec::new();
+        while run.done_parts < last
+            && run
+                .part_ends_s
+                .get(run.done_parts)
+                .is_some_and(|end| run.t_s >= *end)
+        {
+            passed.push(run.parts[run.done_parts].clone());
+            run.done_parts += 1;
+        }
+        let finished = run.t_s >= duration;
+        if finished {
+            run.settle_ms += 1;
+        }
+        let settle_ms = run.settle_ms;
+        for part in &passed {
+            self.part_events(part, false);
+        }
+        if !finished {
             return;
         }
-        seg.settle_ms += 1;
         let settled = self
             .plant
             .positions_rad()
             .iter()
             .zip(&self.setpoint_rad)
             .all(|(q, s)| (q - s).abs() < ARRIVED_TOLERANCE_RAD);
-        if settled || seg.settle_ms >= SETTLE_TIMEOUT_MS {
-            self.finish_segment();
+        if settled || settle_ms >= SETTLE_TIMEOUT_MS {
+            self.finish_run();
         }
     }
 
-    fn finish_segment(&mut self) {
-        let Some(seg) = self.motion.queue.pop_front() else {
+    /// The arrival events of one part; `last` = the group's final part (its final event
+    /// carries `trajectory_connect` 0).
+    fn part_events(&mut self, part: &Part, last: bool) {
+        let Some(client) = part.client else {
             return;
         };
-        let more_in_group = self
-            .motion
-            .queue
-            .front()
-            .is_some_and(|next| next.group == seg.group);
-        if let Some(client) = seg.client {
-            for i in 0..seg.events {
-                let connect = u8::from(i + 1 < seg.events || more_in_group);
-                self.events.push(Event {
-                    to: client,
-                    text: arrival(true, 0, connect),
-                });
-            }
+        for i in 0..part.events {
+            let connect = u8::from(!last || i + 1 < part.events);
+            self.events.push(Event {
+                to: client,
+                text: arrival(true, 0, connect),
+            });
+        }
+    }
+
+    fn finish_run(&mut self) {
+        let Some(run) = self.motion.queue.pop_front() else {
+            return;
+        };
+        let count = run.parts.len();
+        for (i, part) in run.parts.iter().enumerate().skip(run.done_parts) {
+            self.part_events(part, i + 1 == count);
         }
     }
 
