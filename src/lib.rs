@@ -1,5 +1,6 @@
-//! armhil's scenario harness: YAML scenarios, the runner, reports.
+//! armhil's scenario harness: YAML scenarios, the runner, reports, and the device kinds.
 //!
 //! The CLI (`armhil run`, `armhil check`) is a thin layer over this library.
 
+pub mod devices;
 pub mod harness;

@@ -7,7 +7,8 @@ use std::time::Duration;
 
 use armhil::harness::report::{junit_xml, write_atomic, write_outputs, Written};
 use armhil::harness::{
-    discover, load_scenario, run_scenario_with, Clock, Outcome, RunOptions, ScenarioResult, Verdict,
+    discover_suite, load_scenario, run_scenario_with, Clock, Outcome, RunOptions, ScenarioResult,
+    SuiteFile, Verdict,
 };
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -20,9 +21,17 @@ pub struct Args {
     /// Write a JUnit XML report of the suite to this file.
     #[arg(long, value_name = "FILE")]
     junit: Option<PathBuf>,
-    /// Output root: each scenario writes into DIR/<scenario name>/.
+    /// Output root: each scenario writes into DIR/<its path under the folder it was found in,
+    /// without extension>/ (DIR/<file stem>/ for a file named directly).
     #[arg(long, value_name = "DIR", default_value = "out")]
     out: PathBuf,
+    /// Scenarios run at once (default: every core). Outputs do not depend on it.
+    #[arg(short = 'j', long, value_name = "N")]
+    jobs: Option<usize>,
+    /// Run only shard K of N (1-based): the K-th of N interleaved slices of the suite in path
+    /// order, so N machines running 1/N .. N/N together run every scenario once.
+    #[arg(long, value_name = "K/N", value_parser = parse_shard)]
+    shard: Option<(usize, usize)>,
     /// Run on the real clock instead of virtual time: on the scenario's `bench.bus.interface`
     /// when it names one, else with the in-process emulator on the virtual bus.
     #[arg(long)]
@@ -37,6 +46,134 @@ pub struct Args {
     /// time.
     #[arg(long, value_name = "FACTOR", default_value_t = 1.0)]
     time_scale: f64,
+}
+
+/// `K/N` with 1 <= K <= N.
+fn parse_shard(text: &str) -> Result<(usize, usize), String> {
+    let (k, n) = text
+        .split_once('/')
+        .ok_or_else(|| format!("expected K/N (e.g. 1/4), got `{text}`"))?;
+    let k: usize = k.trim().parse().map_err(|_| format!("bad K in `{text}`"))?;
+    let n: usize = n.trim().parse().map_err(|_| format!("bad N in `{text}`"))?;
+    if n == 0 || k == 0 || k > n {
+        return Err(format!("shard K/N needs 1 <= K <= N, got `{text}`"));
+    }
+    Ok((k, n))
+}
+
+/// The files of shard `k` of `n`: every n-th file starting at the k-th.
+fn shard_of(files: Vec<SuiteFile>, shard: Option<(usize, usize)>) -> Vec<SuiteFile> {
+    match shard {
+        None => files,
+        Some((k, n)) => files
+            .into_iter()
+            .enumerate()
+            .filter(|(i, _)| i % n == k - 1)
+            .map(|(_, f)| f)
+            .collect(),
+    }
+}
+
+/// Refuse a suite where two scenario files would write into one output folder.
+fn check_out_dirs(files: &[SuiteFile]) -> anyhow::Result<()> {
+    let mut seen: std::collections::BTreeMap<&Path, &Path> = std::collections::BTreeMap::new();
+    for f in files {
+        if let Some(other) = seen.insert(&f.out_dir, &f.path) {
+            anyhow::bail!(
+                "{} and {} would both write into {}/: name them through their folder instead",
+                other.display(),
+                f.path.display(),
+                f.out_dir.display()
+            );
+        }
+    }
+    Ok(())
+}
+
+/// What one scenario produced.
+struct Ran {
+    result: ScenarioResult,
+    written: Option<Written>,
+    write_error: Option<String>,
+}
+
+/// Load, run and write one scenario.
+fn run_one(file: &SuiteFile, args: &Args) -> Ran {
+    let clock_for = |bench_iface: Option<&String>| match (&args.iface, args.realtime, bench_iface) {
+        (Some(iface), _, _) => Clock::Iface(iface.clone()),
+        (None, true, Some(iface)) => Clock::Iface(iface.clone()),
+        (None, true, None) => Clock::Realtime,
+        (None, false, _) => Clock::Virtual,
+    };
+    let scenario = match load_scenario(&file.path) {
+        Ok(s) => s,
+        Err(e) => {
+            let name = file.out_dir.to_string_lossy().into_owned();
+            return Ran {
+                result: ScenarioResult::not_run(
+                    &name,
+                    file.path.clone(),
+                    Verdict::Error(e.to_string()),
+                    "none",
+                ),
+                written: None,
+                write_error: None,
+            };
+        }
+    };
+    let options = RunOptions {
+        time_scale: args.time_scale,
+    };
+    let result = run_scenario_with(
+        &scenario,
+        &clock_for(scenario.bench.interface.as_ref()),
+        &options,
+    );
+    let mut ran = Ran {
+        result,
+        written: None,
+        write_error: None,
+    };
+    if !matches!(ran.result.verdict, Verdict::Skipped(_)) {
+        let dir = args.out.join(&file.out_dir);
+        match write_outputs(&ran.result, &scenario.record, &dir) {
+            Ok(w) => ran.written = Some(w),
+            Err(e) => ran.write_error = Some(format!("writing outputs to {}: {e}", dir.display())),
+        }
+    }
+    ran
+}
+
+/// Run `files` on `jobs` threads; results in file order whatever order they finish in.
+fn run_parallel(
+    files: &[SuiteFile],
+    args: &Args,
+    jobs: usize,
+    done: &(dyn Fn(&Ran) + Sync),
+) -> Vec<Ran> {
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let slots: Vec<std::sync::Mutex<Option<Ran>>> =
+        files.iter().map(|_| std::sync::Mutex::new(None)).collect();
+    std::thread::scope(|scope| {
+        for _ in 0..jobs.clamp(1, files.len().max(1)) {
+            scope.spawn(|| loop {
+                let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                let Some(file) = files.get(i) else { break };
+                let ran = run_one(file, args);
+                done(&ran);
+                *slots[i]
+                    .lock()
+                    .unwrap_or_else(std::sync::PoisonError::into_inner) = Some(ran);
+            });
+        }
+    });
+    slots
+        .into_iter()
+        .filter_map(|s| {
+            s.into_inner()
+                .unwrap_or_else(std::sync::PoisonError::into_inner)
+        })
+        .collect()
 }
 
 fn secs(d: Duration) -> String {
@@ -107,24 +244,23 @@ fn where_written(w: &Written) -> String {
     parts.join("\n")
 }
 
-/// Run every scenario; exit 0 only when none failed.
+/// Run every scenario; exit 0 only when none failed and every output was written.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    let clock_for = |bench_iface: Option<&String>| match (&args.iface, args.realtime, bench_iface) {
-        (Some(iface), _, _) => Clock::Iface(iface.clone()),
-        (None, true, Some(iface)) => Clock::Iface(iface.clone()),
-        (None, true, None) => Clock::Realtime,
-        (None, false, _) => Clock::Virtual,
-    };
     if !(args.time_scale.is_finite() && args.time_scale >= 1.0) {
         anyhow::bail!(
             "--time-scale must be a number >= 1, got {}",
             args.time_scale
         );
     }
-    let files = discover(&args.paths)?;
-    if files.is_empty() {
+    let all = discover_suite(&args.paths)?;
+    if all.is_empty() {
         anyhow::bail!("no scenario files (*.yaml, *.yml) found");
     }
+    check_out_dirs(&all)?;
+    let files = shard_of(all, args.shard);
+    let jobs = args
+        .jobs
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     let progress = (files.len() > 1 && std::io::stderr().is_terminal()).then(|| {
         let bar = ProgressBar::new(files.len() as u64);
         if let Ok(style) = ProgressStyle::with_template("{bar:30} {pos}/{len} {msg}") {
@@ -141,55 +277,33 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             "running on {iface} in real time against a separate emulator process: bus faults and emulator faults are unavailable; scenarios that use them are skipped"
         ));
     }
-    let mut results = Vec::new();
-    let mut last_written = None;
-    for file in &files {
-        if let Some(bar) = &progress {
-            bar.set_message(file.display().to_string());
+    let single = files.len() == 1;
+    let done = |ran: &Ran| {
+        print(&verdict_line(&ran.result));
+        if ran.result.bus.recorder_missed > 0 {
+            print(&format!(
+                "      warning: the recorder missed {} frames; the recording is incomplete",
+                ran.result.bus.recorder_missed
+            ));
         }
-        let result = match load_scenario(file) {
-            Ok(scenario) => {
-                let options = RunOptions {
-                    time_scale: args.time_scale,
-                };
-                let result = run_scenario_with(
-                    &scenario,
-                    &clock_for(scenario.bench.interface.as_ref()),
-                    &options,
-                );
-                if !matches!(result.verdict, Verdict::Skipped(_)) {
-                    let dir = args.out.join(&scenario.name);
-                    match write_outputs(&result, &scenario.record, &dir) {
-                        Ok(w) => last_written = Some(w),
-                        Err(e) => {
-                            print(&format!("error writing outputs to {}: {e}", dir.display()))
-                        }
-                    }
-                }
-                result
-            }
-            Err(e) => {
-                let name = file.file_stem().map_or_else(
-                    || "scenario".to_owned(),
-                    |s| s.to_string_lossy().into_owned(),
-                );
-                ScenarioResult::not_run(&name, file.clone(), Verdict::Error(e.to_string()), "none")
-            }
-        };
-        print(&verdict_line(&result));
-        if files.len() == 1 {
-            if let Some(w) = &last_written {
+        if let Some(e) = &ran.write_error {
+            print(&format!("      error {e}"));
+        }
+        if single {
+            if let Some(w) = &ran.written {
                 print(&where_written(w));
             }
         }
         if let Some(bar) = &progress {
             bar.inc(1);
         }
-        results.push(result);
-    }
+    };
+    let ran = run_parallel(&files, &args, jobs, &done);
     if let Some(bar) = progress {
         bar.finish_and_clear();
     }
+    let write_errors = ran.iter().filter(|r| r.write_error.is_some()).count();
+    let results: Vec<ScenarioResult> = ran.into_iter().map(|r| r.result).collect();
     let count = |f: fn(&Verdict) -> bool| results.iter().filter(|r| f(&r.verdict)).count();
     let passed = count(|v| matches!(v, Verdict::Passed));
     let failed = count(|v| matches!(v, Verdict::Failed));
@@ -199,23 +313,63 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         let scenario_time: Duration = results.iter().map(|r| r.duration).sum();
         let wall: Duration = results.iter().map(|r| r.wall).sum();
         println!(
-            "{} scenarios: {passed} passed, {failed} failed, {errors} errors, {skipped} skipped ({} scenario time in {} wall)",
+            "{} scenarios: {passed} passed, {failed} failed, {errors} errors, {skipped} skipped ({} scenario time in {} wall, {jobs} jobs)",
             results.len(),
             secs(scenario_time),
             secs(wall)
         );
         println!(
-            "outputs: {}/<scenario>/{{result.yaml, bus.log, bus.pcap, plot.svg}}",
+            "outputs: {}/<scenario path>/{{result.yaml, bus.log, bus.pcap, plot.svg}}",
             args.out.display()
         );
     }
+    if write_errors > 0 {
+        println!("{write_errors} scenario(s) could not write their outputs");
+    }
     if let Some(path) = &args.junit {
-        write_atomic(path, junit_xml("armhil", &results).as_bytes())?;
+        write_atomic(path, junit_xml("armhil", &results)?.as_bytes())?;
         println!("junit: {}", path.display());
     }
-    Ok(if failed == 0 && errors == 0 {
+    Ok(if failed == 0 && errors == 0 && write_errors == 0 {
         ExitCode::SUCCESS
     } else {
         ExitCode::FAILURE
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn file(path: &str, out: &str) -> SuiteFile {
+        SuiteFile {
+            path: PathBuf::from(path),
+            out_dir: PathBuf::from(out),
+        }
+    }
+
+    #[test]
+    fn shards_partition_the_suite() {
+        let files: Vec<SuiteFile> = (0..10)
+            .map(|i| file(&format!("{i}.yaml"), &i.to_string()))
+            .collect();
+        let mut seen = Vec::new();
+        for k in 1..=4 {
+            seen.extend(shard_of(files.clone(), Some((k, 4))));
+        }
+        seen.sort_by(|a, b| a.path.cmp(&b.path));
+        assert_eq!(seen, files);
+        assert_eq!(parse_shard("2/4"), Ok((2, 4)));
+        assert!(parse_shard("0/4").is_err());
+        assert!(parse_shard("5/4").is_err());
+        assert!(parse_shard("x").is_err());
+    }
+
+    #[test]
+    fn two_files_sharing_an_output_folder_are_refused() {
+        let ok = [file("a/x.yaml", "a/x"), file("b/x.yaml", "b/x")];
+        assert!(check_out_dirs(&ok).is_ok());
+        let clash = [file("a/x.yaml", "x"), file("b/x.yaml", "x")];
+        assert!(check_out_dirs(&clash).is_err());
+    }
 }

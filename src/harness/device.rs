@@ -1,15 +1,11 @@
-//! The device abstraction the runner drives: one implementation per device kind (Piper now;
-//! RobStride and others plug in by implementing [`Device`] and adding a [`DeviceKind`] arm in
-//! [`crate::harness::bench`]).
-//!
-//! [`DeviceKind`]: super::model::DeviceKind
+//! The device abstraction the runner drives: one implementation per device kind, in
+//! `crate::devices::<kind>`, registered in `crate::devices`.
 
-use std::collections::BTreeMap;
 use std::time::Duration;
 
 use async_trait::async_trait;
 
-use super::model::{Action, EmulatorFault, ErrorClass};
+use super::model::{Action, Check, DeviceFault, ErrorClass, Signal};
 
 /// Why a device action failed.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -46,46 +42,20 @@ pub struct Reply {
     pub mismatches: Vec<(String, String, String)>,
 }
 
-/// A device's state as the driver sees it, in physical units, for expectations and traces.
-/// Empty vectors / `None` mean "not known yet" (no feedback received).
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct Observation {
-    /// Joint angles.
-    pub joints_deg: Vec<f64>,
-    /// Joint speeds.
-    pub speeds_deg_s: Vec<f64>,
-    /// Motor currents.
-    pub currents_a: Vec<f64>,
-    /// Motor temperatures.
-    pub motor_temps_c: Vec<f64>,
-    /// Flange position.
-    pub position_mm: Option<[f64; 3]>,
-    /// Flange orientation.
-    pub orientation_deg: Option<[f64; 3]>,
-    /// Gripper stroke.
-    pub gripper_mm: Option<f64>,
-    /// Named status values (`arm_status`, `ctrl_mode`, `move_mode`, `motion`, `feedback`,
-    /// `leader_frames`).
-    pub status: BTreeMap<&'static str, String>,
-    /// Raw arm status code (for the trace).
-    pub arm_status_code: Option<u8>,
-    /// Per-joint enable bits.
-    pub enabled: Vec<bool>,
-    /// Gripper enable bit.
-    pub gripper_enabled: Option<bool>,
-    /// Joints with the comm-error bit set.
-    pub comm_error_joints: Vec<u8>,
-    /// Joints with the angle-limit bit set.
-    pub limit_error_joints: Vec<u8>,
-    /// Per-joint driver fault flags (sorted names).
-    pub joint_flags: Vec<Vec<String>>,
-    /// Gripper fault flags (sorted names).
-    pub gripper_flags: Vec<String>,
-    /// RobStride motors by CAN ID (empty for other devices).
-    pub motors: BTreeMap<u8, super::robstride::MotorObservation>,
+/// One trace column a device fills: its name (without the device prefix the harness adds on
+/// multi-device benches), its quantum and its plot group.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TraceColumn {
+    /// Column name with its unit (`j1_deg`, `m1_rad_s`).
+    pub name: String,
+    /// Quantum the value is rounded to (the snapshot stores integer multiples).
+    pub quantum: f64,
+    /// Plot group (one panel per group).
+    pub group: &'static str,
 }
 
-/// A device on the bench: its driver (always) and its emulator (in-process runs).
+/// A device on the bench: its driver (always) and its emulator (in-process runs), on whatever
+/// transport the device speaks.
 #[async_trait]
 pub trait Device: Send + Sync {
     /// The device's name in the scenario.
@@ -98,14 +68,21 @@ pub trait Device: Send + Sync {
         timeout: Option<Duration>,
     ) -> Result<Reply, DeviceError>;
 
-    /// The current state as the driver sees it.
-    fn observe(&self) -> Observation;
+    /// Check conditions against the current state as the driver sees it: `Ok` when every one
+    /// holds, else `(expected, actual)` of the first that does not.
+    fn evaluate(&self, checks: &[Check]) -> Result<(), (String, String)>;
+
+    /// The trace columns this device fills for the recorded `signals` (in a stable order).
+    fn trace_columns(&self, signals: &[Signal]) -> Vec<TraceColumn>;
+
+    /// One trace row, matching [`Device::trace_columns`]: `None` where nothing is known yet.
+    fn trace_row(&self, signals: &[Signal]) -> Vec<Option<f64>>;
 
     /// Apply an emulator fault (needs the in-process emulator).
-    fn inject(&self, fault: &EmulatorFault) -> Result<(), DeviceError>;
+    async fn inject(&self, fault: &DeviceFault) -> Result<(), DeviceError>;
 
     /// Clear an emulator fault, or every one when `None`.
-    fn clear(&self, fault: Option<&EmulatorFault>) -> Result<(), DeviceError>;
+    async fn clear(&self, fault: Option<&DeviceFault>) -> Result<(), DeviceError>;
 
     /// Stop the driver and the emulator.
     async fn shutdown(&self);

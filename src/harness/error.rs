@@ -141,7 +141,7 @@ fn suggest(message: &str) -> String {
     };
     let best = list
         .split(", ")
-        .map(|c| (edit_distance(key, c), c))
+        .map(|c| (strsim::levenshtein(key, c), c))
         .filter(|(d, c)| *d <= 2 && *d < c.len())
         .min();
     match best {
@@ -154,25 +154,10 @@ fn suggest(message: &str) -> String {
 pub(crate) fn suggestion(word: &str, candidates: &[&str]) -> String {
     candidates
         .iter()
-        .map(|c| (edit_distance(word, c), *c))
+        .map(|c| (strsim::levenshtein(word, c), *c))
         .filter(|(d, c)| *d <= 2 && *d < c.len())
         .min()
         .map_or_else(String::new, |(_, c)| format!("; did you mean `{c}`?"))
-}
-
-/// Levenshtein distance (keys are short ASCII words).
-pub(crate) fn edit_distance(a: &str, b: &str) -> usize {
-    let b: Vec<char> = b.chars().collect();
-    let mut prev: Vec<usize> = (0..=b.len()).collect();
-    for (i, ca) in a.chars().enumerate() {
-        let mut cur = vec![i + 1];
-        for (j, cb) in b.iter().enumerate() {
-            let cost = usize::from(ca != *cb);
-            cur.push((prev[j] + cost).min(prev[j + 1] + 1).min(cur[j] + 1));
-        }
-        prev = cur;
-    }
-    prev[b.len()]
 }
 
 /// serde's type errors name Rust types; say what the scenario author should write instead.

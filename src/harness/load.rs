@@ -4,13 +4,34 @@ use std::path::{Path, PathBuf};
 
 use super::error::{from_yaml_error, LoadError};
 use super::model::Scenario;
-use super::raw::RawScenario;
+use super::raw::{RawBench, RawScenario, S};
+
+/// The bench alone (every other key ignored).
+#[derive(serde::Deserialize)]
+struct RawHead {
+    bench: S<RawBench>,
+}
 use super::validate::{validate, Ctx};
 
 /// Parse and validate scenario text; `path` is used for error messages and relative URDFs.
 pub fn parse_scenario(path: &Path, text: &str) -> Result<Scenario, LoadError> {
-    let raw: RawScenario = serde_saphyr::from_str(text)
-        .map_err(|error| LoadError::Invalid(Box::new(from_yaml_error(path, text, &error))))?;
+    // The bench first: its device kinds decide which vocabulary the steps are read with. When
+    // it does not parse, the full parse below reports the error.
+    let kinds = serde_saphyr::from_str::<RawHead>(text).ok().map(|head| {
+        head.bench
+            .value
+            .devices
+            .value
+            .values()
+            .map(|d| d.value.kind_name())
+            .collect::<Vec<_>>()
+    });
+    let parse = || serde_saphyr::from_str::<RawScenario>(text);
+    let raw = match kinds {
+        Some(kinds) => crate::devices::with_bench_kinds(kinds, parse),
+        None => parse(),
+    }
+    .map_err(|error| LoadError::Invalid(Box::new(from_yaml_error(path, text, &error))))?;
     let mut ctx = Ctx::new(path, text);
     validate(&mut ctx, raw).map_err(LoadError::Invalid)
 }
@@ -22,6 +43,43 @@ pub fn load_scenario(path: &Path) -> Result<Scenario, LoadError> {
         source,
     })?;
     parse_scenario(path, &text)
+}
+
+/// A scenario file of a suite and the folder its outputs go to, relative to the output root:
+/// its path under the folder it was found in, without extension (`piper/move_l` for
+/// `scenarios/piper/move_l.yaml` found under `scenarios/`), or its stem for a file named
+/// directly. Two files never share a folder unless they were named as the same path.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SuiteFile {
+    /// The scenario file.
+    pub path: PathBuf,
+    /// Output folder relative to the output root.
+    pub out_dir: PathBuf,
+}
+
+/// Like [`discover`], with each file's output folder.
+pub fn discover_suite(paths: &[PathBuf]) -> Result<Vec<SuiteFile>, LoadError> {
+    let mut found = Vec::new();
+    for root in paths {
+        if root.is_dir() {
+            let mut files = Vec::new();
+            walk(root, &mut files)?;
+            for path in files {
+                let rel = path.strip_prefix(root).unwrap_or(&path).with_extension("");
+                found.push(SuiteFile { out_dir: rel, path });
+            }
+        } else {
+            let stem = root.file_stem().map_or_else(
+                || PathBuf::from("scenario"),
+                |s| PathBuf::from(s.to_os_string()),
+            );
+            found.push(SuiteFile {
+                path: root.clone(),
+                out_dir: stem,
+            });
+        }
+    }
+    Ok(found)
 }
 
 /// Expand files and folders into the scenario files they hold (`*.yaml`, `*.yml`, searched

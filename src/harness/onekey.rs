@@ -2,70 +2,119 @@
 //!
 //! serde's derived externally-tagged enums reject the bare form for variants with optional
 //! arguments, so the dispatch is written by hand; the arguments keep serde-saphyr's spans.
+//! A one-key enum may end with a fallback variant holding another [`OneKey`] type: that is how
+//! the generic step and fault grammars hand the keys they do not know to the device kinds.
+
+use serde::de::{Error, MapAccess};
+
+/// A type read from a one-key mapping (or a bare key), dispatched on the key.
+pub(crate) trait OneKey: Sized {
+    /// Every key this type accepts.
+    fn keys() -> Vec<&'static str>;
+    /// The value of a bare `key`; `None` when the key is not this type's.
+    fn bare<E: Error>(key: &str) -> Option<Result<Self, E>>;
+    /// Read the value of `key` from `map`; `None` (nothing read) when the key is not this type's.
+    fn entry<'de, A: MapAccess<'de>>(key: &str, map: &mut A) -> Option<Result<Self, A::Error>>;
+}
+
+/// The "unknown key" error, with the accepted keys and a "did you mean".
+pub(crate) fn unknown<E: Error>(what: &str, key: &str, keys: &[&'static str]) -> E {
+    E::custom(format!(
+        "unknown {what} `{key}`; expected one of: {}{}",
+        keys.join(", "),
+        crate::harness::error::suggestion(key, keys)
+    ))
+}
 
 /// Define an enum whose YAML form is a one-key mapping `name: args` (or a bare `name` for
-/// variants marked `bare`, which take their arguments' `Default`).
+/// variants marked `bare`, which take their arguments' `Default`), optionally with a fallback
+/// variant (`else Variant(Type)`) for keys another [`OneKey`] type knows.
 macro_rules! one_key_enum {
     (
         $(#[$meta:meta])*
         $vis:vis enum $name:ident ($what:literal) {
             $( $key:literal => $variant:ident($ty:ty) $([$bare:ident])? ),* $(,)?
         }
+        $( else $fb:ident($fty:ty) )?
     ) => {
         $(#[$meta])*
         #[derive(Debug)]
+        // Parse-time values, one per list item and short-lived: their size does not matter.
+        #[allow(clippy::large_enum_variant)]
         $vis enum $name {
             $( #[doc = concat!("`", $key, "`")] $variant($ty), )*
+            $( #[doc = "A key of another vocabulary."] $fb($fty), )?
         }
 
-        impl $name {
-            /// Every key this enum accepts, in declaration order.
-            #[allow(dead_code)]
-            pub const KEYS: &'static [&'static str] = &[$($key),*];
+        impl $crate::harness::onekey::OneKey for $name {
+            fn keys() -> Vec<&'static str> {
+                #[allow(unused_mut)]
+                let mut keys = vec![$($key),*];
+                $( keys.extend(<$fty as $crate::harness::onekey::OneKey>::keys()); )?
+                keys
+            }
+
+            fn bare<E: serde::de::Error>(key: &str) -> Option<Result<Self, E>> {
+                match key {
+                    $( $key => Some(one_key_enum!(@bare E, $name, $variant, $key $(, $bare)?)), )*
+                    #[allow(unused_variables)]
+                    other => {
+                        $( return <$fty as $crate::harness::onekey::OneKey>::bare(other)
+                            .map(|r| r.map($name::$fb)); )?
+                        #[allow(unreachable_code)]
+                        None
+                    }
+                }
+            }
+
+            fn entry<'de, A: serde::de::MapAccess<'de>>(
+                key: &str,
+                map: &mut A,
+            ) -> Option<Result<Self, A::Error>> {
+                match key {
+                    $( $key => Some((|| {
+                        let args: Option<$ty> = map.next_value()?;
+                        match args {
+                            Some(args) => Ok($name::$variant(args)),
+                            None => one_key_enum!(@bare A::Error, $name, $variant, $key $(, $bare)?),
+                        }
+                    })()), )*
+                    #[allow(unused_variables)]
+                    other => {
+                        $( return <$fty as $crate::harness::onekey::OneKey>::entry(other, map)
+                            .map(|r| r.map($name::$fb)); )?
+                        #[allow(unreachable_code)]
+                        None
+                    }
+                }
+            }
         }
 
         impl<'de> serde::Deserialize<'de> for $name {
             fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+                use $crate::harness::onekey::OneKey;
                 struct Visit;
                 impl<'de> serde::de::Visitor<'de> for Visit {
                     type Value = $name;
                     fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-                        write!(f, "{} (one of: {})", $what, $name::KEYS.join(", "))
+                        write!(f, "{} (one of: {})", $what, $name::keys().join(", "))
                     }
                     fn visit_str<E: serde::de::Error>(self, text: &str) -> Result<$name, E> {
-                        match text {
-                            $( $key => one_key_enum!(@bare E, $name, $variant, $key $(, $bare)?), )*
-                            other => Err(E::custom(format!(
-                                "unknown {} `{}`; expected one of: {}{}",
-                                $what, other, $name::KEYS.join(", "),
-                                $crate::harness::error::suggestion(other, $name::KEYS)
-                            ))),
-                        }
+                        $name::bare(text).unwrap_or_else(|| {
+                            Err($crate::harness::onekey::unknown($what, text, &$name::keys()))
+                        })
                     }
                     fn visit_map<A: serde::de::MapAccess<'de>>(self, mut map: A) -> Result<$name, A::Error> {
                         use serde::de::Error as _;
                         let Some(key) = map.next_key::<String>()? else {
                             return Err(A::Error::custom(format!(
                                 "empty mapping; expected a {} (one of: {})",
-                                $what, $name::KEYS.join(", ")
+                                $what, $name::keys().join(", ")
                             )));
                         };
-                        let value = match key.as_str() {
-                            $( $key => {
-                                let args: Option<$ty> = map.next_value()?;
-                                match args {
-                                    Some(args) => $name::$variant(args),
-                                    None => one_key_enum!(@bare A::Error, $name, $variant, $key $(, $bare)?)?,
-                                }
-                            } )*
-                            other => {
-                                return Err(A::Error::custom(format!(
-                                    "unknown {} `{}`; expected one of: {}{}",
-                                    $what, other, $name::KEYS.join(", "),
-                                    $crate::harness::error::suggestion(other, $name::KEYS)
-                                )))
-                            }
-                        };
+                        let value = $name::entry(&key, &mut map).unwrap_or_else(|| {
+                            Err($crate::harness::onekey::unknown($what, &key, &$name::keys()))
+                        })?;
                         if let Some(extra) = map.next_key::<String>()? {
                             return Err(A::Error::custom(format!(
                                 "one {} per list item, found a second key `{}` (indent its arguments under `{}:`)",

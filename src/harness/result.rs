@@ -117,6 +117,9 @@ pub struct BusSummary {
     pub errors: u64,
     /// Frames dropped by faults.
     pub dropped: u64,
+    /// Frames the recorder missed (its queue overflowed): the recording and `frames` are
+    /// incomplete by this many.
+    pub recorder_missed: u64,
 }
 
 /// The verdict of a scenario.

@@ -215,10 +215,8 @@ async fn watchdog_and_active_reporting() {
 
 #[tokio::test(start_paused = true)]
 async fn saved_state_and_new_can_id_survive_a_power_cycle() {
-    let dir = std::env::temp_dir().join(format!("armhil-robstride-flow-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let state = dir.join("state.json");
-    let _ = std::fs::remove_file(&state);
+    let dir = tempfile::tempdir().unwrap();
+    let state = dir.path().join("state.json");
     let mut config = two_motor_config();
     config.state_file = Some(state.clone());
 
@@ -247,5 +245,4 @@ async fn saved_state_and_new_can_id_survive_a_power_cycle() {
     assert_eq!(disc.read_f32(Param::LimitSpd).await.unwrap(), 3.5);
     assert_eq!(disc.read_f32(Param::LocKp).await.unwrap(), 12.0);
     emulator.shutdown().await;
-    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -1,24 +1,8 @@
 //! JUnit XML for a suite: one test case per scenario.
 
-use std::fmt::Write as _;
+use quick_junit::{NonSuccessKind, Report, TestCase, TestCaseStatus, TestSuite};
 
 use crate::harness::result::{Outcome, ScenarioResult, Verdict};
-
-fn escape(text: &str) -> String {
-    let mut out = String::with_capacity(text.len());
-    for c in text.chars() {
-        match c {
-            '&' => out.push_str("&amp;"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '"' => out.push_str("&quot;"),
-            '\'' => out.push_str("&apos;"),
-            c if (c as u32) < 0x20 && !matches!(c, '\n' | '\t' | '\r') => {}
-            c => out.push(c),
-        }
-    }
-    out
-}
 
 /// Why a scenario failed, as a one-line message and a body.
 fn failure_text(result: &ScenarioResult) -> (String, String) {
@@ -51,79 +35,52 @@ fn failure_text(result: &ScenarioResult) -> (String, String) {
     }
 }
 
-/// Render a JUnit XML report of `results`.
-pub fn junit_xml(suite: &str, results: &[ScenarioResult]) -> String {
-    let count = |f: fn(&Verdict) -> bool| results.iter().filter(|r| f(&r.verdict)).count();
-    let failures = count(|v| matches!(v, Verdict::Failed));
-    let errors = count(|v| matches!(v, Verdict::Error(_)));
-    let skipped = count(|v| matches!(v, Verdict::Skipped(_)));
-    let time: f64 = results.iter().map(|r| r.wall.as_secs_f64()).sum();
-    let mut out = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
-    let _ = writeln!(
-        out,
-        "<testsuites name=\"{}\" tests=\"{}\" failures=\"{failures}\" errors=\"{errors}\" skipped=\"{skipped}\" time=\"{time:.3}\">",
-        escape(suite),
-        results.len()
-    );
-    let _ = writeln!(
-        out,
-        "  <testsuite name=\"{}\" tests=\"{}\" failures=\"{failures}\" errors=\"{errors}\" skipped=\"{skipped}\" time=\"{time:.3}\">",
-        escape(suite),
-        results.len()
-    );
+/// Render a JUnit XML report of `results` (one test case per scenario; times are wall time).
+pub fn junit_xml(
+    suite: &str,
+    results: &[ScenarioResult],
+) -> Result<String, quick_junit::SerializeError> {
+    let mut test_suite = TestSuite::new(suite);
     for r in results {
+        let status = match &r.verdict {
+            Verdict::Passed => TestCaseStatus::success(),
+            Verdict::Failed => {
+                let (message, body) = failure_text(r);
+                let mut status = TestCaseStatus::non_success(NonSuccessKind::Failure);
+                status
+                    .set_message(message)
+                    .set_type("step")
+                    .set_description(body);
+                status
+            }
+            Verdict::Skipped(reason) => {
+                let mut status = TestCaseStatus::skipped();
+                status.set_message(reason.as_str());
+                status
+            }
+            Verdict::Error(message) => {
+                let mut status = TestCaseStatus::non_success(NonSuccessKind::Error);
+                status
+                    .set_message(message.lines().next().unwrap_or_default())
+                    .set_type("error")
+                    .set_description(message.as_str());
+                status
+            }
+        };
         let classname = r
             .path
             .parent()
             .map(|p| p.to_string_lossy().replace(['/', '\\'], "."))
             .unwrap_or_default();
-        let _ = write!(
-            out,
-            "    <testcase name=\"{}\" classname=\"{}\" file=\"{}\" time=\"{:.3}\"",
-            escape(&r.name),
-            escape(&classname),
-            escape(&r.path.to_string_lossy()),
-            r.wall.as_secs_f64()
-        );
-        match &r.verdict {
-            Verdict::Passed => out.push_str(" />\n"),
-            Verdict::Failed => {
-                let (message, body) = failure_text(r);
-                let _ = writeln!(
-                    out,
-                    ">\n      <failure message=\"{}\" type=\"step\">{}</failure>\n    </testcase>",
-                    escape(&message),
-                    escape(&body)
-                );
-            }
-            Verdict::Skipped(reason) => {
-                let _ = writeln!(
-                    out,
-                    ">\n      <skipped message=\"{}\" />\n    </testcase>",
-                    escape(reason)
-                );
-            }
-            Verdict::Error(message) => {
-                let headline = message.lines().next().unwrap_or_default();
-                let _ = writeln!(
-                    out,
-                    ">\n      <error message=\"{}\" type=\"error\">{}</error>\n    </testcase>",
-                    escape(headline),
-                    escape(message)
-                );
-            }
-        }
+        let mut case = TestCase::new(r.name.as_str(), status);
+        case.set_classname(classname).set_time(r.wall);
+        case.extra
+            .insert("file".into(), r.path.to_string_lossy().as_ref().into());
+        test_suite.add_test_case(case);
     }
-    out.push_str("  </testsuite>\n</testsuites>\n");
-    out
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn escapes_markup() {
-        assert_eq!(escape("a<b & \"c\""), "a&lt;b &amp; &quot;c&quot;");
-    }
+    let time: std::time::Duration = results.iter().map(|r| r.wall).sum();
+    test_suite.set_time(time);
+    let mut report = Report::new(suite);
+    report.set_time(time).add_test_suite(test_suite);
+    report.to_string()
 }

@@ -120,6 +120,10 @@ pub fn snapshot_yaml(result: &ScenarioResult) -> String {
     }
     let _ = writeln!(out, "  crc_errors: {}", result.bus.errors);
     let _ = writeln!(out, "  dropped: {}", result.bus.dropped);
+    // Only when it happened, so that complete recordings keep their snapshots.
+    if result.bus.recorder_missed > 0 {
+        let _ = writeln!(out, "  recorder_missed: {}", result.bus.recorder_missed);
+    }
     if result.bus.frames_by_id.is_empty() {
         out.push_str("  frames_by_id: {}\n");
     } else {

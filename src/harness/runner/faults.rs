@@ -74,7 +74,7 @@ impl FaultControl {
     }
 
     /// Apply `fault` now; when `duration` is set, remove it after that long.
-    pub fn apply(
+    pub async fn apply(
         self: &Arc<Self>,
         fault: &FaultSpec,
         duration: Option<Duration>,
@@ -85,7 +85,7 @@ impl FaultControl {
                     .devices
                     .get(*device)
                     .ok_or_else(|| format!("no device #{device}"))?;
-                dev.inject(f).map_err(|e| e.to_string())?;
+                dev.inject(f).await.map_err(|e| e.to_string())?;
                 Undo::Emulator(*device)
             }
             FaultSpec::Bus(bus_fault) => {
@@ -133,14 +133,14 @@ impl FaultControl {
             let fault = fault.clone();
             let timer = tokio::spawn(async move {
                 tokio::time::sleep(duration).await;
-                this.undo(undo, &fault);
+                this.undo(undo, &fault).await;
             });
             lock(&self.timers).push(timer);
         }
         Ok(())
     }
 
-    fn undo(&self, undo: Undo, fault: &FaultSpec) {
+    async fn undo(&self, undo: Undo, fault: &FaultSpec) {
         match undo {
             Undo::Bus(id) => {
                 if let Some(handle) = &self.bus {
@@ -151,7 +151,7 @@ impl FaultControl {
                 if let (Some(dev), FaultSpec::Emulator { fault: f, .. }) =
                     (self.devices.get(device), fault)
                 {
-                    if let Err(e) = dev.clear(Some(f)) {
+                    if let Err(e) = dev.clear(Some(f)).await {
                         lock(&self.errors).push(format!("clearing {}: {e}", f.describe()));
                     }
                 }
@@ -171,7 +171,7 @@ impl FaultControl {
         let this = Arc::clone(self);
         let timer = tokio::spawn(async move {
             tokio::time::sleep(delay).await;
-            if let Err(e) = this.apply(&fault, duration) {
+            if let Err(e) = this.apply(&fault, duration).await {
                 lock(&this.errors).push(format!("injecting {}: {e}", fault.describe()));
             }
         });
@@ -179,9 +179,9 @@ impl FaultControl {
     }
 
     /// Remove every emulator fault of `device` and every bus fault.
-    pub fn clear_all(&self, device: usize) -> Result<(), String> {
+    pub async fn clear_all(&self, device: usize) -> Result<(), String> {
         if let Some(dev) = self.devices.get(device) {
-            dev.clear(None).map_err(|e| e.to_string())?;
+            dev.clear(None).await.map_err(|e| e.to_string())?;
         }
         if let Some(handle) = &self.bus {
             handle.clear();

@@ -1,6 +1,5 @@
 //! Runs a scenario: builds the bench, executes the steps, applies faults, samples the state.
 
-mod eval;
 mod faults;
 mod recorder;
 mod trace;
@@ -28,7 +27,7 @@ pub enum Clock {
     /// In-process emulator and virtual bus on the real clock.
     Realtime,
     /// Real time on a SocketCAN interface, against a separate emulator process
-    /// (`armhil sim piper --iface IF`). Bus and emulator faults are unavailable.
+    /// (`armhil sim <kind> --iface IF`). Bus and emulator faults are unavailable.
     Iface(String),
 }
 
@@ -205,7 +204,14 @@ async fn run_async(scenario: &Scenario, clock: &Clock, options: &RunOptions) -> 
         dev.shutdown().await;
     }
     let stats = bus.as_ref().map(bus::virtual_bus::VirtualBus::stats);
-    let (frames, _missed) = recorder.finish().await;
+    let (frames, missed) = recorder.finish().await;
+    if missed > 0 {
+        tracing::warn!(
+            scenario = %scenario.name,
+            missed,
+            "the recorder missed frames: bus.log, bus.pcap and the frame counts are incomplete"
+        );
+    }
 
     let mut frames_by_id = BTreeMap::new();
     for f in &frames {
@@ -217,6 +223,7 @@ async fn run_async(scenario: &Scenario, clock: &Clock, options: &RunOptions) -> 
         load_percent: stats.as_ref().map(|s| s.load_percent),
         errors: stats.as_ref().map_or(0, |s| s.errors),
         dropped: stats.as_ref().map_or(0, |s| s.dropped),
+        recorder_missed: missed,
     };
     let verdict = if let Some(err) = fault_errors.first() {
         failed = true;
@@ -346,14 +353,14 @@ async fn run_step(
             let Some(dev) = device(*index) else {
                 return (missing_device(*index), Vec::new());
             };
-            if let Err((expected, actual)) = eval::evaluate(checks, &dev.observe()) {
+            if let Err((expected, actual)) = dev.evaluate(checks) {
                 return (Outcome::Failed { expected, actual }, Vec::new());
             }
             if let Some(hold) = hold {
                 let start = Instant::now();
                 while start.elapsed() < *hold {
                     tokio::time::sleep(POLL).await;
-                    if let Err((expected, actual)) = eval::evaluate(checks, &dev.observe()) {
+                    if let Err((expected, actual)) = dev.evaluate(checks) {
                         let at = start.elapsed().as_millis();
                         return (
                             Outcome::Failed {
@@ -378,7 +385,7 @@ async fn run_step(
             let timeout = options.deadline(*timeout);
             let start = Instant::now();
             loop {
-                let last = match eval::evaluate(checks, &dev.observe()) {
+                let last = match dev.evaluate(checks) {
                     Ok(()) => return (Outcome::Passed, Vec::new()),
                     Err((_, actual)) => actual,
                 };
@@ -386,7 +393,11 @@ async fn run_step(
                     return (
                         Outcome::TimedOut {
                             waited: start.elapsed(),
-                            expected: eval::describe(checks),
+                            expected: checks
+                                .iter()
+                                .map(crate::devices::Check::describe)
+                                .collect::<Vec<_>>()
+                                .join("; "),
                             actual: last,
                         },
                         Vec::new(),
@@ -395,7 +406,7 @@ async fn run_step(
                 tokio::time::sleep(POLL).await;
             }
         }
-        StepKind::Inject { fault, duration } => match faults.apply(fault, *duration) {
+        StepKind::Inject { fault, duration } => match faults.apply(fault, *duration).await {
             Ok(()) => (Outcome::Passed, Vec::new()),
             Err(e) => (
                 Outcome::Failed {
@@ -405,7 +416,7 @@ async fn run_step(
                 Vec::new(),
             ),
         },
-        StepKind::ClearFaults { device: index } => match faults.clear_all(*index) {
+        StepKind::ClearFaults { device: index } => match faults.clear_all(*index).await {
             Ok(()) => (Outcome::Passed, Vec::new()),
             Err(e) => (
                 Outcome::Failed {

@@ -5,19 +5,12 @@ use std::time::Duration;
 
 use tokio::time::{Instant, MissedTickBehavior};
 
-use crate::harness::device::{Device, Observation};
-use crate::harness::model::{Record, Signal, PIPER_JOINTS};
+use crate::harness::device::Device;
+use crate::harness::model::{Record, Signal};
 use crate::harness::result::{Column, Trace};
 
-/// Quantum of each signal group: coarse enough to be stable across harmless changes, fine
-/// enough that a wrong scale factor (×10, ×1000, rad for deg) changes the snapshot.
-const DEG_Q: f64 = 0.1;
-const SPEED_Q: f64 = 0.1;
-const AMP_Q: f64 = 0.01;
-const MM_Q: f64 = 0.1;
-const TEMP_Q: f64 = 1.0;
-
-fn columns(record: &Record, devices: &[Arc<dyn Device>]) -> Vec<Column> {
+/// Every device's columns, prefixed with the device name on multi-device benches.
+fn columns(signals: &[Signal], devices: &[Arc<dyn Device>]) -> Vec<Column> {
     let mut cols = Vec::new();
     for dev in devices {
         let prefix = if devices.len() > 1 {
@@ -25,36 +18,12 @@ fn columns(record: &Record, devices: &[Arc<dyn Device>]) -> Vec<Column> {
         } else {
             String::new()
         };
-        let mut push = |name: String, quantum: f64, group: &'static str| {
+        for c in dev.trace_columns(signals) {
             cols.push(Column {
-                name: format!("{prefix}{name}"),
-                quantum,
-                group,
+                name: format!("{prefix}{}", c.name),
+                quantum: c.quantum,
+                group: c.group,
             });
-        };
-        for signal in &record.signals {
-            match signal {
-                Signal::Joints => {
-                    (1..=PIPER_JOINTS).for_each(|j| push(format!("j{j}_deg"), DEG_Q, "joints"))
-                }
-                Signal::Speeds => {
-                    (1..=PIPER_JOINTS).for_each(|j| push(format!("v{j}_deg_s"), SPEED_Q, "speeds"))
-                }
-                Signal::Currents => {
-                    (1..=PIPER_JOINTS).for_each(|j| push(format!("i{j}_a"), AMP_Q, "currents"))
-                }
-                Signal::Gripper => push("gripper_mm".to_owned(), MM_Q, "gripper"),
-                Signal::Pose => ["x", "y", "z"]
-                    .iter()
-                    .for_each(|a| push(format!("{a}_mm"), MM_Q, "pose")),
-                Signal::Temperatures => {
-                    (1..=PIPER_JOINTS).for_each(|j| push(format!("t{j}_c"), TEMP_Q, "temperatures"))
-                }
-                Signal::Status => {
-                    push("arm_status".to_owned(), 1.0, "status");
-                    push("enabled_mask".to_owned(), 1.0, "status");
-                }
-            }
         }
     }
     cols
@@ -72,46 +41,6 @@ fn quantise(value: Option<f64>, quantum: f64) -> Option<i64> {
     })
 }
 
-fn row(record: &Record, obs: &Observation) -> Vec<Option<i64>> {
-    let mut out = Vec::new();
-    let per_joint = |values: &[f64], q: f64, out: &mut Vec<Option<i64>>| {
-        for j in 0..PIPER_JOINTS {
-            out.push(quantise(values.get(j).copied(), q));
-        }
-    };
-    for signal in &record.signals {
-        match signal {
-            Signal::Joints => per_joint(&obs.joints_deg, DEG_Q, &mut out),
-            Signal::Speeds => per_joint(&obs.speeds_deg_s, SPEED_Q, &mut out),
-            Signal::Currents => per_joint(&obs.currents_a, AMP_Q, &mut out),
-            Signal::Gripper => out.push(quantise(obs.gripper_mm, MM_Q)),
-            Signal::Pose => {
-                for i in 0..3 {
-                    out.push(quantise(obs.position_mm.map(|p| p[i]), MM_Q));
-                }
-            }
-            Signal::Temperatures => per_joint(&obs.motor_temps_c, TEMP_Q, &mut out),
-            Signal::Status => {
-                out.push(obs.arm_status_code.map(i64::from));
-                let mask = if obs.enabled.is_empty() {
-                    None
-                } else {
-                    Some(
-                        obs.enabled
-                            .iter()
-                            .enumerate()
-                            .filter(|(_, e)| **e)
-                            .map(|(i, _)| 1i64 << i)
-                            .sum(),
-                    )
-                };
-                out.push(mask);
-            }
-        }
-    }
-    out
-}
-
 /// A running sampler; [`Sampler::finish`] returns the trace.
 pub(crate) struct Sampler {
     trace: Arc<Mutex<Trace>>,
@@ -123,7 +52,7 @@ impl Sampler {
     pub fn start(record: &Record, devices: Vec<Arc<dyn Device>>, t0: Instant) -> Self {
         let trace = Arc::new(Mutex::new(Trace {
             period: record.sample_period,
-            columns: columns(record, &devices),
+            columns: columns(&record.signals, &devices),
             rows: Vec::new(),
         }));
         let shared = Arc::clone(&trace);
@@ -136,7 +65,14 @@ impl Sampler {
                 let at = t0.elapsed();
                 let mut values = Vec::new();
                 for dev in &devices {
-                    values.extend(row(&record, &dev.observe()));
+                    let quanta = dev.trace_columns(&record.signals);
+                    let row = dev.trace_row(&record.signals);
+                    values.extend(
+                        quanta
+                            .iter()
+                            .enumerate()
+                            .map(|(i, c)| quantise(row.get(i).copied().flatten(), c.quantum)),
+                    );
                 }
                 let at = round_to_period(at, record.sample_period);
                 shared

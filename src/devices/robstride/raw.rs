@@ -3,8 +3,10 @@
 
 use serde::Deserialize;
 
-use super::onekey::one_key_enum;
-use super::raw::S;
+use std::collections::BTreeMap;
+
+use crate::harness::onekey::one_key_enum;
+use crate::harness::raw::S;
 
 /// One motor of a `robstride` device.
 #[derive(Debug, Deserialize)]
@@ -97,4 +99,76 @@ pub(crate) struct RawMotorConds {
     pub faults: Option<S<Vec<S<String>>>>,
     pub fault_report: Option<S<Vec<S<String>>>>,
     pub feedback: Option<S<String>>,
+}
+
+/// A RobStride bus's settings (after `kind: robstride`).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawSettings {
+    pub motors: Option<S<Vec<S<RawRsMotor>>>>,
+}
+
+/// RobStride conditions in `expect` and `wait_until`: per motor, by CAN ID.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawConds {
+    pub motors: Option<S<BTreeMap<i64, S<RawMotorConds>>>>,
+}
+
+/// The keys of [`RawConds`].
+pub(crate) const CONDITION_KEYS: [&str; 1] = ["motors"];
+
+one_key_enum! {
+    /// RobStride steps.
+    pub(crate) enum RawStep ("step") {
+        "robstride" => Robstride(Box<RawRsStep>),
+    }
+}
+
+impl RawStep {
+    /// The step's `id:`.
+    pub(crate) fn id(&self) -> Option<&S<String>> {
+        match self {
+            Self::Robstride(a) => a.id.as_ref(),
+        }
+    }
+}
+
+/// Arguments of a RobStride emulator fault.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawFaultArgs {
+    pub motor: Option<S<i64>>,
+}
+
+/// A RobStride emulator fault as written: its name (one of the emulator's faults) and motor.
+#[derive(Debug)]
+pub(crate) struct RawFault {
+    pub fault: sim::robstride::Fault,
+    pub args: RawFaultArgs,
+}
+
+impl crate::harness::onekey::OneKey for RawFault {
+    fn keys() -> Vec<&'static str> {
+        super::model::FAULTS.iter().map(|(_, n)| *n).collect()
+    }
+
+    fn bare<E: serde::de::Error>(key: &str) -> Option<Result<Self, E>> {
+        let (fault, _) = super::model::FAULTS.iter().find(|(_, n)| *n == key)?;
+        Some(Ok(Self {
+            fault: *fault,
+            args: RawFaultArgs::default(),
+        }))
+    }
+
+    fn entry<'de, A: serde::de::MapAccess<'de>>(
+        key: &str,
+        map: &mut A,
+    ) -> Option<Result<Self, A::Error>> {
+        let (fault, _) = super::model::FAULTS.iter().find(|(_, n)| *n == key)?;
+        Some(map.next_value::<Option<RawFaultArgs>>().map(|args| Self {
+            fault: *fault,
+            args: args.unwrap_or_default(),
+        }))
+    }
 }

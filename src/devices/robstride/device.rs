@@ -1,9 +1,5 @@
-//! RobStride actuators on the bench: the scenario model of the `robstride` device kind (its
-//! settings, the `robstride` step's commands, per-motor conditions) and the [`Device`] that
-//! drives `driver::robstride` against the in-process `sim::robstride` emulator.
-//!
-//! Every motor is observed the way the driver sees it: the last status frame (type 2 reply
-//! or type 24 active report) and the last type-21 fault report of each CAN ID.
+//! RobStride actuators on the bench: the [`Device`] that drives `driver::robstride` against the
+//! in-process `sim::robstride` emulator (or a separate emulator process on a real interface).
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -14,443 +10,14 @@ use std::time::Duration;
 use async_trait::async_trait;
 use bus::virtual_bus::VirtualBus;
 use bus::CanBus;
-use driver::robstride::{
-    FaultReport, Feedback, FeedbackKind, Motor, MotorMode, OpControl, Param, ParamValue,
-    RobstrideDriver, RobstrideError, RunMode,
-};
-use sim::robstride::{Fault, MotorConfig, RobstrideBus, RobstrideConfig, RobstrideHandle};
+use driver::robstride::{Feedback, Motor, ParamValue, RobstrideDriver, RobstrideError};
+use sim::robstride::{RobstrideBus, RobstrideConfig, RobstrideHandle};
 
-use super::device::{Device, DeviceError, Observation, Reply};
-use super::model::{Action, EmulatorFault, ErrorClass, Near};
-
-/// Settings of a `robstride` bench device: the motors on its bus.
-#[derive(Debug, Clone, PartialEq)]
-pub struct RobstrideSettings {
-    /// The emulated motors (CAN ID, model, load), in file order.
-    pub motors: Vec<MotorConfig>,
-}
-
-/// One `robstride` step: a command to one motor (or, for `restart`, to the whole bus).
-#[derive(Debug, Clone, PartialEq)]
-pub struct RobstrideAction {
-    /// Target CAN ID (0 for bus-wide commands).
-    pub motor: u8,
-    /// What to do.
-    pub command: RsCommand,
-}
-
-/// Commands of the `robstride` step.
-#[derive(Debug, Clone, PartialEq)]
-pub enum RsCommand {
-    /// Enable (type 3); the motor must report run mode.
-    Enable,
-    /// Stop (type 4), optionally clearing latched faults.
-    Disable {
-        /// Clear latched faults whose cause is gone.
-        clear: bool,
-    },
-    /// Stop, write run_mode, read it back, enable.
-    Mode(RunMode),
-    /// Operation-control frame (type 1).
-    OpControl(OpControl),
-    /// Velocity-mode setpoint.
-    Velocity {
-        /// Speed.
-        speed_rad_s: f32,
-        /// Current limit.
-        limit_cur_a: f32,
-        /// Acceleration.
-        acc_rad_s2: f32,
-    },
-    /// Profile-position move.
-    Profile {
-        /// Target angle.
-        target_rad: f32,
-        /// Speed limit.
-        vel_max_rad_s: f32,
-        /// Acceleration.
-        acc_rad_s2: f32,
-    },
-    /// Current-mode setpoint.
-    Current {
-        /// iq reference.
-        iq_a: f32,
-    },
-    /// Cyclic-synchronous-position setpoint.
-    Csp {
-        /// Target angle.
-        target_rad: f32,
-        /// Speed limit.
-        limit_spd_rad_s: f32,
-    },
-    /// Set the mechanical zero here (type 6).
-    SetZero,
-    /// Stop, set zero, enable again.
-    ZeroHere,
-    /// Read a parameter and compare it with an expectation.
-    ReadParam {
-        /// Which parameter.
-        param: Param,
-        /// Expected value.
-        expect: Option<Near>,
-    },
-    /// Write a parameter (volatile until `save`).
-    WriteParam {
-        /// Which parameter.
-        param: Param,
-        /// New value.
-        value: f64,
-    },
-    /// Change the CAN ID (type 7); later steps address the new ID.
-    SetCanId {
-        /// New ID 1..=127.
-        new_id: u8,
-    },
-    /// Save parameters to flash (type 22).
-    Save,
-    /// Power-cycle the emulator: motors restart from their saved state.
-    Restart,
-    /// Active reporting on / off (type 24).
-    ActiveReport {
-        /// On.
-        on: bool,
-    },
-    /// Active-report period (EPScan_time).
-    ReportPeriod {
-        /// Period.
-        period: Duration,
-    },
-    /// CAN watchdog window (canTimeout), zero = off.
-    CanTimeout {
-        /// Window.
-        window: Duration,
-    },
-    /// Ask the motor for its status (type 2 poll).
-    Poll,
-    /// Emulator: inject a fault (its cause is set, or a one-shot event latched).
-    Inject(Fault),
-    /// Emulator: remove a fault's cause (the latched bit stays until `disable` with clear).
-    RemoveCause(Fault),
-    /// Emulator: set the winding temperature.
-    SetTemperature {
-        /// Temperature.
-        temp_c: f64,
-    },
-    /// Emulator: set the supply voltage.
-    SetBusVoltage {
-        /// Voltage.
-        voltage_v: f64,
-    },
-    /// Emulator: push the load with an external torque.
-    ExternalTorque {
-        /// Torque.
-        torque_nm: f64,
-    },
-}
-
-impl RsCommand {
-    /// Whether the command acts on the emulator (unavailable against a separate process).
-    pub fn needs_emulator(&self) -> bool {
-        matches!(
-            self,
-            Self::Restart
-                | Self::Inject(_)
-                | Self::RemoveCause(_)
-                | Self::SetTemperature { .. }
-                | Self::SetBusVoltage { .. }
-                | Self::ExternalTorque { .. }
-        )
-    }
-
-    /// The command's name as written after `do:`.
-    pub fn name(&self) -> &'static str {
-        match self {
-            Self::Enable => "enable",
-            Self::Disable { .. } => "disable",
-            Self::Mode(_) => "mode",
-            Self::OpControl(_) => "op_control",
-            Self::Velocity { .. } => "velocity",
-            Self::Profile { .. } => "profile",
-            Self::Current { .. } => "current",
-            Self::Csp { .. } => "csp",
-            Self::SetZero => "set_zero",
-            Self::ZeroHere => "zero_here",
-            Self::ReadParam { .. } => "read_param",
-            Self::WriteParam { .. } => "write_param",
-            Self::SetCanId { .. } => "set_can_id",
-            Self::Save => "save",
-            Self::Restart => "restart",
-            Self::ActiveReport { .. } => "active_report",
-            Self::ReportPeriod { .. } => "report_period",
-            Self::CanTimeout { .. } => "can_timeout",
-            Self::Poll => "poll",
-            Self::Inject(_) => "inject",
-            Self::RemoveCause(_) => "remove_cause",
-            Self::SetTemperature { .. } => "set_temperature",
-            Self::SetBusVoltage { .. } => "set_bus_voltage",
-            Self::ExternalTorque { .. } => "external_torque",
-        }
-    }
-}
-
-/// Names of the run modes (`mode:`).
-pub const RUN_MODES: [(RunMode, &str); 6] = [
-    (RunMode::OperationControl, "op_control"),
-    (RunMode::ProfilePosition, "profile"),
-    (RunMode::Velocity, "velocity"),
-    (RunMode::Current, "current"),
-    (RunMode::ZeroReturn, "zero_return"),
-    (RunMode::CyclicPosition, "csp"),
-];
-
-/// Names of the parameters (`param:`).
-pub const PARAMS: [(Param, &str); 29] = [
-    (Param::RunMode, "run_mode"),
-    (Param::IqRef, "iq_ref"),
-    (Param::SpdRef, "spd_ref"),
-    (Param::LimitTorque, "limit_torque"),
-    (Param::CurKp, "cur_kp"),
-    (Param::CurKi, "cur_ki"),
-    (Param::CurFiltGain, "cur_filt_gain"),
-    (Param::LocRef, "loc_ref"),
-    (Param::LimitSpd, "limit_spd"),
-    (Param::LimitCur, "limit_cur"),
-    (Param::MechPos, "mech_pos"),
-    (Param::Iqf, "iqf"),
-    (Param::MechVel, "mech_vel"),
-    (Param::Vbus, "vbus"),
-    (Param::LocKp, "loc_kp"),
-    (Param::SpdKp, "spd_kp"),
-    (Param::SpdKi, "spd_ki"),
-    (Param::SpdFiltGain, "spd_filt_gain"),
-    (Param::AccRad, "acc_rad"),
-    (Param::VelMax, "vel_max"),
-    (Param::AccSet, "acc_set"),
-    (Param::EpscanTime, "epscan_time"),
-    (Param::CanTimeout, "can_timeout"),
-    (Param::ZeroSta, "zero_sta"),
-    (Param::Damper, "damper"),
-    (Param::AddOffset, "add_offset"),
-    (Param::AlveolousOpen, "alveolous_open"),
-    (Param::IqTest, "iq_test"),
-    (Param::DccSet, "dcc_set"),
-];
-
-/// Names of the emulator faults (`fault:`).
-pub const FAULTS: [(Fault, &str); 9] = [
-    (Fault::OverTemperature, "over_temperature"),
-    (Fault::UnderVoltage, "under_voltage"),
-    (Fault::OverVoltage, "over_voltage"),
-    (
-        Fault::PhaseOverCurrent(sim::robstride::Phase::A),
-        "phase_a_over_current",
-    ),
-    (
-        Fault::PhaseOverCurrent(sim::robstride::Phase::B),
-        "phase_b_over_current",
-    ),
-    (
-        Fault::PhaseOverCurrent(sim::robstride::Phase::C),
-        "phase_c_over_current",
-    ),
-    (Fault::EncoderNotCalibrated, "encoder_not_calibrated"),
-    (Fault::StallOverload, "stall_overload"),
-    (Fault::GateDriver, "gate_driver"),
-];
-
-/// Names of the status-frame fault bits (bits 16..21), in bit order.
-pub const STATUS_FAULTS: [&str; 6] = [
-    "under_voltage",
-    "over_current",
-    "over_temperature",
-    "encoder",
-    "stall_overload",
-    "uncalibrated",
-];
-
-/// Names of the type-21 fault-report flags.
-pub const REPORT_FLAGS: [&str; 10] = [
-    "over_temperature",
-    "gate_driver",
-    "under_voltage",
-    "over_voltage",
-    "phase_a_over_current",
-    "phase_b_over_current",
-    "phase_c_over_current",
-    "uncalibrated",
-    "stall_overload",
-    "over_temperature_warning",
-];
-
-/// Mode-state names (`mode_state:`).
-pub const MODE_STATES: [&str; 4] = ["reset", "calibration", "run", "brake"];
-
-/// Kinds of the last feedback frame (`feedback:`).
-pub const FEEDBACK_KINDS: [&str; 2] = ["reply", "active_report"];
-
-/// One motor as the driver last saw it.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct MotorObservation {
-    /// Last status frame (`None` before the first one).
-    pub angle_rad: Option<f64>,
-    /// Speed.
-    pub speed_rad_s: Option<f64>,
-    /// Torque.
-    pub torque_nm: Option<f64>,
-    /// Temperature.
-    pub temperature_c: Option<f64>,
-    /// Mode state name ([`MODE_STATES`]).
-    pub mode_state: Option<&'static str>,
-    /// Set status-frame fault bits ([`STATUS_FAULTS`]).
-    pub status_faults: Vec<&'static str>,
-    /// Set flags of the last type-21 report ([`REPORT_FLAGS`]), empty when none came.
-    pub fault_report: Vec<&'static str>,
-    /// Kind of the last status frame ([`FEEDBACK_KINDS`]).
-    pub feedback: Option<&'static str>,
-}
-
-/// A condition on one motor (`motors: {ID: {...}}` in `expect` / `wait_until`).
-#[derive(Debug, Clone, PartialEq)]
-pub enum MotorCond {
-    /// Angle near.
-    Position(Near),
-    /// Speed near.
-    Velocity(Near),
-    /// Torque near.
-    Torque(Near),
-    /// Temperature at or above.
-    TempMin(f64),
-    /// Temperature at or below.
-    TempMax(f64),
-    /// Mode state equals.
-    ModeState(&'static str),
-    /// Exactly these status fault bits.
-    StatusFaults(Vec<&'static str>),
-    /// Exactly these type-21 flags.
-    FaultReport(Vec<&'static str>),
-    /// Kind of the last status frame.
-    Feedback(&'static str),
-}
-
-fn f2(v: f64) -> String {
-    let t = format!("{v:.2}");
-    if t == "-0.00" {
-        "0.00".to_owned()
-    } else {
-        t
-    }
-}
-
-fn near_text(n: &Near) -> String {
-    format!("{} ± {}", f2(n.value), f2(n.tolerance))
-}
-
-fn opt(v: Option<f64>) -> String {
-    v.map_or_else(|| "unknown".to_owned(), f2)
-}
-
-impl MotorCond {
-    /// What the condition wants, for reports.
-    pub fn expected_text(&self, motor: u8) -> String {
-        let what = match self {
-            Self::Position(n) => format!("position_rad {}", near_text(n)),
-            Self::Velocity(n) => format!("velocity_rad_s {}", near_text(n)),
-            Self::Torque(n) => format!("torque_nm {}", near_text(n)),
-            Self::TempMin(t) => format!("temp_c >= {}", f2(*t)),
-            Self::TempMax(t) => format!("temp_c <= {}", f2(*t)),
-            Self::ModeState(m) => format!("mode_state {m}"),
-            Self::StatusFaults(f) => format!("faults [{}]", f.join(", ")),
-            Self::FaultReport(f) => format!("fault_report [{}]", f.join(", ")),
-            Self::Feedback(k) => format!("feedback {k}"),
-        };
-        format!("motor {motor} {what}")
-    }
-
-    /// What the motor shows for this condition, for reports.
-    pub fn actual_text(&self, motor: u8, obs: &Observation) -> String {
-        let Some(m) = obs.motors.get(&motor) else {
-            return format!("motor {motor} not on the bus");
-        };
-        let what = match self {
-            Self::Position(_) => format!("position_rad {}", opt(m.angle_rad)),
-            Self::Velocity(_) => format!("velocity_rad_s {}", opt(m.speed_rad_s)),
-            Self::Torque(_) => format!("torque_nm {}", opt(m.torque_nm)),
-            Self::TempMin(_) | Self::TempMax(_) => format!("temp_c {}", opt(m.temperature_c)),
-            Self::ModeState(_) => format!("mode_state {}", m.mode_state.unwrap_or("unknown")),
-            Self::StatusFaults(_) => format!("faults [{}]", m.status_faults.join(", ")),
-            Self::FaultReport(_) => format!("fault_report [{}]", m.fault_report.join(", ")),
-            Self::Feedback(_) => format!("feedback {}", m.feedback.unwrap_or("none")),
-        };
-        format!("motor {motor} {what}")
-    }
-
-    /// Whether the condition holds.
-    pub fn holds(&self, motor: u8, obs: &Observation) -> bool {
-        let Some(m) = obs.motors.get(&motor) else {
-            return false;
-        };
-        let near = |v: Option<f64>, n: &Near| v.is_some_and(|v| (v - n.value).abs() <= n.tolerance);
-        match self {
-            Self::Position(n) => near(m.angle_rad, n),
-            Self::Velocity(n) => near(m.speed_rad_s, n),
-            Self::Torque(n) => near(m.torque_nm, n),
-            Self::TempMin(t) => m.temperature_c.is_some_and(|v| v >= *t),
-            Self::TempMax(t) => m.temperature_c.is_some_and(|v| v <= *t),
-            Self::ModeState(s) => m.mode_state == Some(*s),
-            Self::StatusFaults(f) => m.status_faults == *f,
-            Self::FaultReport(f) => m.fault_report == *f,
-            Self::Feedback(k) => m.feedback == Some(*k),
-        }
-    }
-}
-
-fn observe_motor(feedback: Option<Feedback>, report: Option<FaultReport>) -> MotorObservation {
-    let mut m = MotorObservation::default();
-    if let Some(f) = feedback {
-        m.angle_rad = Some(f64::from(f.angle_rad));
-        m.speed_rad_s = Some(f64::from(f.speed_rad_s));
-        m.torque_nm = Some(f64::from(f.torque_nm));
-        m.temperature_c = Some(f64::from(f.temperature_c));
-        m.mode_state = Some(match f.mode {
-            MotorMode::Reset => "reset",
-            MotorMode::Calibration => "calibration",
-            MotorMode::Run => "run",
-            MotorMode::Brake => "brake",
-        });
-        m.status_faults = STATUS_FAULTS
-            .iter()
-            .enumerate()
-            .filter(|(bit, _)| f.faults.0 & (1 << bit) != 0)
-            .map(|(_, name)| *name)
-            .collect();
-        m.feedback = Some(match f.kind {
-            FeedbackKind::Reply => "reply",
-            FeedbackKind::ActiveReport => "active_report",
-        });
-    }
-    if let Some(r) = report {
-        let [a, b, c] = r.phase_over_current();
-        let flags = [
-            r.over_temperature(),
-            r.gate_driver(),
-            r.under_voltage(),
-            r.over_voltage(),
-            a,
-            b,
-            c,
-            r.uncalibrated(),
-            r.stall_overload(),
-            r.over_temperature_warning(),
-        ];
-        m.fault_report = REPORT_FLAGS
-            .iter()
-            .zip(flags)
-            .filter(|(_, on)| *on)
-            .map(|(name, _)| *name)
-            .collect();
-    }
-    m
-}
+use super::model::{MotorCheck, RobstrideAction, RobstrideSettings, RsCommand, RsFault, PARAMS};
+use super::observe::{f2, near_text, observe_motor, Observation};
+use crate::devices::{Action, Check, DeviceFault};
+use crate::harness::model::{ErrorClass, Signal};
+use crate::harness::{Device, DeviceError, Reply, TraceColumn};
 
 fn classify(error: &RobstrideError) -> ErrorClass {
     match error {
@@ -487,6 +54,10 @@ pub(crate) struct RobstrideDevice {
     /// Owns the receive task that feeds every motor handle (dropping it stops the task).
     _driver: RobstrideDriver,
     motors: Mutex<BTreeMap<u8, Arc<Motor>>>,
+    /// The CAN ID each motor had at power-on (it names the trace columns) and has now.
+    ids: Mutex<Vec<(u8, u8)>>,
+    /// Emulator faults injected and not yet cleared, so `clear_faults` can undo them.
+    active: Mutex<Vec<RsFault>>,
     emulator: Option<RsEmulator>,
     handle: tokio::sync::Mutex<Option<RobstrideHandle>>,
     state_dir: Option<PathBuf>,
@@ -553,6 +124,14 @@ impl RobstrideDevice {
             name: name.to_owned(),
             _driver: driver,
             motors: Mutex::new(motors),
+            ids: Mutex::new(
+                settings
+                    .motors
+                    .iter()
+                    .map(|m| (m.can_id, m.can_id))
+                    .collect(),
+            ),
+            active: Mutex::new(Vec::new()),
             emulator,
             handle: tokio::sync::Mutex::new(handle),
             state_dir,
@@ -682,6 +261,9 @@ impl RobstrideDevice {
                 let result = motor.set_can_id(*new_id).await;
                 let now = motor.can_id();
                 lock(&self.motors).insert(now, Arc::new(motor));
+                for slot in lock(&self.ids).iter_mut().filter(|(_, c)| *c == id) {
+                    slot.1 = now;
+                }
                 let uid = result.map_err(derr)?;
                 let hex: String = uid.iter().map(|b| format!("{b:02X}")).collect();
                 reply.values.push(("can_id".to_owned(), now.to_string()));
@@ -796,47 +378,68 @@ impl Device for RobstrideDevice {
     ) -> Result<Reply, DeviceError> {
         match action {
             Action::Robstride(a) => self.act(a, timeout).await,
-            _ => Err(DeviceError::unsupported(format!(
-                "`{}` is a RobStride bus: use `robstride` steps",
-                self.name
+            other => Err(DeviceError::unsupported(format!(
+                "`{}` is a RobStride bus: a {} step needs a {} device",
+                self.name,
+                other.kind_name(),
+                other.kind_name()
             ))),
         }
     }
 
-    fn observe(&self) -> Observation {
-        let mut obs = Observation::default();
-        for (id, motor) in lock(&self.motors).iter() {
-            let m = observe_motor(motor.last_feedback(), motor.last_fault_report());
-            // The generic signals (trace columns j1.., speeds, temperatures) in CAN ID order.
-            obs.joints_deg
-                .push(m.angle_rad.map_or(f64::NAN, f64::to_degrees));
-            obs.speeds_deg_s
-                .push(m.speed_rad_s.map_or(f64::NAN, f64::to_degrees));
-            obs.motor_temps_c.push(m.temperature_c.unwrap_or(f64::NAN));
-            obs.enabled.push(m.mode_state == Some("run"));
-            obs.motors.insert(*id, m);
+    fn evaluate(&self, checks: &[Check]) -> Result<(), (String, String)> {
+        let obs = self.observe();
+        for check in checks {
+            let Check::Robstride(MotorCheck { motor, cond }) = check else {
+                return Err((
+                    check.describe(),
+                    format!("`{}` is a RobStride bus", self.name),
+                ));
+            };
+            if !cond.holds(*motor, &obs) {
+                return Err((cond.expected_text(*motor), cond.actual_text(*motor, &obs)));
+            }
         }
-        obs
+        Ok(())
     }
 
-    fn inject(&self, fault: &EmulatorFault) -> Result<(), DeviceError> {
-        Err(DeviceError::unsupported(format!(
-            "`{}` is a RobStride bus: inject `{}` is a Piper fault; use `robstride: {{do: inject, ...}}`",
-            self.name,
-            fault.describe()
-        )))
+    fn trace_columns(&self, signals: &[Signal]) -> Vec<TraceColumn> {
+        let ids: Vec<u8> = lock(&self.ids).iter().map(|(first, _)| *first).collect();
+        super::trace::columns(signals, &ids)
     }
 
-    fn clear(&self, fault: Option<&EmulatorFault>) -> Result<(), DeviceError> {
-        // `clear_faults` (None) also clears bus faults: there is no Piper-style fault to clear
-        // here, RobStride faults are cleared by `remove_cause` + `disable` with `clear`.
-        if fault.is_none() {
-            return Ok(());
+    fn trace_row(&self, signals: &[Signal]) -> Vec<Option<f64>> {
+        let obs = self.observe();
+        let now: Vec<u8> = lock(&self.ids).iter().map(|(_, now)| *now).collect();
+        let motors: Vec<_> = now.iter().map(|id| obs.get(id)).collect();
+        super::trace::row(signals, &motors)
+    }
+
+    async fn inject(&self, fault: &DeviceFault) -> Result<(), DeviceError> {
+        let f = rs_fault(fault, &self.name)?;
+        self.motor(f.motor)?;
+        self.emulator_do(|h| Box::pin(h.inject(f.motor, f.fault)))
+            .await?;
+        lock(&self.active).push(f);
+        Ok(())
+    }
+
+    async fn clear(&self, fault: Option<&DeviceFault>) -> Result<(), DeviceError> {
+        // Clearing removes the cause; a latched fault stays until `disable` with `clear`, as
+        // on the motor.
+        let faults: Vec<RsFault> = match fault {
+            Some(f) => {
+                let f = rs_fault(f, &self.name)?;
+                lock(&self.active).retain(|a| *a != f);
+                vec![f]
+            }
+            None => std::mem::take(&mut *lock(&self.active)),
+        };
+        for f in faults {
+            self.emulator_do(|h| Box::pin(h.clear(f.motor, f.fault)))
+                .await?;
         }
-        Err(DeviceError::unsupported(format!(
-            "`{}` is a RobStride bus: use `robstride: {{do: remove_cause, ...}}` and `disable` with `clear: true`",
-            self.name
-        )))
+        Ok(())
     }
 
     async fn shutdown(&self) {
@@ -851,11 +454,40 @@ impl Device for RobstrideDevice {
     }
 }
 
+/// The RobStride fault inside a device fault (validation routes only RobStride faults here).
+fn rs_fault(fault: &DeviceFault, name: &str) -> Result<RsFault, DeviceError> {
+    match fault {
+        DeviceFault::Robstride(f) => Ok(*f),
+        other => Err(DeviceError::unsupported(format!(
+            "`{name}` is a RobStride bus: `{}` is a {} fault",
+            other.describe(),
+            other.kind_name()
+        ))),
+    }
+}
+
+impl RobstrideDevice {
+    /// Every motor as the driver last saw it.
+    fn observe(&self) -> Observation {
+        lock(&self.motors)
+            .iter()
+            .map(|(id, motor)| {
+                (
+                    *id,
+                    observe_motor(motor.last_feedback(), motor.last_fault_report()),
+                )
+            })
+            .collect()
+    }
+}
+
 #[cfg(test)]
 mod tests {
-    use driver::robstride::StatusFaults;
+    use driver::robstride::{FaultReport, FeedbackKind, MotorMode, StatusFaults};
 
+    use super::super::model::MotorCond;
     use super::*;
+    use crate::harness::model::Near;
 
     fn feedback(faults: u8, mode: MotorMode) -> Feedback {
         Feedback {
@@ -896,8 +528,7 @@ mod tests {
     #[test]
     fn motor_conditions_judge_the_right_motor() {
         let mut obs = Observation::default();
-        obs.motors
-            .insert(3, observe_motor(Some(feedback(0, MotorMode::Run)), None));
+        obs.insert(3, observe_motor(Some(feedback(0, MotorMode::Run)), None));
         let near = |value, tolerance| Near { value, tolerance };
         assert!(MotorCond::Velocity(near(-2.0, 0.1)).holds(3, &obs));
         assert!(!MotorCond::Velocity(near(2.0, 0.1)).holds(3, &obs));

@@ -1,63 +1,28 @@
-//! The Piper on the bench: our driver (always) plus, in-process, the firmware emulator.
+//! Between the scenario's units and the Piper driver's wire-level API: scaling (mm to µm,
+//! degrees to 0.001°/0.1°), "unchanged" sentinels, MIT code aliases, status-code names, and the
+//! driver state as an [`Observation`]. Every Piper action is carried out here.
 
 use std::collections::BTreeMap;
 use std::future::Future;
 use std::time::Duration;
 
-use async_trait::async_trait;
 use driver::piper::codec::{
     CollisionLevels, CtrlMode as WireCtrl, EndParams, EndPoseTarget, GripperTeachParams, IdOffset,
     InstallPosition, JointLimits, LeaderFollowerConfig, LinkageConfig, MitCommand, MitMode,
     ModeCtrl, MotionStatus, MotorSelect, MoveCPoint, MoveMode as WireMove, ParamCommand,
     ParamReset, Payload as WirePayload, UNCHANGED_U16,
 };
-use driver::piper::{GripperCommand, MoveKind, Piper, PiperError, PiperState};
+use driver::piper::{GripperCommand, MoveKind, PiperError, PiperState};
 
-use super::device::{Device, DeviceError, Observation, Reply};
-use super::model::{
-    Action, CtrlMode, EmulatorFault, ErrorClass, Install, MoveMode, Near, Payload, PiperAction,
-    Pose, Role,
-};
-use super::runner::RunOptions;
+use super::device::PiperDevice;
+use super::model::{CtrlMode, Install, MoveMode, Payload, PiperAction, Pose, Role};
+use super::observe::Observation;
 use super::vocab;
+use crate::harness::model::{ErrorClass, Near};
+use crate::harness::{DeviceError, Reply};
 
 /// Deadline of a `mode` step's confirmation on 0x2A1 when the step gives none.
 const MODE_CONFIRM: Duration = Duration::from_millis(300);
-
-/// Control of an in-process emulator (the seam between the harness and `sim::piper`).
-#[async_trait]
-pub(crate) trait EmulatorControl: Send + Sync {
-    /// Apply a fault.
-    fn inject(&self, fault: &EmulatorFault) -> Result<(), String>;
-    /// Clear one fault, or all.
-    fn clear(&self, fault: Option<&EmulatorFault>) -> Result<(), String>;
-    /// Stop the emulator.
-    async fn shutdown(&self);
-}
-
-/// A Piper: driver plus optional in-process emulator.
-pub(crate) struct PiperDevice {
-    name: String,
-    driver: Piper,
-    emulator: Option<Box<dyn EmulatorControl>>,
-    options: RunOptions,
-}
-
-impl PiperDevice {
-    pub fn new(
-        name: &str,
-        driver: Piper,
-        emulator: Option<Box<dyn EmulatorControl>>,
-        options: RunOptions,
-    ) -> Self {
-        Self {
-            name: name.to_owned(),
-            driver,
-            emulator,
-            options,
-        }
-    }
-}
 
 pub(crate) fn classify(error: &PiperError) -> ErrorClass {
     match error {
@@ -293,7 +258,8 @@ impl PiperDevice {
         }
     }
 
-    async fn act(
+    /// Carry out a Piper action through the driver.
+    pub(super) async fn act(
         &self,
         action: &PiperAction,
         timeout: Option<Duration>,
@@ -661,55 +627,5 @@ impl PiperDevice {
             }
         }
         Ok(reply)
-    }
-}
-
-#[async_trait]
-impl Device for PiperDevice {
-    fn name(&self) -> &str {
-        &self.name
-    }
-
-    async fn perform(
-        &self,
-        action: &Action,
-        timeout: Option<Duration>,
-    ) -> Result<Reply, DeviceError> {
-        match action {
-            Action::Piper(a) => self.act(a, timeout).await,
-            Action::Robstride(_) => Err(DeviceError::unsupported(format!(
-                "`{}` is a Piper: `robstride` steps need a robstride device",
-                self.name
-            ))),
-        }
-    }
-
-    fn observe(&self) -> Observation {
-        observe(&self.driver.state(), tokio::time::Instant::now())
-    }
-
-    fn inject(&self, fault: &EmulatorFault) -> Result<(), DeviceError> {
-        match &self.emulator {
-            Some(e) => e.inject(fault).map_err(DeviceError::unsupported),
-            None => Err(DeviceError::unsupported(
-                "emulator faults need the in-process emulator (not available with --iface)",
-            )),
-        }
-    }
-
-    fn clear(&self, fault: Option<&EmulatorFault>) -> Result<(), DeviceError> {
-        match &self.emulator {
-            Some(e) => e.clear(fault).map_err(DeviceError::unsupported),
-            None => Err(DeviceError::unsupported(
-                "emulator faults need the in-process emulator (not available with --iface)",
-            )),
-        }
-    }
-
-    async fn shutdown(&self) {
-        self.driver.disconnect().await;
-        if let Some(e) = &self.emulator {
-            e.shutdown().await;
-        }
     }
 }

@@ -7,15 +7,16 @@ use std::time::Duration;
 use driver::robstride::OpControl;
 use sim::robstride::{Load, Model, MotorConfig};
 
-use super::{pos, Ctx, Res};
-use crate::harness::error::Pos;
-use crate::harness::model::{Action, Check, ErrorClass, Near, StepKind};
-use crate::harness::raw::{RawDevice, S};
-use crate::harness::robstride::{
-    MotorCond, RobstrideAction, RobstrideSettings, RsCommand, FAULTS, FEEDBACK_KINDS, MODE_STATES,
-    PARAMS, REPORT_FLAGS, RUN_MODES, STATUS_FAULTS,
+use super::model::{
+    MotorCheck, MotorCond, RobstrideAction, RobstrideSettings, RsCommand, RsFault, FAULTS,
+    FEEDBACK_KINDS, MODE_STATES, PARAMS, REPORT_FLAGS, RUN_MODES, STATUS_FAULTS,
 };
-use crate::harness::robstride_raw::{RawMotorConds, RawRsLoad, RawRsStep};
+use super::raw::{RawConds, RawFault, RawMotorConds, RawRsLoad, RawRsStep, RawSettings, RawStep};
+use crate::devices::Action;
+use crate::harness::error::Pos;
+use crate::harness::model::{ErrorClass, Near, StepKind};
+use crate::harness::raw::S;
+use crate::harness::validate::{pos, Ctx, Res};
 
 /// Default tolerance of `read_param` expectations.
 const DEFAULT_PARAM_TOLERANCE: f64 = 0.01;
@@ -45,30 +46,10 @@ fn positive(ctx: &Ctx<'_>, v: &S<f64>, key: &str) -> Res<f64> {
 }
 
 /// The settings of a `kind: robstride` device.
-pub(super) fn device_kind(ctx: &Ctx<'_>, raw: &S<RawDevice>) -> Res<RobstrideSettings> {
-    let d = &raw.value;
-    let piper_only = [
-        ("firmware", d.firmware.as_ref().map(pos)),
-        ("urdf", d.urdf.as_ref().map(pos)),
-        ("initial_joints_deg", d.initial_joints_deg.as_ref().map(pos)),
-        ("gripper_max_mm", d.gripper_max_mm.as_ref().map(pos)),
-        ("collision_levels", d.collision_levels.as_ref().map(pos)),
-        (
-            "obstacles",
-            d.obstacles.as_ref().and_then(|o| o.first()).map(pos),
-        ),
-    ];
-    for (key, at) in piper_only {
-        if let Some(at) = at {
-            return Err(ctx.err(
-                at,
-                format!("`{key}` is a Piper setting; a robstride device takes `motors`"),
-            ));
-        }
-    }
+pub(crate) fn settings(ctx: &Ctx<'_>, d: &RawSettings, at: Pos) -> Res<RobstrideSettings> {
     let Some(list) = &d.motors else {
         return Err(ctx.err(
-            pos(raw),
+            at,
             "a robstride device needs `motors: [{id: 1, model: RS03}, ...]`",
         ));
     };
@@ -191,8 +172,24 @@ fn f32_of(ctx: &Ctx<'_>, v: &S<f64>, key: &str) -> Res<f32> {
     Ok(ctx.finite(v, key)? as f32)
 }
 
+/// A RobStride step.
+pub(crate) fn step(ctx: &Ctx<'_>, raw: &RawStep, at: Pos) -> Res<(&'static str, StepKind)> {
+    match raw {
+        RawStep::Robstride(a) => robstride_step(ctx, a, at),
+    }
+}
+
+/// A RobStride emulator fault on one motor.
+pub(crate) fn fault(ctx: &Ctx<'_>, raw: &RawFault, at: Pos) -> Res<RsFault> {
+    let m = ctx.required(&raw.args.motor, "motor", "a robstride fault", at)?;
+    Ok(RsFault {
+        motor: can_id(ctx, m, "motor")?,
+        fault: raw.fault,
+    })
+}
+
 /// A `robstride:` step.
-pub(super) fn step(ctx: &Ctx<'_>, a: &RawRsStep, at: Pos) -> Res<(&'static str, StepKind)> {
+fn robstride_step(ctx: &Ctx<'_>, a: &RawRsStep, at: Pos) -> Res<(&'static str, StepKind)> {
     let Some(cmd) = &a.command else {
         let names: Vec<&str> = COMMAND_KEYS.iter().map(|(n, _, _)| *n).collect();
         return Err(ctx.err(
@@ -329,7 +326,7 @@ pub(super) fn step(ctx: &Ctx<'_>, a: &RawRsStep, at: Pos) -> Res<(&'static str, 
         (RsCommand::Restart, None) => 0,
         (_, m) => can_id(ctx, ctx.required(m, "motor", name, at)?, "motor")?,
     };
-    let device = ctx.device(&a.device, at)?;
+    let device = ctx.device_of_kind(&a.device, at, "robstride", "this step")?;
     let timeout = a
         .timeout_ms
         .as_ref()
@@ -395,10 +392,19 @@ fn one_of(ctx: &Ctx<'_>, v: &S<String>, table: &[&'static str], key: &str) -> Re
 }
 
 /// The `motors:` conditions of `expect` / `wait_until`.
-pub(super) fn checks(
+pub(crate) fn checks(ctx: &Ctx<'_>, c: &RawConds, step: &str, at: Pos) -> Res<Vec<MotorCheck>> {
+    let mut out = Vec::new();
+    let Some(motors) = &c.motors else {
+        return Err(ctx.err(at, format!("`{step}` has no condition")));
+    };
+    motor_checks(ctx, motors, &mut out)?;
+    Ok(out)
+}
+
+fn motor_checks(
     ctx: &Ctx<'_>,
     motors: &S<BTreeMap<i64, S<RawMotorConds>>>,
-    out: &mut Vec<Check>,
+    out: &mut Vec<MotorCheck>,
 ) -> Res<()> {
     for (id, conds) in &motors.value {
         if !(1..=0x7F).contains(id) {
@@ -412,7 +418,7 @@ pub(super) fn checks(
         let tol = |t: &Option<S<f64>>, key: &str, default: f64| {
             t.as_ref().map_or(Ok(default), |t| ctx.non_negative(t, key))
         };
-        let mut push = |cond: MotorCond| out.push(Check::Motor { motor, cond });
+        let mut push = |cond: MotorCond| out.push(MotorCheck { motor, cond });
         if let Some(p) = &c.position_rad {
             push(MotorCond::Position(Near {
                 value: ctx.finite(p, "position_rad")?,
@@ -473,10 +479,7 @@ pub(super) fn checks(
                 "feedback",
             )?));
         }
-        if out
-            .iter()
-            .all(|check| !matches!(check, Check::Motor { motor: m, .. } if *m == motor))
-        {
+        if out.iter().all(|check| check.motor != motor) {
             return Err(ctx.err(
                 pos(conds),
                 format!("motor {motor} has no condition (for example `velocity_rad_s`, `mode_state`, `faults`)"),
@@ -490,9 +493,9 @@ pub(super) fn checks(
 mod tests {
     use std::path::Path;
 
+    use crate::devices::robstride::model::{MotorCheck, MotorCond, RsCommand};
     use crate::harness::model::{Check, DeviceKind, StepKind};
     use crate::harness::parse_scenario;
-    use crate::harness::robstride::{MotorCond, RsCommand};
 
     const BENCH: &str = "bench:\n  devices:\n    bus: {kind: robstride, motors: [{id: 1, model: RS03, load: {pendulum: {mass_kg: 1.0, length_m: 0.3}}}, {id: 2, model: RS00}]}\n";
 
@@ -522,7 +525,7 @@ mod tests {
         );
         assert_eq!(s.steps[0].label, "robstride velocity");
         let StepKind::Action {
-            action: crate::harness::model::Action::Robstride(a),
+            action: crate::devices::Action::Robstride(a),
             ..
         } = &s.steps[0].kind
         else {
@@ -534,10 +537,10 @@ mod tests {
             panic!("not wait_until");
         };
         // Flags come back in bit order whatever order the file lists them in.
-        assert!(checks.contains(&Check::Motor {
+        assert!(checks.contains(&Check::Robstride(MotorCheck {
             motor: 2,
             cond: MotorCond::StatusFaults(vec!["under_voltage", "stall_overload"])
-        }));
+        })));
     }
 
     #[test]
@@ -618,14 +621,45 @@ mod tests {
     #[test]
     fn piper_settings_on_a_robstride_bus_and_motors_on_a_piper_are_refused() {
         let text = "bench:\n  devices:\n    bus: {kind: robstride, firmware: S-V1.8-8, motors: [{id: 1, model: RS03}]}\nsteps:\n  - wait_ms: 1\n";
-        assert_eq!(
-            error_of(text),
-            "broken.yaml:3:38: `firmware` is a Piper setting; a robstride device takes `motors`"
+        let e = error_of(text);
+        assert!(
+            e.starts_with("broken.yaml:3:") && e.contains("`firmware`"),
+            "{e}"
         );
         let text = "bench:\n  devices:\n    arm: {kind: piper, motors: [{id: 1, model: RS03}]}\nsteps:\n  - wait_ms: 1\n";
+        let e = error_of(text);
+        assert!(
+            e.starts_with("broken.yaml:3:") && e.contains("`motors`"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn a_step_or_fault_aimed_at_the_wrong_kind_is_refused_at_its_position() {
+        let two = "bench:\n  devices:\n    arm: {kind: piper}\n    bus: {kind: robstride, motors: [{id: 1, model: RS03}]}\n";
+        let e = error_of(&format!(
+            "{two}steps:\n  - move_j: {{device: bus, joints_deg: [0, 0, 0, 0, 0, 0]}}\n"
+        ));
+        assert!(e.starts_with("broken.yaml:6:"), "{e}");
+        assert!(e.contains("device `bus` is a robstride"), "{e}");
+        let e = error_of(&format!(
+            "{two}steps:\n  - robstride: {{device: arm, motor: 1, do: enable}}\n"
+        ));
+        assert!(e.contains("device `arm` is a piper"), "{e}");
+        let e = error_of(&format!("{two}faults:\n  - {{at_ms: 5, device: arm, fault: {{robstride.stall_overload: {{motor: 1}}}}}}\nsteps:\n  - wait_ms: 1\n"));
+        assert!(e.starts_with("broken.yaml:6:"), "{e}");
+        assert!(e.contains("device `arm` is a piper"), "{e}");
+    }
+
+    #[test]
+    fn a_robstride_fault_is_scheduled_with_its_motor() {
+        let text = format!("{BENCH}faults:\n  - {{at_ms: 100, duration_ms: 50, fault: {{under_voltage: {{motor: 2}}}}}}\nsteps:\n  - wait_ms: 1\n");
+        let s = parse_scenario(Path::new("ok.yaml"), &text).expect("valid");
+        assert_eq!(s.faults.len(), 1);
+        assert_eq!(s.faults[0].fault.describe(), "under_voltage motor 2");
         assert_eq!(
-            error_of(text),
-            "broken.yaml:3:32: `motors` is a robstride setting; a piper device does not take it"
+            s.faults[0].duration,
+            Some(std::time::Duration::from_millis(50))
         );
     }
 }

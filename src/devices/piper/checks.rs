@@ -1,24 +1,7 @@
-//! Evaluate step conditions against an [`Observation`].
+//! Evaluate a Piper's conditions against its [`Observation`].
 
-use crate::harness::device::Observation;
-use crate::harness::model::Check;
-
-/// `Ok` when every check holds, else `(expected, actual)` for the first one that does not.
-pub(crate) fn evaluate(checks: &[Check], obs: &Observation) -> Result<(), (String, String)> {
-    for check in checks {
-        evaluate_one(check, obs)?;
-    }
-    Ok(())
-}
-
-/// Describe what every check wants (for timeouts).
-pub(crate) fn describe(checks: &[Check]) -> String {
-    checks
-        .iter()
-        .map(expected_text)
-        .collect::<Vec<_>>()
-        .join("; ")
-}
+use super::model::Check;
+use super::observe::Observation;
 
 fn fmt1(v: f64) -> String {
     let text = format!("{v:.1}");
@@ -47,7 +30,8 @@ fn opt_list(values: &[Option<f64>]) -> String {
     format!("[{}]", parts.join(", "))
 }
 
-fn expected_text(check: &Check) -> String {
+/// What a condition wants, for reports.
+pub(super) fn expected_text(check: &Check) -> String {
     match check {
         Check::JointsNear {
             targets_deg,
@@ -78,7 +62,6 @@ fn expected_text(check: &Check) -> String {
             format!("joint {joint} faults [{}]", flags.join(", "))
         }
         Check::GripperFaults(flags) => format!("gripper_faults [{}]", flags.join(", ")),
-        Check::Motor { motor, cond } => cond.expected_text(*motor),
     }
 }
 
@@ -143,7 +126,6 @@ fn actual_text(check: &Check, obs: &Observation) -> String {
             None => none(),
         },
         Check::GripperFaults(_) => format!("gripper_faults [{}]", obs.gripper_flags.join(", ")),
-        Check::Motor { motor, cond } => cond.actual_text(*motor, obs),
     }
 }
 
@@ -197,7 +179,6 @@ fn holds(check: &Check, obs: &Observation) -> bool {
             .get(usize::from(*joint) - 1)
             .is_some_and(|f| f == flags),
         Check::GripperFaults(flags) => obs.gripper_flags == *flags,
-        Check::Motor { motor, cond } => cond.holds(*motor, obs),
     }
 }
 
@@ -216,7 +197,8 @@ fn angle_diff(a: f64, b: f64) -> f64 {
     d.min(360.0 - d)
 }
 
-fn evaluate_one(check: &Check, obs: &Observation) -> Result<(), (String, String)> {
+/// `Ok` when the condition holds, else `(expected, actual)`.
+pub(super) fn evaluate_one(check: &Check, obs: &Observation) -> Result<(), (String, String)> {
     if holds(check, obs) {
         Ok(())
     } else {
@@ -245,7 +227,7 @@ mod tests {
             &check,
             &obs_with_joints([90.4, 33.0, 0.0, 0.0, 0.0, -0.2])
         ));
-        let err = evaluate(&[check], &obs_with_joints([89.0, 0.0, 0.0, 0.0, 0.0, 0.0]));
+        let err = evaluate_one(&check, &obs_with_joints([89.0, 0.0, 0.0, 0.0, 0.0, 0.0]));
         let (expected, actual) = err.expect_err("89.0 is 1° off");
         assert_eq!(expected, "joints_deg [90.0, ~, ~, ~, ~, 0.0] ± 0.5");
         assert_eq!(actual, "joints_deg [89.0, 0.0, 0.0, 0.0, 0.0, 0.0]");

@@ -9,8 +9,8 @@ use sim::piper::{
     FirmwareProfile, Flash, PiperConfig, PiperEmulator, PiperFault, PiperFaultKind, PiperHandle,
 };
 
+use super::device::EmulatorControl;
 use super::model::{EmulatorFault, NtcBoard, ObstacleShape, PiperSettings};
-use super::piper::EmulatorControl;
 
 /// A running in-process Piper emulator.
 pub(crate) struct PiperSim {

@@ -1,0 +1,70 @@
+//! RobStride actuators (`kind: robstride`): a bus of motors on the bench's CAN bus.
+
+mod device;
+pub mod model;
+mod observe;
+pub(crate) mod raw;
+mod trace;
+pub(crate) mod validate;
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use bus::CanBus;
+
+pub use model::{
+    MotorCheck as Check, RobstrideAction as Action, RobstrideSettings as Settings, RsFault as Fault,
+};
+pub use observe::{MotorObservation, Observation};
+
+use super::Wiring;
+use crate::harness::{Clock, Device, HOST_NODE};
+use device::RobstrideDevice;
+
+/// How long the RobStride driver waits for each reply (its default, before time scaling).
+const DRIVER_TIMEOUT: Duration = Duration::from_millis(20);
+
+/// Short description of a fault for logs and reports.
+pub fn describe_fault(fault: &Fault) -> String {
+    fault.describe()
+}
+
+/// What a condition wants, for reports.
+pub fn describe_check(check: &Check) -> String {
+    check.cond.expected_text(check.motor)
+}
+
+/// Why an action needs the in-process emulator, if it does.
+pub fn action_needs_emulator(action: &Action) -> Option<String> {
+    action
+        .command
+        .needs_emulator()
+        .then(|| format!("robstride `{}`", action.command.name()))
+}
+
+/// RobStride settings are all the emulator's (motors, models, loads), and a separate emulator
+/// process is configured on its own command line: none needs the in-process emulator.
+pub fn in_process_requirements(_settings: &Settings, _device: &str) -> Vec<String> {
+    Vec::new()
+}
+
+/// Start a RobStride bus: the emulator on the virtual bus (in-process runs) and the driver.
+pub(crate) async fn build(
+    name: &str,
+    settings: &Settings,
+    wiring: &Wiring<'_>,
+) -> Result<Arc<dyn Device>, String> {
+    let host: Arc<dyn CanBus> = match (wiring.bus, wiring.clock) {
+        (Some(bus), _) => Arc::new(bus.attach(HOST_NODE)),
+        (None, Clock::Iface(iface)) => crate::harness::bench::open_iface(iface, "driver")?,
+        (None, _) => return Err(format!("device `{name}`: no bus to attach to")),
+    };
+    Ok(Arc::new(RobstrideDevice::start(
+        name,
+        settings,
+        host,
+        wiring.bus,
+        wiring.bitrate_bps,
+        wiring.options.deadline(DRIVER_TIMEOUT),
+    )?))
+}

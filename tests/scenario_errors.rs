@@ -1,0 +1,130 @@
+//! Broken scenarios: their errors must name the file, line and column.
+
+use std::path::Path;
+
+use armhil::harness::parse_scenario;
+
+/// Parse `text` as `broken.yaml` and return the error's headline.
+fn error_of(text: &str) -> String {
+    match parse_scenario(Path::new("broken.yaml"), text) {
+        Ok(_) => panic!("scenario unexpectedly valid:\n{text}"),
+        Err(e) => e.scenario_error().expect("a scenario error").headline(),
+    }
+}
+
+const BENCH: &str = "bench:\n  devices:\n    arm: {kind: piper}\n";
+
+#[test]
+fn typo_in_a_key_names_the_key_and_the_valid_ones() {
+    let text =
+        format!("{BENCH}steps:\n  - move_j: {{joints_deg: [0, 0, 0, 0, 0, 0], sped_pct: 20}}\n");
+    assert_eq!(
+        error_of(&text),
+        "broken.yaml:5:46: unknown key `sped_pct`, expected one of device, id, timeout_ms, expect_error, joints_deg, speed_pct; did you mean `speed_pct`?"
+    );
+}
+
+#[test]
+fn typo_in_a_top_level_key_is_an_error() {
+    let text = format!("{BENCH}step:\n  - estop\n");
+    assert_eq!(
+        error_of(&text),
+        "broken.yaml:4:1: unknown key `step`, expected one of name, description, tags, bench, record, faults, steps; did you mean `steps`?"
+    );
+}
+
+#[test]
+fn unknown_action_lists_the_actions() {
+    let text = format!("{BENCH}steps:\n  - move_z: {{joints_deg: [0, 0, 0, 0, 0, 0]}}\n");
+    let e = error_of(&text);
+    assert!(
+        e.starts_with(
+            "broken.yaml:5:5: unknown step `move_z`; expected one of: wait_ms, inject, clear_faults, expect, wait_until, enable, disable"
+        ),
+        "{e}"
+    );
+}
+
+#[test]
+fn wrong_type_says_what_was_expected() {
+    let text = format!("{BENCH}steps:\n  - wait_ms: soon\n");
+    assert_eq!(error_of(&text), "broken.yaml:5:14: expected a whole number");
+    let text = format!("{BENCH}steps:\n  - move_j: {{joints_deg: 90}}\n");
+    assert_eq!(
+        error_of(&text),
+        "broken.yaml:5:26: expected a list ([a, b, ...])"
+    );
+}
+
+#[test]
+fn unknown_device_names_the_bench_devices() {
+    let text = format!("{BENCH}steps:\n  - estop: {{device: left_arm}}\n");
+    assert_eq!(
+        error_of(&text),
+        "broken.yaml:5:21: unknown device `left_arm`; the bench has: arm"
+    );
+}
+
+#[test]
+fn negative_timeout_is_rejected() {
+    let text = format!("{BENCH}steps:\n  - wait_until: {{enabled: true, timeout_ms: -50}}\n");
+    assert_eq!(
+        error_of(&text),
+        "broken.yaml:5:45: `timeout_ms` must be >= 0 (milliseconds), got -50"
+    );
+}
+
+#[test]
+fn out_of_range_joint_index_is_rejected() {
+    let text = format!("{BENCH}steps:\n  - inject: {{fault: {{comm_loss: {{joint: 7}}}}}}\n");
+    assert_eq!(
+        error_of(&text),
+        "broken.yaml:5:41: `joint`: joint index 7 out of range, expected 1..=6"
+    );
+}
+
+#[test]
+fn wrong_number_of_joints_is_rejected() {
+    let text = format!("{BENCH}steps:\n  - move_j: {{joints_deg: [1, 2, 3]}}\n");
+    assert_eq!(
+        error_of(&text),
+        "broken.yaml:5:26: `joints_deg` needs exactly 6 numbers, got 3"
+    );
+}
+
+#[test]
+fn fault_schedule_must_refer_to_a_known_step() {
+    let text = format!("{BENCH}faults:\n  - {{after: mvoe, fault: estop}}\nsteps:\n  - move_j: {{joints_deg: [0, 0, 0, 0, 0, 0], id: move}}\n");
+    assert_eq!(
+        error_of(&text),
+        "broken.yaml:5:13: `after`: no step has id `mvoe` (step ids: move)"
+    );
+}
+
+#[test]
+fn unknown_firmware_lists_the_emulated_ones() {
+    let text =
+        "bench:\n  devices:\n    arm: {kind: piper, firmware: S-V9.9-9}\nsteps:\n  - estop\n";
+    let e = error_of(text);
+    assert!(e.starts_with("broken.yaml:3:34: `firmware`: unknown Piper firmware `S-V9.9-9`; the emulator implements: S-V1.5-8"), "{e}");
+}
+
+#[test]
+fn vcan_tag_refuses_in_process_features() {
+    let text = format!("tags: [vcan]\n{BENCH}steps:\n  - inject: {{fault: estop}}\n");
+    assert_eq!(
+        error_of(&text),
+        "broken.yaml:1:8: tagged `vcan` but needs the in-process emulator: inject `estop` (line 6)"
+    );
+}
+
+#[test]
+fn error_display_shows_the_source_line_with_a_caret() {
+    let text = format!("{BENCH}steps:\n  - estop: {{device: left_arm}}\n");
+    let e = parse_scenario(Path::new("broken.yaml"), &text).expect_err("invalid");
+    let shown = e.to_string();
+    assert!(
+        shown.contains("5 |   - estop: {device: left_arm}\n  |                     ^"),
+        "{shown}"
+    );
+}
