@@ -394,3 +394,68 @@ async fn abrupt_disconnects_mid_reply_do_not_disturb_other_clients() {
     assert_eq!(emu.connections(), 1, "the rude clients were cleaned up");
     emu.shutdown().await;
 }
+
+#[tokio::test(start_paused = true)]
+async fn power_loss_aborts_the_move_and_power_on_recovers() {
+    let emu = emulator().await;
+    let mut c = client(&emu);
+    c.ask(r#"{"command":"movej","joint":[60000,0,0,0,0,0],"v":20,"r":0,"trajectory_connect":0}"#)
+        .await;
+    tokio::time::sleep(Duration::from_millis(200)).await;
+    emu.inject(RealmanFault::PowerLoss).unwrap();
+    let event = c.json(SHORT).await.expect("event");
+    assert_eq!(event["trajectory_state"], false);
+    let power = c.ask(r#"{"command":"get_arm_power_state"}"#).await;
+    assert_eq!(power["power_state"], 0);
+    let en = c.ask(r#"{"command":"get_joint_en_state"}"#).await;
+    assert_eq!(en["en_state"], json!([0, 0, 0, 0, 0, 0]));
+    let on = c.ask(r#"{"command":"set_arm_power","arm_power":1}"#).await;
+    assert_eq!(on["arm_power"], true);
+    let ok = c
+        .ask(r#"{"command":"movej","joint":[0,0,0,0,0,0],"v":20,"r":0,"trajectory_connect":0}"#)
+        .await;
+    assert_eq!(ok["receive_state"], true);
+}
+
+#[tokio::test(start_paused = true)]
+async fn estop_refuses_moves_until_released_and_cleared() {
+    let emu = emulator().await;
+    let mut c = client(&emu);
+    emu.inject(RealmanFault::EStop).unwrap();
+    let refused = c
+        .ask(r#"{"command":"movej","joint":[10000,0,0,0,0,0],"v":20,"r":0,"trajectory_connect":0}"#)
+        .await;
+    assert_eq!(refused["receive_state"], false);
+    c.ask(r#"{"command":"clear_system_err"}"#).await;
+    let state = c.ask(r#"{"command":"get_current_arm_state"}"#).await;
+    assert_eq!(
+        state["arm_state"]["err"],
+        json!([4112]),
+        "e-stop error stays while pressed"
+    );
+    emu.clear(RealmanFaultKind::EStop);
+    c.ask(r#"{"command":"clear_system_err"}"#).await;
+    let ok = c
+        .ask(r#"{"command":"movej","joint":[10000,0,0,0,0,0],"v":20,"r":0,"trajectory_connect":0}"#)
+        .await;
+    assert_eq!(ok["receive_state"], true);
+}
+
+#[tokio::test(start_paused = true)]
+async fn gripper_fault_makes_gripper_commands_answer_false() {
+    let emu = emulator().await;
+    let mut c = client(&emu);
+    emu.inject(RealmanFault::GripperFault { bits: 0x01 })
+        .unwrap();
+    let ack = c
+        .ask(r#"{"command":"set_gripper_position","position":500,"block":true}"#)
+        .await;
+    assert_eq!(ack, json!({"command":"set_gripper","state":false}));
+    let state = c.ask(r#"{"command":"get_gripper_state"}"#).await;
+    assert_eq!(state["error"], 1);
+    emu.clear(RealmanFaultKind::GripperFault);
+    let ack = c
+        .ask(r#"{"command":"set_gripper_position","position":500,"block":false}"#)
+        .await;
+    assert_eq!(ack["state"], true);
+}

@@ -96,7 +96,7 @@ def test_blocking_movej_arrives_at_the_target(arm):
     assert arm.rm_movej(target, 50, 0, 0, 1) == 0
     q, _, err = joints(arm)
     assert q == pytest.approx(target, abs=0.05)
-    assert err["err"] == ["0"]
+    assert all(code == "0" for code in err["err"]), err
 
 
 def test_blocking_movel_arrives_at_the_pose(arm):
@@ -149,6 +149,21 @@ def test_realtime_push_reaches_the_callback(arm):
     # cycle 1 = every 5 ms = 200 per second; allow for scheduling on a busy machine.
     assert count > 120, f"{count} datagrams in 1 s"
     assert codes == {0}, f"callback error codes {codes}"
+
+
+def test_gripper_blocking_move_and_state(arm):
+    assert arm.rm_set_gripper_position(300, True, 5) == 0
+    code, state = arm.rm_get_gripper_state()
+    assert code == 0 and state["actpos"] == 300
+
+
+def test_motion_parameters_round_trip(arm):
+    assert arm.rm_set_arm_max_line_speed(0.5) == 0
+    assert arm.rm_get_arm_max_line_speed() == (0, pytest.approx(0.5))
+    assert arm.rm_set_arm_tcp_init() == 0  # wire command set_arm_init
+    assert arm.rm_get_arm_max_line_speed() == (0, pytest.approx(0.25))
+    assert arm.rm_set_collision_state(3) == 0
+    assert arm.rm_get_collision_stage() == (0, 3)
 
 
 def raw_request(port, payload: bytes, timeout=2.0):

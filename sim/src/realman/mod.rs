@@ -7,6 +7,32 @@
 //!   virtual time, request framing ([`framing`]), per-client reply streams, the UDP push
 //!   ([`push`]) and transport faults ([`faults`]).
 //!
+//! # Harness API
+//!
+//! ```no_run
+//! # async fn demo() -> Result<(), Box<dyn std::error::Error>> {
+//! use sim::realman::model::ArmModel;
+//! use sim::realman::{ControllerConfig, EmulatorConfig, RealmanEmulator, RealmanFault, Transport};
+//! use tokio::io::AsyncWriteExt;
+//!
+//! // Virtual time (paused clock): in-memory streams, datagrams on a channel.
+//! let emu = RealmanEmulator::spawn(
+//!     EmulatorConfig::new(ControllerConfig::new(ArmModel::rm65b())),
+//!     Transport::InMemory,
+//! )
+//! .await?;
+//! let mut stream = emu.connect("192.168.1.10".parse()?)?;
+//! stream.write_all(b"{\"command\":\"get_joint_degree\"}\r\n").await?;
+//! let mut datagrams = emu.take_datagrams().expect("in-memory push");
+//! emu.inject(RealmanFault::Collision)?;
+//! println!("{:?} {:?}", emu.snapshot().joints_rad, datagrams.recv().await);
+//! emu.shutdown().await;
+//! # Ok(()) }
+//! ```
+//!
+//! `Transport::Tcp(addr)` serves the same controller on a real TCP listener (and pushes over
+//! UDP) for external clients such as the vendor SDK (`armhil sim realman`).
+//!
 //! The motion core is independent of the wire protocol:
 //!
 //! - [`model`]: the arm models (MDH table, flange, joint ranges, speeds, masses).

@@ -18,6 +18,9 @@
 //!   segment's deceleration and the next one's acceleration, and the joint *displacements* of
 //!   both are added in that window. The arm never stops at the junction, the corner is rounded,
 //!   and with `r = 0` the segments simply run back to back. Splines are never blended (§3).
+//!   In the overlap a joint moving the same way in both segments can briefly exceed either
+//!   segment's own peak speed (at most their sum); the Cartesian path leaves the two lines
+//!   there, which is what a blend radius is for.
 
 use nalgebra::Isometry3;
 
