@@ -34,6 +34,39 @@ pub enum Phase {
 }
 
 impl Fault {
+    /// Every fault the emulator can inject.
+    pub const ALL: [Fault; 9] = [
+        Fault::OverTemperature,
+        Fault::UnderVoltage,
+        Fault::OverVoltage,
+        Fault::PhaseOverCurrent(Phase::A),
+        Fault::PhaseOverCurrent(Phase::B),
+        Fault::PhaseOverCurrent(Phase::C),
+        Fault::EncoderNotCalibrated,
+        Fault::StallOverload,
+        Fault::GateDriver,
+    ];
+
+    /// The fault's name in scenario files, logs and reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Fault::OverTemperature => "over_temperature",
+            Fault::UnderVoltage => "under_voltage",
+            Fault::OverVoltage => "over_voltage",
+            Fault::PhaseOverCurrent(Phase::A) => "phase_a_over_current",
+            Fault::PhaseOverCurrent(Phase::B) => "phase_b_over_current",
+            Fault::PhaseOverCurrent(Phase::C) => "phase_c_over_current",
+            Fault::EncoderNotCalibrated => "encoder_not_calibrated",
+            Fault::StallOverload => "stall_overload",
+            Fault::GateDriver => "gate_driver",
+        }
+    }
+
+    /// The fault with this [`name`](Fault::name).
+    pub fn from_name(name: &str) -> Option<Fault> {
+        Fault::ALL.into_iter().find(|f| f.name() == name)
+    }
+
     /// The bit of the type-21 fault word (spec §9.1).
     pub fn word_bit(self) -> u32 {
         match self {
@@ -84,6 +117,18 @@ pub fn status_bits(fault_word: u32) -> u8 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn every_fault_has_its_own_name_and_word_bit() {
+        for (i, a) in Fault::ALL.iter().enumerate() {
+            assert_eq!(Fault::from_name(a.name()), Some(*a));
+            for b in &Fault::ALL[i + 1..] {
+                assert_ne!(a.name(), b.name());
+                assert_ne!(a.word_bit(), b.word_bit());
+            }
+        }
+        assert_eq!(Fault::from_name("melted"), None);
+    }
 
     #[test]
     fn status_bits_follow_the_documented_mapping() {

@@ -222,28 +222,6 @@ pub const PARAMS: [(Param, &str); 29] = [
     (Param::DccSet, "dcc_set"),
 ];
 
-/// Names of the emulator faults (`fault:`).
-pub const FAULTS: [(Fault, &str); 9] = [
-    (Fault::OverTemperature, "over_temperature"),
-    (Fault::UnderVoltage, "under_voltage"),
-    (Fault::OverVoltage, "over_voltage"),
-    (
-        Fault::PhaseOverCurrent(sim::robstride::Phase::A),
-        "phase_a_over_current",
-    ),
-    (
-        Fault::PhaseOverCurrent(sim::robstride::Phase::B),
-        "phase_b_over_current",
-    ),
-    (
-        Fault::PhaseOverCurrent(sim::robstride::Phase::C),
-        "phase_c_over_current",
-    ),
-    (Fault::EncoderNotCalibrated, "encoder_not_calibrated"),
-    (Fault::StallOverload, "stall_overload"),
-    (Fault::GateDriver, "gate_driver"),
-];
-
 /// Names of the status-frame fault bits (bits 16..21), in bit order.
 pub const STATUS_FAULTS: [&str; 6] = [
     "under_voltage",
@@ -322,10 +300,7 @@ impl RsFault {
     }
 }
 
-/// The scenario name of an emulator fault.
+/// The scenario name of an emulator fault: the emulator's own.
 pub fn fault_name(fault: Fault) -> &'static str {
-    FAULTS
-        .iter()
-        .find(|(f, _)| *f == fault)
-        .map_or("fault", |(_, n)| n)
+    fault.name()
 }

@@ -150,13 +150,16 @@ pub(crate) struct RawFault {
 
 impl crate::harness::onekey::OneKey for RawFault {
     fn keys() -> Vec<&'static str> {
-        super::model::FAULTS.iter().map(|(_, n)| *n).collect()
+        sim::robstride::Fault::ALL
+            .iter()
+            .map(|f| f.name())
+            .collect()
     }
 
     fn bare<E: serde::de::Error>(key: &str) -> Option<Result<Self, E>> {
-        let (fault, _) = super::model::FAULTS.iter().find(|(_, n)| *n == key)?;
+        let fault = sim::robstride::Fault::from_name(key)?;
         Some(Ok(Self {
-            fault: *fault,
+            fault,
             args: RawFaultArgs::default(),
         }))
     }
@@ -165,9 +168,9 @@ impl crate::harness::onekey::OneKey for RawFault {
         key: &str,
         map: &mut A,
     ) -> Option<Result<Self, A::Error>> {
-        let (fault, _) = super::model::FAULTS.iter().find(|(_, n)| *n == key)?;
+        let fault = sim::robstride::Fault::from_name(key)?;
         Some(map.next_value::<Option<RawFaultArgs>>().map(|args| Self {
-            fault: *fault,
+            fault,
             args: args.unwrap_or_default(),
         }))
     }

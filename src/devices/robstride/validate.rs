@@ -5,11 +5,11 @@ use std::collections::BTreeMap;
 use std::time::Duration;
 
 use driver::robstride::OpControl;
-use sim::robstride::{Load, Model, MotorConfig};
+use sim::robstride::{Fault, Load, Model, MotorConfig};
 
 use super::model::{
-    MotorCheck, MotorCond, RobstrideAction, RobstrideSettings, RsCommand, RsFault, FAULTS,
-    FEEDBACK_KINDS, MODE_STATES, PARAMS, REPORT_FLAGS, RUN_MODES, STATUS_FAULTS,
+    MotorCheck, MotorCond, RobstrideAction, RobstrideSettings, RsCommand, RsFault, FEEDBACK_KINDS,
+    MODE_STATES, PARAMS, REPORT_FLAGS, RUN_MODES, STATUS_FAULTS,
 };
 use super::raw::{RawConds, RawFault, RawMotorConds, RawRsLoad, RawRsStep, RawSettings, RawStep};
 use crate::devices::Action;
@@ -233,7 +233,8 @@ fn robstride_step(ctx: &Ctx<'_>, a: &RawRsStep, at: Pos) -> Res<(&'static str, S
     };
     let fault = |v: &Option<S<String>>| {
         let v = ctx.required(v, "fault", name, at)?;
-        ctx.choice(v, "fault", &FAULTS)
+        let names: Vec<(Fault, &str)> = Fault::ALL.iter().map(|f| (*f, f.name())).collect();
+        ctx.choice(v, "fault", &names)
     };
     let command = match name {
         "enable" => RsCommand::Enable,
