@@ -27,6 +27,7 @@ use crate::harness::validate::{Ctx, Res};
 use crate::harness::{Clock, RunOptions};
 
 pub mod piper;
+pub mod realman;
 pub mod robstride;
 
 /// What a kind's `build` gets: the scenario's clock and options, and, for CAN devices, the
@@ -323,6 +324,7 @@ fn for_kind<'k>(kind: &str, key: &'k str) -> Option<&'k str> {
 device_kinds! {
     "piper" => Piper(piper),
     "robstride" => Robstride(robstride),
+    "realman" => Realman(realman),
 }
 
 impl<'de> Deserialize<'de> for RawDevice {

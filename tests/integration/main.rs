@@ -2,4 +2,5 @@
 
 mod deps;
 mod piper_flow;
+mod realman_flow;
 mod robstride_flow;

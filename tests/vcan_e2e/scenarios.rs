@@ -106,8 +106,9 @@ fn firmware_of(file: &Path) -> String {
         .iter()
         .map(|d| match &d.kind {
             DeviceKind::Piper(p) => p.firmware.clone(),
-            // RobStride scenarios are not tagged `vcan` (they need the in-process emulator).
-            DeviceKind::Robstride(_) => String::new(),
+            // RobStride and Realman scenarios are not tagged `vcan` (they need the in-process
+            // emulator; a Realman arm is not on CAN at all).
+            DeviceKind::Robstride(_) | DeviceKind::Realman(_) => String::new(),
         })
         .next()
         .expect("one device")

@@ -1,0 +1,256 @@
+//! The Realman kind's validated vocabulary: settings, the `realman` step's commands, the arm
+//! conditions and the emulator faults (the emulator's own fault list and descriptions).
+
+use sim::realman::{RealmanFault, RealmanFaultKind};
+
+use crate::harness::model::Near;
+
+/// Settings of a `realman` bench device.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RealmanSettings {
+    /// Product name (`RM65-B`, `RM75-B`).
+    pub model: &'static str,
+    /// Boot pose, degrees (`None`: all zero).
+    pub initial_joints_deg: Option<Vec<f64>>,
+    /// Whether a gripper is mounted.
+    pub gripper: bool,
+    /// TCP connections the driver opens (steps choose one with `client:`).
+    pub clients: usize,
+}
+
+/// Model names a scenario may give.
+pub const MODELS: [(&str, &str); 2] = [("RM65-B", "RM65-B"), ("RM75-B", "RM75-B")];
+
+/// Motion options of a planned move.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Motion {
+    /// Speed, % of the maximum.
+    pub speed: u8,
+    /// Blend radius, %.
+    pub blend: u8,
+    /// Queue with the next move (`trajectory_connect` 1) instead of starting.
+    pub queue: bool,
+    /// Wait for the arrival event.
+    pub block: bool,
+}
+
+/// A pose: position (m) and Z-Y-X Euler angles (degrees).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PoseDeg {
+    /// x, y, z, m.
+    pub position_m: [f64; 3],
+    /// rx, ry, rz, degrees.
+    pub euler_deg: [f64; 3],
+}
+
+/// One `realman` step.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RealmanAction {
+    /// Which connection sends it (0-based).
+    pub client: usize,
+    /// What to do.
+    pub command: RmCommand,
+}
+
+/// Commands of the `realman` step.
+#[derive(Debug, Clone, PartialEq)]
+pub enum RmCommand {
+    /// The connect handshake (11 queries).
+    Handshake,
+    /// `movej` to joint angles (degrees).
+    MoveJ(Vec<f64>, Motion),
+    /// `movel` to a pose.
+    MoveL(PoseDeg, Motion),
+    /// `movej_p` to a pose.
+    MoveJP(PoseDeg, Motion),
+    /// `movec` through `via` to `to`.
+    MoveC {
+        /// Via pose.
+        via: PoseDeg,
+        /// End pose.
+        to: PoseDeg,
+        /// Extra turns.
+        loops: u32,
+        /// Options.
+        motion: Motion,
+    },
+    /// Quick stop.
+    Stop,
+    /// Slow stop.
+    SlowStop,
+    /// Pause on the path.
+    Pause,
+    /// Continue after a pause.
+    Continue,
+    /// Delete every queued move (after a pause).
+    DeleteTrajectories,
+    /// Clear the controller's errors.
+    ClearErrors,
+    /// Arm power on / off.
+    Power(bool),
+    /// Realtime push period and enable.
+    Push {
+        /// Period, ms (multiple of 5).
+        period_ms: u32,
+        /// On or off.
+        enable: bool,
+    },
+    /// Gripper to an opening 1–1000.
+    GripperPosition {
+        /// Opening.
+        position: u16,
+        /// Wait for the arrival event.
+        block: bool,
+    },
+    /// Gripper force pick.
+    GripperPick {
+        /// Speed 1–1000.
+        speed: u16,
+        /// Force 50–1000.
+        force: u16,
+        /// Wait.
+        block: bool,
+    },
+    /// Gripper release.
+    GripperRelease {
+        /// Speed 1–1000.
+        speed: u16,
+        /// Wait.
+        block: bool,
+    },
+    /// Read the gripper opening (and compare it with an expectation).
+    ReadGripper {
+        /// Expected opening.
+        expect: Option<Near>,
+    },
+    /// Hand posture 1–40.
+    HandPosture {
+        /// Posture number.
+        posture: u8,
+        /// Wait.
+        block: bool,
+    },
+    /// Hand finger angles 0–1000 (−1 keeps a finger).
+    HandAngles {
+        /// Six fingers.
+        angles: [Option<u16>; 6],
+        /// Wait.
+        block: bool,
+    },
+    /// Read the joint angles over TCP (`get_joint_degree`).
+    ReadJoints,
+    /// Open the connection again after a drop.
+    Reconnect,
+}
+
+impl RmCommand {
+    /// The command's name as written after `do:`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Handshake => "handshake",
+            Self::MoveJ(..) => "movej",
+            Self::MoveL(..) => "movel",
+            Self::MoveJP(..) => "movej_p",
+            Self::MoveC { .. } => "movec",
+            Self::Stop => "stop",
+            Self::SlowStop => "slow_stop",
+            Self::Pause => "pause",
+            Self::Continue => "continue",
+            Self::DeleteTrajectories => "delete_trajectories",
+            Self::ClearErrors => "clear_errors",
+            Self::Power(_) => "power",
+            Self::Push { .. } => "push",
+            Self::GripperPosition { .. } => "gripper_position",
+            Self::GripperPick { .. } => "gripper_pick",
+            Self::GripperRelease { .. } => "gripper_release",
+            Self::ReadGripper { .. } => "read_gripper",
+            Self::HandPosture { .. } => "hand_posture",
+            Self::HandAngles { .. } => "hand_angles",
+            Self::ReadJoints => "read_joints",
+            Self::Reconnect => "reconnect",
+        }
+    }
+}
+
+/// `arm_state` names: the push's `arm_current_status` strings.
+pub const ARM_STATES: [&str; 15] = [
+    "idle",
+    "move_L",
+    "move_J",
+    "move_C",
+    "move_S",
+    "move_through_joint",
+    "move_through_pose",
+    "move_through_force_pose",
+    "move_through_current",
+    "stop",
+    "slow_stop",
+    "pause",
+    "current_drag",
+    "sensor_drag",
+    "tech_demonstration",
+];
+
+/// Controller error names (`errors:`) and their codes (docs/protocols/realman.md §12).
+pub const ERRORS: [(&str, u32); 12] = [
+    ("joint_comms", 0x1001),
+    ("beyond_joint_limit", 0x1002),
+    ("unreachable", 0x1003),
+    ("over_speed", 0x1009),
+    ("brake_not_released", 0x100B),
+    ("collision", 0x100D),
+    ("no_work_frame", 0x100E),
+    ("no_tool_frame", 0x100F),
+    ("joint_disabled", 0x1010),
+    ("arc_planning", 0x1011),
+    ("self_collision", 0x1012),
+    ("gripper", 0x2001),
+];
+
+/// A condition on the arm.
+#[derive(Debug, Clone, PartialEq)]
+pub enum RmCond {
+    /// Every joint within the tolerance of its angle (degrees).
+    Joints(Vec<f64>, f64),
+    /// Flange position within a distance (m).
+    Position([f64; 3], f64),
+    /// The push's motion status.
+    ArmState(&'static str),
+    /// Exactly these controller errors (by name).
+    Errors(Vec<&'static str>),
+    /// Per-joint enable flags.
+    Enabled(Vec<bool>),
+    /// Push datagrams over the last second.
+    PushHz(Near),
+    /// Every driver connection up (or not).
+    Connected(bool),
+}
+
+/// A Realman emulator fault: the emulator's own value.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RmFault(pub RealmanFault);
+
+impl RmFault {
+    /// Short description for logs and reports: the fault's name, its values and the emulator's
+    /// description of its wire effect.
+    pub fn describe(&self) -> String {
+        let values = match &self.0 {
+            RealmanFault::ReplyDelay { delay_ms } => format!(" {delay_ms} ms"),
+            RealmanFault::MalformedReply { count } => format!(" x{count}"),
+            RealmanFault::UdpLoss { permille } => format!(" {permille}‰"),
+            RealmanFault::JointError { joint, code } => format!(" joint {joint} 0x{code:04X}"),
+            RealmanFault::GripperFault { bits } => format!(" bits 0x{bits:02X}"),
+            _ => String::new(),
+        };
+        format!(
+            "{}{values} ({})",
+            self.0.name(),
+            self.0.kind().description()
+        )
+    }
+
+    /// The fault's kind.
+    pub fn kind(&self) -> RealmanFaultKind {
+        self.0.kind()
+    }
+}
