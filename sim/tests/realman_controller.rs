@@ -413,3 +413,60 @@ async fn a_blend_radius_joins_connected_moves_without_stopping() {
         "blended {blended:?} vs stopping {stop_between:?}"
     );
 }
+
+/// Largest joint change between two poses, degrees.
+fn max_change_deg(a_rad: &[f64], b_rad: &[f64]) -> f64 {
+    a_rad
+        .iter()
+        .zip(b_rad)
+        .map(|(a, b)| (a - b).abs().to_degrees())
+        .fold(0.0, f64::max)
+}
+
+#[tokio::test(start_paused = true)]
+async fn joint_error_mid_move_aborts_and_the_arm_holds_where_it_stopped_until_and_after_clear() {
+    let emu = emulator().await;
+    let mut c = client(&emu);
+    // J2, J3 and J5 (the parallel axes) all move, so every coupling between them is loaded.
+    let ack = c
+        .ask(r#"{"command":"movej","joint":[20000,40000,60000,0,45000,0],"v":20,"r":0,"trajectory_connect":0}"#)
+        .await;
+    assert_eq!(ack["receive_state"], true);
+    tokio::time::sleep(Duration::from_millis(300)).await;
+    let moving = emu.snapshot();
+    assert!(
+        moving.speeds_rad_s.iter().any(|v| v.abs() > 0.1),
+        "the arm should be mid-move: {:?}",
+        moving.speeds_rad_s
+    );
+    emu.inject(sim::realman::RealmanFault::JointError {
+        joint: 3,
+        code: 0x0008,
+    })
+    .unwrap();
+    let at_fault = emu.snapshot().joints_rad;
+    let (event, _) = wait_event(&mut c, SHORT).await;
+    assert_eq!(
+        event.expect("abort event"),
+        json!({"state":"current_trajectory_state","trajectory_state":false,"device":0,"trajectory_connect":0})
+    );
+    tokio::time::sleep(Duration::from_secs(2)).await;
+    let held = emu.snapshot();
+    assert_eq!(held.enabled, vec![true, true, false, true, true, true]);
+    let drift = max_change_deg(&held.joints_rad, &at_fault);
+    assert!(
+        drift < 0.5,
+        "joints moved {drift:.3}° while J3 was faulted: {at_fault:?} → {:?}",
+        held.joints_rad
+    );
+    emu.clear(sim::realman::RealmanFaultKind::JointError);
+    tokio::time::sleep(Duration::from_secs(2)).await;
+    let cleared = emu.snapshot();
+    assert!(cleared.enabled.iter().all(|e| *e), "{:?}", cleared.enabled);
+    let drift = max_change_deg(&cleared.joints_rad, &at_fault);
+    assert!(
+        drift < 0.5,
+        "joints moved {drift:.3}° after the clear: {at_fault:?} → {:?}",
+        cleared.joints_rad
+    );
+}
