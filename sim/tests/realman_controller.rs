@@ -413,3 +413,75 @@ async fn a_blend_radius_joins_connected_moves_without_stopping() {
         "blended {blended:?} vs stopping {stop_between:?}"
     );
 }
+
+/// Largest joint change between two poses, degrees.
+fn max_change_deg(a_rad: &[f64], b_rad: &[f64]) -> f64 {
+    a_rad
+        .iter()
+        .zip(b_rad)
+        .map(|(a, b)| (a - b).abs().to_degrees())
+        .fold(0.0, f64::max)
+}
+
+/// The largest joint change from `from_rad` seen over `span`, sampling the ground truth every
+/// 5 ms (so a transient swing counts, not only where the arm ends up), and the last pose.
+async fn max_excursion_deg(
+    emu: &sim::realman::RealmanHandle,
+    from_rad: &[f64],
+    span: Duration,
+) -> (f64, Vec<f64>) {
+    let step = Duration::from_millis(5);
+    let mut worst = 0.0_f64;
+    let mut last = from_rad.to_vec();
+    for _ in 0..span.as_millis() / step.as_millis() {
+        tokio::time::sleep(step).await;
+        last = emu.snapshot().joints_rad;
+        worst = worst.max(max_change_deg(&last, from_rad));
+    }
+    (worst, last)
+}
+
+#[tokio::test(start_paused = true)]
+async fn joint_error_mid_move_aborts_and_the_arm_holds_where_it_stopped_until_and_after_clear() {
+    let emu = emulator().await;
+    let mut c = client(&emu);
+    // J2, J3 and J5 (the parallel axes) all move, so every coupling between them is loaded.
+    let ack = c
+        .ask(r#"{"command":"movej","joint":[20000,40000,60000,0,45000,0],"v":20,"r":0,"trajectory_connect":0}"#)
+        .await;
+    assert_eq!(ack["receive_state"], true);
+    tokio::time::sleep(Duration::from_millis(300)).await;
+    let moving = emu.snapshot();
+    assert!(
+        moving.speeds_rad_s.iter().any(|v| v.abs() > 0.1),
+        "the arm should be mid-move: {:?}",
+        moving.speeds_rad_s
+    );
+    emu.inject(sim::realman::RealmanFault::JointError {
+        joint: 3,
+        code: 0x0008,
+    })
+    .unwrap();
+    let at_fault = emu.snapshot().joints_rad;
+    let (event, _) = wait_event(&mut c, SHORT).await;
+    assert_eq!(
+        event.expect("abort event"),
+        json!({"state":"current_trajectory_state","trajectory_state":false,"device":0,"trajectory_connect":0})
+    );
+    let (drift, held) = max_excursion_deg(&emu, &at_fault, Duration::from_secs(2)).await;
+    assert_eq!(
+        emu.snapshot().enabled,
+        vec![true, true, false, true, true, true]
+    );
+    assert!(
+        drift < 0.5,
+        "joints moved up to {drift:.3}° while J3 was faulted: {at_fault:?} → {held:?}"
+    );
+    emu.clear(sim::realman::RealmanFaultKind::JointError);
+    let (drift, cleared) = max_excursion_deg(&emu, &at_fault, Duration::from_secs(2)).await;
+    assert!(emu.snapshot().enabled.iter().all(|e| *e));
+    assert!(
+        drift < 0.5,
+        "joints moved up to {drift:.3}° after the clear: {at_fault:?} → {cleared:?}"
+    );
+}

@@ -239,9 +239,7 @@ impl Controller {
         if self.can_hold() {
             self.tick_motion();
         } else {
-            // Unpowered or stopped arm: the set-point follows the arm so that power-on or
-            // re-enable never jumps.
-            self.setpoint_rad = self.plant.positions_rad();
+            self.hold_where_stopped();
         }
         self.tick_effectors();
         let speeds: Vec<f64> = self
@@ -253,6 +251,21 @@ impl Controller {
         self.plant.set_target(&self.setpoint_rad, &speeds);
         self.plant.step();
         self.prev_setpoint_rad.clone_from(&self.setpoint_rad);
+    }
+
+    /// The set-point while the arm cannot follow a motion (a joint disabled, power off,
+    /// emergency stop). A braked joint's set-point follows the arm, so that re-enabling it
+    /// never jumps. A joint still under servo keeps the set-point it had when the motion
+    /// stopped: it holds that position. Following the arm there too would make the reference
+    /// the arm's own state — no stiffness, and the speed feed-forward (the set-point's
+    /// change) would echo the arm's own motion, so a joint that was moving would keep going.
+    fn hold_where_stopped(&mut self) {
+        let measured = self.plant.positions_rad();
+        for (j, (setpoint, q)) in self.setpoint_rad.iter_mut().zip(measured).enumerate() {
+            if self.plant.is_braked(j) {
+                *setpoint = q;
+            }
+        }
     }
 
     /// Messages produced since the last call (arrival events), oldest first.
