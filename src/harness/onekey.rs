@@ -140,3 +140,51 @@ macro_rules! one_key_enum {
 }
 
 pub(crate) use one_key_enum;
+
+/// A vocabulary whose names come from elsewhere (an emulator's fault table): every value, its
+/// scenario name, and the value of a name. Implemented for each emulator's fault kind so that
+/// the emulator's table is the one description of its faults.
+pub(crate) trait NamedKind: Copy + Sized + 'static {
+    /// Every value, in the table's order.
+    fn all() -> &'static [Self];
+    /// The scenario name of `self`.
+    fn name(self) -> &'static str;
+    /// The value named `name`, if any.
+    fn from_name(name: &str) -> Option<Self>;
+}
+
+/// `name: {args}` (or a bare `name`, taking `A::default()`) where `name` is one of a
+/// [`NamedKind`]'s names: how a device kind reads its emulator's faults.
+#[derive(Debug)]
+pub(crate) struct NamedEntry<K, A> {
+    /// Which one.
+    pub kind: K,
+    /// Its arguments as written.
+    pub args: A,
+}
+
+impl<K, A> OneKey for NamedEntry<K, A>
+where
+    K: NamedKind,
+    A: Default + for<'de> serde::Deserialize<'de>,
+{
+    fn keys() -> Vec<&'static str> {
+        K::all().iter().map(|k| k.name()).collect()
+    }
+
+    fn bare<E: Error>(key: &str) -> Option<Result<Self, E>> {
+        let kind = K::from_name(key)?;
+        Some(Ok(Self {
+            kind,
+            args: A::default(),
+        }))
+    }
+
+    fn entry<'de, M: MapAccess<'de>>(key: &str, map: &mut M) -> Option<Result<Self, M::Error>> {
+        let kind = K::from_name(key)?;
+        Some(map.next_value::<Option<A>>().map(|args| Self {
+            kind,
+            args: args.unwrap_or_default(),
+        }))
+    }
+}

@@ -108,36 +108,19 @@ pub(crate) struct RawFaultArgs {
 }
 
 /// A Realman emulator fault as written: one of the emulator's fault names and its arguments.
-#[derive(Debug)]
-pub(crate) struct RawFault {
-    pub kind: sim::realman::RealmanFaultKind,
-    pub args: RawFaultArgs,
-}
+pub(crate) type RawFault =
+    crate::harness::onekey::NamedEntry<sim::realman::RealmanFaultKind, RawFaultArgs>;
 
-impl crate::harness::onekey::OneKey for RawFault {
-    fn keys() -> Vec<&'static str> {
-        sim::realman::RealmanFaultKind::ALL
-            .iter()
-            .map(|k| k.name())
-            .collect()
+impl crate::harness::onekey::NamedKind for sim::realman::RealmanFaultKind {
+    fn all() -> &'static [Self] {
+        &Self::ALL
     }
 
-    fn bare<E: serde::de::Error>(key: &str) -> Option<Result<Self, E>> {
-        let kind = sim::realman::RealmanFaultKind::from_name(key)?;
-        Some(Ok(Self {
-            kind,
-            args: RawFaultArgs::default(),
-        }))
+    fn name(self) -> &'static str {
+        sim::realman::RealmanFaultKind::name(self)
     }
 
-    fn entry<'de, A: serde::de::MapAccess<'de>>(
-        key: &str,
-        map: &mut A,
-    ) -> Option<Result<Self, A::Error>> {
-        let kind = sim::realman::RealmanFaultKind::from_name(key)?;
-        Some(map.next_value::<Option<RawFaultArgs>>().map(|args| Self {
-            kind,
-            args: args.unwrap_or_default(),
-        }))
+    fn from_name(name: &str) -> Option<Self> {
+        sim::realman::RealmanFaultKind::from_name(name)
     }
 }

@@ -141,37 +141,19 @@ pub(crate) struct RawFaultArgs {
     pub motor: Option<S<i64>>,
 }
 
-/// A RobStride emulator fault as written: its name (one of the emulator's faults) and motor.
-#[derive(Debug)]
-pub(crate) struct RawFault {
-    pub fault: sim::robstride::Fault,
-    pub args: RawFaultArgs,
-}
+/// A RobStride emulator fault as written: one of the emulator's fault names and its arguments.
+pub(crate) type RawFault = crate::harness::onekey::NamedEntry<sim::robstride::Fault, RawFaultArgs>;
 
-impl crate::harness::onekey::OneKey for RawFault {
-    fn keys() -> Vec<&'static str> {
-        sim::robstride::Fault::ALL
-            .iter()
-            .map(|f| f.name())
-            .collect()
+impl crate::harness::onekey::NamedKind for sim::robstride::Fault {
+    fn all() -> &'static [Self] {
+        &Self::ALL
     }
 
-    fn bare<E: serde::de::Error>(key: &str) -> Option<Result<Self, E>> {
-        let fault = sim::robstride::Fault::from_name(key)?;
-        Some(Ok(Self {
-            fault,
-            args: RawFaultArgs::default(),
-        }))
+    fn name(self) -> &'static str {
+        sim::robstride::Fault::name(self)
     }
 
-    fn entry<'de, A: serde::de::MapAccess<'de>>(
-        key: &str,
-        map: &mut A,
-    ) -> Option<Result<Self, A::Error>> {
-        let fault = sim::robstride::Fault::from_name(key)?;
-        Some(map.next_value::<Option<RawFaultArgs>>().map(|args| Self {
-            fault,
-            args: args.unwrap_or_default(),
-        }))
+    fn from_name(name: &str) -> Option<Self> {
+        sim::robstride::Fault::from_name(name)
     }
 }

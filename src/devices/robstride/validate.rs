@@ -184,7 +184,7 @@ pub(crate) fn fault(ctx: &Ctx<'_>, raw: &RawFault, at: Pos) -> Res<RsFault> {
     let m = ctx.required(&raw.args.motor, "motor", "a robstride fault", at)?;
     Ok(RsFault {
         motor: can_id(ctx, m, "motor")?,
-        fault: raw.fault,
+        fault: raw.kind,
     })
 }
 
