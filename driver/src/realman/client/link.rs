@@ -198,6 +198,7 @@ pub(crate) async fn reader<R: AsyncRead + Unpin>(mut rd: R, shared: Arc<Shared>,
                     Err(e) => shared.malformed(format!("{e}: {text}")),
                 },
                 Frame::Stray(text) => shared.malformed(format!("not a JSON object: {text}")),
+                Frame::Truncated(text) => shared.malformed(format!("reply cut short: {text}")),
                 Frame::Overflow { discarded } => shared.malformed(format!(
                     "message longer than {max_frame} bytes ({discarded} dropped)"
                 )),

@@ -16,6 +16,10 @@ pub enum Frame {
     Object(String),
     /// Non-whitespace text outside any object, up to the next line end or `{`.
     Stray(String),
+    /// An object cut short: a CR LF arrived before its closing brace. The controller's replies
+    /// are compact and end with CR LF, so a line end inside an object means the rest was lost;
+    /// dropping the fragment there keeps the stream in step with the next reply.
+    Truncated(String),
     /// An object longer than the limit was dropped entirely; this many bytes were discarded.
     Overflow {
         /// Bytes thrown away.
@@ -124,6 +128,15 @@ impl Splitter {
         while self.pos < self.buf.len() {
             let b = self.buf[self.pos];
             self.pos += 1;
+            if b == b'\n' && self.pos >= 2 && self.buf[self.pos - 2] == b'\r' {
+                let bytes: Vec<u8> = self.buf.drain(..self.pos).collect();
+                self.pos = 0;
+                self.depth = 0;
+                self.in_string = false;
+                self.escaped = false;
+                let text = String::from_utf8_lossy(&bytes).trim_end().to_string();
+                return Some(Frame::Truncated(text));
+            }
             if self.step(b) {
                 let bytes: Vec<u8> = self.buf.drain(..self.pos).collect();
                 self.pos = 0;
@@ -242,6 +255,21 @@ mod tests {
         assert!(matches!(got[1], Frame::Overflow { discarded } if discarded > 100));
         assert_eq!(got[2], Frame::Object("{\"ok\":true}".into()));
         assert_eq!(got.len(), 3);
+    }
+
+    #[test]
+    fn a_line_end_inside_an_object_ends_it_as_truncated() {
+        let mut s = Splitter::default();
+        s.push(b"{\"state\":\"joint_de\r\n{\"ok\":true}\r\n{\"a\":{\"b\":1\r\n{\"c\":2}");
+        assert_eq!(
+            all(&mut s),
+            vec![
+                Frame::Truncated("{\"state\":\"joint_de".into()),
+                Frame::Object("{\"ok\":true}".into()),
+                Frame::Truncated("{\"a\":{\"b\":1".into()),
+                Frame::Object("{\"c\":2}".into()),
+            ]
+        );
     }
 
     #[test]
