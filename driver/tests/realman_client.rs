@@ -532,8 +532,9 @@ async fn realman_malformed_replies_fail_the_request_not_the_connection() {
     }
     assert_eq!(
         client.malformed_count(),
-        2,
-        "two undecodable messages; one decodable but mistyped"
+        3,
+        "undecodable: the stray text, the object cut at its CR LF and the stray `}` after it; \
+         one more decodable but mistyped"
     );
     assert!(client.is_connected());
     assert_eq!(client.joint_positions().await.unwrap().len(), 6);
