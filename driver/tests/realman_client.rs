@@ -533,7 +533,7 @@ async fn realman_malformed_replies_fail_the_request_not_the_connection() {
     assert_eq!(
         client.malformed_count(),
         3,
-        "undecodable: the stray text, the object cut at its CR LF and the stray `}` after it; \
+        "undecodable: the stray text, the object cut at its CR LF and the stray closing brace after it; \
          one more decodable but mistyped"
     );
     assert!(client.is_connected());
