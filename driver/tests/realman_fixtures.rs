@@ -536,12 +536,14 @@ fn check_vector(file: &str, v: &Vector) -> usize {
         "malformed_json" => {
             let mut sp = Splitter::default();
             sp.push(v.request.as_bytes());
+            // An object broken by a CR LF is cut there as truncated, as the controller does,
+            // so the next message is read cleanly.
             assert_eq!(
                 sp.next_frame(),
-                None,
-                "an unterminated object must not be cut"
+                Some(Frame::Truncated(v.request.trim_end().to_string())),
+                "an object broken by a line end is reported as truncated"
             );
-            assert!(sp.buffered() > 0);
+            assert_eq!(sp.buffered(), 0);
             return 0;
         }
         _ => {}
