@@ -26,4 +26,6 @@ pub use device::{Device, DeviceError, Reply, TraceColumn};
 pub use result::{Outcome, ScenarioResult, StepResult, Verdict};
 pub use runner::{run_scenario, run_scenario_with, Clock, RunOptions};
 #[cfg(test)]
+pub(crate) mod test_support;
+#[cfg(test)]
 mod tests;

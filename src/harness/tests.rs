@@ -7,17 +7,11 @@ use super::model::*;
 use super::parse_scenario;
 use super::report::{junit_xml, write_atomic};
 use super::result::{Outcome, ScenarioResult, StepResult, Verdict};
+use super::test_support::error_of as error;
 use crate::devices::piper::model::{Check as PiperCheck, PiperAction};
 
 fn parse(text: &str) -> Scenario {
     parse_scenario(Path::new("t.yaml"), text).unwrap_or_else(|e| panic!("{e}"))
-}
-
-fn error(text: &str) -> String {
-    parse_scenario(Path::new("t.yaml"), text)
-        .err()
-        .and_then(|e| e.scenario_error().map(super::ScenarioError::headline))
-        .expect("an error")
 }
 
 const BENCH: &str = "bench:\n  devices:\n    arm: {kind: piper}\n";
@@ -122,37 +116,37 @@ fn arm_status_accepts_names_and_codes() {
 fn semantic_errors_point_at_the_value() {
     assert_eq!(
         error(&format!("{BENCH}steps:\n  - mode: {{move: x}}\n")),
-        "t.yaml:5:18: `move`: unknown value `x`; expected one of: p, j, l, c, m"
+        "broken.yaml:5:18: `move`: unknown value `x`; expected one of: p, j, l, c, m"
     );
     assert_eq!(
         error(&format!(
             "{BENCH}steps:\n  - inject: {{fault: {{estop: {{joint: 2}}}}}}\n"
         )),
-        "t.yaml:5:37: `estop` takes no `joint` (it takes: no arguments)"
+        "broken.yaml:5:37: `estop` takes no `joint` (it takes: no arguments)"
     );
     assert_eq!(
         error(&format!(
             "{BENCH}steps:\n  - inject: {{fault: {{bus_off: {{node: host}}}}}}\n"
         )),
-        "t.yaml:5:5: `bus_off` needs `duration_ms` (the node recovers after it)"
+        "broken.yaml:5:5: `bus_off` needs `duration_ms` (the node recovers after it)"
     );
     assert_eq!(
         error(&format!(
             "{BENCH}steps:\n  - inject: {{fault: {{silence: {{node: left}}}}}}\n"
         )),
-        "t.yaml:5:38: unknown node `left`; expected `host` (the driver) or a device: arm"
+        "broken.yaml:5:38: unknown node `left`; expected `host` (the driver) or a device: arm"
     );
     assert_eq!(
         error(&format!("{BENCH}steps:\n  - expect: {{}}\n")),
-        "t.yaml:5:5: `expect` has no condition (for example `joints_deg`, `arm_status`, `enabled`)"
+        "broken.yaml:5:5: `expect` has no condition (for example `joints_deg`, `arm_status`, `enabled`)"
     );
     assert_eq!(
         error(&format!("{BENCH}steps:\n  - move_j: {{speed_pct: 20}}\n")),
-        "t.yaml:5:5: `move_j` needs `joints_deg`"
+        "broken.yaml:5:5: `move_j` needs `joints_deg`"
     );
     assert_eq!(
         error(&format!("{BENCH}steps:\n  - estop: {{}}\n    reset:\n")),
-        "t.yaml:5:5: one step per list item, found a second key `reset` (indent its arguments under `estop:`)"
+        "broken.yaml:5:5: one step per list item, found a second key `reset` (indent its arguments under `estop:`)"
     );
 }
 
@@ -162,7 +156,7 @@ fn several_devices_need_a_device_key() {
         "bench:\n  devices:\n    a: {kind: piper}\n    b: {kind: piper}\nsteps:\n  - estop\n";
     assert_eq!(
         error(text),
-        "t.yaml:6:5: the bench has several devices (a, b): say which with `device:`"
+        "broken.yaml:6:5: the bench has several devices (a, b): say which with `device:`"
     );
 }
 

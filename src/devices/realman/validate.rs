@@ -513,15 +513,9 @@ mod tests {
     use crate::devices::{Action, Check, DeviceKind};
     use crate::harness::model::StepKind;
     use crate::harness::parse_scenario;
+    use crate::harness::test_support::error_of;
 
     const BENCH: &str = "bench:\n  devices:\n    arm: {kind: realman, clients: 2}\n";
-
-    fn error_of(text: &str) -> String {
-        match parse_scenario(Path::new("broken.yaml"), text) {
-            Ok(_) => panic!("scenario unexpectedly valid:\n{text}"),
-            Err(e) => e.scenario_error().expect("a scenario error").headline(),
-        }
-    }
 
     #[test]
     fn a_valid_bench_step_condition_and_fault_are_typed() {

@@ -497,15 +497,9 @@ mod tests {
     use crate::devices::robstride::model::{MotorCheck, MotorCond, RsCommand};
     use crate::harness::model::{Check, DeviceKind, StepKind};
     use crate::harness::parse_scenario;
+    use crate::harness::test_support::error_of;
 
     const BENCH: &str = "bench:\n  devices:\n    bus: {kind: robstride, motors: [{id: 1, model: RS03, load: {pendulum: {mass_kg: 1.0, length_m: 0.3}}}, {id: 2, model: RS00}]}\n";
-
-    fn error_of(text: &str) -> String {
-        match parse_scenario(Path::new("broken.yaml"), text) {
-            Ok(_) => panic!("scenario unexpectedly valid:\n{text}"),
-            Err(e) => e.scenario_error().expect("a scenario error").headline(),
-        }
-    }
 
     #[test]
     fn a_valid_bench_step_and_condition_are_typed() {
