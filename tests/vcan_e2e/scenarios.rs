@@ -42,11 +42,12 @@ impl Drop for Sim {
 }
 
 /// Deadline factor for `armhil run --time-scale` (the VM runs several times slower than the
-/// host): `ARMHIL_E2E_TIME_SCALE`, default 60. Only deadlines are scaled (waits and holds are
-/// not), so a generous factor costs time only when a scenario fails; at 25 an idle TCG VM still
-/// missed a 50 ms status deadline now and then.
+/// host): `ARMHIL_E2E_TIME_SCALE`, default 150. Only deadlines are scaled (waits and holds are
+/// not), so a generous factor costs time only when a scenario fails. Under TCG the emulator's
+/// status stream (0x2A1, 200 Hz on hardware) was measured at 40–55 Hz with stalls of up to
+/// 2.2 s in passing runs, and a 20 ms e-stop deadline scaled by 60 (1.2 s) fell inside one.
 fn time_scale() -> String {
-    std::env::var("ARMHIL_E2E_TIME_SCALE").unwrap_or_else(|_| "60".to_owned())
+    std::env::var("ARMHIL_E2E_TIME_SCALE").unwrap_or_else(|_| "150".to_owned())
 }
 
 /// Wait until the emulator streams its status frame (0x2A1) on the interface.
@@ -72,11 +73,22 @@ fn wait_for_feedback() {
     });
 }
 
-fn start_sim(firmware: &str) -> Sim {
+/// Start `armhil sim piper`; its log goes to `log` when given (read back when a scenario fails).
+fn start_sim_logged(firmware: &str, log: Option<&Path>) -> Sim {
+    let stderr = match log {
+        Some(path) => {
+            std::fs::create_dir_all(path.parent().expect("log path has a folder"))
+                .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            Stdio::from(
+                std::fs::File::create(path).unwrap_or_else(|e| panic!("{}: {e}", path.display())),
+            )
+        }
+        None => Stdio::null(),
+    };
     let child = Command::new(armhil())
         .args(["sim", "piper", "--iface", &iface(), "--firmware", firmware])
         .stdout(Stdio::null())
-        .stderr(Stdio::null())
+        .stderr(stderr)
         .spawn()
         .expect("armhil sim piper starts");
     let sim = Sim(child);
@@ -84,7 +96,16 @@ fn start_sim(firmware: &str) -> Sim {
     sim
 }
 
+fn start_sim(firmware: &str) -> Sim {
+    start_sim_logged(firmware, None)
+}
+
 fn run(file: &Path) -> Output {
+    run_into(file, &out_dir())
+}
+
+/// `armhil run` of one file with its outputs under `out`.
+fn run_into(file: &Path, out: &Path) -> Output {
     Command::new(armhil())
         .args([
             "run",
@@ -94,7 +115,7 @@ fn run(file: &Path) -> Output {
             &time_scale(),
             "--out",
         ])
-        .arg(out_dir())
+        .arg(out)
         .arg(file)
         .output()
         .expect("armhil run starts")
@@ -143,22 +164,118 @@ fn vcan_tagged_scenarios_pass_against_a_separate_emulator() {
         );
     }
     let mut failed = Vec::new();
+    let mut flaky = Vec::new();
     for file in &files {
-        let _sim = start_sim(&firmware_of(file));
-        let output = run(file);
-        let stdout = String::from_utf8_lossy(&output.stdout);
-        eprintln!("{stdout}");
-        if !output.status.success() || !stdout.starts_with("running on") || !stdout.contains("PASS")
-        {
+        let first = attempt(file, 1);
+        if first.passed {
+            continue;
+        }
+        // Real time under TCG is at the mercy of the host's scheduler (see `time_scale`): a
+        // failure is retried once against a fresh emulator, and both attempts are reported
+        // with the emulator's status-stream figures so a stall can be told from a bug.
+        eprintln!(
+            "RETRY {}: first attempt failed\n{}",
+            file.display(),
+            first.report
+        );
+        let second = attempt(file, 2);
+        if second.passed {
+            flaky.push(format!("{}\n{}", file.display(), first.report));
+        } else {
             failed.push(format!(
-                "{}: {}\n{stdout}\n{}",
+                "{}\n-- attempt 1 --\n{}\n-- attempt 2 --\n{}",
                 file.display(),
-                output.status,
-                String::from_utf8_lossy(&output.stderr)
+                first.report,
+                second.report
             ));
         }
     }
+    if !flaky.is_empty() {
+        eprintln!(
+            "{} scenario(s) passed only on the retry:\n{}",
+            flaky.len(),
+            flaky.join("\n")
+        );
+    }
     assert!(failed.is_empty(), "{}", failed.join("\n"));
+}
+
+/// One run of a scenario against a fresh emulator.
+struct Attempt {
+    passed: bool,
+    /// On failure: the runner's output, the status-stream figures and the emulator log's tail.
+    report: String,
+}
+
+fn attempt(file: &Path, number: u32) -> Attempt {
+    let stem = file
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let out = out_dir().join(format!("attempt-{number}"));
+    let sim_log = out.join(format!("{stem}.sim.log"));
+    let sim = start_sim_logged(&firmware_of(file), Some(&sim_log));
+    let output = run_into(file, &out);
+    drop(sim);
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    eprintln!("{stdout}");
+    let passed =
+        output.status.success() && stdout.starts_with("running on") && stdout.contains("PASS");
+    if passed {
+        return Attempt {
+            passed,
+            report: String::new(),
+        };
+    }
+    let log = std::fs::read_to_string(&sim_log).unwrap_or_else(|e| format!("(no log: {e})"));
+    let tail: Vec<&str> = log.lines().rev().take(15).collect();
+    let report = format!(
+        "{}\n{stdout}\n{}\n{}\nemulator log {} (last lines):\n{}",
+        output.status,
+        String::from_utf8_lossy(&output.stderr),
+        status_stream_figures(&out.join(&stem).join("bus.log")),
+        sim_log.display(),
+        tail.into_iter().rev().collect::<Vec<_>>().join("\n")
+    );
+    Attempt { passed, report }
+}
+
+/// Rate and longest gap of the emulator's status frames (0x2A1) in a candump recording.
+fn status_stream_figures(bus_log: &Path) -> String {
+    let Ok(text) = std::fs::read_to_string(bus_log) else {
+        return format!("{}: no recording", bus_log.display());
+    };
+    let stamps_s: Vec<f64> = text
+        .lines()
+        .filter_map(|line| {
+            let mut fields = line.split_whitespace();
+            let stamp = fields.next()?.trim_matches(|c| c == '(' || c == ')');
+            let frame = fields.nth(1)?;
+            frame
+                .starts_with("2A1#")
+                .then(|| stamp.parse::<f64>().ok())
+                .flatten()
+        })
+        .collect();
+    let (Some(first), Some(last)) = (stamps_s.first(), stamps_s.last()) else {
+        return format!("{}: no 0x2A1 status frame recorded", bus_log.display());
+    };
+    let (gap_s, at_s) = stamps_s
+        .windows(2)
+        .map(|w| (w[1] - w[0], w[0] - first))
+        .fold((0.0, 0.0), |best, g| if g.0 > best.0 { g } else { best });
+    let span_s = last - first;
+    format!(
+        "status stream 0x2A1: {} frames in {span_s:.2} s ({:.0} Hz; 200 Hz on hardware), \
+         longest gap {:.0} ms at {at_s:.2} s",
+        stamps_s.len(),
+        if span_s > 0.0 {
+            (stamps_s.len() - 1) as f64 / span_s
+        } else {
+            0.0
+        },
+        gap_s * 1000.0
+    )
 }
 
 #[test]
@@ -177,4 +294,26 @@ fn scenarios_with_injected_faults_are_skipped_with_the_reason() {
     );
     assert!(stdout.contains("needs the in-process emulator"), "{stdout}");
     assert!(stdout.contains("comm_loss joint 3"), "{stdout}");
+}
+
+#[test]
+fn status_stream_figures_find_the_longest_gap() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let log = dir.path().join("bus.log");
+    std::fs::write(
+        &log,
+        "(100.000000) vcan0 2A1#0000000000000000\n\
+         (100.005000) vcan0 150#0100000000000000\n\
+         (100.010000) vcan0 2A1#0100000000000000\n\
+         (101.210000) vcan0 2A1#0100000000000000\n\
+         (101.215000) vcan0 2A1#0100000000000000\n",
+    )
+    .expect("write");
+    let figures = status_stream_figures(&log);
+    assert!(figures.contains("4 frames in 1.22 s"), "{figures}");
+    assert!(
+        figures.contains("longest gap 1200 ms at 0.01 s"),
+        "{figures}"
+    );
+    assert!(status_stream_figures(&dir.path().join("none.log")).contains("no recording"));
 }
