@@ -4,7 +4,9 @@
 //! - [`piper`]: AgileX Piper arm (CAN, 11-bit IDs).
 //! - [`robstride`]: RobStride actuators (CAN, 29-bit IDs).
 //! - [`realman`]: Realman arm controllers (JSON over TCP, state over UDP).
+//! - [`arm`]: the vendor-neutral Arm API over the Realman and Piper drivers.
 
+pub mod arm;
 pub mod piper;
 pub mod realman;
 pub mod robstride;

@@ -55,6 +55,34 @@ fn theta_offsets_deg(variant: DhVariant) -> [f64; 6] {
     }
 }
 
+/// One row of the modified-DH table: a (mm), alpha (rad), d (mm) and the angle added to the
+/// joint reading (rad).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct DhRow {
+    /// a(i-1), mm.
+    pub a_mm: f64,
+    /// alpha(i-1), rad.
+    pub alpha_rad: f64,
+    /// d(i), mm.
+    pub d_mm: f64,
+    /// θ offset, rad.
+    pub theta_offset_rad: f64,
+}
+
+/// The DH table [`forward_kinematics`] uses, for other solvers (the Arm API's IK).
+pub fn dh_table(variant: DhVariant) -> [DhRow; 6] {
+    let offsets = theta_offsets_deg(variant);
+    std::array::from_fn(|i| {
+        let (a_mm, alpha_rad, d_mm) = DH_A_ALPHA_D[i];
+        DhRow {
+            a_mm,
+            alpha_rad,
+            d_mm,
+            theta_offset_rad: offsets[i].to_radians(),
+        }
+    })
+}
+
 /// RotX(α)·TransX(a)·RotZ(θ)·TransZ(d).
 fn link(a: f64, alpha: f64, theta: f64, d: f64) -> Mat4 {
     let (st, ct) = theta.sin_cos();

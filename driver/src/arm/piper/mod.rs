@@ -1,0 +1,187 @@
+//! The Piper backend: CAN through the Piper driver ([`Piper`]), planned moves with the
+//! firmware's MOVE J / P / L modes, joint streaming with joint control frames, realtime state
+//! from the CAN feedback (one sample per joint-feedback cycle), kinematics on the driver's
+//! DH table.
+
+mod api;
+mod convert;
+
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+use tokio::sync::RwLock;
+use tokio::task::JoinHandle;
+
+use super::error::{ArmError, ArmResult};
+use super::interface::Method;
+use super::kinematics::Chain;
+use super::params::ArmFactoryParam;
+use super::realtime::RealtimeHub;
+use crate::piper::{MotorSelect, Piper, PiperBuilder, PiperState};
+
+/// What the Piper backend implements (everything else answers `NOT_IMPLEMENTED`).
+pub const PIPER_CAPABILITIES: &[Method] = &[
+    Method::Connect,
+    Method::MoveJointPosition,
+    Method::MoveCartesianLinear,
+    Method::MoveJointPose,
+    Method::MoveJointPositionCanfd,
+    Method::MoveJointFollow,
+    Method::MovePoseFollow,
+    Method::RealtimeState,
+    Method::SetArmStop,
+    Method::SetGripperRelease,
+    Method::SetGripperPick,
+    Method::SetGripperPickOn,
+    Method::SetGripperPosition,
+    Method::GetGripperState,
+    Method::GetJointDegree,
+    Method::ForwardKinematics,
+    Method::InverseKinematics,
+];
+
+/// Settings of a Piper arm.
+#[derive(Debug, Clone, Copy)]
+pub struct PiperArmOptions {
+    /// Enable all motors at connect (moves need them enabled).
+    pub enable_on_connect: bool,
+    /// Longest wait of a blocking move.
+    pub motion_timeout: Duration,
+    /// A blocking joint move has arrived when every joint is this close, degrees.
+    pub arrival_tolerance_deg: f64,
+    /// A blocking Cartesian move has arrived when the flange is this close, metres.
+    pub arrival_tolerance_m: f64,
+    /// Gripper stroke that API aperture 1000 stands for, metres.
+    pub gripper_max_stroke_m: f64,
+    /// Gripper torque that API force 1000 stands for, N·m.
+    pub gripper_max_effort_nm: f64,
+    /// Gripper torque of release and position moves, N·m.
+    pub gripper_move_effort_nm: f64,
+}
+
+impl Default for PiperArmOptions {
+    fn default() -> Self {
+        Self {
+            enable_on_connect: true,
+            motion_timeout: Duration::from_secs(60),
+            arrival_tolerance_deg: 0.2,
+            arrival_tolerance_m: 0.002,
+            gripper_max_stroke_m: 0.07,
+            gripper_max_effort_nm: 5.0,
+            gripper_move_effort_nm: 1.0,
+        }
+    }
+}
+
+/// A Piper arm behind the Arm API.
+pub struct PiperArm {
+    name: String,
+    can_interface: Option<String>,
+    options: PiperArmOptions,
+    prebuilt: Mutex<Option<Piper>>,
+    hub: Arc<RealtimeHub>,
+    link: RwLock<Option<Arc<Link>>>,
+}
+
+struct Link {
+    piper: Piper,
+    chain: Chain,
+    forwarder: JoinHandle<()>,
+}
+
+impl Drop for Link {
+    fn drop(&mut self) {
+        self.forwarder.abort();
+    }
+}
+
+impl PiperArm {
+    /// An arm on the SocketCAN interface named in `params.can_interface`.
+    pub fn new(params: ArmFactoryParam) -> Self {
+        Self {
+            name: params.arm_name,
+            can_interface: Some(params.can_interface),
+            options: PiperArmOptions::default(),
+            prebuilt: Mutex::new(None),
+            hub: Arc::new(RealtimeHub::default()),
+            link: RwLock::new(None),
+        }
+    }
+
+    /// An arm over an already connected driver (for example on a virtual bus). `connect`
+    /// enables the motors (per `options`) and starts the realtime stream.
+    pub fn from_client(name: &str, piper: Piper, options: PiperArmOptions) -> Self {
+        Self {
+            name: name.to_string(),
+            can_interface: None,
+            options,
+            prebuilt: Mutex::new(Some(piper)),
+            hub: Arc::new(RealtimeHub::default()),
+            link: RwLock::new(None),
+        }
+    }
+
+    async fn link(&self) -> ArmResult<Arc<Link>> {
+        self.link
+            .read()
+            .await
+            .clone()
+            .ok_or_else(|| ArmError::not_connected(&self.name))
+    }
+
+    async fn open_link(&self) -> ArmResult<Link> {
+        let taken = self
+            .prebuilt
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .take();
+        let piper = match (taken, &self.can_interface) {
+            (Some(p), _) => p,
+            (None, Some(iface)) => PiperBuilder::interface(iface)
+                .connect()
+                .await
+                .map_err(convert::error)?,
+            (None, None) => {
+                return Err(ArmError::new(
+                    super::AbcErrorCode::InvalidHandle,
+                    "this arm was built from a driver that is already closed",
+                ))
+            }
+        };
+        if self.options.enable_on_connect {
+            if let Err(e) = piper.enable(MotorSelect::All).await {
+                piper.disconnect().await;
+                return Err(convert::error(e));
+            }
+        }
+        let chain = convert::chain(piper.dh_variant());
+        let forwarder = self.forward_states(piper.subscribe_state());
+        tracing::info!(arm = %self.name, "piper arm connected");
+        Ok(Link {
+            piper,
+            chain,
+            forwarder,
+        })
+    }
+
+    /// Publishes one sample per joint-feedback cycle (when the joint angles' sequence moves).
+    fn forward_states(&self, mut rx: tokio::sync::watch::Receiver<PiperState>) -> JoinHandle<()> {
+        let hub = self.hub.clone();
+        let name = self.name.clone();
+        let stroke = self.options.gripper_max_stroke_m;
+        tokio::spawn(async move {
+            let mut last_seq = 0;
+            while rx.changed().await.is_ok() {
+                let state = rx.borrow_and_update().clone();
+                let seq = state.joints.as_ref().map_or(0, |j| j.seq);
+                if seq == last_seq {
+                    continue;
+                }
+                last_seq = seq;
+                if let Some(s) = convert::realtime(&name, &state, stroke) {
+                    hub.publish(s);
+                }
+            }
+        })
+    }
+}
