@@ -79,8 +79,18 @@ impl Default for RealmanArmOptions {
     }
 }
 
+impl RealmanArmOptions {
+    /// Default options that aim the push at `ip:port` every `period_ms` at connect.
+    pub fn push_to(ip: std::net::Ipv4Addr, port: u16, period_ms: u32) -> Self {
+        Self {
+            push: Some(push_settings(ip, port, period_ms)),
+            ..Self::default()
+        }
+    }
+}
+
 /// Push settings aimed at `ip:port` every `period_ms`, with joint speeds and the motion status.
-pub fn push_settings(ip: std::net::Ipv4Addr, port: u16, period_ms: u32) -> PushSettings {
+pub(crate) fn push_settings(ip: std::net::Ipv4Addr, port: u16, period_ms: u32) -> PushSettings {
     PushSettings {
         period_ms,
         enable: true,
