@@ -11,7 +11,9 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 
 use armhil::harness::report::{snapshot_yaml, write_outputs};
-use armhil::harness::{discover_suite, load_scenario, run_scenario, Clock, SuiteFile, Verdict};
+use armhil::harness::{
+    discover_suite, load_suite_file, run_scenario, Clock, SuiteFile, Verdict,
+};
 use libtest_mimic::{Arguments, Failed, Trial};
 
 const SUITE: &str = "scenarios";
@@ -46,7 +48,7 @@ fn guarded(f: impl FnOnce() -> Result<(), Failed>) -> Result<(), Failed> {
 
 /// Run one scenario and compare it with its snapshot.
 fn scenario_passes_and_matches_its_snapshot(file: &SuiteFile) -> Result<(), Failed> {
-    let scenario = load_scenario(&file.path).map_err(|e| e.to_string())?;
+    let scenario = load_suite_file(file).map_err(|e| e.to_string())?;
     let result = run_scenario(&scenario, &Clock::Virtual);
     let text = snapshot_yaml(&result);
     if result.verdict != Verdict::Passed {
@@ -89,7 +91,7 @@ fn files_under(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
 /// Run the whole suite and write every output under `dir`, as `armhil run` does.
 fn run_suite_into(files: &[SuiteFile], dir: &Path) -> Result<(), Failed> {
     for file in files {
-        let scenario = load_scenario(&file.path).map_err(|e| e.to_string())?;
+        let scenario = load_suite_file(file).map_err(|e| e.to_string())?;
         let result = run_scenario(&scenario, &Clock::Virtual);
         write_outputs(&result, &scenario.record, &dir.join(&file.out_dir))
             .map_err(|e| format!("{}: {e}", file.path.display()))?;

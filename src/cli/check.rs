@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use armhil::harness::{discover, load_scenario};
+use armhil::harness::{discover_suite, load_suite_file};
 
 /// Arguments of `armhil check`.
 #[derive(Debug, clap::Args)]
@@ -15,16 +15,17 @@ pub struct Args {
 
 /// Validate every file; exit 1 if any is invalid.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    let files = discover(&args.paths)?;
+    // Suite entries: a file with a `matrix:` is checked once per value.
+    let files = discover_suite(&args.paths)?;
     if files.is_empty() {
         anyhow::bail!("no scenario files (*.yaml, *.yml) found");
     }
     let mut invalid = 0usize;
     for file in &files {
-        match load_scenario(file) {
+        match load_suite_file(file) {
             Ok(s) => println!(
                 "ok    {} ({}: {} steps, {} scheduled faults{})",
-                file.display(),
+                file.path.display(),
                 s.name,
                 s.steps.len(),
                 s.faults.len(),

@@ -7,7 +7,7 @@ use std::time::Duration;
 
 use armhil::harness::report::{junit_xml, write_atomic, write_outputs, Written};
 use armhil::harness::{
-    discover_suite, load_scenario, run_scenario_with, Clock, Outcome, RunOptions, ScenarioResult,
+    discover_suite, load_suite_file, run_scenario_with, Clock, Outcome, RunOptions, ScenarioResult,
     SuiteFile, Verdict,
 };
 use indicatif::{ProgressBar, ProgressStyle};
@@ -105,7 +105,7 @@ fn run_one(file: &SuiteFile, args: &Args) -> Ran {
         (None, true, None) => Clock::Realtime,
         (None, false, _) => Clock::Virtual,
     };
-    let scenario = match load_scenario(&file.path) {
+    let scenario = match load_suite_file(file) {
         Ok(s) => s,
         Err(e) => {
             let name = file.out_dir.to_string_lossy().into_owned();
@@ -345,6 +345,7 @@ mod tests {
         SuiteFile {
             path: PathBuf::from(path),
             out_dir: PathBuf::from(out),
+            variant: None,
         }
     }
 

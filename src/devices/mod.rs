@@ -26,6 +26,7 @@ use crate::harness::raw::S;
 use crate::harness::validate::{Ctx, Res};
 use crate::harness::{Clock, RunOptions};
 
+pub mod arm;
 pub mod piper;
 pub mod realman;
 pub mod robstride;
@@ -325,6 +326,7 @@ device_kinds! {
     "piper" => Piper(piper),
     "robstride" => Robstride(robstride),
     "realman" => Realman(realman),
+    "arm" => Arm(arm),
 }
 
 impl<'de> Deserialize<'de> for RawDevice {

@@ -13,8 +13,15 @@ struct RawHead {
 }
 use super::validate::{validate, Ctx};
 
-/// Parse and validate scenario text; `path` is used for error messages and relative URDFs.
+/// Parse and validate scenario text; `path` is used for error messages and relative URDFs. A
+/// file with a `matrix:` is refused here (it is several scenarios): see [`parse_variant`].
 pub fn parse_scenario(path: &Path, text: &str) -> Result<Scenario, LoadError> {
+    parse_variant(path, text, None)
+}
+
+/// Parse and validate the variant `variant` (a value of its `matrix:`) of scenario text;
+/// `None` for a file without a matrix.
+pub fn parse_variant(path: &Path, text: &str, variant: Option<&str>) -> Result<Scenario, LoadError> {
     // The bench first: its device kinds decide which vocabulary the steps are read with. When
     // it does not parse, the full parse below reports the error.
     let kinds = serde_saphyr::from_str::<RawHead>(text).ok().map(|head| {
@@ -32,8 +39,36 @@ pub fn parse_scenario(path: &Path, text: &str) -> Result<Scenario, LoadError> {
         None => parse(),
     }
     .map_err(|error| LoadError::Invalid(Box::new(from_yaml_error(path, text, &error))))?;
-    let mut ctx = Ctx::new(path, text);
+    let mut ctx = Ctx::new(path, text).for_variant(variant);
     validate(&mut ctx, raw).map_err(LoadError::Invalid)
+}
+
+/// Read, parse and validate a scenario of a suite (its matrix variant, if any).
+pub fn load_suite_file(file: &SuiteFile) -> Result<Scenario, LoadError> {
+    let text = std::fs::read_to_string(&file.path).map_err(|source| LoadError::Io {
+        path: file.path.clone(),
+        source,
+    })?;
+    parse_variant(&file.path, &text, file.variant.as_deref())
+}
+
+/// The `matrix:` of a file alone (every other key ignored).
+#[derive(serde::Deserialize)]
+struct RawMatrixHead {
+    matrix: Option<std::collections::BTreeMap<String, Vec<String>>>,
+}
+
+/// The values of a file's one-parameter `matrix:`; `None` when it has none or it does not
+/// read (loading the file then reports why).
+fn matrix_values(path: &Path) -> Option<Vec<String>> {
+    let text = std::fs::read_to_string(path).ok()?;
+    let head: RawMatrixHead = serde_saphyr::from_str(&text).ok()?;
+    let matrix = head.matrix?;
+    let mut entries = matrix.into_values();
+    match (entries.next(), entries.next()) {
+        (Some(values), None) if !values.is_empty() => Some(values),
+        _ => None,
+    }
 }
 
 /// Read, parse and validate one scenario file.
@@ -45,16 +80,41 @@ pub fn load_scenario(path: &Path) -> Result<Scenario, LoadError> {
     parse_scenario(path, &text)
 }
 
-/// A scenario file of a suite and the folder its outputs go to, relative to the output root:
-/// its path under the folder it was found in, without extension (`piper/move_l` for
+/// A scenario of a suite and the folder its outputs go to, relative to the output root: its
+/// path under the folder it was found in, without extension (`piper/move_l` for
 /// `scenarios/piper/move_l.yaml` found under `scenarios/`), or its stem for a file named
-/// directly. Two files never share a folder unless they were named as the same path.
+/// directly. Two files never share a folder unless they were named as the same path. A file
+/// with `matrix: {vendor: [piper, realman]}` is one entry per value, each with a subfolder
+/// (`arm/moves/piper`, `arm/moves/realman`).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct SuiteFile {
     /// The scenario file.
     pub path: PathBuf,
     /// Output folder relative to the output root.
     pub out_dir: PathBuf,
+    /// The matrix value this entry runs (`None`: the file has no matrix).
+    pub variant: Option<String>,
+}
+
+impl SuiteFile {
+    /// One entry per matrix value of `path` (one entry without variant when it has none).
+    fn expand(path: PathBuf, out_dir: PathBuf) -> Vec<SuiteFile> {
+        match matrix_values(&path) {
+            Some(values) => values
+                .into_iter()
+                .map(|v| SuiteFile {
+                    path: path.clone(),
+                    out_dir: out_dir.join(&v),
+                    variant: Some(v),
+                })
+                .collect(),
+            None => vec![SuiteFile {
+                path,
+                out_dir,
+                variant: None,
+            }],
+        }
+    }
 }
 
 /// Like [`discover`], with each file's output folder.
@@ -66,17 +126,14 @@ pub fn discover_suite(paths: &[PathBuf]) -> Result<Vec<SuiteFile>, LoadError> {
             walk(root, &mut files)?;
             for path in files {
                 let rel = path.strip_prefix(root).unwrap_or(&path).with_extension("");
-                found.push(SuiteFile { out_dir: rel, path });
+                found.extend(SuiteFile::expand(path, rel));
             }
         } else {
             let stem = root.file_stem().map_or_else(
                 || PathBuf::from("scenario"),
                 |s| PathBuf::from(s.to_os_string()),
             );
-            found.push(SuiteFile {
-                path: root.clone(),
-                out_dir: stem,
-            });
+            found.extend(SuiteFile::expand(root.clone(), stem));
         }
     }
     Ok(found)

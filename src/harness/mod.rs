@@ -13,7 +13,10 @@ pub(crate) mod raw;
 pub(crate) mod validate;
 
 pub use error::{LoadError, Pos, ScenarioError};
-pub use load::{discover, discover_suite, load_scenario, parse_scenario, SuiteFile};
+pub use load::{
+    discover, discover_suite, load_scenario, load_suite_file, parse_scenario, parse_variant,
+    SuiteFile,
+};
 pub use model::Scenario;
 pub(crate) mod bench;
 pub mod device;

@@ -17,6 +17,9 @@ pub struct Scenario {
     pub description: Option<String>,
     /// Tags; `vcan` marks scenarios that can run against a separate emulator process.
     pub tags: Vec<String>,
+    /// The value of the file's `matrix:` this scenario was loaded for (`piper` of
+    /// `matrix: {vendor: [piper, realman]}`); `None` for a file without a matrix.
+    pub variant: Option<String>,
     /// Bus and devices.
     pub bench: Bench,
     /// What to record.

@@ -17,6 +17,7 @@ pub(crate) struct RawScenario {
     pub name: Option<S<String>>,
     pub description: Option<String>,
     pub tags: Option<Vec<S<String>>>,
+    pub matrix: Option<S<BTreeMap<String, S<Vec<S<String>>>>>>,
     pub bench: S<RawBench>,
     pub record: Option<S<RawRecord>>,
     pub faults: Option<Vec<S<RawFaultEntry>>>,

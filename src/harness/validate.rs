@@ -1,5 +1,6 @@
 //! Layer 2: check a [`RawScenario`] and build the typed [`Scenario`].
 
+use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Duration;
 
@@ -18,6 +19,10 @@ pub(crate) struct Ctx<'a> {
     pub text: &'a str,
     devices: Vec<(String, &'static str)>,
     step_ids: Vec<Option<String>>,
+    /// The variant being loaded: requested value, then (once checked against the file's
+    /// `matrix:`) the parameter's name and value.
+    variant: Option<String>,
+    matrix: Option<(String, String)>,
 }
 
 /// The position of a spanned value.
@@ -32,7 +37,23 @@ impl<'a> Ctx<'a> {
             text,
             devices: Vec::new(),
             step_ids: Vec::new(),
+            variant: None,
+            matrix: None,
         }
+    }
+
+    /// Load the variant `value` of a file with a `matrix:`.
+    pub fn for_variant(mut self, value: Option<&str>) -> Self {
+        self.variant = value.map(str::to_owned);
+        self
+    }
+
+    /// The value of matrix parameter `key` (`vendor`) for the variant being loaded.
+    pub(crate) fn matrix_value(&self, key: &str) -> Option<&str> {
+        self.matrix
+            .as_ref()
+            .filter(|(k, _)| k == key)
+            .map(|(_, v)| v.as_str())
     }
 
     pub(crate) fn err(&self, at: Pos, message: impl Into<String>) -> Box<ScenarioError> {
@@ -221,6 +242,12 @@ pub(crate) fn validate(ctx: &mut Ctx<'_>, raw: RawScenario) -> Res<Scenario> {
         }
         tags.push(tag.value.clone());
     }
+    ctx.matrix = matrix(ctx, raw.matrix.as_ref())?;
+    let variant = ctx.matrix.as_ref().map(|(_, v)| v.clone());
+    let name = match &variant {
+        Some(v) => format!("{name}@{v}"),
+        None => name,
+    };
     let bench = bench(ctx, &raw.bench)?;
     ctx.devices = bench
         .devices
@@ -258,6 +285,7 @@ pub(crate) fn validate(ctx: &mut Ctx<'_>, raw: RawScenario) -> Res<Scenario> {
         path: ctx.file.to_path_buf(),
         description: raw.description.clone(),
         tags,
+        variant,
         bench,
         record,
         faults,
@@ -279,6 +307,67 @@ pub(crate) fn validate(ctx: &mut Ctx<'_>, raw: RawScenario) -> Res<Scenario> {
         }
     }
     Ok(scenario)
+}
+
+/// `matrix: {key: [values]}`: one parameter, each value a run of its own. Checks the shape and
+/// that the requested variant is one of the values.
+fn matrix(
+    ctx: &Ctx<'_>,
+    raw: Option<&S<BTreeMap<String, S<Vec<S<String>>>>>>,
+) -> Res<Option<(String, String)>> {
+    let Some(raw) = raw else {
+        return match &ctx.variant {
+            Some(v) => Err(ctx.err(
+                Pos::default(),
+                format!("variant `{v}` requested, but the file has no `matrix:`"),
+            )),
+            None => Ok(None),
+        };
+    };
+    let mut entries = raw.value.iter();
+    let (key, values) = match (entries.next(), entries.next()) {
+        (Some(entry), None) => entry,
+        _ => {
+            return Err(ctx.err(
+                pos(raw),
+                "`matrix` takes exactly one parameter, e.g. `matrix: {vendor: [piper, realman]}`",
+            ))
+        }
+    };
+    if values.value.is_empty() {
+        return Err(ctx.err(pos(values), format!("`matrix.{key}` lists no value")));
+    }
+    for (i, v) in values.value.iter().enumerate() {
+        let ok = !v.value.is_empty()
+            && v
+                .value
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_'));
+        if !ok {
+            return Err(ctx.err(
+                pos(v),
+                "matrix values use letters, digits, '-' and '_' (each names an output folder)",
+            ));
+        }
+        if values.value[..i].iter().any(|w| w.value == v.value) {
+            return Err(ctx.err(pos(v), format!("`{}` is listed twice", v.value)));
+        }
+    }
+    let listed: Vec<&str> = values.value.iter().map(|v| v.value.as_str()).collect();
+    match &ctx.variant {
+        Some(v) if listed.contains(&v.as_str()) => Ok(Some((key.clone(), v.clone()))),
+        Some(v) => Err(ctx.err(
+            pos(values),
+            format!("variant `{v}` is not in `matrix.{key}` ({})", listed.join(", ")),
+        )),
+        None => Err(ctx.err(
+            pos(raw),
+            format!(
+                "this file runs once per `{key}` ({}); run it as a suite (`armhil run FILE`), which expands the matrix",
+                listed.join(", ")
+            ),
+        )),
+    }
 }
 
 fn step_id(step: &RawStep) -> Option<&S<String>> {

@@ -2,7 +2,7 @@
 
 mod actions;
 mod checks;
-mod device;
+pub(crate) mod device;
 mod emulator;
 pub mod model;
 mod observe;
@@ -77,6 +77,30 @@ fn driver_timeouts(options: &RunOptions) -> Timeouts {
         send: options.deadline(d.send),
         ..d
     }
+}
+
+/// A Piper with the default settings (the default firmware, joints at zero) emulated on
+/// `bus`, and our driver connected to it: how other kinds (the vendor-neutral `arm`) get one.
+pub(crate) async fn spawn_default(
+    name: &str,
+    bus: &bus::virtual_bus::VirtualBus,
+) -> Result<(Box<dyn device::EmulatorControl>, driver::piper::Piper), String> {
+    let settings = Settings {
+        firmware: DEFAULT_FIRMWARE.to_owned(),
+        urdf: None,
+        initial_joints_deg: [0.0; model::PIPER_JOINTS],
+        gripper_max_mm: None,
+        collision_levels: None,
+        obstacles: Vec::new(),
+    };
+    let node: Arc<dyn CanBus> = Arc::new(bus.attach(name));
+    let sim = PiperSim::spawn(node, &settings).map_err(|e| format!("device `{name}`: emulator: {e}"))?;
+    let host: Arc<dyn CanBus> = Arc::new(bus.attach(HOST_NODE));
+    let driver = PiperBuilder::new(host)
+        .connect()
+        .await
+        .map_err(|e| format!("device `{name}`: driver could not connect: {e}"))?;
+    Ok((Box::new(sim), driver))
 }
 
 /// Start a Piper: the emulator on the virtual bus (in-process runs) and the driver.

@@ -23,9 +23,9 @@ use crate::harness::model::{ErrorClass, Signal};
 use crate::harness::{Device, DeviceError, Reply, TraceColumn};
 
 /// The IP the driver's host has on the emulated network (the push aims at it).
-const HOST_IP: Ipv4Addr = Ipv4Addr::new(192, 168, 1, 10);
+pub(crate) const HOST_IP: Ipv4Addr = Ipv4Addr::new(192, 168, 1, 10);
 /// The port the driver's state feed listens on (the controller's default push port).
-const PUSH_PORT: u16 = 8089;
+pub(crate) const PUSH_PORT: u16 = 8089;
 
 fn classify(error: &RealmanError) -> ErrorClass {
     match error {
@@ -82,22 +82,22 @@ fn opts(m: &Motion) -> MoveOpts {
     }
 }
 
-/// One Realman arm: the emulator, the driver's connections and its state feed.
-pub(crate) struct RealmanDevice {
-    name: String,
-    dof: usize,
-    /// The emulator (`None` once shut down).
-    emu: Mutex<Option<RealmanHandle>>,
-    clients: Vec<RealmanClient>,
-    feed: StateFeed,
+/// A Realman emulator on in-memory streams with the driver's state feed fed by its push
+/// (datagrams aimed at the host only, as on a real network), and the push arrival times.
+pub(crate) struct Emulated {
+    /// The emulator.
+    pub emu: RealmanHandle,
+    /// Joints of the model.
+    pub dof: usize,
+    /// The driver's state feed.
+    pub feed: StateFeed,
     /// Arrival times of the push datagrams of the last second.
-    stamps: Arc<Mutex<VecDeque<Instant>>>,
-    active: Mutex<Vec<RmFault>>,
+    pub stamps: Arc<Mutex<VecDeque<Instant>>>,
 }
 
-impl RealmanDevice {
-    /// Start the emulator, connect `settings.clients` driver connections and the state feed.
-    pub(crate) async fn start(name: &str, settings: &RealmanSettings) -> Result<Self, String> {
+impl Emulated {
+    /// Start the emulator for `settings`; clients connect with [`Emulated::client`].
+    pub(crate) async fn spawn(name: &str, settings: &RealmanSettings) -> Result<Self, String> {
         let model = ArmModel::from_product(settings.model)
             .ok_or_else(|| format!("device `{name}`: no emulator model {}", settings.model))?;
         let dof = model.dof;
@@ -137,13 +137,51 @@ impl RealmanDevice {
             }
         });
         let feed = StateFeed::from_channel(rx, JointSpeedUnit::default());
+        Ok(Self {
+            emu,
+            dof,
+            feed,
+            stamps,
+        })
+    }
+
+    /// Open one more driver connection to the emulator.
+    pub(crate) async fn client(&self, name: &str) -> Result<RealmanClient, String> {
+        let stream = self
+            .emu
+            .connect(IpAddr::V4(HOST_IP))
+            .map_err(|e| format!("device `{name}`: connect: {e}"))?;
+        Ok(RealmanClient::from_stream(stream, ClientConfig::default()).await)
+    }
+}
+
+/// One Realman arm: the emulator, the driver's connections and its state feed.
+pub(crate) struct RealmanDevice {
+    name: String,
+    dof: usize,
+    /// The emulator (`None` once shut down).
+    emu: Mutex<Option<RealmanHandle>>,
+    clients: Vec<RealmanClient>,
+    feed: StateFeed,
+    /// Arrival times of the push datagrams of the last second.
+    stamps: Arc<Mutex<VecDeque<Instant>>>,
+    active: Mutex<Vec<RmFault>>,
+}
+
+impl RealmanDevice {
+    /// Start the emulator, connect `settings.clients` driver connections and the state feed.
+    pub(crate) async fn start(name: &str, settings: &RealmanSettings) -> Result<Self, String> {
+        let emulated = Emulated::spawn(name, settings).await?;
         let mut clients = Vec::new();
         for _ in 0..settings.clients {
-            let stream = emu
-                .connect(IpAddr::V4(HOST_IP))
-                .map_err(|e| format!("device `{name}`: connect: {e}"))?;
-            clients.push(RealmanClient::from_stream(stream, ClientConfig::default()).await);
+            clients.push(emulated.client(name).await?);
         }
+        let Emulated {
+            emu,
+            dof,
+            feed,
+            stamps,
+        } = emulated;
         clients[0]
             .set_realtime_push(&push_settings(5, true))
             .await

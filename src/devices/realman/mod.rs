@@ -1,7 +1,7 @@
 //! Realman arms (`kind: realman`): a controller speaking JSON over TCP with a UDP state push,
 //! emulated in-process on in-memory streams (virtual or real time).
 
-mod device;
+pub(crate) mod device;
 pub mod model;
 mod observe;
 pub(crate) mod raw;
