@@ -5,6 +5,7 @@ use std::collections::VecDeque;
 
 use super::super::faults::codes;
 use super::super::kinematics::{self, Pose};
+use super::super::model::ArmModel;
 use super::super::planner::{self, CartesianLimits, PlanError, Trajectory};
 use super::super::wire::Obj;
 use super::{ClientId, Controller, Event, STEP_S};
@@ -309,9 +310,21 @@ impl Controller {
         }
     }
 
+    /// The model as the planner should see it: the controller's current joint limits, speed
+    /// and acceleration tables (`set_joint_max_speed` and friends, docs/protocols/realman.md
+    /// §9) instead of the factory values.
+    fn planning_model(&self) -> ArmModel {
+        let mut model = self.model.clone();
+        model.joint_min_deg.clone_from(&self.params.min_deg);
+        model.joint_max_deg.clone_from(&self.params.max_deg);
+        model.max_speed_deg_s.clone_from(&self.params.max_speed_deg_s);
+        model.max_acc_deg_s2.clone_from(&self.params.max_acc_deg_s2);
+        model
+    }
+
     fn plan(&self, from: &[f64], goal: &Goal, speed_percent: f64) -> Result<Trajectory, Refusal> {
         let limits = self.cartesian_limits();
-        let model = &self.model;
+        let model = &self.planning_model();
         let result = match goal {
             Goal::Joint(to) => {
                 if self.beyond_limits(to).is_some() {
@@ -385,7 +398,7 @@ impl Controller {
                 points.extend(last.iter().copied());
                 let limits = self.cartesian_limits();
                 let planned =
-                    planner::plan_spline(&self.model, &from, &points, speed_percent, &limits);
+                    planner::plan_spline(&self.planning_model(), &from, &points, speed_percent, &limits);
                 match planned {
                     Ok(traj) => traj.sample(traj.duration_s()),
                     Err(e) => {
