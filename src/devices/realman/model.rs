@@ -107,7 +107,8 @@ pub enum JogAxis {
 }
 
 /// `axis:` names.
-pub const JOG_AXES: [(JogAxis, &str); 3] = [(JogAxis::X, "x"), (JogAxis::Y, "y"), (JogAxis::Z, "z")];
+pub const JOG_AXES: [(JogAxis, &str); 3] =
+    [(JogAxis::X, "x"), (JogAxis::Y, "y"), (JogAxis::Z, "z")];
 
 /// What a step or teach jog moves.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

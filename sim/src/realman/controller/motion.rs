@@ -307,7 +307,9 @@ impl Controller {
         let mut model = self.model.clone();
         model.joint_min_deg.clone_from(&self.params.min_deg);
         model.joint_max_deg.clone_from(&self.params.max_deg);
-        model.max_speed_deg_s.clone_from(&self.params.max_speed_deg_s);
+        model
+            .max_speed_deg_s
+            .clone_from(&self.params.max_speed_deg_s);
         model.max_acc_deg_s2.clone_from(&self.params.max_acc_deg_s2);
         model
     }
@@ -387,8 +389,13 @@ impl Controller {
                     .collect();
                 points.extend(last.iter().copied());
                 let limits = self.cartesian_limits();
-                let planned =
-                    planner::plan_spline(&self.planning_model(), &from, &points, speed_percent, &limits);
+                let planned = planner::plan_spline(
+                    &self.planning_model(),
+                    &from,
+                    &points,
+                    speed_percent,
+                    &limits,
+                );
                 match planned {
                     Ok(traj) => traj.sample(traj.duration_s()),
                     Err(e) => {

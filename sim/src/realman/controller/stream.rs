@@ -69,7 +69,12 @@ impl Stream {
     }
 
     /// Advance the set-point one tick of `dt_s`; true when every joint is on its target.
-    pub(super) fn advance(&mut self, setpoint_rad: &mut [f64], limits: &[JointLimits], dt_s: f64) -> bool {
+    pub(super) fn advance(
+        &mut self,
+        setpoint_rad: &mut [f64],
+        limits: &[JointLimits],
+        dt_s: f64,
+    ) -> bool {
         self.idle_ms += 1;
         let mut done = true;
         for (j, q) in setpoint_rad.iter_mut().enumerate() {

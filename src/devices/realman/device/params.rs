@@ -44,7 +44,9 @@ async fn read(arm: &RealmanClient, param: Param, joint: Option<u8>) -> Result<f6
         Param::MaxAngularAcc => arm.max_angular_acc().await.map_err(derr)?,
         Param::CollisionStage => f64::from(arm.collision_stage().await.map_err(derr)?),
         Param::SelfCollision => f64::from(u8::from(arm.self_collision().await.map_err(derr)?)),
-        Param::JointMaxSpeed => joint_value(&deg(arm.joint_max_speed().await.map_err(derr)?), joint)?,
+        Param::JointMaxSpeed => {
+            joint_value(&deg(arm.joint_max_speed().await.map_err(derr)?), joint)?
+        }
         Param::JointMaxAcc => joint_value(&deg(arm.joint_max_acc().await.map_err(derr)?), joint)?,
         Param::JointMinPos => joint_value(&deg(arm.joint_min_pos().await.map_err(derr)?), joint)?,
         Param::JointMaxPos => joint_value(&deg(arm.joint_max_pos().await.map_err(derr)?), joint)?,
@@ -86,9 +88,11 @@ async fn write(
             // The controller takes the whole table: read it, change one value, write it back.
             let mut rows = arm.dh_table().await.map_err(derr)?;
             let count = rows.len();
-            let row = rows.get_mut(usize::from(j).wrapping_sub(1)).ok_or_else(|| {
-                DeviceError::unsupported(format!("DH row {j}: the table has {count} rows"))
-            })?;
+            let row = rows
+                .get_mut(usize::from(j).wrapping_sub(1))
+                .ok_or_else(|| {
+                    DeviceError::unsupported(format!("DH row {j}: the table has {count} rows"))
+                })?;
             match param {
                 Param::DhAlpha => row.alpha_rad = value.to_radians(),
                 Param::DhA => row.a_m = value,

@@ -15,7 +15,11 @@ fn lerp(a: f64, b: f64, f: f64) -> f64 {
 }
 
 fn lerp3(a: [f64; 3], b: [f64; 3], f: f64) -> [f64; 3] {
-    [lerp(a[0], b[0], f), lerp(a[1], b[1], f), lerp(a[2], b[2], f)]
+    [
+        lerp(a[0], b[0], f),
+        lerp(a[1], b[1], f),
+        lerp(a[2], b[2], f),
+    ]
 }
 
 /// Send the point at fraction `f` (0 = first, 1 = last) of the path.

@@ -23,7 +23,10 @@ fn param(ctx: &Ctx<'_>, a: &RawRmStep, command: &str, at: Pos) -> Res<(Param, Op
         (None, true) => {
             return Err(ctx.err(
                 pos(name),
-                format!("`{}` belongs to one joint: say which with `joint:`", param.name()),
+                format!(
+                    "`{}` belongs to one joint: say which with `joint:`",
+                    param.name()
+                ),
             ))
         }
         (Some(j), false) => {

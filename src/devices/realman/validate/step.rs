@@ -4,7 +4,7 @@
 
 use super::super::model::{Motion, PoseDeg, RealmanAction, RmCommand};
 use super::super::raw::RawRmStep;
-use super::{int_in, joints, jog, params, stream, MAX_CLIENTS};
+use super::{int_in, jog, joints, params, stream, MAX_CLIENTS};
 use crate::devices::Action;
 use crate::harness::error::Pos;
 use crate::harness::model::{ErrorClass, Near, StepKind};
@@ -57,7 +57,14 @@ const COMMAND_KEYS: [(&str, &[&str]); 36] = [
     ("reconnect", &[]),
     (
         "stream_joints",
-        &["from_deg", "to_deg", "duration_ms", "period_ms", "mode", "block"],
+        &[
+            "from_deg",
+            "to_deg",
+            "duration_ms",
+            "period_ms",
+            "mode",
+            "block",
+        ],
     ),
     (
         "stream_pose",
@@ -403,3 +410,16 @@ const LABELS: [(&str, &str); 36] = [
     ("set_zero_offset", "realman set_zero_offset"),
     ("joint_enable", "realman joint_enable"),
 ];
+
+#[cfg(test)]
+mod tests {
+    use super::{COMMAND_KEYS, LABELS};
+
+    #[test]
+    fn every_command_has_its_label() {
+        for ((name, _), (label_of, label)) in COMMAND_KEYS.iter().zip(LABELS.iter()) {
+            assert_eq!(name, label_of);
+            assert_eq!(*label, format!("realman {name}"));
+        }
+    }
+}
