@@ -485,3 +485,43 @@ async fn joint_error_mid_move_aborts_and_the_arm_holds_where_it_stopped_until_an
         "joints moved up to {drift:.3}° after the clear: {at_fault:?} → {cleared:?}"
     );
 }
+
+/// Time for a blocking MOVEJ of joint 1 from 0° to 90° at full speed, ms (virtual time).
+async fn j1_movej_ms<S>(c: &mut realman_common::LineClient<S>, to_mdeg: i64) -> u128
+where
+    S: tokio::io::AsyncRead + tokio::io::AsyncWrite + Unpin,
+{
+    let start = tokio::time::Instant::now();
+    let ack = c
+        .ask(&format!(
+            r#"{{"command":"movej","joint":[{to_mdeg},0,0,0,0,0],"v":100,"r":0,"trajectory_connect":0}}"#
+        ))
+        .await;
+    assert_eq!(ack["receive_state"], true);
+    let (event, _) = wait_event(c, Duration::from_secs(20)).await;
+    assert_eq!(event.expect("arrival")["trajectory_state"], true);
+    start.elapsed().as_millis()
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_lower_joint_speed_limit_slows_planned_moves() {
+    let emu = emulator().await;
+    let mut c = client(&emu);
+    let fast = j1_movej_ms(&mut c, 90_000).await;
+    // Limits are written to a disabled joint only (§9): 7.5 RPM = 45 °/s.
+    let off = c
+        .ask(r#"{"command":"set_joint_en_state","joint_en_state":[1,0]}"#)
+        .await;
+    assert_eq!(off["joint_en_state"], true);
+    let set = c
+        .ask(r#"{"command":"set_joint_max_speed","joint_max_speed":[1,7500]}"#)
+        .await;
+    assert_eq!(set["joint_max_speed"], true);
+    c.ask(r#"{"command":"set_joint_en_state","joint_en_state":[1,1]}"#)
+        .await;
+    let slow = j1_movej_ms(&mut c, 0).await;
+    // Trapezoids with 540 °/s²: 90/180 + 180/540 ≈ 0.83 s; 90/45 + 45/540 ≈ 2.08 s (plus
+    // settling).
+    assert!((800..1000).contains(&fast), "fast move took {fast} ms");
+    assert!((2050..2400).contains(&slow), "slow move took {slow} ms");
+}

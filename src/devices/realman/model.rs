@@ -43,6 +43,150 @@ pub struct PoseDeg {
     pub euler_deg: [f64; 3],
 }
 
+/// How a stream's points reach the controller (docs/protocols/realman.md §4).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StreamMode {
+    /// `movej_canfd` / `movep_canfd` with `follow: false` (low follow).
+    Canfd,
+    /// `movej_canfd` / `movep_canfd` with `follow: true` (high follow, period ≤ 10 ms).
+    CanfdFollow,
+    /// `movej_follow` / `movep_follow` (online planning toward the latest point).
+    Follow,
+}
+
+/// `mode:` names of a stream.
+pub const STREAM_MODES: [(StreamMode, &str); 3] = [
+    (StreamMode::Canfd, "canfd"),
+    (StreamMode::CanfdFollow, "canfd_follow"),
+    (StreamMode::Follow, "follow"),
+];
+
+/// What a stream interpolates between.
+#[derive(Debug, Clone, PartialEq)]
+pub enum StreamPath {
+    /// Joint angles, degrees (`stream_joints`).
+    Joints {
+        /// First point.
+        from_deg: Vec<f64>,
+        /// Last point.
+        to_deg: Vec<f64>,
+    },
+    /// Poses (`stream_pose`): position and Euler angles interpolated component by component.
+    Pose {
+        /// First point.
+        from: PoseDeg,
+        /// Last point.
+        to: PoseDeg,
+    },
+}
+
+/// A stream of passthrough / follow points sent at a fixed period (in the run's clock).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Stream {
+    /// The interpolated path.
+    pub path: StreamPath,
+    /// Time from the first point to the last, ms.
+    pub duration_ms: u32,
+    /// Time between points, ms.
+    pub period_ms: u32,
+    /// Which command carries the points.
+    pub mode: StreamMode,
+    /// Wait for the last point (`false`: stream in the background while later steps run).
+    pub block: bool,
+}
+
+/// Cartesian axis of a step or teach jog.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum JogAxis {
+    /// x (rx for orientation).
+    X,
+    /// y (ry).
+    Y,
+    /// z (rz).
+    Z,
+}
+
+/// `axis:` names.
+pub const JOG_AXES: [(JogAxis, &str); 3] =
+    [(JogAxis::X, "x"), (JogAxis::Y, "y"), (JogAxis::Z, "z")];
+
+/// What a step or teach jog moves.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum JogTarget {
+    /// One joint (1-based): `set_joint_step` / `set_joint_teach`.
+    Joint(u8),
+    /// The tool position along an axis: `set_pos_step` / `set_pos_teach`.
+    Position(JogAxis),
+    /// The tool orientation about an axis: `set_ort_step` / `set_ort_teach`.
+    Orientation(JogAxis),
+}
+
+/// A motion parameter `set_param` / `get_param` name (docs/protocols/realman.md §8, §9).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Param {
+    /// End-effector line speed, m/s.
+    MaxLineSpeed,
+    /// End-effector line acceleration, m/s².
+    MaxLineAcc,
+    /// End-effector angular speed, rad/s.
+    MaxAngularSpeed,
+    /// End-effector angular acceleration, rad/s².
+    MaxAngularAcc,
+    /// Collision sensitivity 0..=8.
+    CollisionStage,
+    /// Self-collision detection, 0 or 1.
+    SelfCollision,
+    /// One joint's speed limit, °/s.
+    JointMaxSpeed,
+    /// One joint's acceleration limit, °/s².
+    JointMaxAcc,
+    /// One joint's lower position limit, °.
+    JointMinPos,
+    /// One joint's upper position limit, °.
+    JointMaxPos,
+    /// One DH row's alpha, °.
+    DhAlpha,
+    /// One DH row's a, m.
+    DhA,
+    /// One DH row's d, m.
+    DhD,
+    /// One DH row's offset, °.
+    DhOffset,
+}
+
+/// Parameter names as written (units in the names) and whether they need `joint:`.
+pub const PARAMS: [(Param, &str, bool); 14] = [
+    (Param::MaxLineSpeed, "max_line_speed_m_s", false),
+    (Param::MaxLineAcc, "max_line_acc_m_s2", false),
+    (Param::MaxAngularSpeed, "max_angular_speed_rad_s", false),
+    (Param::MaxAngularAcc, "max_angular_acc_rad_s2", false),
+    (Param::CollisionStage, "collision_stage", false),
+    (Param::SelfCollision, "self_collision", false),
+    (Param::JointMaxSpeed, "joint_max_speed_deg_s", true),
+    (Param::JointMaxAcc, "joint_max_acc_deg_s2", true),
+    (Param::JointMinPos, "joint_min_pos_deg", true),
+    (Param::JointMaxPos, "joint_max_pos_deg", true),
+    (Param::DhAlpha, "dh_alpha_deg", true),
+    (Param::DhA, "dh_a_m", true),
+    (Param::DhD, "dh_d_m", true),
+    (Param::DhOffset, "dh_offset_deg", true),
+];
+
+impl Param {
+    /// The name as written.
+    pub fn name(self) -> &'static str {
+        PARAMS
+            .iter()
+            .find(|(p, _, _)| *p == self)
+            .map_or("?", |(_, n, _)| n)
+    }
+
+    /// Whether the parameter belongs to one joint (`joint:` needed).
+    pub fn per_joint(self) -> bool {
+        PARAMS.iter().any(|(p, _, j)| *p == self && *j)
+    }
+}
+
 /// One `realman` step.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RealmanAction {
@@ -139,6 +283,62 @@ pub enum RmCommand {
     },
     /// Read the joint angles over TCP (`get_joint_degree`).
     ReadJoints,
+    /// Stream interpolated points (`stream_joints` / `stream_pose`).
+    Stream(Stream),
+    /// A step jog (`set_joint_step`, `set_pos_step`, `set_ort_step`): a single planned move.
+    Step {
+        /// What moves.
+        target: JogTarget,
+        /// Step: degrees for a joint or an orientation, metres for a position.
+        amount: f64,
+        /// Speed, %.
+        speed: u8,
+        /// Wait for the arrival event.
+        block: bool,
+    },
+    /// A teach jog (`set_joint_teach`, `set_pos_teach`, `set_ort_teach`): moves until
+    /// `set_stop_teach`.
+    Teach {
+        /// What moves.
+        target: JogTarget,
+        /// Positive direction.
+        positive: bool,
+        /// Speed, % of the limit.
+        speed: u8,
+    },
+    /// End a teach jog.
+    StopTeach,
+    /// Write a motion parameter.
+    SetParam {
+        /// Which.
+        param: Param,
+        /// Joint / DH row (1-based) of a per-joint parameter.
+        joint: Option<u8>,
+        /// Value in the unit the name gives.
+        value: f64,
+    },
+    /// Read a motion parameter (and compare it with an expectation).
+    GetParam {
+        /// Which.
+        param: Param,
+        /// Joint / DH row (1-based) of a per-joint parameter.
+        joint: Option<u8>,
+        /// Expected value.
+        expect: Option<Near>,
+    },
+    /// `set_arm_init`: end-effector limits back to the factory values.
+    ResetParams,
+    /// `set_DH_data_default`.
+    ResetDh,
+    /// `set_joint_zero_offset`, degrees per joint.
+    SetZeroOffset(Vec<f64>),
+    /// `set_joint_en_state`: enable or disable one joint (1-based).
+    JointEnable {
+        /// Joint.
+        joint: u8,
+        /// Enable.
+        on: bool,
+    },
     /// Open the connection again after a drop.
     Reconnect,
 }
@@ -168,6 +368,27 @@ impl RmCommand {
             Self::HandAngles { .. } => "hand_angles",
             Self::ReadJoints => "read_joints",
             Self::Reconnect => "reconnect",
+            Self::Stream(s) => match s.path {
+                StreamPath::Joints { .. } => "stream_joints",
+                StreamPath::Pose { .. } => "stream_pose",
+            },
+            Self::Step { target, .. } => match target {
+                JogTarget::Joint(_) => "set_joint_step",
+                JogTarget::Position(_) => "set_pos_step",
+                JogTarget::Orientation(_) => "set_ort_step",
+            },
+            Self::Teach { target, .. } => match target {
+                JogTarget::Joint(_) => "set_joint_teach",
+                JogTarget::Position(_) => "set_pos_teach",
+                JogTarget::Orientation(_) => "set_ort_teach",
+            },
+            Self::StopTeach => "set_stop_teach",
+            Self::SetParam { .. } => "set_param",
+            Self::GetParam { .. } => "get_param",
+            Self::ResetParams => "reset_params",
+            Self::ResetDh => "reset_dh",
+            Self::SetZeroOffset(_) => "set_zero_offset",
+            Self::JointEnable { .. } => "joint_enable",
         }
     }
 }

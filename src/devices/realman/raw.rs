@@ -46,6 +46,22 @@ pub(crate) struct RawRmStep {
     pub on: Option<S<bool>>,
     pub expect: Option<S<f64>>,
     pub tolerance: Option<S<f64>>,
+    // Streams (`stream_joints`, `stream_pose`).
+    pub from_deg: Option<S<Vec<f64>>>,
+    pub to_deg: Option<S<Vec<f64>>>,
+    pub from_position_m: Option<S<Vec<f64>>>,
+    pub from_euler_deg: Option<S<Vec<f64>>>,
+    pub duration_ms: Option<S<i64>>,
+    pub mode: Option<S<String>>,
+    // Step and teach jogs.
+    pub joint: Option<S<i64>>,
+    pub axis: Option<S<String>>,
+    pub direction: Option<S<String>>,
+    pub step_deg: Option<S<f64>>,
+    pub step_m: Option<S<f64>>,
+    // Motion parameters.
+    pub name: Option<S<String>>,
+    pub value: Option<S<f64>>,
 }
 
 /// Realman conditions in `expect` and `wait_until` (the arm as the driver's push feed and

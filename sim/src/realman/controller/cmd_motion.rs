@@ -4,6 +4,7 @@
 use super::super::kinematics::{self, Pose};
 use super::super::wire::{self, ack, Obj, Req};
 use super::motion::{Goal, Jog, MoveCommand, TrajectoryType};
+use super::stream::Tracking;
 use super::{Answer, ClientId, Controller};
 
 /// Answer a motion command, or `None` if `name` is not one.
@@ -267,7 +268,13 @@ fn passthrough(c: &mut Controller, name: &str, req: Req) {
             } else {
                 "move_through_pose"
             };
-            c.motion.set_stream(t, status);
+            // High follow (`follow: true` on a passthrough frame) bypasses the online planner.
+            let tracking = if name.ends_with("_canfd") && req.bool("follow") == Some(true) {
+                Tracking::Direct
+            } else {
+                Tracking::Planned
+            };
+            c.motion.set_stream(t, status, tracking);
         }
         None => tracing::debug!(
             command = name,

@@ -14,6 +14,7 @@ mod cmd_state;
 mod effectors;
 mod motion;
 mod status;
+mod stream;
 
 use std::collections::BTreeSet;
 use std::path::PathBuf;

@@ -5,8 +5,10 @@ use std::collections::VecDeque;
 
 use super::super::faults::codes;
 use super::super::kinematics::{self, Pose};
+use super::super::model::ArmModel;
 use super::super::planner::{self, CartesianLimits, PlanError, Trajectory};
 use super::super::wire::Obj;
+use super::stream::{JointLimits, Stream, Tracking, STREAM_IDLE_MS};
 use super::{ClientId, Controller, Event, STEP_S};
 
 /// Path-speed change per second when pausing / continuing (full speed to rest in 0.2 s).
@@ -19,8 +21,6 @@ const SLOW_STOP_RAMP_PER_S: f64 = 2.0;
 const ARRIVED_TOLERANCE_RAD: f64 = 1.75e-4;
 /// Longest wait for the arm to settle after the path's end, ms.
 const SETTLE_TIMEOUT_MS: u32 = 300;
-/// A streamed target that no new frame refreshes is dropped after this long, ms.
-const STREAM_IDLE_MS: u32 = 200;
 
 /// What a move aims at.
 #[derive(Debug, Clone, PartialEq)]
@@ -158,17 +158,6 @@ pub enum Jog {
     },
 }
 
-/// A streamed target (`movej_canfd`, `movep_canfd`, `*_follow`).
-#[derive(Debug, Clone, PartialEq)]
-pub struct Stream {
-    /// Target joints, rad.
-    pub target_rad: Vec<f64>,
-    /// `arm_current_status` while streaming.
-    pub status: &'static str,
-    /// ms since the last frame.
-    pub idle_ms: u32,
-}
-
 /// The queue and its modifiers.
 #[derive(Debug, Clone)]
 pub struct Motion {
@@ -245,12 +234,14 @@ impl Motion {
         self.jog = jog;
     }
 
-    pub(super) fn set_stream(&mut self, target_rad: Vec<f64>, status: &'static str) {
-        self.stream = Some(Stream {
-            target_rad,
-            status,
-            idle_ms: 0,
-        });
+    pub(super) fn set_stream(
+        &mut self,
+        target_rad: Vec<f64>,
+        status: &'static str,
+        tracking: Tracking,
+    ) {
+        let stream = Stream::new(target_rad, status, tracking, self.stream.as_ref());
+        self.stream = Some(stream);
     }
 
     /// Whether a planned move or jog is running (streaming does not count).
@@ -309,9 +300,23 @@ impl Controller {
         }
     }
 
+    /// The model as the planner should see it: the controller's current joint limits, speed
+    /// and acceleration tables (`set_joint_max_speed` and friends, docs/protocols/realman.md
+    /// §9) instead of the factory values.
+    fn planning_model(&self) -> ArmModel {
+        let mut model = self.model.clone();
+        model.joint_min_deg.clone_from(&self.params.min_deg);
+        model.joint_max_deg.clone_from(&self.params.max_deg);
+        model
+            .max_speed_deg_s
+            .clone_from(&self.params.max_speed_deg_s);
+        model.max_acc_deg_s2.clone_from(&self.params.max_acc_deg_s2);
+        model
+    }
+
     fn plan(&self, from: &[f64], goal: &Goal, speed_percent: f64) -> Result<Trajectory, Refusal> {
         let limits = self.cartesian_limits();
-        let model = &self.model;
+        let model = &self.planning_model();
         let result = match goal {
             Goal::Joint(to) => {
                 if self.beyond_limits(to).is_some() {
@@ -384,8 +389,13 @@ impl Controller {
                     .collect();
                 points.extend(last.iter().copied());
                 let limits = self.cartesian_limits();
-                let planned =
-                    planner::plan_spline(&self.model, &from, &points, speed_percent, &limits);
+                let planned = planner::plan_spline(
+                    &self.planning_model(),
+                    &from,
+                    &points,
+                    speed_percent,
+                    &limits,
+                );
                 match planned {
                     Ok(traj) => traj.sample(traj.duration_s()),
                     Err(e) => {
@@ -682,21 +692,19 @@ impl Controller {
     }
 
     fn tick_stream(&mut self) {
+        let p = &self.params;
+        let limits: Vec<JointLimits> = (0..self.setpoint_rad.len())
+            .map(|j| JointLimits {
+                min_rad: p.min_deg[j].to_radians(),
+                max_rad: p.max_deg[j].to_radians(),
+                speed_rad_s: p.max_speed_deg_s[j].to_radians(),
+                acc_rad_s2: p.max_acc_deg_s2[j].to_radians(),
+            })
+            .collect();
         let Some(stream) = &mut self.motion.stream else {
             return;
         };
-        stream.idle_ms += 1;
-        let mut done = true;
-        for (j, q) in self.setpoint_rad.iter_mut().enumerate() {
-            let target = stream.target_rad[j].clamp(
-                self.params.min_deg[j].to_radians(),
-                self.params.max_deg[j].to_radians(),
-            );
-            let max_step = self.params.max_speed_deg_s[j].to_radians() * STEP_S;
-            let delta = (target - *q).clamp(-max_step, max_step);
-            *q += delta;
-            done &= (target - *q).abs() < 1e-9;
-        }
+        let done = stream.advance(&mut self.setpoint_rad, &limits, STEP_S);
         if done && stream.idle_ms > STREAM_IDLE_MS {
             self.motion.stream = None;
         }

@@ -1,6 +1,11 @@
 //! A Realman arm on the bench: the [`Device`] that drives `driver::realman` against the
 //! in-process `sim::realman` emulator over in-memory streams (virtual or real time), with the
-//! UDP push carried to the driver's state feed through a channel.
+//! UDP push carried to the driver's state feed through a channel. The later command families
+//! live in [`stream`], [`jog`] and [`params`].
+
+mod jog;
+mod params;
+mod stream;
 
 use std::collections::VecDeque;
 use std::net::{IpAddr, Ipv4Addr, SocketAddr};
@@ -14,6 +19,7 @@ use driver::realman::{
 };
 use sim::realman::model::ArmModel;
 use sim::realman::{ControllerConfig, EmulatorConfig, RealmanEmulator, RealmanHandle, Transport};
+use tokio::task::JoinHandle;
 use tokio::time::Instant;
 
 use super::model::{Motion, PoseDeg, RealmanAction, RealmanSettings, RmCommand, RmFault};
@@ -63,6 +69,7 @@ fn push_settings(period_ms: u32, enable: bool) -> PushSettings {
     }
 }
 
+/// A scenario pose in the driver's units.
 fn pose(p: &PoseDeg) -> Pose {
     Pose {
         position_m: p.position_m,
@@ -166,6 +173,8 @@ pub(crate) struct RealmanDevice {
     /// Arrival times of the push datagrams of the last second.
     stamps: Arc<Mutex<VecDeque<Instant>>>,
     active: Mutex<Vec<RmFault>>,
+    /// A stream running in the background (`block: false`).
+    streaming: Mutex<Option<JoinHandle<()>>>,
 }
 
 impl RealmanDevice {
@@ -200,6 +209,7 @@ impl RealmanDevice {
             feed,
             stamps,
             active: Mutex::new(Vec::new()),
+            streaming: Mutex::new(None),
         })
     }
 
@@ -336,8 +346,41 @@ impl RealmanDevice {
                     self.with_emu(|h| h.connect(IpAddr::V4(HOST_IP)).map_err(|e| e.to_string()))?;
                 arm.reconnect_with(stream).await;
             }
+            RmCommand::Stream(s) => self.start_stream(arm, s).await?,
+            RmCommand::Step { .. } | RmCommand::Teach { .. } | RmCommand::StopTeach => {
+                jog::perform(arm, &a.command).await.map_err(derr)?;
+            }
+            RmCommand::SetParam { .. }
+            | RmCommand::GetParam { .. }
+            | RmCommand::ResetParams
+            | RmCommand::ResetDh
+            | RmCommand::SetZeroOffset(_)
+            | RmCommand::JointEnable { .. } => params::perform(arm, &a.command, &mut reply).await?,
         }
         Ok(reply)
+    }
+
+    /// Send a stream: here (`block`) or in a background task that a later stream replaces.
+    async fn start_stream(
+        &self,
+        arm: &RealmanClient,
+        s: &super::model::Stream,
+    ) -> Result<(), DeviceError> {
+        if let Some(previous) = lock(&self.streaming).take() {
+            previous.abort();
+        }
+        if s.block {
+            return stream::run(arm, s).await.map_err(derr);
+        }
+        let (arm, s) = (arm.clone(), s.clone());
+        let name = self.name.clone();
+        let task = tokio::spawn(async move {
+            if let Err(e) = stream::run(&arm, &s).await {
+                tracing::warn!(device = %name, error = %e, "Realman background stream stopped");
+            }
+        });
+        *lock(&self.streaming) = Some(task);
+        Ok(())
     }
 }
 
@@ -426,6 +469,9 @@ impl Device for RealmanDevice {
     }
 
     async fn shutdown(&self) {
+        if let Some(task) = lock(&self.streaming).take() {
+            task.abort();
+        }
         let emu = lock(&self.emu).take();
         if let Some(emu) = emu {
             emu.shutdown().await;

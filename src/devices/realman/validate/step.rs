@@ -1,84 +1,18 @@
-//! Layer 2 of the Realman grammar: the `realman` device kind, the `realman:` step, the arm
-//! conditions and the emulator faults.
+//! The `realman:` step: which keys each command takes, and the commands of the original
+//! vocabulary (moves, stops, power, push, gripper, hand); the later families live in
+//! [`super::stream`], [`super::jog`] and [`super::params`].
 
-use sim::realman::{RealmanFault, RealmanFaultKind};
-
-use super::model::{
-    Motion, PoseDeg, RealmanAction, RealmanSettings, RmCommand, RmCond, RmFault, ARM_STATES,
-    ERRORS, MODELS,
-};
-use super::raw::{RawConds, RawFault, RawRmStep, RawSettings, RawStep};
+use super::super::model::{Motion, PoseDeg, RealmanAction, RmCommand};
+use super::super::raw::RawRmStep;
+use super::{int_in, jog, joints, params, stream, MAX_CLIENTS};
 use crate::devices::Action;
 use crate::harness::error::Pos;
 use crate::harness::model::{ErrorClass, Near, StepKind};
 use crate::harness::raw::S;
 use crate::harness::validate::{pos, Ctx, Res};
 
-/// Default tolerances of the conditions.
-const DEFAULT_TOLERANCE_DEG: f64 = 0.05;
-const DEFAULT_TOLERANCE_M: f64 = 0.001;
-const DEFAULT_TOLERANCE_HZ: f64 = 2.0;
-/// Most driver connections a scenario may open.
-const MAX_CLIENTS: i64 = 4;
-
-/// The settings of a `kind: realman` device.
-pub(crate) fn settings(ctx: &Ctx<'_>, d: &RawSettings, _at: Pos) -> Res<RealmanSettings> {
-    let model = match &d.model {
-        Some(m) => ctx.choice(m, "model", &MODELS)?,
-        None => "RM65-B",
-    };
-    let dof = if model == "RM75-B" { 7 } else { 6 };
-    let initial_joints_deg = match &d.initial_joints_deg {
-        Some(j) => Some(joints(ctx, j, "initial_joints_deg", dof)?),
-        None => None,
-    };
-    let clients = match &d.clients {
-        Some(c) if (1..=MAX_CLIENTS).contains(&c.value) => c.value as usize,
-        Some(c) => {
-            return Err(ctx.err(
-                pos(c),
-                format!(
-                    "`clients`: {} out of range, expected 1..={MAX_CLIENTS}",
-                    c.value
-                ),
-            ))
-        }
-        None => 1,
-    };
-    Ok(RealmanSettings {
-        model,
-        initial_joints_deg,
-        gripper: d.gripper.as_ref().is_none_or(|g| g.value),
-        clients,
-    })
-}
-
-fn joints(ctx: &Ctx<'_>, v: &S<Vec<f64>>, key: &str, dof: usize) -> Res<Vec<f64>> {
-    if v.value.len() != dof || v.value.iter().any(|x| !x.is_finite()) {
-        return Err(ctx.err(
-            pos(v),
-            format!(
-                "`{key}` needs {dof} finite angles (degrees), got {:?}",
-                v.value
-            ),
-        ));
-    }
-    Ok(v.value.clone())
-}
-
-fn int_in(ctx: &Ctx<'_>, v: &S<i64>, key: &str, lo: i64, hi: i64) -> Res<i64> {
-    if (lo..=hi).contains(&v.value) {
-        Ok(v.value)
-    } else {
-        Err(ctx.err(
-            pos(v),
-            format!("`{key}`: {} out of range, expected {lo}..={hi}", v.value),
-        ))
-    }
-}
-
 /// Which argument keys each command takes (`client` aside).
-const COMMAND_KEYS: [(&str, &[&str]); 21] = [
+const COMMAND_KEYS: [(&str, &[&str]); 36] = [
     ("handshake", &[]),
     ("movej", &["joints_deg", "speed", "blend", "queue", "block"]),
     (
@@ -121,6 +55,43 @@ const COMMAND_KEYS: [(&str, &[&str]); 21] = [
     ("hand_angles", &["angles", "block"]),
     ("read_joints", &[]),
     ("reconnect", &[]),
+    (
+        "stream_joints",
+        &[
+            "from_deg",
+            "to_deg",
+            "duration_ms",
+            "period_ms",
+            "mode",
+            "block",
+        ],
+    ),
+    (
+        "stream_pose",
+        &[
+            "from_position_m",
+            "from_euler_deg",
+            "position_m",
+            "euler_deg",
+            "duration_ms",
+            "period_ms",
+            "mode",
+            "block",
+        ],
+    ),
+    ("set_joint_step", &["joint", "step_deg", "speed", "block"]),
+    ("set_pos_step", &["axis", "step_m", "speed", "block"]),
+    ("set_ort_step", &["axis", "step_deg", "speed", "block"]),
+    ("set_joint_teach", &["joint", "direction", "speed"]),
+    ("set_pos_teach", &["axis", "direction", "speed"]),
+    ("set_ort_teach", &["axis", "direction", "speed"]),
+    ("set_stop_teach", &[]),
+    ("set_param", &["name", "joint", "value"]),
+    ("get_param", &["name", "joint", "expect", "tolerance"]),
+    ("reset_params", &[]),
+    ("reset_dh", &[]),
+    ("set_zero_offset", &["joints_deg"]),
+    ("joint_enable", &["joint", "on"]),
 ];
 
 fn present_keys(a: &RawRmStep) -> Vec<(&'static str, Pos)> {
@@ -150,18 +121,24 @@ fn present_keys(a: &RawRmStep) -> Vec<(&'static str, Pos)> {
         on,
         expect,
         tolerance,
+        from_deg,
+        to_deg,
+        from_position_m,
+        from_euler_deg,
+        duration_ms,
+        mode,
+        joint,
+        axis,
+        direction,
+        step_deg,
+        step_m,
+        name,
+        value,
     );
     out
 }
 
-/// A Realman step.
-pub(crate) fn step(ctx: &Ctx<'_>, raw: &RawStep, at: Pos) -> Res<(&'static str, StepKind)> {
-    match raw {
-        RawStep::Realman(a) => realman_step(ctx, a, at),
-    }
-}
-
-fn pose(
+pub(super) fn pose(
     ctx: &Ctx<'_>,
     position: &Option<S<Vec<f64>>>,
     euler: &Option<S<Vec<f64>>>,
@@ -327,12 +304,16 @@ fn command(ctx: &Ctx<'_>, a: &RawRmStep, name: &str, at: Pos) -> Res<RmCommand> 
             RmCommand::HandAngles { angles, block }
         }
         "read_joints" => RmCommand::ReadJoints,
-        _ => RmCommand::Reconnect,
+        "reconnect" => RmCommand::Reconnect,
+        "stream_joints" | "stream_pose" => stream::command(ctx, a, name, at)?,
+        "set_joint_step" | "set_pos_step" | "set_ort_step" | "set_joint_teach"
+        | "set_pos_teach" | "set_ort_teach" | "set_stop_teach" => jog::command(ctx, a, name, at)?,
+        _ => params::command(ctx, a, name, at)?,
     })
 }
 
 /// A `realman:` step.
-fn realman_step(ctx: &Ctx<'_>, a: &RawRmStep, at: Pos) -> Res<(&'static str, StepKind)> {
+pub(super) fn realman_step(ctx: &Ctx<'_>, a: &RawRmStep, at: Pos) -> Res<(&'static str, StepKind)> {
     let names: Vec<&str> = COMMAND_KEYS.iter().map(|(n, _)| *n).collect();
     let Some(cmd) = &a.command else {
         return Err(ctx.err(
@@ -390,8 +371,8 @@ fn realman_step(ctx: &Ctx<'_>, a: &RawRmStep, at: Pos) -> Res<(&'static str, Ste
     ))
 }
 
-/// Step labels for reports.
-const LABELS: [(&str, &str); 21] = [
+/// Step labels for reports (`realman <command>`, static for the report).
+const LABELS: [(&str, &str); 36] = [
     ("handshake", "realman handshake"),
     ("movej", "realman movej"),
     ("movel", "realman movel"),
@@ -413,190 +394,32 @@ const LABELS: [(&str, &str); 21] = [
     ("hand_angles", "realman hand_angles"),
     ("read_joints", "realman read_joints"),
     ("reconnect", "realman reconnect"),
+    ("stream_joints", "realman stream_joints"),
+    ("stream_pose", "realman stream_pose"),
+    ("set_joint_step", "realman set_joint_step"),
+    ("set_pos_step", "realman set_pos_step"),
+    ("set_ort_step", "realman set_ort_step"),
+    ("set_joint_teach", "realman set_joint_teach"),
+    ("set_pos_teach", "realman set_pos_teach"),
+    ("set_ort_teach", "realman set_ort_teach"),
+    ("set_stop_teach", "realman set_stop_teach"),
+    ("set_param", "realman set_param"),
+    ("get_param", "realman get_param"),
+    ("reset_params", "realman reset_params"),
+    ("reset_dh", "realman reset_dh"),
+    ("set_zero_offset", "realman set_zero_offset"),
+    ("joint_enable", "realman joint_enable"),
 ];
-
-/// A Realman emulator fault with its arguments.
-pub(crate) fn fault(ctx: &Ctx<'_>, raw: &RawFault, at: Pos) -> Res<RmFault> {
-    let a = &raw.args;
-    let name = raw.kind.name();
-    let int = |v: &Option<S<i64>>, key: &str, lo: i64, hi: i64| -> Res<i64> {
-        int_in(ctx, ctx.required(v, key, name, at)?, key, lo, hi)
-    };
-    let f = match raw.kind {
-        RealmanFaultKind::ConnectionDrop => RealmanFault::ConnectionDrop { peer_ip: None },
-        RealmanFaultKind::ReplyDelay => RealmanFault::ReplyDelay {
-            delay_ms: int(&a.delay_ms, "delay_ms", 1, 60_000)? as u64,
-        },
-        RealmanFaultKind::MalformedReply => RealmanFault::MalformedReply {
-            count: int(&a.count, "count", 1, 1000)? as u32,
-        },
-        RealmanFaultKind::UdpLoss => RealmanFault::UdpLoss {
-            permille: int(&a.permille, "permille", 0, 1000)? as u16,
-        },
-        RealmanFaultKind::UdpReorder => RealmanFault::UdpReorder,
-        RealmanFaultKind::JointError => RealmanFault::JointError {
-            joint: int(&a.joint, "joint", 1, 7)? as u8,
-            code: int(&a.code, "code", 1, 0xFFFF)? as u16,
-        },
-        RealmanFaultKind::PowerLoss => RealmanFault::PowerLoss,
-        RealmanFaultKind::Collision => RealmanFault::Collision,
-        RealmanFaultKind::EStop => RealmanFault::EStop,
-        RealmanFaultKind::GripperFault => RealmanFault::GripperFault {
-            bits: int(&a.bits, "bits", 1, 0xFF)? as u8,
-        },
-    };
-    Ok(RmFault(f))
-}
-
-/// The arm conditions of `expect` / `wait_until`.
-pub(crate) fn checks(ctx: &Ctx<'_>, c: &RawConds, step: &str, at: Pos) -> Res<Vec<RmCond>> {
-    let mut out = Vec::new();
-    let tol = |t: &Option<S<f64>>, key: &str, default: f64| {
-        t.as_ref().map_or(Ok(default), |t| ctx.non_negative(t, key))
-    };
-    if let Some(j) = &c.joints_deg {
-        let dof = j.value.len().clamp(6, 7);
-        out.push(RmCond::Joints(
-            joints(ctx, j, "joints_deg", dof)?,
-            tol(&c.tolerance_deg, "tolerance_deg", DEFAULT_TOLERANCE_DEG)?,
-        ));
-    }
-    if let Some(p) = &c.position_m {
-        out.push(RmCond::Position(
-            ctx.array::<3>(p, "position_m")?,
-            tol(&c.tolerance_m, "tolerance_m", DEFAULT_TOLERANCE_M)?,
-        ));
-    }
-    if let Some(s) = &c.arm_state {
-        let table: Vec<(&'static str, &str)> = ARM_STATES.iter().map(|n| (*n, *n)).collect();
-        out.push(RmCond::ArmState(ctx.choice(s, "arm_state", &table)?));
-    }
-    if let Some(list) = &c.errors {
-        let mut names = Vec::new();
-        for e in &list.value {
-            let table: Vec<(&'static str, &str)> = ERRORS.iter().map(|(n, _)| (*n, *n)).collect();
-            names.push(ctx.choice(e, "errors", &table)?);
-        }
-        // In table order, as the observation lists them.
-        let ordered = ERRORS
-            .iter()
-            .map(|(n, _)| *n)
-            .filter(|n| names.contains(n))
-            .collect();
-        out.push(RmCond::Errors(ordered));
-    }
-    if let Some(e) = &c.joints_enabled {
-        out.push(RmCond::Enabled(e.value.clone()));
-    }
-    if let Some(h) = &c.push_hz {
-        out.push(RmCond::PushHz(Near {
-            value: ctx.non_negative(h, "push_hz")?,
-            tolerance: tol(&c.tolerance_hz, "tolerance_hz", DEFAULT_TOLERANCE_HZ)?,
-        }));
-    }
-    if let Some(k) = &c.connected {
-        out.push(RmCond::Connected(k.value));
-    }
-    if out.is_empty() {
-        return Err(ctx.err(at, format!("`{step}` has no condition")));
-    }
-    Ok(out)
-}
 
 #[cfg(test)]
 mod tests {
-    use std::path::Path;
-
-    use sim::realman::RealmanFault;
-
-    use crate::devices::realman::model::{RmCommand, RmCond};
-    use crate::devices::{Action, Check, DeviceKind};
-    use crate::harness::model::StepKind;
-    use crate::harness::parse_scenario;
-    use crate::harness::test_support::error_of;
-
-    const BENCH: &str = "bench:\n  devices:\n    arm: {kind: realman, clients: 2}\n";
+    use super::{COMMAND_KEYS, LABELS};
 
     #[test]
-    fn a_valid_bench_step_condition_and_fault_are_typed() {
-        let text = format!(
-            "{BENCH}faults:\n  - {{at_ms: 100, for_ms: 50, fault: {{reply_delay: {{delay_ms: 600}}}}}}\nsteps:\n  - realman: {{do: movej, joints_deg: [10, 20, 30, 40, 50, 60], speed: 30, blend: 20, queue: true, client: 2}}\n  - wait_until: {{joints_deg: [10, 20, 30, 40, 50, 60], arm_state: idle, errors: [collision, beyond_joint_limit], timeout_ms: 100}}\n"
-        );
-        let s = parse_scenario(Path::new("ok.yaml"), &text).expect("valid");
-        let DeviceKind::Realman(settings) = &s.bench.devices[0].kind else {
-            panic!("not a realman device");
-        };
-        assert_eq!((settings.model, settings.clients), ("RM65-B", 2));
-        let StepKind::Action {
-            action: Action::Realman(a),
-            ..
-        } = &s.steps[0].kind
-        else {
-            panic!("not a realman action");
-        };
-        assert_eq!(a.client, 1);
-        let RmCommand::MoveJ(j, m) = &a.command else {
-            panic!("not movej: {:?}", a.command);
-        };
-        assert_eq!(j[5], 60.0);
-        assert!(m.queue && m.block && m.speed == 30 && m.blend == 20);
-        let StepKind::WaitUntil { checks, .. } = &s.steps[1].kind else {
-            panic!("not wait_until");
-        };
-        // Error names come back in table (code) order.
-        assert!(checks.contains(&Check::Realman(RmCond::Errors(vec![
-            "beyond_joint_limit",
-            "collision"
-        ]))));
-        assert!(s.faults[0]
-            .fault
-            .describe()
-            .starts_with("reply_delay 600 ms ("));
-        let crate::harness::model::FaultSpec::Emulator {
-            fault: crate::devices::DeviceFault::Realman(f),
-            ..
-        } = &s.faults[0].fault
-        else {
-            panic!("not a realman fault");
-        };
-        assert_eq!(f.0, RealmanFault::ReplyDelay { delay_ms: 600 });
-    }
-
-    #[test]
-    fn bad_arguments_are_errors_at_their_position() {
-        let e = error_of(&format!(
-            "{BENCH}steps:\n  - realman: {{do: movej, joints_deg: [1, 2, 3], speed: 30}}\n"
-        ));
-        assert!(
-            e.starts_with("broken.yaml:5:") && e.contains("`joints_deg` needs 6"),
-            "{e}"
-        );
-        let e = error_of(&format!(
-            "{BENCH}steps:\n  - realman: {{do: movej, joints_deg: [0, 0, 0, 0, 0, 0], speed: 101}}\n"
-        ));
-        assert!(
-            e.contains("`speed`: 101 out of range, expected 1..=100"),
-            "{e}"
-        );
-        let e = error_of(&format!(
-            "{BENCH}steps:\n  - realman: {{do: pause, speed: 3}}\n"
-        ));
-        assert!(e.contains("`speed` does not apply to `do: pause`"), "{e}");
-        let e = error_of(&format!(
-            "{BENCH}steps:\n  - realman: {{do: push, period_ms: 7}}\n"
-        ));
-        assert!(e.contains("multiple of 5"), "{e}");
-        let e = error_of(&format!(
-            "{BENCH}steps:\n  - realman: {{do: read_joints, client: 5}}\n"
-        ));
-        assert!(e.contains("`client`: 5 out of range"), "{e}");
-        let e = error_of(&format!(
-            "{BENCH}faults:\n  - {{at_ms: 5, fault: {{joint_error: {{joint: 3}}}}}}\nsteps:\n  - wait_ms: 1\n"
-        ));
-        assert!(e.contains("`joint_error` needs `code`"), "{e}");
-        let e = error_of(&format!(
-            "{BENCH}steps:\n  - expect: {{arm_state: dancing}}\n"
-        ));
-        assert!(e.contains("`arm_state`: unknown value `dancing`"), "{e}");
+    fn every_command_has_its_label() {
+        for ((name, _), (label_of, label)) in COMMAND_KEYS.iter().zip(LABELS.iter()) {
+            assert_eq!(name, label_of);
+            assert_eq!(*label, format!("realman {name}"));
+        }
     }
 }
