@@ -157,6 +157,11 @@ impl ArmDevice {
                     fail(format!("joints_deg {:?}", round(have, 0.01)))
                 }
             }
+            (ArmCond::GripperActpos(want, tol), Some(s)) => match &s.gripper_state {
+                Some(g) if (g.actpos - want).abs() <= *tol => Ok(()),
+                Some(g) => fail(format!("gripper_actpos {}", g.actpos)),
+                None => fail("no gripper state".to_owned()),
+            },
             (ArmCond::Position(want, tol), Some(s)) => {
                 let have = s.ee_pose.position_m;
                 let ok = have.iter().zip(want).all(|(h, w)| (h - w).abs() <= *tol);

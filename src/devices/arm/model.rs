@@ -104,6 +104,8 @@ pub enum ArmCond {
     Position([f64; 3], f64),
     /// Whether the arm is connected.
     Connected(bool),
+    /// Gripper aperture (0 closed – 1000 open) within a tolerance.
+    GripperActpos(i32, i32),
 }
 
 impl ArmCond {
@@ -113,6 +115,7 @@ impl ArmCond {
             Self::Joints(j, tol) => format!("joints_deg {j:?} ±{tol}"),
             Self::Position(p, tol) => format!("position_m {p:?} ±{tol}"),
             Self::Connected(c) => format!("connected {c}"),
+            Self::GripperActpos(a, tol) => format!("gripper_actpos {a} ±{tol}"),
         }
     }
 }

@@ -45,15 +45,19 @@ pub(crate) struct RawConds {
     pub position_m: Option<S<Vec<f64>>>,
     pub tolerance_m: Option<S<f64>>,
     pub connected: Option<S<bool>>,
+    pub gripper_actpos: Option<S<i64>>,
+    pub tolerance_actpos: Option<S<i64>>,
 }
 
 /// The keys of [`RawConds`].
-pub(crate) const CONDITION_KEYS: [&str; 5] = [
+pub(crate) const CONDITION_KEYS: [&str; 7] = [
     "joints_deg",
     "tolerance_deg",
     "position_m",
     "tolerance_m",
     "connected",
+    "gripper_actpos",
+    "tolerance_actpos",
 ];
 
 one_key_enum! {

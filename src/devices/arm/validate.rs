@@ -284,6 +284,11 @@ pub(crate) fn checks(ctx: &Ctx<'_>, c: &RawConds, _step: &str, _at: Pos) -> Res<
             .map_or(Ok(DEFAULT_TOLERANCE_M), |t| ctx.non_negative(t, "tolerance_m"))?;
         out.push(ArmCond::Position(ctx.array::<3>(p, "position_m")?, tol));
     }
+    if let Some(g) = &c.gripper_actpos {
+        let actpos = int_in(ctx, &c.gripper_actpos, "gripper_actpos", (0, 1000), g.value)?;
+        let tol = int_in(ctx, &c.tolerance_actpos, "tolerance_actpos", (0, 1000), 10)?;
+        out.push(ArmCond::GripperActpos(actpos as i32, tol as i32));
+    }
     if let Some(c) = &c.connected {
         out.push(ArmCond::Connected(c.value));
     }
