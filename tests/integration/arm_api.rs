@@ -11,9 +11,9 @@ use std::time::Duration;
 
 use bus::virtual_bus::{VirtualBus, VirtualBusConfig};
 use driver::arm::{
-    create_arm_from_config, AbcErrorCode, ArmError, ArmInterface, IkMode, Method, MoveOptions,
-    PeripheralReadWriteParams, PiperArm, PiperArmOptions, Pose, RealmanArm, RealmanArmOptions,
-    TrajectoryMode, Vendor,
+    create_arm_from_config, AbcErrorCode, ArmCurrentStatus, ArmError, ArmInterface, IkMode, Method,
+    MoveOptions, PeripheralReadWriteParams, PiperArm, PiperArmOptions, Pose, RealmanArm,
+    RealmanArmOptions, TrajectoryMode, Vendor,
 };
 use driver::piper::PiperBuilder;
 use driver::realman::{ClientConfig, JointSpeedUnit, RealmanClient, StateFeed};
@@ -247,6 +247,13 @@ async fn the_realtime_stream_runs_at_the_arm_rate() {
         assert_eq!(s.name, case.arm.name());
         assert_eq!(s.joint_status.joint_position.len(), 6);
         assert_eq!(s.joint_status.joint_en_flag, vec![true; 6]);
+        assert_eq!(s.joint_status.joint_speed.len(), 6);
+        assert_eq!(s.arm_current_status, ArmCurrentStatus::Idle);
+        assert!(
+            s.since_connect >= Duration::from_secs(1),
+            "{:?}",
+            s.since_connect
+        );
     }
 }
 

@@ -136,6 +136,7 @@ mod tests {
         ArmRealtimeState {
             name: "a".into(),
             timestamp: std::time::SystemTime::UNIX_EPOCH,
+            since_connect: std::time::Duration::ZERO,
             joint_status: JointState {
                 joint_position: vec![n],
                 ..JointState::default()

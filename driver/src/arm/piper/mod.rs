@@ -169,16 +169,22 @@ impl PiperArm {
         let hub = self.hub.clone();
         let name = self.name.clone();
         let stroke = self.options.gripper_max_stroke_m;
+        let start = tokio::time::Instant::now();
         tokio::spawn(async move {
             let mut last_seq = 0;
             while rx.changed().await.is_ok() {
-                let state = rx.borrow_and_update().clone();
-                let seq = state.joints.as_ref().map_or(0, |j| j.seq);
-                if seq == last_seq {
-                    continue;
-                }
-                last_seq = seq;
-                if let Some(s) = convert::realtime(&name, &state, stroke) {
+                // Converted under the borrow: most changes are other frames of the cycle and
+                // cost one comparison, not a copy of the state.
+                let sample = {
+                    let state = rx.borrow_and_update();
+                    let seq = state.joints.as_ref().map_or(0, |j| j.seq);
+                    if seq == last_seq {
+                        continue;
+                    }
+                    last_seq = seq;
+                    convert::realtime(&name, start.elapsed(), &state, stroke)
+                };
+                if let Some(s) = sample {
                     hub.publish(s);
                 }
             }

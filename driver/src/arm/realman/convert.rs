@@ -118,10 +118,16 @@ fn status(s: &ArmState) -> ArmCurrentStatus {
 }
 
 /// One pushed sample in the API's units.
-pub(crate) fn realtime(name: &str, s: &ArmState, g: Option<GripperState>) -> ArmRealtimeState {
+pub(crate) fn realtime(
+    name: &str,
+    since_connect: std::time::Duration,
+    s: &ArmState,
+    g: Option<GripperState>,
+) -> ArmRealtimeState {
     ArmRealtimeState {
         name: name.to_string(),
         timestamp: SystemTime::now(),
+        since_connect,
         joint_status: JointState {
             joint_position: s.joints_rad.iter().map(|r| r.to_degrees()).collect(),
             joint_speed: s
