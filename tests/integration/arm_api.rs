@@ -529,3 +529,83 @@ fn config_file_errors_name_the_file_the_key_and_the_value() {
     let e = create_arm_from_config(&gone).err().expect("no file");
     assert!(e.message.contains("absent.json"), "{e}");
 }
+
+#[tokio::test(start_paused = true)]
+async fn realman_refusals_pause_and_reconnect_map_to_their_codes() {
+    let c = realman_case(5).await;
+    let arm = c.arm.as_ref();
+    let e = arm.get_joint_degree().await.unwrap_err();
+    assert_eq!(e.code, AbcErrorCode::NotInitialized);
+    arm.connect().await.unwrap();
+    arm.connect().await.expect("connect twice is a no-op");
+
+    // J2 131° is beyond the RM65-B's ±130°: the controller answers false.
+    let e = arm
+        .move_joint_position(&[0.0, 131.0, 0.0, 0.0, 0.0, 0.0], MoveOptions::blocking(20))
+        .await
+        .unwrap_err();
+    assert_eq!(e.code, AbcErrorCode::ArmCtrlFalse, "{e}");
+    let e = arm
+        .move_joint_position(&[0.0; 5], MoveOptions::blocking(20))
+        .await
+        .unwrap_err();
+    assert_eq!(e.code, AbcErrorCode::InvalidArgument, "{e}");
+    let e = arm
+        .move_joint_position(&[0.0; 6], MoveOptions::blocking(0))
+        .await
+        .unwrap_err();
+    assert_eq!(e.code, AbcErrorCode::ParamOutOfRange, "{e}");
+
+    // Pause holds the arm part way; continue finishes the move.
+    let mut sub = arm.subscribe_realtime();
+    arm.move_joint_position(&c.target_deg, MoveOptions::non_blocking(20))
+        .await
+        .unwrap();
+    sleep(Duration::from_millis(500)).await;
+    arm.set_arm_pause().await.unwrap();
+    sleep(Duration::from_millis(200)).await;
+    let held = arm.get_joint_degree().await.unwrap();
+    sleep(Duration::from_millis(500)).await;
+    assert!(max_diff(&held, &arm.get_joint_degree().await.unwrap()) < 0.01);
+    assert!(max_diff(&held, &c.target_deg) > 1.0, "paused at {held:?}");
+    while sub.try_recv().is_some() {}
+    let s = sub.recv().await.unwrap();
+    assert_eq!(s.arm_current_status, ArmCurrentStatus::Paused);
+    arm.set_arm_continue().await.unwrap();
+    let arrived = tokio::time::timeout(Duration::from_secs(30), async {
+        loop {
+            let s = sub.recv().await.unwrap();
+            if s.arm_current_status == ArmCurrentStatus::Idle {
+                return s;
+            }
+        }
+    })
+    .await
+    .expect("idle again after continue");
+    assert!(max_diff(&arrived.joint_status.joint_position, &c.target_deg) < 0.02);
+
+    // A client handed in is used once: after disconnect there is nothing to reconnect with.
+    arm.disconnect().await;
+    assert_eq!(
+        arm.connect().await.unwrap_err().code,
+        AbcErrorCode::InvalidHandle
+    );
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn nothing_listening_is_a_send_failure_naming_the_address() {
+    // A port that was free a moment ago: nothing accepts on it.
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .and_then(|l| l.local_addr())
+        .unwrap()
+        .port();
+    let dir = tempfile::tempdir().unwrap();
+    let text = format!(
+        r#"{{"arm_type": "realman", "arm_name": "a", "ip": "127.0.0.1", "port": "{port}",
+            "udp_ip": "127.0.0.1", "udp_port": "0", "udp_cycle": "1"}}"#
+    );
+    let arm = create_arm_from_config(write_config(&dir, "arm.json", &text)).unwrap();
+    let e = arm.connect().await.unwrap_err();
+    assert_eq!(e.code, AbcErrorCode::ArmDataSendFailed, "{e}");
+    assert!(e.message.contains(&format!("127.0.0.1:{port}")), "{e}");
+}
