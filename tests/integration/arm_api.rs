@@ -264,10 +264,12 @@ async fn the_callback_form_sees_the_motion() {
         let seen = Arc::new(AtomicUsize::new(0));
         let last_j1 = Arc::new(std::sync::Mutex::new(f64::NAN));
         let (s, l) = (seen.clone(), last_j1.clone());
-        c.arm.realtime_arm_state_call_back(Box::new(move |state| {
-            s.fetch_add(1, Ordering::SeqCst);
-            *l.lock().unwrap() = state.joint_status.joint_position[0];
-        }));
+        c.arm
+            .realtime_arm_state_call_back(Box::new(move |state| {
+                s.fetch_add(1, Ordering::SeqCst);
+                *l.lock().unwrap() = state.joint_status.joint_position[0];
+            }))
+            .unwrap();
         c.arm
             .move_joint_position(&c.target_deg, MoveOptions::blocking(50))
             .await
@@ -608,4 +610,27 @@ async fn nothing_listening_is_a_send_failure_naming_the_address() {
     let e = arm.connect().await.unwrap_err();
     assert_eq!(e.code, AbcErrorCode::ArmDataSendFailed, "{e}");
     assert!(e.message.contains(&format!("127.0.0.1:{port}")), "{e}");
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_stopped_piper_refuses_blocking_moves_with_arm_error() {
+    let c = piper_case().await;
+    let arm = c.arm.as_ref();
+    arm.connect().await.unwrap();
+    arm.move_joint_position(&c.target_deg, MoveOptions::non_blocking(20))
+        .await
+        .unwrap();
+    sleep(Duration::from_millis(300)).await;
+    arm.set_arm_stop().await.unwrap();
+    sleep(Duration::from_millis(100)).await;
+    let mut sub = arm.subscribe_realtime();
+    assert_eq!(
+        sub.recv().await.unwrap().arm_current_status,
+        ArmCurrentStatus::Stopped
+    );
+    let e = arm
+        .move_joint_position(&[0.0; 6], MoveOptions::blocking(20))
+        .await
+        .unwrap_err();
+    assert_eq!(e.code, AbcErrorCode::ArmError, "{e}");
 }
