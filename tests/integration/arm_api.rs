@@ -130,6 +130,20 @@ async fn both_backends_move_read_joints_and_round_trip_the_kinematics() {
         let q = arm.get_joint_degree().await.expect("joints");
         assert!(max_diff(&q, &c.target_deg) < 0.25, "{v}: at {q:?}");
 
+        // The client-side FK agrees with the pose the arm itself reports.
+        sleep(Duration::from_millis(50)).await;
+        let s = arm.subscribe_realtime().recv().await.unwrap();
+        let fk = arm
+            .forward_kinematics(&s.joint_status.joint_position)
+            .await
+            .unwrap();
+        let (dp, dr) = pose_error(&fk, &s.ee_pose);
+        assert!(
+            dp < 1e-4 && dr < 1e-3,
+            "{v}: FK {fk:?} vs reported {:?}",
+            s.ee_pose
+        );
+
         // FK then IK from a nearby reference gives the same pose back.
         let pose = arm.forward_kinematics(&c.target_deg).await.expect("fk");
         let reference: Vec<f64> = c.target_deg.iter().map(|d| d + 3.0).collect();

@@ -54,7 +54,8 @@ pub(crate) fn smoothing(mode: TrajectoryMode) -> Smoothing {
     }
 }
 
-/// The kinematic chain from the controller's DH table and joint limits.
+/// The kinematic chain from the controller's DH table and joint limits, reporting the tool in
+/// the work frame that were current at connect (as the controller's own poses are).
 pub(crate) fn chain(h: &rm::Handshake) -> Chain {
     Chain::new(
         h.dh.iter()
@@ -76,6 +77,10 @@ pub(crate) fn chain(h: &rm::Handshake) -> Chain {
                     .unwrap_or(std::f64::consts::PI),
             })
             .collect(),
+    )
+    .with_frames(
+        &pose_from_rm(&h.work_frame.pose),
+        &pose_from_rm(&h.tool_frame.pose),
     )
 }
 
