@@ -68,7 +68,7 @@ async fn main() -> anyhow::Result<()> {
     let counter = states.clone();
     arm.realtime_arm_state_call_back(Box::new(move |_| {
         counter.fetch_add(1, Ordering::Relaxed);
-    }));
+    }))?;
     let started = Instant::now();
 
     arm.move_joint_position(&HOME_DEG, MoveOptions::blocking(50))

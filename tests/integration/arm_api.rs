@@ -11,9 +11,9 @@ use std::time::Duration;
 
 use bus::virtual_bus::{VirtualBus, VirtualBusConfig};
 use driver::arm::{
-    create_arm_from_config, AbcErrorCode, ArmError, ArmInterface, IkMode, Method, MoveOptions,
-    PeripheralReadWriteParams, PiperArm, PiperArmOptions, Pose, RealmanArm, RealmanArmOptions,
-    TrajectoryMode, Vendor,
+    create_arm_from_config, AbcErrorCode, ArmCurrentStatus, ArmError, ArmInterface, IkMode, Method,
+    MoveOptions, PeripheralReadWriteParams, PiperArm, PiperArmOptions, Pose, RealmanArm,
+    RealmanArmOptions, TrajectoryMode, Vendor,
 };
 use driver::piper::PiperBuilder;
 use driver::realman::{ClientConfig, JointSpeedUnit, RealmanClient, StateFeed};
@@ -129,6 +129,20 @@ async fn both_backends_move_read_joints_and_round_trip_the_kinematics() {
             .unwrap_or_else(|e| panic!("{v}: move_joint_position: {e}"));
         let q = arm.get_joint_degree().await.expect("joints");
         assert!(max_diff(&q, &c.target_deg) < 0.25, "{v}: at {q:?}");
+
+        // The client-side FK agrees with the pose the arm itself reports.
+        sleep(Duration::from_millis(50)).await;
+        let s = arm.subscribe_realtime().recv().await.unwrap();
+        let fk = arm
+            .forward_kinematics(&s.joint_status.joint_position)
+            .await
+            .unwrap();
+        let (dp, dr) = pose_error(&fk, &s.ee_pose);
+        assert!(
+            dp < 1e-4 && dr < 1e-3,
+            "{v}: FK {fk:?} vs reported {:?}",
+            s.ee_pose
+        );
 
         // FK then IK from a nearby reference gives the same pose back.
         let pose = arm.forward_kinematics(&c.target_deg).await.expect("fk");
@@ -247,6 +261,13 @@ async fn the_realtime_stream_runs_at_the_arm_rate() {
         assert_eq!(s.name, case.arm.name());
         assert_eq!(s.joint_status.joint_position.len(), 6);
         assert_eq!(s.joint_status.joint_en_flag, vec![true; 6]);
+        assert_eq!(s.joint_status.joint_speed.len(), 6);
+        assert_eq!(s.arm_current_status, ArmCurrentStatus::Idle);
+        assert!(
+            s.since_connect >= Duration::from_secs(1),
+            "{:?}",
+            s.since_connect
+        );
     }
 }
 
@@ -257,10 +278,12 @@ async fn the_callback_form_sees_the_motion() {
         let seen = Arc::new(AtomicUsize::new(0));
         let last_j1 = Arc::new(std::sync::Mutex::new(f64::NAN));
         let (s, l) = (seen.clone(), last_j1.clone());
-        c.arm.realtime_arm_state_call_back(Box::new(move |state| {
-            s.fetch_add(1, Ordering::SeqCst);
-            *l.lock().unwrap() = state.joint_status.joint_position[0];
-        }));
+        c.arm
+            .realtime_arm_state_call_back(Box::new(move |state| {
+                s.fetch_add(1, Ordering::SeqCst);
+                *l.lock().unwrap() = state.joint_status.joint_position[0];
+            }))
+            .unwrap();
         c.arm
             .move_joint_position(&c.target_deg, MoveOptions::blocking(50))
             .await
@@ -521,4 +544,107 @@ fn config_file_errors_name_the_file_the_key_and_the_value() {
     let gone = dir.path().join("absent.json");
     let e = create_arm_from_config(&gone).err().expect("no file");
     assert!(e.message.contains("absent.json"), "{e}");
+}
+
+#[tokio::test(start_paused = true)]
+async fn realman_refusals_pause_and_reconnect_map_to_their_codes() {
+    let c = realman_case(5).await;
+    let arm = c.arm.as_ref();
+    let e = arm.get_joint_degree().await.unwrap_err();
+    assert_eq!(e.code, AbcErrorCode::NotInitialized);
+    arm.connect().await.unwrap();
+    arm.connect().await.expect("connect twice is a no-op");
+
+    // J2 131° is beyond the RM65-B's ±130°: the controller answers false.
+    let e = arm
+        .move_joint_position(&[0.0, 131.0, 0.0, 0.0, 0.0, 0.0], MoveOptions::blocking(20))
+        .await
+        .unwrap_err();
+    assert_eq!(e.code, AbcErrorCode::ArmCtrlFalse, "{e}");
+    let e = arm
+        .move_joint_position(&[0.0; 5], MoveOptions::blocking(20))
+        .await
+        .unwrap_err();
+    assert_eq!(e.code, AbcErrorCode::InvalidArgument, "{e}");
+    let e = arm
+        .move_joint_position(&[0.0; 6], MoveOptions::blocking(0))
+        .await
+        .unwrap_err();
+    assert_eq!(e.code, AbcErrorCode::ParamOutOfRange, "{e}");
+
+    // Pause holds the arm part way; continue finishes the move.
+    let mut sub = arm.subscribe_realtime();
+    arm.move_joint_position(&c.target_deg, MoveOptions::non_blocking(20))
+        .await
+        .unwrap();
+    sleep(Duration::from_millis(500)).await;
+    arm.set_arm_pause().await.unwrap();
+    sleep(Duration::from_millis(200)).await;
+    let held = arm.get_joint_degree().await.unwrap();
+    sleep(Duration::from_millis(500)).await;
+    assert!(max_diff(&held, &arm.get_joint_degree().await.unwrap()) < 0.01);
+    assert!(max_diff(&held, &c.target_deg) > 1.0, "paused at {held:?}");
+    while sub.try_recv().is_some() {}
+    let s = sub.recv().await.unwrap();
+    assert_eq!(s.arm_current_status, ArmCurrentStatus::Paused);
+    arm.set_arm_continue().await.unwrap();
+    let arrived = tokio::time::timeout(Duration::from_secs(30), async {
+        loop {
+            let s = sub.recv().await.unwrap();
+            if s.arm_current_status == ArmCurrentStatus::Idle {
+                return s;
+            }
+        }
+    })
+    .await
+    .expect("idle again after continue");
+    assert!(max_diff(&arrived.joint_status.joint_position, &c.target_deg) < 0.02);
+
+    // A client handed in is used once: after disconnect there is nothing to reconnect with.
+    arm.disconnect().await;
+    assert_eq!(
+        arm.connect().await.unwrap_err().code,
+        AbcErrorCode::InvalidHandle
+    );
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn nothing_listening_is_a_send_failure_naming_the_address() {
+    // A port that was free a moment ago: nothing accepts on it.
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .and_then(|l| l.local_addr())
+        .unwrap()
+        .port();
+    let dir = tempfile::tempdir().unwrap();
+    let text = format!(
+        r#"{{"arm_type": "realman", "arm_name": "a", "ip": "127.0.0.1", "port": "{port}",
+            "udp_ip": "127.0.0.1", "udp_port": "0", "udp_cycle": "1"}}"#
+    );
+    let arm = create_arm_from_config(write_config(&dir, "arm.json", &text)).unwrap();
+    let e = arm.connect().await.unwrap_err();
+    assert_eq!(e.code, AbcErrorCode::ArmDataSendFailed, "{e}");
+    assert!(e.message.contains(&format!("127.0.0.1:{port}")), "{e}");
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_stopped_piper_refuses_blocking_moves_with_arm_error() {
+    let c = piper_case().await;
+    let arm = c.arm.as_ref();
+    arm.connect().await.unwrap();
+    arm.move_joint_position(&c.target_deg, MoveOptions::non_blocking(20))
+        .await
+        .unwrap();
+    sleep(Duration::from_millis(300)).await;
+    arm.set_arm_stop().await.unwrap();
+    sleep(Duration::from_millis(100)).await;
+    let mut sub = arm.subscribe_realtime();
+    assert_eq!(
+        sub.recv().await.unwrap().arm_current_status,
+        ArmCurrentStatus::Stopped
+    );
+    let e = arm
+        .move_joint_position(&[0.0; 6], MoveOptions::blocking(20))
+        .await
+        .unwrap_err();
+    assert_eq!(e.code, AbcErrorCode::ArmError, "{e}");
 }

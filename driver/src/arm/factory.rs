@@ -87,6 +87,19 @@ mod tests {
         assert!(e.message.contains("\"port\""), "{e}");
     }
 
+    #[cfg(target_os = "linux")]
+    #[tokio::test]
+    async fn a_missing_can_interface_is_a_send_failure_naming_it() {
+        let arm = create_arm(ArmFactoryParam::piper("p", "armhilnocan7"));
+        let e = arm.connect().await.unwrap_err();
+        assert_eq!(e.code, AbcErrorCode::ArmDataSendFailed, "{e}");
+        assert!(e.message.contains("\"armhilnocan7\""), "{e}");
+        assert_eq!(
+            arm.get_joint_degree().await.unwrap_err().code,
+            AbcErrorCode::NotInitialized
+        );
+    }
+
     #[tokio::test]
     async fn calls_before_connect_are_not_initialized() {
         let arm = create_arm_from_map("piper", "p", &map(&[])).unwrap();

@@ -241,9 +241,9 @@ pub trait ArmInterface: Send + Sync {
     }
 
     /// The API's callback form: `callback` receives every realtime state, replacing an earlier
-    /// callback. Call inside a tokio runtime.
-    fn realtime_arm_state_call_back(&self, callback: RealtimeCallback) {
-        self.realtime_hub().set_callback(callback);
+    /// callback. It runs on a task of the current tokio runtime (`INVALID_STATE` outside one).
+    fn realtime_arm_state_call_back(&self, callback: RealtimeCallback) -> ArmResult<()> {
+        self.realtime_hub().set_callback(callback)
     }
 
     /// Decelerate and stop along the path.

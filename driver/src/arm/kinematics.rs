@@ -25,10 +25,15 @@ pub struct MdhJoint {
     pub max_rad: f64,
 }
 
-/// A serial chain from the base to the flange.
+/// A serial chain from the base to the flange, with an optional reference frame in front
+/// (poses are reported in it) and a tool behind (poses are of the tool point).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Chain {
     joints: Vec<MdhJoint>,
+    /// Reference frame ← base.
+    base: Isometry3<f64>,
+    /// Flange → tool.
+    tool: Isometry3<f64>,
 }
 
 /// Solver tolerances: what counts as "at the pose".
@@ -39,9 +44,21 @@ const MAX_ITERATIONS: usize = 200;
 const SEARCH_STARTS: usize = 24;
 
 impl Chain {
-    /// A chain of `joints`, base first.
+    /// A chain of `joints`, base first; poses of the flange in the base frame.
     pub fn new(joints: Vec<MdhJoint>) -> Self {
-        Self { joints }
+        Self {
+            joints,
+            base: Isometry3::identity(),
+            tool: Isometry3::identity(),
+        }
+    }
+
+    /// Poses of the point `tool` (a pose in the flange frame) expressed in the frame `work`
+    /// (its pose in the base frame).
+    pub fn with_frames(mut self, work: &Pose, tool: &Pose) -> Self {
+        self.base = to_isometry(work).inverse();
+        self.tool = to_isometry(tool);
+        self
     }
 
     /// Number of joints.
@@ -55,7 +72,7 @@ impl Chain {
     }
 
     fn transform(&self, q_rad: &[f64]) -> Isometry3<f64> {
-        let mut t = Isometry3::identity();
+        let mut t = self.base;
         for (j, q) in self.joints.iter().zip(q_rad) {
             let rx = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), j.alpha_rad);
             let rz = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), q + j.offset_rad);
@@ -65,7 +82,7 @@ impl Chain {
                 * Isometry3::from_parts(Translation3::identity(), rz)
                 * Isometry3::translation(0.0, 0.0, j.d_m);
         }
-        t
+        t * self.tool
     }
 
     /// Flange pose for joint angles `q_rad` (one per joint).
@@ -266,6 +283,22 @@ mod tests {
         for (g, w) in got.iter().zip(want) {
             assert!((g - w).abs() < 1e-5, "{got:?}");
         }
+    }
+
+    #[test]
+    fn work_and_tool_frames_move_the_reported_pose() {
+        // At q = 0 the RM65-B flange points straight up (its z axis is the base's z).
+        let tool = Pose::new([0.0, 0.0, 0.1], [0.0, 0.0, 0.0]);
+        let work = Pose::new([0.0, 0.0, 0.5], [0.0, 0.0, PI / 2.0]);
+        let c = rm65b().with_frames(&work, &tool);
+        let p = c.forward(&[0.0; 6]);
+        let (dp, dr) = pose_distance(&p, &Pose::new([0.0, 0.0, 0.4505], [0.0, 0.0, PI / 2.0]));
+        assert!(dp < 1e-9 && dr < 1e-9, "{p:?}");
+        // IK answers in the same frames.
+        let q = deg(&[10.0, 20.0, 30.0, 40.0, 50.0, 60.0]);
+        let target = c.forward(&q);
+        let sol = c.inverse(&target, &q, IkMode::SingleStep).unwrap();
+        assert!(pose_distance(&c.forward(&sol), &target).0 < 1e-6);
     }
 
     #[test]

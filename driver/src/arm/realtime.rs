@@ -95,10 +95,13 @@ impl RealtimeHub {
     }
 
     /// Registers `callback` for every state from now on, replacing any earlier one (the API
-    /// keeps one callback per arm). Must be called inside a tokio runtime.
-    pub fn set_callback(&self, callback: RealtimeCallback) {
+    /// keeps one callback per arm). The callback runs on a task of the current tokio runtime;
+    /// outside a runtime this is `INVALID_STATE`.
+    pub fn set_callback(&self, callback: RealtimeCallback) -> ArmResult<()> {
+        let runtime = tokio::runtime::Handle::try_current()
+            .map_err(|e| ArmError::caused_by(AbcErrorCode::InvalidState, e))?;
         let mut sub = self.subscribe();
-        let task = tokio::spawn(async move {
+        let task = runtime.spawn(async move {
             while let Ok(state) = sub.recv().await {
                 callback(ArmRealtimeState::clone(&state));
             }
@@ -111,6 +114,7 @@ impl RealtimeHub {
         if let Some(h) = old {
             h.abort();
         }
+        Ok(())
     }
 
     /// Removes the callback, if any.
@@ -136,6 +140,7 @@ mod tests {
         ArmRealtimeState {
             name: "a".into(),
             timestamp: std::time::SystemTime::UNIX_EPOCH,
+            since_connect: std::time::Duration::ZERO,
             joint_status: JointState {
                 joint_position: vec![n],
                 ..JointState::default()
@@ -159,7 +164,8 @@ mod tests {
                 s2.load(Ordering::SeqCst)
             );
             s2.fetch_add(1, Ordering::SeqCst);
-        }));
+        }))
+        .unwrap();
         for i in 0..10 {
             hub.publish(state(i as f64));
         }
@@ -180,6 +186,13 @@ mod tests {
         hub.publish(state(10.0));
         tokio::task::yield_now().await;
         assert_eq!(seen.load(Ordering::SeqCst), 10);
+    }
+
+    #[test]
+    fn a_callback_needs_a_runtime() {
+        let hub = RealtimeHub::default();
+        let e = hub.set_callback(Box::new(|_| {})).unwrap_err();
+        assert_eq!(e.code, AbcErrorCode::InvalidState);
     }
 
     #[tokio::test]

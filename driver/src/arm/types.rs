@@ -197,6 +197,9 @@ pub struct ArmRealtimeState {
     pub name: String,
     /// When the sample was received (wall clock).
     pub timestamp: SystemTime,
+    /// Time since `connect` on the tokio clock (virtual under a paused clock, so runs in
+    /// virtual time are reproducible).
+    pub since_connect: std::time::Duration,
     /// Joint states.
     pub joint_status: JointState,
     /// Force sensor (empty vectors when the arm has none).

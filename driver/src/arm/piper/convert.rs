@@ -125,7 +125,12 @@ fn arm_status(s: &PiperState) -> ArmCurrentStatus {
 }
 
 /// One feedback cycle in the API's units; `None` before the first joint feedback.
-pub(crate) fn realtime(name: &str, s: &PiperState, max_stroke_m: f64) -> Option<ArmRealtimeState> {
+pub(crate) fn realtime(
+    name: &str,
+    since_connect: std::time::Duration,
+    s: &PiperState,
+    max_stroke_m: f64,
+) -> Option<ArmRealtimeState> {
     let joints = s.joints_rad()?;
     let high = |f: fn(&pp::MotorState) -> f64| -> Vec<f64> {
         s.high_speed
@@ -142,6 +147,7 @@ pub(crate) fn realtime(name: &str, s: &PiperState, max_stroke_m: f64) -> Option<
     Some(ArmRealtimeState {
         name: name.to_string(),
         timestamp: SystemTime::now(),
+        since_connect,
         joint_status: JointState {
             joint_position: joints.iter().map(|r| r.to_degrees()).collect(),
             joint_speed: high(|m| m.speed_rad_s * RAD_S_TO_RPM),

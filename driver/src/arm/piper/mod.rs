@@ -17,7 +17,9 @@ use super::interface::Method;
 use super::kinematics::Chain;
 use super::params::ArmFactoryParam;
 use super::realtime::RealtimeHub;
-use crate::piper::{MotorSelect, Piper, PiperBuilder, PiperState};
+#[cfg(target_os = "linux")]
+use crate::piper::PiperBuilder;
+use crate::piper::{MotorSelect, Piper, PiperState};
 
 /// What the Piper backend implements (everything else answers `NOT_IMPLEMENTED`).
 pub const PIPER_CAPABILITIES: &[Method] = &[
@@ -71,6 +73,26 @@ impl Default for PiperArmOptions {
             gripper_move_effort_nm: 1.0,
         }
     }
+}
+
+/// Opens the driver on a SocketCAN interface.
+#[cfg(target_os = "linux")]
+async fn open_interface(iface: &str) -> ArmResult<Piper> {
+    PiperBuilder::interface(iface).connect().await.map_err(|e| {
+        let mut err = convert::error(e);
+        err.message = format!("CAN interface {iface:?}: {}", err.message);
+        err
+    })
+}
+
+/// SocketCAN exists only on Linux; elsewhere a Piper is reached through
+/// [`PiperArm::from_client`] over another bus (socketcand, the virtual bus).
+#[cfg(not(target_os = "linux"))]
+async fn open_interface(iface: &str) -> ArmResult<Piper> {
+    Err(ArmError::new(
+        super::AbcErrorCode::NotImplemented,
+        format!("CAN interface {iface:?}: SocketCAN is available on Linux only"),
+    ))
 }
 
 /// A Piper arm behind the Arm API.
@@ -137,10 +159,7 @@ impl PiperArm {
             .take();
         let piper = match (taken, &self.can_interface) {
             (Some(p), _) => p,
-            (None, Some(iface)) => PiperBuilder::interface(iface)
-                .connect()
-                .await
-                .map_err(convert::error)?,
+            (None, Some(iface)) => open_interface(iface).await?,
             (None, None) => {
                 return Err(ArmError::new(
                     super::AbcErrorCode::InvalidHandle,
@@ -169,16 +188,22 @@ impl PiperArm {
         let hub = self.hub.clone();
         let name = self.name.clone();
         let stroke = self.options.gripper_max_stroke_m;
+        let start = tokio::time::Instant::now();
         tokio::spawn(async move {
             let mut last_seq = 0;
             while rx.changed().await.is_ok() {
-                let state = rx.borrow_and_update().clone();
-                let seq = state.joints.as_ref().map_or(0, |j| j.seq);
-                if seq == last_seq {
-                    continue;
-                }
-                last_seq = seq;
-                if let Some(s) = convert::realtime(&name, &state, stroke) {
+                // Converted under the borrow: most changes are other frames of the cycle and
+                // cost one comparison, not a copy of the state.
+                let sample = {
+                    let state = rx.borrow_and_update();
+                    let seq = state.joints.as_ref().map_or(0, |j| j.seq);
+                    if seq == last_seq {
+                        continue;
+                    }
+                    last_seq = seq;
+                    convert::realtime(&name, start.elapsed(), &state, stroke)
+                };
+                if let Some(s) = sample {
                     hub.publish(s);
                 }
             }

@@ -54,7 +54,8 @@ pub(crate) fn smoothing(mode: TrajectoryMode) -> Smoothing {
     }
 }
 
-/// The kinematic chain from the controller's DH table and joint limits.
+/// The kinematic chain from the controller's DH table and joint limits, reporting the tool in
+/// the work frame that were current at connect (as the controller's own poses are).
 pub(crate) fn chain(h: &rm::Handshake) -> Chain {
     Chain::new(
         h.dh.iter()
@@ -76,6 +77,10 @@ pub(crate) fn chain(h: &rm::Handshake) -> Chain {
                     .unwrap_or(std::f64::consts::PI),
             })
             .collect(),
+    )
+    .with_frames(
+        &pose_from_rm(&h.work_frame.pose),
+        &pose_from_rm(&h.tool_frame.pose),
     )
 }
 
@@ -118,10 +123,16 @@ fn status(s: &ArmState) -> ArmCurrentStatus {
 }
 
 /// One pushed sample in the API's units.
-pub(crate) fn realtime(name: &str, s: &ArmState, g: Option<GripperState>) -> ArmRealtimeState {
+pub(crate) fn realtime(
+    name: &str,
+    since_connect: std::time::Duration,
+    s: &ArmState,
+    g: Option<GripperState>,
+) -> ArmRealtimeState {
     ArmRealtimeState {
         name: name.to_string(),
         timestamp: SystemTime::now(),
+        since_connect,
         joint_status: JointState {
             joint_position: s.joints_rad.iter().map(|r| r.to_degrees()).collect(),
             joint_speed: s

@@ -258,13 +258,14 @@ impl RealmanArm {
         let mut rx = feed.subscribe();
         let hub = self.hub.clone();
         let name = self.name.clone();
+        let start = tokio::time::Instant::now();
         tokio::spawn(async move {
             use tokio::sync::broadcast::error::RecvError;
             loop {
                 match rx.recv().await {
                     Ok(s) => {
                         let g = *gripper.lock().unwrap_or_else(|p| p.into_inner());
-                        hub.publish(convert::realtime(&name, &s, g));
+                        hub.publish(convert::realtime(&name, start.elapsed(), &s, g));
                     }
                     Err(RecvError::Lagged(n)) => {
                         tracing::debug!(missed = n, "realtime forwarder fell behind");
