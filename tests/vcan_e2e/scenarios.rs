@@ -129,9 +129,11 @@ fn firmware_of(file: &Path) -> String {
         .iter()
         .map(|d| match &d.kind {
             DeviceKind::Piper(p) => p.firmware.clone(),
-            // RobStride and Realman scenarios are not tagged `vcan` (they need the in-process
-            // emulator; a Realman arm is not on CAN at all).
-            DeviceKind::Robstride(_) | DeviceKind::Realman(_) => String::new(),
+            // RobStride, Realman and vendor-neutral arm scenarios are not tagged `vcan` (they
+            // need the in-process emulators; a Realman arm is not on CAN at all).
+            DeviceKind::Robstride(_) | DeviceKind::Realman(_) | DeviceKind::Arm(_) => {
+                String::new()
+            }
         })
         .next()
         .expect("one device")
