@@ -37,6 +37,23 @@ if ! ip link show "$iface" >/dev/null 2>&1; then
 fi
 ip -brief link show "$iface"
 
+# A vxcan pair for the vendor SDK hooks: what one end sends arrives on the other whatever the
+# sender's CAN_RAW_LOOPBACK, so an SDK that turns its own loopback off (piper_sdk does) works
+# unchanged with the emulator on the peer. A plain vcan delivers such frames to nobody.
+vxcan_sdk=${ARMHIL_VXCAN_SDK:-vxcan0}
+vxcan_sim=${ARMHIL_VXCAN_SIM:-vxcan1}
+if ! ip link show "$vxcan_sdk" >/dev/null 2>&1; then
+    if ! { modprobe vxcan && ip link add "$vxcan_sdk" type vxcan peer name "$vxcan_sim" \
+            && ip link set up "$vxcan_sdk" && ip link set up "$vxcan_sim"; }; then
+        echo "suite FAILED: cannot create the vxcan pair $vxcan_sdk/$vxcan_sim"
+        failures=1
+        exit 1
+    fi
+fi
+ip -brief link show "$vxcan_sdk"
+ip -brief link show "$vxcan_sim"
+export ARMHIL_VXCAN_SDK=$vxcan_sdk ARMHIL_VXCAN_SIM=$vxcan_sim
+
 # The Python SDK hooks need the interpreter that has python-can and piper_sdk first on PATH.
 PATH="$(dirname "$ARMHIL_E2E_PYTHON"):$PATH"
 export PATH PYTHON="$ARMHIL_E2E_PYTHON"

@@ -1,11 +1,13 @@
 #!/usr/bin/env python3
 """vcan end-to-end hook: the vendor Python SDK (piper_sdk) against `armhil sim piper`.
 
-Starts `$ARMHIL_BIN sim piper --iface $ARMHIL_VCAN_IFACE --firmware S-V1.8-2` (unless
-ARMHIL_PIPER_EXTERNAL=1, then an emulator must already run on the interface), then with
-`C_PiperInterface_V2(iface, judge_flag=False)` (a vcan has no bitrate for the SDK to check)
-and CAN_RAW_LOOPBACK turned back on for the SDK's send socket (see run_checks: without it a
-vcan delivers none of the SDK's frames):
+The SDK runs unchanged, as a user runs it, on one end of a vxcan pair ($ARMHIL_VXCAN_SDK,
+`vxcan0`) and the emulator on the other: starts `$ARMHIL_BIN sim piper --iface
+$ARMHIL_VXCAN_SIM --firmware S-V1.8-2` (unless ARMHIL_PIPER_EXTERNAL=1, then an emulator must
+already run on the peer), then with `C_PiperInterface_V2(iface, judge_flag=False)` (a virtual
+interface has no bitrate for the SDK to check; `judge_flag` is the SDK's own option for that).
+A plain vcan would not do: the SDK sends on a socket with CAN_RAW_LOOPBACK off, and a vcan
+delivers such frames to nobody; a vxcan hands them to its peer.
 
 1. connects (the SDK queries limits, max acc and the firmware version) and checks the
    firmware string and the 0x473 joint limits (with a kernel filter on the SDK's receive
@@ -23,12 +25,12 @@ VM (TCG) everything runs several times slower.
 
 import os
 import signal
-import socket
 import subprocess
 import sys
 import time
 
-IFACE = os.environ.get("ARMHIL_VCAN_IFACE", "vcan0")
+SDK_IFACE = os.environ.get("ARMHIL_VXCAN_SDK", "vxcan0")
+SIM_IFACE = os.environ.get("ARMHIL_VXCAN_SIM", "vxcan1")
 ARMHIL_BIN = os.environ.get("ARMHIL_BIN", "armhil")
 EXTERNAL = os.environ.get("ARMHIL_PIPER_EXTERNAL") == "1"
 OUT_DIR = os.environ.get("ARMHIL_E2E_OUT", "/tmp")
@@ -132,14 +134,8 @@ def run_checks():
     from piper_sdk import C_PiperInterface_V2
 
     say("piper_sdk imported")
-    piper = C_PiperInterface_V2(IFACE, judge_flag=False)
-    sdk_rx, sdk_tx = sdk_buses(piper)
-    # piper_sdk 0.6.2 (can_encapsulation_v0_4_0) sends on its own socket opened with
-    # local_loopback=False. On a real adapter the frames still go out on the wire; a vcan *is*
-    # the local loopback (vcan_tx drops every frame not marked for loopback), so without this
-    # no command of the SDK, not even its 0x4AF query, ever reaches the emulator. Turn the
-    # kernel loopback back on for that socket before ConnectPort sends its first queries.
-    sdk_tx.socket.setsockopt(socket.SOL_CAN_RAW, socket.CAN_RAW_LOOPBACK, 1)
+    piper = C_PiperInterface_V2(SDK_IFACE, judge_flag=False)
+    sdk_rx, _sdk_tx = sdk_buses(piper)
     piper.ConnectPort()
 
     wait_for(lambda: piper.GetArmStatus().time_stamp > 0, 30, "0x2A1 status feedback")
@@ -228,7 +224,7 @@ def main():
     if not EXTERNAL:
         log_path = os.path.join(OUT_DIR, "piper_sdk_emulator.log")
         log = open(log_path, "w")
-        cmd = [ARMHIL_BIN, "sim", "piper", "--iface", IFACE, "--firmware", FIRMWARE]
+        cmd = [ARMHIL_BIN, "sim", "piper", "--iface", SIM_IFACE, "--firmware", FIRMWARE]
         print("starting", " ".join(cmd), "(log:", log_path + ")")
         child = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT)
         time.sleep(1.0)
