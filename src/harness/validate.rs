@@ -42,6 +42,47 @@ impl<'a> Ctx<'a> {
         }
     }
 
+    /// A device step's `timeout_ms`, if given.
+    pub(crate) fn timeout(&self, value: &Option<S<i64>>) -> Res<Option<Duration>> {
+        value
+            .as_ref()
+            .map(|t| self.positive_millis(t, "timeout_ms"))
+            .transpose()
+    }
+
+    /// A device step's `expect_error`, if given.
+    pub(crate) fn expect_error(&self, value: &Option<S<String>>) -> Res<Option<ErrorClass>> {
+        value
+            .as_ref()
+            .map(|e| self.choice(e, "expect_error", &ErrorClass::NAMES))
+            .transpose()
+    }
+
+    /// Refuse the first argument in `present` that `do: command` does not take; `bare` says
+    /// what a command without arguments still accepts (`"no arguments besides `motor`"`).
+    pub(crate) fn only_arguments(
+        &self,
+        present: &[(&'static str, Pos)],
+        allowed: &[&str],
+        command: &str,
+        bare: &str,
+    ) -> Res<()> {
+        match present.iter().find(|(key, _)| !allowed.contains(key)) {
+            None => Ok(()),
+            Some((key, at)) => {
+                let takes = if allowed.is_empty() {
+                    bare.to_owned()
+                } else {
+                    allowed.join(", ")
+                };
+                Err(self.err(
+                    *at,
+                    format!("`{key}` does not apply to `do: {command}`; it takes: {takes}"),
+                ))
+            }
+        }
+    }
+
     /// Load the variant `value` of a file with a `matrix:`.
     pub fn for_variant(mut self, value: Option<&str>) -> Self {
         self.variant = value.map(str::to_owned);
@@ -325,22 +366,20 @@ fn matrix(
         };
     };
     let mut entries = raw.value.iter();
-    let (key, values) = match (entries.next(), entries.next()) {
-        (Some(entry), None) => entry,
-        _ => {
-            return Err(ctx.err(
+    let (key, values) =
+        match (entries.next(), entries.next()) {
+            (Some(entry), None) => entry,
+            _ => return Err(ctx.err(
                 pos(raw),
                 "`matrix` takes exactly one parameter, e.g. `matrix: {vendor: [piper, realman]}`",
-            ))
-        }
-    };
+            )),
+        };
     if values.value.is_empty() {
         return Err(ctx.err(pos(values), format!("`matrix.{key}` lists no value")));
     }
     for (i, v) in values.value.iter().enumerate() {
         let ok = !v.value.is_empty()
-            && v
-                .value
+            && v.value
                 .chars()
                 .all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_'));
         if !ok {

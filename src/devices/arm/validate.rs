@@ -257,26 +257,10 @@ pub(crate) fn step(ctx: &Ctx<'_>, raw: &RawStep, at: Pos) -> Res<(&'static str, 
         .find(|(n, _, _)| *n == name)
         .copied()
         .unwrap_or(("", "arm", &[]));
-    for (key, key_at) in present_keys(a) {
-        if !allowed.contains(&key) {
-            let takes = if allowed.is_empty() {
-                "no arguments".to_owned()
-            } else {
-                allowed.join(", ")
-            };
-            return Err(ctx.err(
-                key_at,
-                format!("`{key}` does not apply to `do: {name}`; it takes: {takes}"),
-            ));
-        }
-    }
+    ctx.only_arguments(&present_keys(a), allowed, name, "no arguments")?;
     let call = call(ctx, a, name, at)?;
     let device = ctx.device_of_kind(&a.device, at, "arm", "this step")?;
-    let timeout = a
-        .timeout_ms
-        .as_ref()
-        .map(|t| ctx.positive_millis(t, "timeout_ms"))
-        .transpose()?;
+    let timeout = ctx.timeout(&a.timeout_ms)?;
     let expect_code = a
         .expect_code
         .as_ref()

@@ -8,7 +8,7 @@ use super::model::*;
 use super::raw::*;
 use super::vocab;
 use crate::harness::error::Pos;
-use crate::harness::model::{ErrorClass, Near, StepKind};
+use crate::harness::model::{Near, StepKind};
 use crate::harness::raw::S;
 use crate::harness::validate::{pos, Ctx, Res};
 
@@ -443,16 +443,8 @@ macro_rules! common {
 
 fn action(ctx: &Ctx<'_>, common: Common<'_>, at: Pos, action: PiperAction) -> Res<StepKind> {
     let device = ctx.device_of_kind(common.device, at, "piper", "this step")?;
-    let timeout = common
-        .timeout_ms
-        .as_ref()
-        .map(|t| ctx.positive_millis(t, "timeout_ms"))
-        .transpose()?;
-    let expect_error = common
-        .expect_error
-        .as_ref()
-        .map(|e| ctx.choice(e, "expect_error", &ErrorClass::NAMES))
-        .transpose()?;
+    let timeout = ctx.timeout(&common.timeout_ms)?;
+    let expect_error = ctx.expect_error(&common.expect_error)?;
     Ok(StepKind::Action {
         device,
         action: crate::devices::Action::Piper(action),

@@ -14,7 +14,7 @@ use super::model::{
 use super::raw::{RawConds, RawFault, RawMotorConds, RawRsLoad, RawRsStep, RawSettings, RawStep};
 use crate::devices::Action;
 use crate::harness::error::Pos;
-use crate::harness::model::{ErrorClass, Near, StepKind};
+use crate::harness::model::{Near, StepKind};
 use crate::harness::raw::S;
 use crate::harness::validate::{pos, Ctx, Res};
 
@@ -203,19 +203,12 @@ fn robstride_step(ctx: &Ctx<'_>, a: &RawRsStep, at: Pos) -> Res<(&'static str, S
         .iter()
         .find(|(n, _, _)| *n == name)
         .map_or(("robstride", &[][..]), |(_, l, k)| (*l, *k));
-    for (key, key_at) in present_keys(a) {
-        if !allowed.contains(&key) {
-            let takes = if allowed.is_empty() {
-                "no arguments besides `motor`".to_owned()
-            } else {
-                allowed.join(", ")
-            };
-            return Err(ctx.err(
-                key_at,
-                format!("`{key}` does not apply to `do: {name}`; it takes: {takes}"),
-            ));
-        }
-    }
+    ctx.only_arguments(
+        &present_keys(a),
+        allowed,
+        name,
+        "no arguments besides `motor`",
+    )?;
     let need = |v: &Option<S<f64>>, key: &str| -> Res<f32> {
         let v = ctx.required(v, key, name, at)?;
         f32_of(ctx, v, key)
@@ -328,16 +321,8 @@ fn robstride_step(ctx: &Ctx<'_>, a: &RawRsStep, at: Pos) -> Res<(&'static str, S
         (_, m) => can_id(ctx, ctx.required(m, "motor", name, at)?, "motor")?,
     };
     let device = ctx.device_of_kind(&a.device, at, "robstride", "this step")?;
-    let timeout = a
-        .timeout_ms
-        .as_ref()
-        .map(|t| ctx.positive_millis(t, "timeout_ms"))
-        .transpose()?;
-    let expect_error = a
-        .expect_error
-        .as_ref()
-        .map(|e| ctx.choice(e, "expect_error", &ErrorClass::NAMES))
-        .transpose()?;
+    let timeout = ctx.timeout(&a.timeout_ms)?;
+    let expect_error = ctx.expect_error(&a.expect_error)?;
     Ok((
         label,
         StepKind::Action {

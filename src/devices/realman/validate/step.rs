@@ -7,7 +7,7 @@ use super::super::raw::RawRmStep;
 use super::{int_in, jog, joints, params, stream, MAX_CLIENTS};
 use crate::devices::Action;
 use crate::harness::error::Pos;
-use crate::harness::model::{ErrorClass, Near, StepKind};
+use crate::harness::model::{Near, StepKind};
 use crate::harness::raw::S;
 use crate::harness::validate::{pos, Ctx, Res};
 
@@ -327,35 +327,20 @@ pub(super) fn realman_step(ctx: &Ctx<'_>, a: &RawRmStep, at: Pos) -> Res<(&'stat
         .iter()
         .find(|(n, _)| *n == name)
         .map_or(&[][..], |(_, k)| *k);
-    for (key, key_at) in present_keys(a) {
-        if !allowed.contains(&key) {
-            let takes = if allowed.is_empty() {
-                "no arguments besides `client`".to_owned()
-            } else {
-                allowed.join(", ")
-            };
-            return Err(ctx.err(
-                key_at,
-                format!("`{key}` does not apply to `do: {name}`; it takes: {takes}"),
-            ));
-        }
-    }
+    ctx.only_arguments(
+        &present_keys(a),
+        allowed,
+        name,
+        "no arguments besides `client`",
+    )?;
     let command = command(ctx, a, name, at)?;
     let client = match &a.client {
         Some(c) => int_in(ctx, c, "client", 1, MAX_CLIENTS)? as usize - 1,
         None => 0,
     };
     let device = ctx.device_of_kind(&a.device, at, "realman", "this step")?;
-    let timeout = a
-        .timeout_ms
-        .as_ref()
-        .map(|t| ctx.positive_millis(t, "timeout_ms"))
-        .transpose()?;
-    let expect_error = a
-        .expect_error
-        .as_ref()
-        .map(|e| ctx.choice(e, "expect_error", &ErrorClass::NAMES))
-        .transpose()?;
+    let timeout = ctx.timeout(&a.timeout_ms)?;
+    let expect_error = ctx.expect_error(&a.expect_error)?;
     let label = LABELS
         .iter()
         .find(|(n, _)| *n == name)
