@@ -29,7 +29,7 @@ fn typo_in_a_top_level_key_is_an_error() {
     let text = format!("{BENCH}step:\n  - estop\n");
     assert_eq!(
         error_of(&text),
-        "broken.yaml:4:1: unknown key `step`, expected one of name, description, tags, bench, record, faults, steps; did you mean `steps`?"
+        "broken.yaml:4:1: unknown key `step`, expected one of name, description, tags, matrix, bench, record, faults, steps; did you mean `steps`?"
     );
 }
 
