@@ -11,9 +11,7 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 
 use armhil::harness::report::{snapshot_yaml, write_outputs};
-use armhil::harness::{
-    discover_suite, load_suite_file, run_scenario, Clock, SuiteFile, Verdict,
-};
+use armhil::harness::{discover_suite, load_suite_file, run_scenario, Clock, SuiteFile, Verdict};
 use libtest_mimic::{Arguments, Failed, Trial};
 
 const SUITE: &str = "scenarios";

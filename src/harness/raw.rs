@@ -17,12 +17,15 @@ pub(crate) struct RawScenario {
     pub name: Option<S<String>>,
     pub description: Option<String>,
     pub tags: Option<Vec<S<String>>>,
-    pub matrix: Option<S<BTreeMap<String, S<Vec<S<String>>>>>>,
+    pub matrix: Option<S<RawMatrix>>,
     pub bench: S<RawBench>,
     pub record: Option<S<RawRecord>>,
     pub faults: Option<Vec<S<RawFaultEntry>>>,
     pub steps: S<Vec<S<RawStep>>>,
 }
+
+/// `matrix: {parameter: [values]}` as written.
+pub(crate) type RawMatrix = BTreeMap<String, S<Vec<S<String>>>>;
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]

@@ -1,6 +1,5 @@
 //! Layer 2: check a [`RawScenario`] and build the typed [`Scenario`].
 
-use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Duration;
 
@@ -352,10 +351,7 @@ pub(crate) fn validate(ctx: &mut Ctx<'_>, raw: RawScenario) -> Res<Scenario> {
 
 /// `matrix: {key: [values]}`: one parameter, each value a run of its own. Checks the shape and
 /// that the requested variant is one of the values.
-fn matrix(
-    ctx: &Ctx<'_>,
-    raw: Option<&S<BTreeMap<String, S<Vec<S<String>>>>>>,
-) -> Res<Option<(String, String)>> {
+fn matrix(ctx: &Ctx<'_>, raw: Option<&S<RawMatrix>>) -> Res<Option<(String, String)>> {
     let Some(raw) = raw else {
         return match &ctx.variant {
             Some(v) => Err(ctx.err(

@@ -371,7 +371,10 @@ async fn call(arm: &dyn ArmInterface, method: Method) -> Result<(), ArmError> {
                 device: 1,
                 num: 1,
             };
-            arm.write_registers(&p, &[1]).await
+            // The port is back out of Modbus mode (CloseModbusMode ran before): open it again.
+            arm.set_modbus_mode(1, 115_200, 2).await?;
+            arm.write_registers(&p, &[1]).await?;
+            arm.close_modbus_mode(1).await
         }
         Method::GetErrorFlag => arm.get_error_flag().await.map(drop),
     }

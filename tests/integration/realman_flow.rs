@@ -800,3 +800,53 @@ async fn over_tcp_two_clients_gripper_and_faults() {
     assert!(at_deg(&q, &[0.0, 0.0, 0.0, 0.0, 0.0, 30.0]), "{q:?}");
     b.emu.shutdown().await;
 }
+
+#[tokio::test(start_paused = true)]
+async fn modbus_registers_are_read_back_and_the_tool_port_excludes_the_gripper() {
+    let b = virtual_bench().await;
+    let arm = &b.arm;
+    // No port in Modbus mode: no slave answers.
+    assert!(matches!(
+        arm.read_holding_register(0, 1, 100).await,
+        Err(RealmanError::Rejected { .. })
+    ));
+    arm.set_modbus_mode(0, 115_200, 2)
+        .await
+        .expect("RTU on port 0");
+    arm.write_registers(0, 1, 100, &[0x1234, 0xABCD])
+        .await
+        .expect("two registers written");
+    assert_eq!(arm.read_holding_register(0, 1, 100).await.unwrap(), 0x1234);
+    assert_eq!(
+        arm.read_holding_register(0, 1, 101).await.unwrap(),
+        0xABCDu16 as i16,
+        "the controller reports registers signed"
+    );
+    assert_eq!(arm.read_holding_register(0, 2, 100).await.unwrap(), 0);
+    // The gripper talks over the tool's RS485 port: not while it is in Modbus mode.
+    arm.gripper_position(500, false)
+        .await
+        .expect("gripper free");
+    arm.set_modbus_mode(1, 9600, 1)
+        .await
+        .expect("RTU on the tool port");
+    assert!(matches!(
+        arm.gripper_position(600, false).await,
+        Err(RealmanError::Rejected { .. })
+    ));
+    arm.close_modbus_mode(1).await.expect("tool port back");
+    arm.gripper_position(600, false)
+        .await
+        .expect("gripper free again");
+    assert_eq!(arm.rm_plus_mode().await.unwrap(), 0);
+    arm.set_rm_plus_mode(256_000)
+        .await
+        .expect("a known baud rate");
+    assert_eq!(arm.rm_plus_mode().await.unwrap(), 256_000);
+    arm.hand_follow_angle([100, 200, 300, 400, 500, 600], false)
+        .await
+        .expect("hand follows angles");
+    arm.hand_follow_pos([0; 6], false)
+        .await
+        .expect("hand follows positions");
+}

@@ -161,6 +161,31 @@ def test_gripper_blocking_move_and_state(arm):
     assert code == 0 and state["actpos"] == 300
 
 
+def test_modbus_registers_plus_mode_and_hand_follow(arm):
+    """The SDK's own parsers accept our replies: a register written over Modbus RTU reads back
+    (signed, as the controller reports it); the end-effector protocol mode round-trips; hand
+    angle following is acknowledged."""
+    assert arm.rm_set_modbus_mode(0, 115200, 2) == 0
+    params = sdk.rm_peripheral_read_write_params_t(port=0, address=100, device=1, num=2)
+    assert arm.rm_write_registers(params, [0x12, 0x34, 0xAB, 0xCD]) == 0
+    code, value = arm.rm_read_holding_registers(
+        sdk.rm_peripheral_read_write_params_t(port=0, address=100, device=1))
+    assert (code, value) == (0, 0x1234)
+    code, value = arm.rm_read_holding_registers(
+        sdk.rm_peripheral_read_write_params_t(port=0, address=101, device=1))
+    assert (code, value) == (0, 0xABCD - 0x10000)
+    assert arm.rm_close_modbus_mode(0) == 0
+    code, _ = arm.rm_read_holding_registers(
+        sdk.rm_peripheral_read_write_params_t(port=0, address=100, device=1))
+    assert code == 1, "no port in Modbus mode: the controller answers false"
+    assert arm.rm_set_rm_plus_mode(256000) == 0
+    assert arm.rm_get_rm_plus_mode() == (0, 256000)
+    assert arm.rm_set_rm_plus_mode(0) == 0
+    assert arm.rm_set_hand_follow_angle([100, 200, 300, 400, 500, 600], False) == 0
+    # rm_set_hand_follow_pos first reads the end-effector's identity (get_rm_plus_base_info),
+    # whose reply format no document gives: not emulated, so not checked here.
+
+
 def test_motion_parameters_round_trip(arm):
     assert arm.rm_set_arm_max_line_speed(0.5) == 0
     assert arm.rm_get_arm_max_line_speed() == (0, pytest.approx(0.5))

@@ -131,9 +131,7 @@ fn firmware_of(file: &Path) -> String {
             DeviceKind::Piper(p) => p.firmware.clone(),
             // RobStride, Realman and vendor-neutral arm scenarios are not tagged `vcan` (they
             // need the in-process emulators; a Realman arm is not on CAN at all).
-            DeviceKind::Robstride(_) | DeviceKind::Realman(_) | DeviceKind::Arm(_) => {
-                String::new()
-            }
+            DeviceKind::Robstride(_) | DeviceKind::Realman(_) | DeviceKind::Arm(_) => String::new(),
         })
         .next()
         .expect("one device")

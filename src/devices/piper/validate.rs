@@ -443,8 +443,8 @@ macro_rules! common {
 
 fn action(ctx: &Ctx<'_>, common: Common<'_>, at: Pos, action: PiperAction) -> Res<StepKind> {
     let device = ctx.device_of_kind(common.device, at, "piper", "this step")?;
-    let timeout = ctx.timeout(&common.timeout_ms)?;
-    let expect_error = ctx.expect_error(&common.expect_error)?;
+    let timeout = ctx.timeout(common.timeout_ms)?;
+    let expect_error = ctx.expect_error(common.expect_error)?;
     Ok(StepKind::Action {
         device,
         action: crate::devices::Action::Piper(action),

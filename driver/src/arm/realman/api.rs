@@ -13,8 +13,10 @@ use crate::arm::kinematics::unreachable;
 use crate::arm::params::Vendor;
 use crate::arm::realtime::RealtimeHub;
 use crate::arm::types::{
-    in_range, joints_to_rad, ErrorFlags, GripperState, IkMode, MoveOptions, Pose, TrajectoryMode,
+    in_range, joints_to_rad, ErrorFlags, GripperState, IkMode, MoveOptions,
+    PeripheralReadWriteParams, Pose, TrajectoryMode,
 };
+use crate::realman::codec::request as rq;
 use crate::realman::{CartesianTarget, Connect, MoveOpts, RealmanError};
 
 fn move_opts(o: &MoveOptions) -> ArmResult<MoveOpts> {
@@ -295,6 +297,99 @@ impl ArmInterface for RealmanArm {
             .map_err(convert::error)
     }
 
+    async fn set_hand_follow_angle(&self, hand_angle: [i32; 6], block_ms: u32) -> ArmResult<()> {
+        let link = self.link().await?;
+        let mut angles = [0i16; 6];
+        for (slot, v) in angles.iter_mut().zip(hand_angle) {
+            *slot = in_range_i16("hand_angle", v)?;
+        }
+        link.client
+            .hand_follow_angle(angles, block_ms > 0)
+            .await
+            .map_err(convert::error)
+    }
+
+    async fn set_hand_follow_pos(&self, hand_pos: [i32; 6], block_ms: u32) -> ArmResult<()> {
+        let link = self.link().await?;
+        let mut positions = [0u16; 6];
+        for (slot, v) in positions.iter_mut().zip(hand_pos) {
+            *slot = in_range("hand_pos", i64::from(v), 0, 65_535)?;
+        }
+        link.client
+            .hand_follow_pos(positions, block_ms > 0)
+            .await
+            .map_err(convert::error)
+    }
+
+    async fn set_plus_mode(&self, mode: u32) -> ArmResult<()> {
+        let link = self.link().await?;
+        if !rq::PLUS_MODES.contains(&mode) {
+            return Err(ArmError::out_of_range(
+                "mode",
+                mode,
+                "0, 9600, 115200, 256000 or 460800",
+            ));
+        }
+        link.client
+            .set_rm_plus_mode(mode)
+            .await
+            .map_err(convert::error)
+    }
+
+    async fn set_modbus_mode(&self, port: u8, baudrate: u32, timeout_100ms: u32) -> ArmResult<()> {
+        let link = self.link().await?;
+        let port = rtu_port(port)?;
+        if !rq::MODBUS_BAUD_RATES.contains(&baudrate) {
+            return Err(ArmError::out_of_range(
+                "baudrate",
+                baudrate,
+                "9600, 115200 or 460800",
+            ));
+        }
+        let timeout = in_range("timeout", i64::from(timeout_100ms), 0, 65_535)?;
+        link.client
+            .set_modbus_mode(port, baudrate, timeout)
+            .await
+            .map_err(convert::error)
+    }
+
+    async fn close_modbus_mode(&self, port: u8) -> ArmResult<()> {
+        let link = self.link().await?;
+        link.client
+            .close_modbus_mode(rtu_port(port)?)
+            .await
+            .map_err(convert::error)
+    }
+
+    async fn write_registers(
+        &self,
+        params: &PeripheralReadWriteParams,
+        values: &[u16],
+    ) -> ArmResult<()> {
+        let link = self.link().await?;
+        let port = rtu_port(params.port)?;
+        if usize::from(params.num) != values.len() {
+            return Err(ArmError::new(
+                AbcErrorCode::ParamError,
+                format!(
+                    "num is {} but {} values were given",
+                    params.num,
+                    values.len()
+                ),
+            ));
+        }
+        in_range(
+            "num",
+            values.len() as i64,
+            1,
+            rq::MAX_REGISTERS_PER_WRITE as i64,
+        )?;
+        link.client
+            .write_registers(port, params.device, params.address, values)
+            .await
+            .map_err(convert::error)
+    }
+
     async fn set_hand_speed(&self, speed: u16) -> ArmResult<()> {
         let link = self.link().await?;
         let speed = in_range("speed", i64::from(speed), 1, 1000)?;
@@ -347,4 +442,19 @@ impl ArmInterface for RealmanArm {
             brake_engaged: f.brake_engaged,
         })
     }
+}
+
+/// A Modbus RTU port (0 controller RS485, 1 tool RS485, 2 controller slave); port 3, the
+/// controller's Modbus TCP master, is not implemented by the Realman driver.
+fn rtu_port(port: u8) -> ArmResult<u8> {
+    match port {
+        0..=2 => Ok(port),
+        3 => Err(ArmError::not_implemented("realman", "Modbus TCP (port 3)")),
+        _ => Err(ArmError::out_of_range("port", port, "0..=3")),
+    }
+}
+
+/// `PARAM_OUT_OF_RANGE` unless `value` fits a signed 16-bit word.
+fn in_range_i16(field: &str, value: i32) -> ArmResult<i16> {
+    i16::try_from(value).map_err(|_| ArmError::out_of_range(field, value, "-32768..=32767"))
 }

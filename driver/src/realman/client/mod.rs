@@ -3,6 +3,7 @@
 
 mod commands;
 mod link;
+mod peripherals;
 mod state;
 
 use std::sync::{Arc, Mutex};

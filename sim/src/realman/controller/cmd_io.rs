@@ -61,7 +61,8 @@ fn gripper_move(c: &mut Controller, client: ClientId, name: &str, req: Req) -> b
     let Some(g) = c.gripper.as_mut() else {
         return false;
     };
-    if g.error_bits != 0 || !c.power_on {
+    // The gripper speaks over the tool's RS485 port: not while that port is in Modbus mode.
+    if g.error_bits != 0 || !c.power_on || c.peripherals.tool_port_in_modbus() {
         return false;
     }
     let speed = req.int("speed").unwrap_or(DEFAULT_GRIPPER_SPEED);

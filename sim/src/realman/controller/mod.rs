@@ -10,9 +10,11 @@
 mod cmd_io;
 mod cmd_motion;
 mod cmd_params;
+mod cmd_periph;
 mod cmd_state;
 mod effectors;
 mod motion;
+pub mod peripherals;
 mod status;
 mod stream;
 
@@ -28,6 +30,7 @@ use super::params::{self, Params, StateFileError};
 use super::plant::{ArmPlant, PlantError};
 use super::profile::FirmwareProfile;
 use super::wire::Req;
+use peripherals::Peripherals;
 
 pub use effectors::{Gripper, Hand};
 pub use motion::{Motion, TrajectoryType};
@@ -140,6 +143,7 @@ pub struct Controller {
     motion: Motion,
     gripper: Option<Gripper>,
     hand: Hand,
+    peripherals: Peripherals,
     time_ms: u64,
     events: Vec<Event>,
 }
@@ -189,6 +193,7 @@ impl Controller {
             motion: Motion::default(),
             gripper: config.gripper.then(Gripper::default),
             hand: Hand::default(),
+            peripherals: Peripherals::default(),
             time_ms: 0,
             events: Vec::new(),
             facts,
@@ -224,7 +229,8 @@ impl Controller {
         let answer = cmd_motion::handle(self, client, name, req)
             .or_else(|| cmd_state::handle(self, name, req))
             .or_else(|| cmd_params::handle(self, name, req))
-            .or_else(|| cmd_io::handle(self, client, name, req));
+            .or_else(|| cmd_io::handle(self, client, name, req))
+            .or_else(|| cmd_periph::handle(self, name, req));
         answer.unwrap_or(Answer::Unknown)
     }
 

@@ -3,6 +3,9 @@
 //!
 //! Field order follows the protocol document; the fixtures pin the exact bytes.
 
+mod peripherals;
+pub use peripherals::*;
+
 use serde::Serialize;
 
 use super::types::{Axis, Connect, Direction, Pose, QuatPose, Smoothing};

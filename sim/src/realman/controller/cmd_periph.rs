@@ -1,0 +1,111 @@
+//! Modbus RTU, the end-effector protocol mode and dexterous-hand following
+//! (docs/protocols/realman.md §18).
+
+use super::super::wire::{ack, Obj, Req};
+use super::{Answer, Controller};
+
+/// Hand-following values the hand accepts (the SDK's range for its angle and position arrays).
+const HAND_FOLLOW_ANGLE: std::ops::RangeInclusive<i64> = -32_768..=32_767;
+const HAND_FOLLOW_POS: std::ops::RangeInclusive<i64> = 0..=65_535;
+/// The emulated hand's full scale (its `set_hand_angle` range).
+const HAND_FULL_SCALE: i64 = 1000;
+
+/// Answer a peripheral command, or `None` if `name` is not one.
+pub(super) fn handle(c: &mut Controller, name: &str, req: Req) -> Option<Answer> {
+    let p = &mut c.peripherals;
+    let reply = match name {
+        "set_modbus_mode" => {
+            let ok = match (req.int("port"), req.int("baudrate"), req.int("timeout")) {
+                (Some(port), Some(baud), Some(timeout)) => p.open(port, baud, timeout),
+                _ => false,
+            };
+            ack(name, "set_state", ok)
+        }
+        "close_modbus_mode" => ack(
+            name,
+            "set_state",
+            req.int("port").is_some_and(|port| p.close(port)),
+        ),
+        "write_single_register" => {
+            let ok = match (
+                req.int("port"),
+                req.int("device"),
+                req.int("address"),
+                req.int("data"),
+            ) {
+                (Some(port), Some(device), Some(address), Some(v))
+                    if (-32_768..=65_535).contains(&v) =>
+                {
+                    let v = v as u16;
+                    p.write(
+                        port,
+                        device,
+                        address,
+                        &[i64::from(v >> 8), i64::from(v & 0xFF)],
+                    )
+                }
+                _ => false,
+            };
+            ack(name, "write_state", ok)
+        }
+        "write_registers" => {
+            let ok = match (
+                req.int("port"),
+                req.int("device"),
+                req.int("address"),
+                req.int("num"),
+                req.ints("data"),
+            ) {
+                (Some(port), Some(device), Some(address), Some(num), Some(bytes))
+                    if bytes.len() as i64 == num * 2 =>
+                {
+                    p.write(port, device, address, &bytes)
+                }
+                _ => false,
+            };
+            ack(name, "write_state", ok)
+        }
+        "read_holding_registers" => {
+            match (req.int("port"), req.int("device"), req.int("address")) {
+                (Some(port), Some(device), Some(address)) => match p.read(port, device, address) {
+                    Some(v) => Obj::command(name).int("data", i64::from(v)).finish(),
+                    None => ack(name, "read_state", false),
+                },
+                _ => ack(name, "read_state", false),
+            }
+        }
+        "set_rm_plus_mode" => ack(
+            name,
+            "set_state",
+            req.int("mode").is_some_and(|m| p.set_plus_mode(m)),
+        ),
+        "get_rm_plus_mode" => Obj::command(name).int("mode", p.plus_mode).finish(),
+        "set_hand_follow_angle" | "set_hand_follow_pos" => {
+            ack(name, "set_state", hand_follow(c, name, req))
+        }
+        _ => return None,
+    };
+    Some(Answer::Reply(reply))
+}
+
+/// Following: the hand chases the latest target at its set speed; values are scaled from the
+/// SDK's ranges to the emulated hand's 0–1000.
+fn hand_follow(c: &mut Controller, name: &str, req: Req) -> bool {
+    let (key, range) = if name == "set_hand_follow_angle" {
+        ("hand_angle", HAND_FOLLOW_ANGLE)
+    } else {
+        ("hand_pos", HAND_FOLLOW_POS)
+    };
+    let Some(values) = req.ints(key) else {
+        return false;
+    };
+    if values.len() != 6 || values.iter().any(|v| !range.contains(v)) {
+        return false;
+    }
+    let targets: Vec<i64> = values
+        .iter()
+        .map(|v| (*v).clamp(0, HAND_FULL_SCALE))
+        .collect();
+    c.hand.command(&targets, None);
+    true
+}
