@@ -13,12 +13,13 @@ use driver::realman::codec::{
     decode_message, decode_push, Expect, Frame, JointSpeedUnit, Message, Request, Splitter,
 };
 
-const FILES: [&str; 7] = [
+const FILES: [&str; 8] = [
     "errors",
     "gripper_hand",
     "handshake",
     "motion",
     "params",
+    "peripherals",
     "push",
     "state",
 ];
@@ -214,6 +215,17 @@ fn request_for(name: &str) -> Option<Request> {
         )
         .ok()?,
         "set_hand_speed" => rq::set_hand_speed(500).ok()?,
+        "read_holding_registers" | "read_holding_registers_no_modbus" => {
+            rq::read_holding_registers(0, 1, 100).ok()?
+        }
+        "read_holding_registers_signed" => rq::read_holding_registers(0, 1, 101).ok()?,
+        "set_modbus_mode" => rq::set_modbus_mode(0, 115_200, 2).ok()?,
+        "close_modbus_mode" => rq::close_modbus_mode(0).ok()?,
+        "write_registers" => rq::write_registers(0, 1, 100, &[0x1234, 0xABCD]).ok()?,
+        "write_registers_after_close" => rq::write_registers(0, 1, 100, &[1]).ok()?,
+        "set_rm_plus_mode" => rq::set_rm_plus_mode(256_000).ok()?,
+        "get_rm_plus_mode" => rq::get_rm_plus_mode(),
+        "set_hand_follow_angle" => rq::set_hand_follow_angle([100, 200, 300, 400, 500, 600], false),
         "set_hand_force" => rq::set_hand_force(500).ok()?,
         // Push.
         "set_realtime_push" => rq::set_realtime_push(&PushSettings {
@@ -260,8 +272,9 @@ fn request_for(name: &str) -> Option<Request> {
 }
 
 /// Vectors the driver never sends as such (it validates locally, or there is no encoder).
-const NOT_ENCODED: [&str; 6] = [
+const NOT_ENCODED: [&str; 7] = [
     "set_arm_max_line_speed_zero",
+    "set_modbus_mode_bad_baud",
     "set_collision_stage_out_of_range",
     "set_gripper_position_refused",
     "unknown_command",
@@ -270,11 +283,12 @@ const NOT_ENCODED: [&str; 6] = [
 ];
 
 /// Encodable vectors the controller answers with `false`.
-const REFUSED: [&str; 4] = [
+const REFUSED: [&str; 5] = [
     "movej_beyond_joint_limit",
     "movel_unreachable",
     "movej_p_unreachable",
     "set_joint_max_pos_while_enabled",
+    "write_registers_after_close",
 ];
 
 fn close(a: f64, b: f64, tol: f64) -> bool {
@@ -466,6 +480,14 @@ fn check_data(v: &Vector, b: &Body) {
                 (d::GripperMode::OpenIdle, 1000, 30)
             );
         }
+        "read_holding_registers" => assert_eq!(b["data"].as_i64().unwrap(), 0x1234),
+        "read_holding_registers_signed" => {
+            assert_eq!(b["data"].as_i64().unwrap(), i64::from(0xABCDu16 as i16))
+        }
+        "read_holding_registers_no_modbus" => {
+            assert_eq!(b.get("read_state").and_then(|v| v.as_bool()), Some(false))
+        }
+        "get_rm_plus_mode" => assert_eq!(b["mode"].as_i64().unwrap(), 256_000),
         other => panic!("no data check for vector {other}"),
     }
 }
