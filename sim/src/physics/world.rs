@@ -61,7 +61,8 @@ struct JointBinding {
 ///   positions never lie outside the URDF limits. Effort and velocity limits are
 ///   *not* enforced here: the caller's motor model clamps its torque to
 ///   [`JointInfo::effort_limit`]. `<dynamics>` damping and friction and `<mimic>` couplings
-///   from the URDF are applied.
+///   from the URDF are applied, and so is each joint's armature (reflected rotor inertia, set
+///   with [`ArmWorld::set_armature`]: URDF has no element for it).
 pub struct ArmWorld {
     model: ArmModel,
     config: WorldConfig,
