@@ -4,3 +4,4 @@
 
 pub mod devices;
 pub mod harness;
+pub mod interop;

@@ -30,6 +30,8 @@ enum Command {
     Run(cli::run::Args),
     /// Validate scenario files without running them.
     Check(cli::check::Args),
+    /// Print every frame of a candump log or pcap decoded with units (driver codecs).
+    Decode(cli::decode::Args),
 }
 
 fn main() -> ExitCode {
@@ -37,7 +39,7 @@ fn main() -> ExitCode {
     // `run` and `check` print their own verdicts; the emulator's and driver's progress logs
     // would drown them, so those two start at `warn`.
     let base_level = match cli.command {
-        Command::Run(_) | Command::Check(_) => "warn",
+        Command::Run(_) | Command::Check(_) | Command::Decode(_) => "warn",
         _ => "info",
     };
     cli::logging::init(cli.verbose, base_level);
@@ -47,6 +49,7 @@ fn main() -> ExitCode {
         Command::Sim(args) => cli::sim::run(args),
         Command::Run(args) => cli::run::run(args),
         Command::Check(args) => cli::check::run(args),
+        Command::Decode(args) => cli::decode::run(args),
     };
     match outcome {
         Ok(code) => code,

@@ -2,7 +2,9 @@
 //!
 //! - Holding torques: a PD + integral controller holds the arm still at three poses; the
 //!   torque it settles on for J2 and J3 must agree within 5 % with the gravity torque computed
-//!   from the URDF inertials by our own Jacobian-transpose code (no rapier).
+//!   from the URDF inertials by our own Jacobian-transpose code (no rapier). That comparison
+//!   runs without the joints' dry friction, which would let the arm stand still with any
+//!   torque within ±friction of the gravity torque.
 //! - Joint limits: a torque-limited PD controller driving a joint toward a target past its
 //!   limit never takes it past the URDF limit.
 
@@ -59,6 +61,25 @@ fn piper_world() -> ArmWorld {
     ArmWorld::from_urdf_str(PIPER_URDF, WorldConfig::default()).expect("the Piper URDF loads")
 }
 
+/// The Piper world with every `<dynamics friction>` set to 0.
+fn frictionless_piper_world() -> ArmWorld {
+    let mut urdf = String::with_capacity(PIPER_URDF.len());
+    let mut rest = PIPER_URDF;
+    while let Some(i) = rest.find("friction=\"") {
+        let value_start = i + "friction=\"".len();
+        urdf.push_str(&rest[..value_start]);
+        urdf.push('0');
+        let Some(end) = rest[value_start..].find('"') else {
+            break;
+        };
+        rest = &rest[value_start + end..];
+    }
+    urdf.push_str(rest);
+    let world = ArmWorld::from_urdf_str(&urdf, WorldConfig::default()).expect("loads");
+    assert!(world.joints().iter().all(|j| j.friction == 0.0));
+    world
+}
+
 /// Holds `pose` for 3 s and returns the mean controller torque over the last 0.5 s and the
 /// largest position error over that window.
 fn settle_holding_torques(world: &mut ArmWorld, pose: &[f64]) -> (Vec<f64>, f64) {
@@ -93,7 +114,7 @@ fn holding_torques_of_j2_and_j3_match_the_urdf_inertials() {
         [-0.8, 0.6, -1.8, -0.5, 0.6, 1.0, 0.02, -0.02],
     ];
     for pose in poses {
-        let mut world = piper_world();
+        let mut world = frictionless_piper_world();
         let reference = world.gravity_torques(&pose).expect("valid pose");
         let (held, worst_error) = settle_holding_torques(&mut world, &pose);
         assert!(worst_error < 1e-3, "arm not held still: {worst_error} rad");

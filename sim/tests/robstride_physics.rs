@@ -93,13 +93,14 @@ fn current_mode_torque_is_iq_times_the_torque_constant() {
     write_f32(&mut rs03, 0x7006, 2.0); // iq_ref
     run_ms(&mut rs03, 10);
     let v0 = rs03.snapshot().speed_rad_s;
-    run_ms(&mut rs03, 100);
+    // 30 ms: the disc reaches ~18 rad/s, where the torque–speed line still allows 8 N·m.
+    run_ms(&mut rs03, 30);
     let v1 = rs03.snapshot().speed_rad_s;
     let kt = Model::RS03.spec().torque_constant_nm_per_a;
     let expected = 2.0 * kt;
     // The plant's inertia: disc ½·m·r² plus the rotor.
     let inertia = 0.5 * 2.0 * 0.01 + Model::RS03.spec().rotor_inertia_kg_m2;
-    let produced = inertia * (v1 - v0) / 0.1;
+    let produced = inertia * (v1 - v0) / 0.03;
     assert!(
         (produced - expected).abs() <= 0.05 * expected,
         "{produced} vs {expected}"
@@ -229,7 +230,12 @@ fn op_control_torque_is_limited_by_the_model_and_limit_torque() {
     let full = CanFrame::extended(0x01FF_FF01, &[0x7F, 0xFF, 0x7F, 0xFF, 0, 0, 0, 0]).unwrap();
     rs00.handle_frame(&full);
     rs00.tick();
-    assert!((rs00.snapshot().torque_nm - 14.0).abs() < 0.01);
+    // 14 N·m is the stall torque; after 1 ms the disc turns at ~1.4 rad/s, where the
+    // torque–speed line allows 14·(1 − ω/ω₀).
+    let snap = rs00.snapshot();
+    let allowed = 14.0 * (1.0 - snap.speed_rad_s / Model::RS00.spec().no_load_speed_rad_s);
+    assert!(snap.speed_rad_s > 1.0);
+    assert!((snap.torque_nm - allowed).abs() < 0.1, "{snap:?}");
     write_f32(&mut rs00, 0x700B, 5.0); // limit_torque
     rs00.handle_frame(&full);
     rs00.tick();
@@ -264,6 +270,9 @@ fn heating_raises_the_warning_before_the_fault() {
     write_u8(&mut rs03, 0x7005, 3);
     enable(&mut rs03);
     write_f32(&mut rs03, 0x7006, 30.0);
+    // Stalled: the load pushes back with the motor's 60 N·m limit, so the current flows
+    // (a free rotor would reach the no-load speed and draw none).
+    rs03.set_external_torque(-60.0);
     let mut fault_frames = Vec::new();
     for ms in 0..20_000u32 {
         for frame in rs03.tick() {
@@ -300,6 +309,8 @@ fn sustained_overcurrent_trips_the_i2t_overload() {
     write_u8(&mut rs03, 0x7005, 3);
     enable(&mut rs03);
     write_f32(&mut rs03, 0x7006, 25.0);
+    // Stalled, as in the heating test.
+    rs03.set_external_torque(-25.0 * Model::RS03.spec().torque_constant_nm_per_a);
     let budget = (43.0f64.powi(2) - 13.0f64.powi(2)) * 2.0;
     let expected_s = budget / (25.0f64.powi(2) - 13.0f64.powi(2));
     let mut tripped = None;
@@ -371,4 +382,80 @@ fn pendulum_hold_in_the_physics_world_needs_mgl_too() {
         "{} vs {mgl}",
         snap.torque_nm
     );
+}
+
+#[test]
+fn constant_torque_stops_accelerating_at_the_no_load_speed() {
+    for model in [Model::RS03, Model::RS00, Model::RS04] {
+        let mut motor = disc_motor(model);
+        write_u8(&mut motor, 0x7005, 3);
+        enable(&mut motor);
+        // Half the peak torque, held constant.
+        let kt = model.spec().torque_constant_nm_per_a;
+        write_f32(
+            &mut motor,
+            0x7006,
+            (0.5 * model.spec().peak_torque_nm / kt) as f32,
+        );
+        run_ms(&mut motor, 1500);
+        let v1 = motor.snapshot().speed_rad_s;
+        run_ms(&mut motor, 200);
+        let v2 = motor.snapshot().speed_rad_s;
+        let no_load = model.spec().no_load_speed_rad_s;
+        eprintln!(
+            "{model:?}: plateau {v2:.3} rad/s, model no-load {no_load:.3} rad/s, \
+             last 200 ms +{:.4} rad/s, torque {:.3} N·m",
+            v2 - v1,
+            motor.snapshot().torque_nm
+        );
+        assert!((v2 - no_load).abs() < 0.01 * no_load, "{model:?}: {v2}");
+        assert!(
+            (v2 - v1).abs() < 0.002 * no_load,
+            "{model:?} still accelerating"
+        );
+        assert!(v2 <= no_load + 1e-9, "{model:?} beyond the no-load speed");
+    }
+}
+
+/// Spin the disc to 10 rad/s in velocity mode, then stop the motor (type 4).
+fn spin_then_stop(damper_param: Option<u8>) -> Vec<f64> {
+    let mut rs03 = disc_motor(Model::RS03);
+    if let Some(value) = damper_param {
+        write_u8(&mut rs03, 0x702A, value);
+    }
+    write_u8(&mut rs03, 0x7005, 2);
+    enable(&mut rs03);
+    write_f32(&mut rs03, 0x7018, 20.0); // limit_cur
+    write_f32(&mut rs03, 0x7022, 50.0); // acc_rad
+    write_f32(&mut rs03, 0x700A, 10.0); // spd_ref
+    run_ms(&mut rs03, 1000);
+    assert!((rs03.snapshot().speed_rad_s - 10.0).abs() < 0.2);
+    let stop = CanFrame::extended(0x0400_FD01, &[0; 8]).unwrap();
+    rs03.handle_frame(&stop);
+    assert_eq!(rs03.snapshot().mode, ModeState::Reset);
+    (0..100)
+        .map(|_| {
+            rs03.tick();
+            rs03.snapshot().speed_rad_s
+        })
+        .collect()
+}
+
+#[test]
+fn a_stopped_motor_brakes_a_spinning_rotor_unless_damper_is_off() {
+    let braked = spin_then_stop(None);
+    // Shorted windings: b = peak / no-load = 60 / 20.9 N·m·s/rad on 0.0105 kg·m² → τ ≈ 3.7 ms.
+    let spec = Model::RS03.spec();
+    let tau_s = (0.5 * 2.0 * 0.01 + spec.rotor_inertia_kg_m2)
+        / (spec.peak_torque_nm / spec.no_load_speed_rad_s);
+    let expected_10ms = 10.0 * (-0.010 / tau_s).exp();
+    eprintln!(
+        "stopped RS03: {:.3} rad/s after 10 ms (model {expected_10ms:.3}), {:.5} after 100 ms",
+        braked[9], braked[99]
+    );
+    assert!((braked[9] - expected_10ms).abs() < 0.1 * expected_10ms + 0.05);
+    assert!(braked[99].abs() < 0.01, "{}", braked[99]);
+    // 0x702A damper = 1 disables the braking: the disc coasts.
+    let coasting = spin_then_stop(Some(1));
+    assert!(coasting[99] > 9.5, "{}", coasting[99]);
 }

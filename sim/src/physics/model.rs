@@ -56,6 +56,11 @@ pub struct JointInfo {
     pub damping: f64,
     /// `<dynamics friction>` (N·m or N), applied as dry joint friction in the world.
     pub friction: f64,
+    /// Reflected rotor inertia of the joint's drive (kg·m² or kg): gear ratio² × rotor
+    /// inertia. URDF has no element for it, so it is 0 after parsing and set by the emulator
+    /// (see [`ArmModel::set_armature`]); it adds to the joint's own diagonal entry of the mass
+    /// matrix, like MuJoCo's `armature`.
+    pub armature: f64,
     /// `<mimic>`, when this joint follows another one.
     pub mimic: Option<Mimic>,
     /// Name of the parent link.
@@ -262,6 +267,7 @@ impl ArmModel {
                     velocity_limit: j.limit.velocity,
                     damping,
                     friction,
+                    armature: 0.0,
                     mimic: None,
                     parent_link: j.parent.link.clone(),
                     child_link: j.child.link.clone(),
@@ -363,6 +369,18 @@ impl ArmModel {
     /// Index of the actuated joint called `name`.
     pub fn joint_index(&self, name: &str) -> Option<usize> {
         self.joints.iter().position(|j| j.name == name)
+    }
+
+    /// Sets the reflected rotor inertia of actuated joint `joint` (kg·m² or kg). Negative or
+    /// non-finite values are taken as 0; an unknown index is ignored.
+    pub fn set_armature(&mut self, joint: usize, armature: f64) {
+        if let Some(j) = self.joints.get_mut(joint) {
+            j.armature = if armature.is_finite() {
+                armature.max(0.0)
+            } else {
+                0.0
+            };
+        }
     }
 
     /// URDF `<joint>` index (document order among all joints) of each actuated joint.
@@ -483,7 +501,8 @@ impl ArmModel {
     /// The joint-space mass matrix at `q` (n × n over the actuated joints; kg·m², kg·m or kg
     /// depending on the joint kinds): `M = Σ_l m_l·J_v,lᵀ·J_v,l + J_ω,lᵀ·I_l·J_ω,l` over the
     /// links, with `J_v,l`, `J_ω,l` the Jacobians of link `l`'s COM and `I_l` its inertia
-    /// about the COM in world axes. Motor controllers use it to decouple the joints. Mimic
+    /// about the COM in world axes, plus each joint's [`JointInfo::armature`] on its diagonal.
+    /// Motor controllers use it to decouple the joints. Mimic
     /// followers are treated as independent joints.
     pub fn mass_matrix(&self, q: &[f64]) -> Result<DMatrix<f64>, PhysicsError> {
         let poses = self.link_poses(q)?;
@@ -513,6 +532,9 @@ impl ArmModel {
                 jw.set_column(a, &ang);
             }
             m += jv.transpose() * &jv * inertial.mass_kg + jw.transpose() * inertia_w * &jw;
+        }
+        for (a, joint) in self.joints.iter().enumerate() {
+            m[(a, a)] += joint.armature;
         }
         Ok(m)
     }

@@ -61,7 +61,8 @@ struct JointBinding {
 ///   positions never lie outside the URDF limits. Effort and velocity limits are
 ///   *not* enforced here: the caller's motor model clamps its torque to
 ///   [`JointInfo::effort_limit`]. `<dynamics>` damping and friction and `<mimic>` couplings
-///   from the URDF are applied.
+///   from the URDF are applied, and so is each joint's armature (reflected rotor inertia, set
+///   with [`ArmWorld::set_armature`]: URDF has no element for it).
 pub struct ArmWorld {
     model: ArmModel,
     config: WorldConfig,
@@ -213,6 +214,7 @@ impl ArmWorld {
                 // rapier adds 0.1 N·m·s/rad on every angular DoF by default; the URDF decides.
                 mb.damping_mut()[dof] = info.damping as Real;
                 mb.frictions_mut()[dof] = info.friction as Real;
+                mb.armature_mut()[dof] = info.armature as Real;
             }
         }
         for (info, b) in self.model.joints().iter().zip(&self.bindings) {
@@ -243,6 +245,27 @@ impl ArmWorld {
         }
     }
 
+    /// Sets the reflected rotor inertia (armature, kg·m² for a revolute joint, kg for a
+    /// prismatic one) of actuated joint `joint`: gear ratio² × rotor inertia of its drive.
+    ///
+    /// URDF has no element for it. rapier adds it to the joint's diagonal entry of the
+    /// multibody mass matrix (MuJoCo's `armature`), and so does [`ArmModel::mass_matrix`]: the
+    /// rotor resists the joint's own acceleration only, which is what a geared motor's rotor
+    /// does when its gear ratio is large. Negative or non-finite values count as 0; an unknown
+    /// index is ignored.
+    pub fn set_armature(&mut self, joint: usize, armature: f64) {
+        self.model.set_armature(joint, armature);
+        let (Some(info), Some(b)) = (self.model.joints().get(joint), self.bindings.get(joint))
+        else {
+            return;
+        };
+        if let Some((mb, link_id)) = self.physics.multibody_joints.get_mut(b.handle) {
+            if let Some(dof) = mb.link(link_id).map(|l| l.assembly_id()) {
+                mb.armature_mut()[dof] = info.armature as Real;
+            }
+        }
+    }
+
     /// The URDF model this world was built from (limits, inertials, link kinematics).
     pub fn model(&self) -> &ArmModel {
         &self.model
@@ -254,7 +277,7 @@ impl ArmWorld {
     }
 
     /// The actuated joints in URDF document order: name, kind, limits, effort and velocity
-    /// limits, damping, friction, mimic.
+    /// limits, damping, friction, armature, mimic.
     pub fn joints(&self) -> &[JointInfo] {
         self.model.joints()
     }

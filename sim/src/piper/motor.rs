@@ -11,6 +11,13 @@
 pub const TORQUE_CONSTANT_NM_PER_A: [f64; 6] =
     [1.18125, 1.18125, 1.18125, 0.95844, 0.95844, 0.95844];
 
+/// Reflected rotor inertia (armature) of each joint's geared motor, kg·m²: gear ratio² × rotor
+/// inertia. AgileX publishes neither the ratios nor the rotor inertias; 0.1 kg·m² is the
+/// armature MuJoCo Menagerie's Piper model gives every joint (spec §13.3, `urdf/README.md`).
+/// It keeps the wrist, whose links alone weigh in at ~4e-4 kg·m², from being a near-massless
+/// body that a host's MIT damping gain drives past the step's stability limit.
+pub const ARMATURE_KG_M2: [f64; 6] = [0.1; 6];
+
 /// Position-loop bandwidth of the MOVE-mode drivers, rad/s: J1–J3, then J4–J6.
 pub const LOOP_BANDWIDTH_RAD_S: [f64; 6] = [100.0, 100.0, 100.0, 150.0, 150.0, 150.0];
 /// Damping ratio of the MOVE-mode position loop.

@@ -10,7 +10,9 @@ use bus::CanFrame;
 use serde::{Deserialize, Serialize};
 
 use crate::robstride::codec::{self, CommType, ExtId};
-use crate::robstride::control::{OpCommand, Profile, SpeedLoop, ZERO_MODE_SPEED_RAD_S};
+use crate::robstride::control::{
+    OpCommand, Profile, SpeedEnvelope, SpeedLoop, ZERO_MODE_SPEED_RAD_S,
+};
 use crate::robstride::faults::{self, Fault, Phase, WARNING_OVER_TEMP};
 use crate::robstride::model::{Model, ModelSpec, RangeTable, Ranges};
 use crate::robstride::params::{self, index, Access, ParamStore};
@@ -758,11 +760,32 @@ impl Actuator {
         out
     }
 
+    /// The torque–speed line at the present supply voltage (no-load speed ∝ voltage).
+    fn envelope(&self, dt: f64) -> SpeedEnvelope {
+        let volts = self.bus_voltage_v.max(0.0) / self.spec.nominal_voltage_v;
+        SpeedEnvelope {
+            peak_torque_nm: self.spec.peak_torque_nm,
+            no_load_speed_rad_s: self.spec.no_load_speed_rad_s * volts,
+            inertia_kg_m2: self.plant.inertia_kg_m2(),
+            dt_s: dt,
+        }
+    }
+
     fn control(&mut self, dt: f64) -> f64 {
         if self.mode != ModeState::Run || self.fault_word != 0 {
             self.iq_a = 0.0;
             self.torque_nm = 0.0;
-            return 0.0;
+            // De-energised, the drive shorts the windings against back-driving unless the
+            // model has 0x702A `damper` and it is set to 1. That torque is passive: the
+            // reported torque and current stay those the drive commands (0). The manual has a
+            // changed `damper` take effect after save and power cycle; we apply it at once.
+            let damper_off = self.spec.has_damper_param && self.params.get(index::DAMPER) >= 0.5;
+            if damper_off {
+                return 0.0;
+            }
+            return self
+                .envelope(dt)
+                .short_circuit_brake(self.plant.velocity_rad_s());
         }
         let kt = self.spec.torque_constant_nm_per_a;
         let angle = self.angle_rad();
@@ -836,7 +859,8 @@ impl Actuator {
             .params
             .get(index::LIMIT_TORQUE)
             .min(f64::from(self.ranges.torque_nm));
-        self.torque_nm = torque_cmd.clamp(-limit, limit);
+        let torque = torque_cmd.clamp(-limit, limit);
+        self.torque_nm = self.envelope(dt).limit(torque, speed);
         if self.torque_nm != torque_cmd {
             self.iq_a = self.torque_nm / kt;
         }

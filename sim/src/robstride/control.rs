@@ -87,6 +87,53 @@ impl SpeedLoop {
     }
 }
 
+/// The motor's torque–speed line (spec §6.3): peak torque at standstill falling linearly to
+/// zero at the no-load speed, as back-EMF eats the supply voltage.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SpeedEnvelope {
+    /// Peak output torque (N·m).
+    pub peak_torque_nm: f64,
+    /// No-load output speed at the present supply voltage (rad/s).
+    pub no_load_speed_rad_s: f64,
+    /// Inertia the motor drives (kg·m²).
+    pub inertia_kg_m2: f64,
+    /// Integration step (s).
+    pub dt_s: f64,
+}
+
+impl SpeedEnvelope {
+    /// `torque_nm` limited to what the motor can produce at `speed_rad_s`.
+    ///
+    /// Torque that drives the shaft faster (same sign as the speed) is capped at
+    /// `peak·(1 − |ω|/ω₀)`, and at what one step may add without overshooting ω₀ (the line is
+    /// a stiff damping term, `peak/ω₀` N·m·s/rad, too stiff for an explicit step on a light
+    /// rotor). Braking torque is limited by the peak torque only.
+    pub fn limit(&self, torque_nm: f64, speed_rad_s: f64) -> f64 {
+        let w0 = self.no_load_speed_rad_s;
+        if !w0.is_finite() || w0 <= 0.0 || torque_nm * speed_rad_s <= 0.0 {
+            return torque_nm;
+        }
+        let headroom = (w0 - speed_rad_s.abs()).max(0.0);
+        let available = (self.peak_torque_nm * headroom / w0)
+            .min(self.inertia_kg_m2 * headroom / self.dt_s.max(1e-9));
+        torque_nm.clamp(-available, available)
+    }
+
+    /// Torque of the de-energised motor's anti-back-drive damping (windings shorted, spec
+    /// §7.1 `damper`): the torque–speed line's slope `peak/ω₀` against the motion, never more
+    /// than what stops the shaft within one step.
+    pub fn short_circuit_brake(&self, speed_rad_s: f64) -> f64 {
+        let w0 = self.no_load_speed_rad_s;
+        if !w0.is_finite() || w0 <= 0.0 {
+            return 0.0;
+        }
+        let damping = self.peak_torque_nm / w0;
+        let magnitude = (damping * speed_rad_s.abs())
+            .min(self.inertia_kg_m2 * speed_rad_s.abs() / self.dt_s.max(1e-9));
+        -magnitude * speed_rad_s.signum()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -117,5 +164,30 @@ mod tests {
             assert!(pi.update(100.0, 6.0, 0.02, 5.0, 1e-3).abs() <= 5.0);
         }
         assert!(pi.integral_a <= 5.0);
+    }
+
+    #[test]
+    fn envelope_caps_driving_torque_and_leaves_braking_alone() {
+        let env = SpeedEnvelope {
+            peak_torque_nm: 60.0,
+            no_load_speed_rad_s: 20.0,
+            inertia_kg_m2: 1.0,
+            dt_s: 1e-4,
+        };
+        assert_eq!(env.limit(60.0, 0.0), 60.0);
+        assert!((env.limit(60.0, 10.0) - 30.0).abs() < 1e-12);
+        assert!((env.limit(-60.0, -15.0) + 15.0).abs() < 1e-12);
+        assert_eq!(env.limit(60.0, 25.0), 0.0);
+        assert_eq!(env.limit(-60.0, 10.0), -60.0);
+        let brake = env.short_circuit_brake(10.0);
+        assert!((brake + 30.0).abs() < 1e-12, "{brake}");
+        assert_eq!(env.short_circuit_brake(0.0), 0.0);
+        // A light rotor: the brake never reverses the speed within one step.
+        let light = SpeedEnvelope {
+            inertia_kg_m2: 1e-4,
+            ..env
+        };
+        let tau = light.short_circuit_brake(10.0);
+        assert!(10.0 + tau * 1e-4 / 1e-4 >= -1e-9, "{tau}");
     }
 }

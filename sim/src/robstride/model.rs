@@ -100,7 +100,20 @@ impl Model {
             Model::RS06 => (1.09, 14.3, 57.0, 60.0, 145.0, 145.0, [0, 6, 0, 11]),
             Model::EL05 => (0.94, 2.6, 11.0, 60.0, 135.0, 135.0, [1, 0, 5, 4]),
         };
+        // (peak torque N·m, no-load output speed rpm) — spec §6.3.
+        let (peak_torque_nm, no_load_rpm) = match self {
+            Model::RS00 => (14.0, 315.0),
+            Model::RS01 => (17.0, 315.0),
+            Model::RS02 => (17.0, 410.0),
+            Model::RS03 => (60.0, 200.0),
+            Model::RS04 => (120.0, 200.0),
+            Model::RS05 => (5.5, 480.0),
+            Model::RS06 => (36.0, 480.0),
+            Model::EL05 => (6.0, 430.0),
+        };
         ModelSpec {
+            peak_torque_nm,
+            no_load_speed_rad_s: no_load_rpm * std::f64::consts::TAU / 60.0,
             torque_constant_nm_per_a: kt,
             rated_current_a: rated,
             peak_current_a: peak,
@@ -190,6 +203,11 @@ pub struct ModelSpec {
     pub firmware_version: [u8; 4],
     /// Rotor inertia reflected to the output (kg·m²), an assumption (not published).
     pub rotor_inertia_kg_m2: f64,
+    /// Peak output torque (N·m), the stall end of the torque–speed line.
+    pub peak_torque_nm: f64,
+    /// No-load output speed at the nominal supply voltage (rad/s): where the torque–speed
+    /// line reaches zero torque.
+    pub no_load_speed_rad_s: f64,
     /// Whether parameter 0x702A `damper` exists on this model.
     pub has_damper_param: bool,
     /// Whether parameter 0x702B `add_offset` exists on this model.

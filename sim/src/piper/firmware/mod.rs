@@ -158,48 +158,39 @@ pub struct Firmware {
 
 fn load_world(config: &PiperConfig) -> Result<ArmWorld, PiperError> {
     let world_config = WorldConfig::default();
-    let world = match &config.urdf_path {
+    let mut world = match &config.urdf_path {
         Some(path) => ArmWorld::from_urdf_file(path, world_config)?,
         None => ArmWorld::from_urdf_str(super::config::BUNDLED_URDF, world_config)?,
     };
+    // URDF cannot carry the motors' rotor inertia: add it to joint1..joint6 here.
+    for (j, armature) in super::motor::ARMATURE_KG_M2.iter().enumerate() {
+        if let Some(i) = world.joint_index(&format!("joint{}", j + 1)) {
+            world.set_armature(i, *armature);
+        }
+    }
     Ok(world)
 }
 
-/// Effective inertia of each arm joint at `q0`, measured on a gravity-free copy of the world:
-/// the velocity a small torque pulse produces in one step (pushing towards the middle of the
-/// joint's range so a joint resting on a stop is measured, not the stop).
+/// Effective inertia of each arm joint at `q0`, kg·m²: the joint's diagonal entry of the
+/// model's mass matrix, links plus armature (the inertia its motor drives when the other
+/// joints hold still). Computed, not probed: a small test torque would not overcome the
+/// joints' dry friction.
 fn estimate_inertias(
-    config: &PiperConfig,
+    world: &ArmWorld,
     q0: &[f64],
     arm_idx: &[usize; 6],
 ) -> Result<[f64; 6], PiperError> {
-    const PULSE_NM: f64 = 0.01;
-    /// Fallback when a joint does not respond (e.g. pinned on both sides), kg·m².
+    /// Floor for a degenerate model, kg·m².
     const MIN_INERTIA: f64 = 1e-4;
-    let mut probe = load_world(&PiperConfig {
-        urdf_path: config.urdf_path.clone(),
-        ..PiperConfig::default()
-    })?;
-    let mut inertia = [MIN_INERTIA; 6];
-    for (j, &i) in arm_idx.iter().enumerate() {
-        // Teleporting also zeroes every velocity, so each joint is probed from rest.
-        probe.set_joint_positions(q0)?;
-        let info = &probe.joints()[i];
-        let towards_middle = if q0[i] < 0.5 * (info.lower + info.upper) {
-            1.0
-        } else {
-            -1.0
-        };
-        let n = probe.joints().len();
-        let mut tau = probe.gravity_torques(q0).unwrap_or_else(|_| vec![0.0; n]);
-        tau[i] += towards_middle * PULSE_NM;
-        probe.step(&tau);
-        let dv = probe.joint_velocities()[i] * towards_middle;
-        if dv > 1e-12 {
-            inertia[j] = (PULSE_NM * STEP_S / dv).max(MIN_INERTIA);
-        }
-    }
-    Ok(inertia)
+    let diagonal = world.model().mass_matrix_diagonal(q0)?;
+    Ok(std::array::from_fn(|j| {
+        diagonal
+            .get(arm_idx[j])
+            .copied()
+            .filter(|i| i.is_finite())
+            .unwrap_or(MIN_INERTIA)
+            .max(MIN_INERTIA)
+    }))
 }
 
 impl Firmware {
@@ -261,7 +252,7 @@ impl Firmware {
         }
         world.set_joint_positions(&q0)?;
         let viscous = std::array::from_fn(|j| world.joints()[arm_idx[j]].damping);
-        let inertia = estimate_inertias(&config, &q0, &arm_idx)?;
+        let inertia = estimate_inertias(&world, &q0, &arm_idx)?;
         let motors = std::array::from_fn(|j| {
             JointMotor::new(j, world.joints()[arm_idx[j]].effort_limit, inertia[j])
         });
