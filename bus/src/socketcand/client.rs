@@ -182,6 +182,9 @@ impl SocketcandBus {
         handshake.expect(Reply::Ok, "< ok > to < open >").await?;
         handshake.send(&Command::RawMode).await?;
         handshake.expect(Reply::Ok, "< ok > to < rawmode >").await?;
+        // Tells the server we have read that `< ok >`, so it forwards frames at once instead
+        // of after its grace period (see `ServerConfig::rawmode_grace`). The answer is ignored.
+        handshake.send(&Command::Echo).await?;
         // Frames that followed the last `< ok >` in the same read are still in the framer.
         let framer = handshake.framer;
         let name = format!("socketcand {addr} {bus_name}");

@@ -37,8 +37,10 @@ pub struct ServerConfig {
     /// (default 1 s); meanwhile no further commands of that client are read.
     pub send_wait: Duration,
     /// Frames are forwarded only this long after `< ok >` answers `< rawmode >` (default
-    /// 100 ms): python-can reads that `< ok >` with one `recv` and compares it whole, so a
-    /// frame arriving in the same read would fail its handshake.
+    /// 100 ms), or from the client's next command on, whichever comes first: python-can
+    /// reads that `< ok >` with one `recv` and compares it whole, so a frame arriving in the
+    /// same read would fail its handshake. A client that sends a command has read its
+    /// `< ok >` (armhil's client sends `< echo >` at once, so it misses nothing).
     pub rawmode_grace: Duration,
     /// Kernel send buffer of each connection in bytes (default 64 KiB, some 1400 frames):
     /// bounds how stale the frames a lagging client reads can be before drops begin.
@@ -360,6 +362,9 @@ impl Session<'_> {
                 return Ok(());
             }
         };
+        if command != Command::RawMode {
+            self.end_grace();
+        }
         let node = self.node.borrow().clone();
         match (command, node) {
             (Command::Open(name), None) => {
@@ -390,6 +395,18 @@ impl Session<'_> {
             (Command::Send(frame), Some(node)) => self.send(&node, frame).await?,
         }
         Ok(())
+    }
+
+    /// Start forwarding now if raw mode is still in its grace period.
+    fn end_grace(&self) {
+        let now = Instant::now();
+        self.raw.send_if_modified(|raw| match raw {
+            Some(start) if *start > now => {
+                *raw = Some(now);
+                true
+            }
+            _ => false,
+        });
     }
 
     /// Put a client's frame on the bus, waiting (and so not reading that client) while its
