@@ -490,20 +490,29 @@ impl Forwarder<'_> {
     }
 }
 
+/// Largest write: python-can reads 1024 bytes at a time and warns about every element a read
+/// cuts in two, so a write holds whole elements and fits one such read.
+const MAX_WRITE: usize = 1024;
+
 async fn write_loop(mut write: OwnedWriteHalf, mut queue: mpsc::Receiver<String>) -> End {
-    let mut batch = Vec::with_capacity(16 * 1024);
-    while let Some(first) = queue.recv().await {
+    let mut batch = Vec::with_capacity(MAX_WRITE + protocol::MAX_ELEMENT_LEN);
+    let mut next = queue.recv().await;
+    while let Some(first) = next.take() {
         batch.clear();
         batch.extend_from_slice(first.as_bytes());
-        // Whatever else is already queued goes out in the same write.
-        while batch.len() < 64 * 1024 {
-            match queue.try_recv() {
-                Ok(more) => batch.extend_from_slice(more.as_bytes()),
-                Err(_) => break,
+        // What else is already queued goes out in the same write, up to MAX_WRITE.
+        while let Ok(more) = queue.try_recv() {
+            if batch.len() + more.len() > MAX_WRITE {
+                next = Some(more);
+                break;
             }
+            batch.extend_from_slice(more.as_bytes());
         }
         if let Err(error) = write.write_all(&batch).await {
             return End::WriteFailed(error);
+        }
+        if next.is_none() {
+            next = queue.recv().await;
         }
     }
     // Every sender is gone: the other parts have ended the connection already.
