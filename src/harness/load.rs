@@ -21,11 +21,7 @@ pub fn parse_scenario(path: &Path, text: &str) -> Result<Scenario, LoadError> {
 
 /// Parse and validate the variant `variant` (a value of its `matrix:`) of scenario text;
 /// `None` for a file without a matrix.
-pub fn parse_variant(
-    path: &Path,
-    text: &str,
-    variant: Option<&str>,
-) -> Result<Scenario, LoadError> {
+pub fn parse_variant(path: &Path, text: &str, variant: Option<&str>) -> Result<Scenario, LoadError> {
     // The bench first: its device kinds decide which vocabulary the steps are read with. When
     // it does not parse, the full parse below reports the error.
     let kinds = serde_saphyr::from_str::<RawHead>(text).ok().map(|head| {

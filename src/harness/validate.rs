@@ -325,20 +325,22 @@ fn matrix(
         };
     };
     let mut entries = raw.value.iter();
-    let (key, values) =
-        match (entries.next(), entries.next()) {
-            (Some(entry), None) => entry,
-            _ => return Err(ctx.err(
+    let (key, values) = match (entries.next(), entries.next()) {
+        (Some(entry), None) => entry,
+        _ => {
+            return Err(ctx.err(
                 pos(raw),
                 "`matrix` takes exactly one parameter, e.g. `matrix: {vendor: [piper, realman]}`",
-            )),
-        };
+            ))
+        }
+    };
     if values.value.is_empty() {
         return Err(ctx.err(pos(values), format!("`matrix.{key}` lists no value")));
     }
     for (i, v) in values.value.iter().enumerate() {
         let ok = !v.value.is_empty()
-            && v.value
+            && v
+                .value
                 .chars()
                 .all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_'));
         if !ok {

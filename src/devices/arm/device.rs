@@ -221,11 +221,7 @@ impl Device for ArmDevice {
             }),
             (Ok(values), Some(want)) => Ok(Reply {
                 values,
-                mismatches: vec![(
-                    "code".to_owned(),
-                    want.to_string(),
-                    "SUCCESS (0)".to_owned(),
-                )],
+                mismatches: vec![("code".to_owned(), want.to_string(), "SUCCESS (0)".to_owned())],
             }),
             (Err(e), Some(want)) => Ok(Reply {
                 values: vec![("code".to_owned(), e.code.to_string())],

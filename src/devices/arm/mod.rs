@@ -12,9 +12,7 @@ use std::sync::{Arc, Mutex};
 
 use driver::arm::{ArmInterface, PiperArm, PiperArmOptions, RealmanArm, RealmanArmOptions, Vendor};
 
-pub use model::{
-    ArmAction as Action, ArmCond as Check, ArmFault as Fault, ArmSettings as Settings,
-};
+pub use model::{ArmAction as Action, ArmCond as Check, ArmFault as Fault, ArmSettings as Settings};
 
 use super::Wiring;
 use crate::harness::{Clock, Device};
@@ -79,10 +77,7 @@ pub(crate) async fn build(
                 ..RealmanArmOptions::push_to(HOST_IP, PUSH_PORT, 5)
             };
             let arm = RealmanArm::from_client(name, client, emulated.feed, options);
-            (
-                Arc::new(arm),
-                Emulator::Realman(Mutex::new(Some(emulated.emu))),
-            )
+            (Arc::new(arm), Emulator::Realman(Mutex::new(Some(emulated.emu))))
         }
     };
     Ok(Arc::new(ArmDevice::new(name, arm, emulator)))

@@ -31,32 +31,14 @@ const METHODS: [(&str, &str, &[&str]); 14] = [
     (
         "move_cartesian_linear",
         "arm move_cartesian_linear",
-        &[
-            "position_m",
-            "euler_deg",
-            "v",
-            "r",
-            "trajectory_connect",
-            "block",
-        ],
+        &["position_m", "euler_deg", "v", "r", "trajectory_connect", "block"],
     ),
     (
         "move_joint_pose",
         "arm move_joint_pose",
-        &[
-            "position_m",
-            "euler_deg",
-            "v",
-            "r",
-            "trajectory_connect",
-            "block",
-        ],
+        &["position_m", "euler_deg", "v", "r", "trajectory_connect", "block"],
     ),
-    (
-        "move_joint_follow",
-        "arm move_joint_follow",
-        &["joints_deg"],
-    ),
+    ("move_joint_follow", "arm move_joint_follow", &["joints_deg"]),
     ("set_arm_stop", "arm set_arm_stop", &[]),
     ("set_arm_slow_stop", "arm set_arm_slow_stop", &[]),
     ("set_arm_pause", "arm set_arm_pause", &[]),
@@ -120,11 +102,7 @@ pub(crate) fn settings(ctx: &Ctx<'_>, d: &RawSettings, at: Pos) -> Res<ArmSettin
 }
 
 fn names(vendors: &[(Vendor, &str)]) -> String {
-    vendors
-        .iter()
-        .map(|(_, n)| *n)
-        .collect::<Vec<_>>()
-        .join(", ")
+    vendors.iter().map(|(_, n)| *n).collect::<Vec<_>>().join(", ")
 }
 
 fn joints(ctx: &Ctx<'_>, v: &S<Vec<f64>>, key: &str) -> Res<Vec<f64>> {
@@ -140,13 +118,7 @@ fn joints(ctx: &Ctx<'_>, v: &S<Vec<f64>>, key: &str) -> Res<Vec<f64>> {
     Ok(v.value.clone())
 }
 
-fn int_in(
-    ctx: &Ctx<'_>,
-    v: &Option<S<i64>>,
-    key: &str,
-    range: (i64, i64),
-    default: i64,
-) -> Res<i64> {
+fn int_in(ctx: &Ctx<'_>, v: &Option<S<i64>>, key: &str, range: (i64, i64), default: i64) -> Res<i64> {
     match v {
         None => Ok(default),
         Some(v) if (range.0..=range.1).contains(&v.value) => Ok(v.value),
@@ -309,9 +281,7 @@ pub(crate) fn checks(ctx: &Ctx<'_>, c: &RawConds, _step: &str, _at: Pos) -> Res<
         let tol = c
             .tolerance_m
             .as_ref()
-            .map_or(Ok(DEFAULT_TOLERANCE_M), |t| {
-                ctx.non_negative(t, "tolerance_m")
-            })?;
+            .map_or(Ok(DEFAULT_TOLERANCE_M), |t| ctx.non_negative(t, "tolerance_m"))?;
         out.push(ArmCond::Position(ctx.array::<3>(p, "position_m")?, tol));
     }
     if let Some(g) = &c.gripper_actpos {

@@ -94,8 +94,7 @@ pub(crate) async fn spawn_default(
         obstacles: Vec::new(),
     };
     let node: Arc<dyn CanBus> = Arc::new(bus.attach(name));
-    let sim =
-        PiperSim::spawn(node, &settings).map_err(|e| format!("device `{name}`: emulator: {e}"))?;
+    let sim = PiperSim::spawn(node, &settings).map_err(|e| format!("device `{name}`: emulator: {e}"))?;
     let host: Arc<dyn CanBus> = Arc::new(bus.attach(HOST_NODE));
     let driver = PiperBuilder::new(host)
         .connect()
