@@ -5,6 +5,7 @@
 //! - [`virtual_bus`]: an in-process bus that models bit timing, arbitration, queues, load and
 //!   faults, and runs under tokio's paused clock for deterministic virtual time.
 //! - `socketcan_bus` (Linux only): real SocketCAN interfaces such as `vcan0` or `can0`.
+//! - [`socketcand`]: CAN over TCP (the socketcand protocol), server and client.
 //! - [`candump`], [`pcap`] and [`recorder`]: logs for can-utils and Wireshark, and a reader.
 //! - [`fixtures`]: the annotated candump test vectors in `fixtures/` that drivers and emulators
 //!   are both checked against.
@@ -20,6 +21,7 @@ pub mod pcap;
 pub mod recorder;
 #[cfg(target_os = "linux")]
 pub mod socketcan_bus;
+pub mod socketcand;
 pub mod timing;
 pub mod transcript;
 pub mod virtual_bus;

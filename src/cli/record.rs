@@ -1,4 +1,5 @@
-//! `armhil record`: write everything seen on a SocketCAN interface to a candump log or pcap.
+//! `armhil record`: write everything seen on a SocketCAN interface or a socketcand server to a
+//! candump log or pcap.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -7,8 +8,12 @@ use std::process::ExitCode;
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// CAN interface to record, e.g. `vcan0`.
-    #[arg(long)]
-    pub iface: String,
+    #[arg(long, required_unless_present = "socketcand")]
+    pub iface: Option<String>,
+    /// Record a socketcand server's bus instead (HOST:PORT, e.g. one served by
+    /// `armhil sim piper --socketcand`); works without kernel CAN.
+    #[arg(long, value_name = "HOST:PORT", conflicts_with = "iface")]
+    pub socketcand: Option<String>,
     /// Output file: `.pcap` writes pcap (Wireshark), anything else a candump `-L` log.
     #[arg(short = 'o', long)]
     pub output: PathBuf,
@@ -28,22 +33,26 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     imp::run(args)
 }
 
-#[cfg(not(target_os = "linux"))]
-mod imp {
-    use super::*;
-
-    pub fn run(_args: Args) -> anyhow::Result<ExitCode> {
-        anyhow::bail!("armhil record needs SocketCAN, which only exists on Linux")
-    }
+/// Open the SocketCAN interface to record.
+#[cfg(target_os = "linux")]
+fn open_iface(iface: &str) -> anyhow::Result<std::sync::Arc<dyn bus::CanBus>> {
+    use anyhow::Context as _;
+    let bus = bus::socketcan_bus::SocketCanBus::open(iface)
+        .with_context(|| format!("cannot open CAN interface {iface}"))?;
+    Ok(std::sync::Arc::new(bus))
 }
 
-#[cfg(target_os = "linux")]
+#[cfg(not(target_os = "linux"))]
+fn open_iface(_iface: &str) -> anyhow::Result<std::sync::Arc<dyn bus::CanBus>> {
+    anyhow::bail!("SocketCAN only exists on Linux; record a socketcand server with --socketcand")
+}
+
 mod imp {
     use std::time::Duration;
 
     use anyhow::Context as _;
     use bus::recorder::Recorder;
-    use bus::socketcan_bus::SocketCanBus;
+    use bus::socketcand::SocketcandBus;
     use bus::{BusError, CanBus};
 
     use super::*;
@@ -57,11 +66,21 @@ mod imp {
     }
 
     async fn record(args: Args) -> anyhow::Result<ExitCode> {
-        let bus = SocketCanBus::open(&args.iface)
-            .with_context(|| format!("cannot open CAN interface {}", args.iface))?;
-        let mut recorder = Recorder::create(&args.output, &args.iface)
+        // The log's interface column: the interface, or one word for a socketcand bus.
+        let (bus, channel): (std::sync::Arc<dyn CanBus>, String) =
+            match (&args.socketcand, &args.iface) {
+                (Some(addr), _) => {
+                    let bus = SocketcandBus::connect(addr, "can0")
+                        .await
+                        .context("cannot record the socketcand bus")?;
+                    (std::sync::Arc::new(bus), "socketcand".to_owned())
+                }
+                (None, Some(iface)) => (open_iface(iface)?, iface.clone()),
+                (None, None) => anyhow::bail!("give --iface IF or --socketcand HOST:PORT"),
+            };
+        let mut recorder = Recorder::create(&args.output, &channel)
             .with_context(|| format!("cannot create {}", args.output.display()))?;
-        tracing::info!(iface = %args.iface, output = %args.output.display(), "recording; Ctrl-C stops");
+        tracing::info!(on = %bus.name(), output = %args.output.display(), "recording; Ctrl-C stops");
         let stop_after = async {
             match args.duration {
                 Some(secs) => tokio::time::sleep(Duration::from_secs_f64(secs)).await,
@@ -92,7 +111,7 @@ mod imp {
                             break Err(anyhow::Error::new(error).context("cannot write the recording"));
                         }
                     }
-                    Err(BusError::BusOff) => tracing::warn!(iface = %args.iface, "bus-off reported; still recording"),
+                    Err(BusError::BusOff) => tracing::warn!(on = %bus.name(), "bus-off reported; still recording"),
                     Err(error) => break Err(anyhow::Error::new(error).context("reading the bus failed")),
                 },
             }

@@ -7,8 +7,8 @@ use std::time::Duration;
 
 use armhil::harness::report::{junit_xml, write_atomic, write_outputs, Written};
 use armhil::harness::{
-    discover_suite, load_suite_file, run_scenario_with, Clock, Outcome, RunOptions, ScenarioResult,
-    SuiteFile, Verdict,
+    discover_suite, load_suite_file, run_scenario_with, Clock, Link, Outcome, RunOptions,
+    ScenarioResult, SuiteFile, Verdict,
 };
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -41,6 +41,10 @@ pub struct Args {
     /// bus faults, obstacles, initial joints) are skipped with the reason.
     #[arg(long, value_name = "IF")]
     iface: Option<String>,
+    /// Like --iface, but over TCP: against `armhil sim piper|robstride --socketcand ADDR`
+    /// (or any socketcand server) at HOST:PORT, for machines without kernel CAN.
+    #[arg(long, value_name = "HOST:PORT", conflicts_with = "iface")]
+    socketcand: Option<String>,
     /// Multiply every deadline (wait_until, action and driver timeouts) by this factor in
     /// real-time runs, for slow machines such as a vcan VM under emulation. Ignored in virtual
     /// time.
@@ -99,11 +103,16 @@ struct Ran {
 
 /// Load, run and write one scenario.
 fn run_one(file: &SuiteFile, args: &Args) -> Ran {
-    let clock_for = |bench_iface: Option<&String>| match (&args.iface, args.realtime, bench_iface) {
-        (Some(iface), _, _) => Clock::Iface(iface.clone()),
-        (None, true, Some(iface)) => Clock::Iface(iface.clone()),
-        (None, true, None) => Clock::Realtime,
-        (None, false, _) => Clock::Virtual,
+    let clock_for = |bench_iface: Option<&String>| {
+        if let Some(addr) = &args.socketcand {
+            return Clock::Iface(Link::Socketcand(addr.clone()));
+        }
+        match (&args.iface, args.realtime, bench_iface) {
+            (Some(iface), _, _) => Clock::Iface(Link::SocketCan(iface.clone())),
+            (None, true, Some(iface)) => Clock::Iface(Link::SocketCan(iface.clone())),
+            (None, true, None) => Clock::Realtime,
+            (None, false, _) => Clock::Virtual,
+        }
     };
     let scenario = match load_suite_file(file) {
         Ok(s) => s,
@@ -272,7 +281,12 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         Some(bar) => bar.println(text),
         None => println!("{text}"),
     };
-    if let Some(iface) = &args.iface {
+    let link = match (&args.socketcand, &args.iface) {
+        (Some(addr), _) => Some(format!("socketcand {addr}")),
+        (None, Some(iface)) => Some(iface.clone()),
+        (None, None) => None,
+    };
+    if let Some(iface) = &link {
         print(&format!(
             "running on {iface} in real time against a separate emulator process: bus faults and emulator faults are unavailable; scenarios that use them are skipped"
         ));

@@ -1,5 +1,5 @@
-//! Building the bench of a scenario: the CAN bus (in-process virtual bus, or a SocketCAN
-//! interface) with its recorder, and every device through its kind's `build`.
+//! Building the bench of a scenario: the CAN bus (in-process virtual bus, a SocketCAN
+//! interface or a socketcand server) with its recorder, and every device through its kind's `build`.
 
 use std::sync::Arc;
 
@@ -8,7 +8,7 @@ use tokio::time::Instant;
 
 use super::device::Device;
 use super::model::Scenario;
-use super::runner::{Clock, Recorder, RunOptions};
+use super::runner::{Clock, Link, Recorder, RunOptions};
 use crate::devices::Wiring;
 
 /// Node name of the drivers on the virtual bus (bus faults can target it as `host`).
@@ -41,7 +41,7 @@ pub(crate) async fn build(
             let recorder = Recorder::from_tap(bus.tap());
             (Some(bus), recorder)
         }
-        Clock::Iface(iface) => (None, iface_recorder(iface)?),
+        Clock::Iface(link) => (None, Recorder::from_bus(open_link(link, "recorder").await?)),
     };
     let t0 = Instant::now();
     let wiring = Wiring {
@@ -62,27 +62,29 @@ pub(crate) async fn build(
     })
 }
 
-/// A second socket on the interface sees every frame (the driver's and the emulator's).
-#[cfg(target_os = "linux")]
-fn iface_recorder(iface: &str) -> Result<Recorder, String> {
-    Ok(Recorder::from_bus(open_iface(iface, "recorder")?))
+/// Open `link` for `what` (the recorder, or the driver of a CAN device kind). On a SocketCAN
+/// interface a second socket sees every frame, the driver's and the emulator's; on a socketcand
+/// server so does a second connection.
+pub(crate) async fn open_link(link: &Link, what: &str) -> Result<Arc<dyn bus::CanBus>, String> {
+    match link {
+        Link::SocketCan(iface) => open_iface(iface, what),
+        Link::Socketcand(addr) => bus::socketcand::SocketcandBus::connect(addr, "can0")
+            .await
+            .map(|b| Arc::new(b) as Arc<dyn bus::CanBus>)
+            .map_err(|e| format!("cannot reach the socketcand server for the {what}: {e}")),
+    }
 }
 
-#[cfg(not(target_os = "linux"))]
-fn iface_recorder(iface: &str) -> Result<Recorder, String> {
-    Err(format!("SocketCAN interface `{iface}` needs Linux"))
-}
-
-/// Open a SocketCAN socket on `iface` for `what` (drivers of CAN device kinds use it).
+/// Open a SocketCAN socket on `iface` for `what`.
 #[cfg(target_os = "linux")]
-pub(crate) fn open_iface(iface: &str, what: &str) -> Result<Arc<dyn bus::CanBus>, String> {
+fn open_iface(iface: &str, what: &str) -> Result<Arc<dyn bus::CanBus>, String> {
     bus::socketcan_bus::SocketCanBus::open(iface)
         .map(|b| Arc::new(b) as Arc<dyn bus::CanBus>)
         .map_err(|e| format!("cannot open {iface} for the {what}: {e}"))
 }
 
-/// Open a SocketCAN socket on `iface` for `what` (drivers of CAN device kinds use it).
+/// Open a SocketCAN socket on `iface` for `what`.
 #[cfg(not(target_os = "linux"))]
-pub(crate) fn open_iface(iface: &str, _what: &str) -> Result<Arc<dyn bus::CanBus>, String> {
+fn open_iface(iface: &str, _what: &str) -> Result<Arc<dyn bus::CanBus>, String> {
     Err(format!("SocketCAN interface `{iface}` needs Linux"))
 }

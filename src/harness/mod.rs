@@ -27,7 +27,7 @@ mod runner;
 pub use bench::HOST_NODE;
 pub use device::{Device, DeviceError, Reply, TraceColumn};
 pub use result::{Outcome, ScenarioResult, StepResult, Verdict};
-pub use runner::{run_scenario, run_scenario_with, Clock, RunOptions};
+pub use runner::{run_scenario, run_scenario_with, Clock, Link, RunOptions};
 #[cfg(test)]
 pub(crate) mod test_support;
 #[cfg(test)]

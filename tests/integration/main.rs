@@ -5,3 +5,4 @@ mod deps;
 mod piper_flow;
 mod realman_flow;
 mod robstride_flow;
+mod socketcand;

@@ -25,11 +25,54 @@ enum Device {
     Robstride(robstride::Args),
 }
 
+/// `--socketcand` takes `HOST:PORT`; a bare port means loopback.
+fn socketcand_addr(text: &str) -> String {
+    match text.parse::<u16>() {
+        Ok(port) => format!("127.0.0.1:{port}"),
+        Err(_) => text.to_owned(),
+    }
+}
+
+/// A socketcand server on `addr` with the real-time virtual bus the emulator attaches to.
+/// Timestamps are Unix time, as a SocketCAN socket reports them.
+pub(crate) async fn socketcand_server(
+    addr: &str,
+) -> anyhow::Result<(
+    bus::virtual_bus::VirtualBus,
+    bus::socketcand::SocketcandServer,
+)> {
+    use anyhow::Context as _;
+    use bus::socketcand::{ServerConfig, SocketcandServer};
+    use bus::virtual_bus::{VirtualBus, VirtualBusConfig};
+
+    let epoch = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .unwrap_or_default();
+    let bus = VirtualBus::new(VirtualBusConfig {
+        epoch,
+        ..VirtualBusConfig::default()
+    });
+    let addr = socketcand_addr(addr);
+    let server = SocketcandServer::bind(&addr, bus.clone(), ServerConfig::default())
+        .await
+        .with_context(|| format!("cannot serve socketcand on {addr}"))?;
+    Ok((bus, server))
+}
+
 /// Run the chosen emulator until Ctrl-C.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     match args.device {
         Device::Piper(args) => piper::run(args),
         Device::Realman(args) => realman::run(args),
         Device::Robstride(args) => robstride::run(args),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn a_bare_port_means_loopback() {
+        assert_eq!(super::socketcand_addr("29536"), "127.0.0.1:29536");
+        assert_eq!(super::socketcand_addr("0.0.0.0:1"), "0.0.0.0:1");
     }
 }

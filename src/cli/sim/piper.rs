@@ -1,4 +1,5 @@
-//! `armhil sim piper`: the Piper firmware emulator in real time on a SocketCAN interface.
+//! `armhil sim piper`: the Piper firmware emulator in real time on a SocketCAN interface or
+//! behind a socketcand server.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -14,6 +15,11 @@ pub struct Args {
     /// SocketCAN interface to answer on.
     #[arg(long, default_value = "vcan0")]
     pub iface: String,
+    /// Serve the emulator over socketcand (CAN over TCP) on HOST:PORT instead of a SocketCAN
+    /// interface, e.g. `127.0.0.1:29536` (a bare port means 127.0.0.1). Any bus name a client
+    /// opens reaches the emulator; several clients may connect at once.
+    #[arg(long, value_name = "HOST:PORT", conflicts_with = "iface")]
+    pub socketcand: Option<String>,
     /// Firmware to impersonate: S-V1.5-8, S-V1.6-3, S-V1.8-2 or S-V1.8-8.
     #[arg(long, default_value = "S-V1.8-2")]
     pub firmware: FirmwareProfile,
@@ -66,21 +72,47 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
         ticks_per_wake: args.ticks_per_wake,
         ..PiperConfig::default()
     };
-    let bus = open_bus(&args.iface)?;
-    let recorder = match &args.record {
-        Some(path) => Some(start_recorder(&args.iface, path)?),
-        None => None,
+    let (bus, tap, server, place) = match &args.socketcand {
+        Some(addr) => {
+            let (virtual_bus, server) = super::socketcand_server(addr).await?;
+            let node: Arc<dyn CanBus> = Arc::new(virtual_bus.attach("piper"));
+            // A node that never sends receives every frame on the bus.
+            let tap: Option<Arc<dyn CanBus>> = args
+                .record
+                .as_ref()
+                .map(|_| Arc::new(virtual_bus.attach("recorder")) as Arc<dyn CanBus>);
+            let place = format!("socketcand {}", server.local_addr());
+            (node, tap, Some(server), place)
+        }
+        None => {
+            let tap = match &args.record {
+                Some(_) => Some(open_bus(&args.iface)?),
+                None => None,
+            };
+            (open_bus(&args.iface)?, tap, None, args.iface.clone())
+        }
+    };
+    let recorder = match (&args.record, tap) {
+        (Some(path), Some(tap)) => {
+            // The log's interface column takes one word.
+            let channel = match args.socketcand {
+                Some(_) => "socketcand",
+                None => args.iface.as_str(),
+            };
+            Some(start_recorder(tap, channel, path)?)
+        }
+        _ => None,
     };
     let emu = PiperEmulator::spawn(Arc::clone(&bus), config)
-        .with_context(|| format!("cannot start the Piper emulator on {}", args.iface))?;
+        .with_context(|| format!("cannot start the Piper emulator on {place}"))?;
     tracing::info!(
-        iface = %args.iface,
+        on = %place,
         firmware = %args.firmware,
         "Piper emulator running; Ctrl-C to stop"
     );
     eprintln!(
-        "armhil sim piper: {} on {} (Ctrl-C to stop)",
-        args.firmware, args.iface
+        "armhil sim piper: {} on {place} (Ctrl-C to stop)",
+        args.firmware
     );
     tokio::signal::ctrl_c()
         .await
@@ -89,6 +121,9 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
     bus.close().await;
     if let Some(rec) = recorder {
         rec.stop().await?;
+    }
+    if let Some(server) = server {
+        server.shutdown().await;
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -132,10 +167,14 @@ impl Recorder {
     }
 }
 
-/// A second socket on the interface sees both the emulator's and the host's frames.
-fn start_recorder(iface: &str, path: &std::path::Path) -> anyhow::Result<Recorder> {
-    let tap = open_bus(iface)?;
-    let mut writer = bus::candump::CandumpWriter::create(path, iface)
+/// Write what `tap` receives (a second socket on the interface, or a silent node on the
+/// socketcand bus: both see the emulator's and the clients' frames) to a candump log.
+fn start_recorder(
+    tap: Arc<dyn CanBus>,
+    channel: &str,
+    path: &std::path::Path,
+) -> anyhow::Result<Recorder> {
+    let mut writer = bus::candump::CandumpWriter::create(path, channel)
         .with_context(|| format!("cannot create {}", path.display()))?;
     let (stop, mut stopped) = tokio::sync::watch::channel(false);
     let task = tokio::spawn(async move {

@@ -1,4 +1,5 @@
-//! `armhil sim robstride`: RobStride actuators in real time on a SocketCAN interface.
+//! `armhil sim robstride`: RobStride actuators in real time on a SocketCAN interface or behind
+//! a socketcand server.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -17,6 +18,11 @@ pub struct Args {
     /// SocketCAN interface to answer on.
     #[arg(long, default_value = "vcan0")]
     pub iface: String,
+    /// Serve the motors over socketcand (CAN over TCP) on HOST:PORT instead of a SocketCAN
+    /// interface, e.g. `127.0.0.1:29536` (a bare port means 127.0.0.1). Any bus name a client
+    /// opens reaches the motors; several clients may connect at once.
+    #[arg(long, value_name = "HOST:PORT", conflicts_with = "iface")]
+    pub socketcand: Option<String>,
     /// A motor as ID:MODEL, e.g. `1:RS03` (repeat for more motors; default `127:RS03`).
     #[arg(long = "motor", value_name = "ID:MODEL")]
     pub motors: Vec<MotorSpec>,
@@ -148,25 +154,35 @@ fn config(args: &Args) -> anyhow::Result<RobstrideConfig> {
 
 async fn serve(args: Args) -> anyhow::Result<ExitCode> {
     let config = config(&args)?;
-    let bus = open_bus(&args.iface)?;
+    let (bus, server, place) = match &args.socketcand {
+        Some(addr) => {
+            let (virtual_bus, server) = super::socketcand_server(addr).await?;
+            let node: Arc<dyn CanBus> = Arc::new(virtual_bus.attach("robstride"));
+            let place = format!("socketcand {}", server.local_addr());
+            (node, Some(server), place)
+        }
+        None => (open_bus(&args.iface)?, None, args.iface.clone()),
+    };
     let motors: Vec<String> = config
         .motors
         .iter()
         .map(|m| format!("{}:{}", m.can_id, m.model.name()))
         .collect();
     let emulator = RobstrideBus::spawn(Arc::clone(&bus), config)
-        .with_context(|| format!("cannot start the RobStride emulator on {}", args.iface))?;
-    tracing::info!(iface = %args.iface, motors = ?motors, "RobStride emulator running; Ctrl-C to stop");
+        .with_context(|| format!("cannot start the RobStride emulator on {place}"))?;
+    tracing::info!(on = %place, motors = ?motors, "RobStride emulator running; Ctrl-C to stop");
     eprintln!(
-        "armhil sim robstride: {} on {} (Ctrl-C to stop)",
+        "armhil sim robstride: {} on {place} (Ctrl-C to stop)",
         motors.join(", "),
-        args.iface
     );
     tokio::signal::ctrl_c()
         .await
         .context("cannot wait for Ctrl-C")?;
     emulator.shutdown().await;
     bus.close().await;
+    if let Some(server) = server {
+        server.shutdown().await;
+    }
     Ok(ExitCode::SUCCESS)
 }
 

@@ -127,15 +127,16 @@ pub(crate) async fn build(
                 *wiring.options,
             )))
         }
-        (None, Clock::Iface(iface)) => {
-            let host = crate::harness::bench::open_iface(iface, "driver")?;
+        (None, Clock::Iface(link)) => {
+            let host = crate::harness::bench::open_link(link, "driver").await?;
             let driver = PiperBuilder::new(host)
                 .timeouts(driver_timeouts(wiring.options))
                 .connect()
                 .await
                 .map_err(|e| {
                     format!(
-                        "device `{name}`: driver could not connect on {iface} (is `armhil sim piper --iface {iface}` running?): {e}"
+                        "device `{name}`: driver could not connect on {link} (is `armhil sim piper {}` running?): {e}",
+                        link.sim_option()
                     )
                 })?;
             Ok(Arc::new(PiperDevice::new(

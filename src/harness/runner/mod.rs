@@ -26,9 +26,38 @@ pub enum Clock {
     Virtual,
     /// In-process emulator and virtual bus on the real clock.
     Realtime,
-    /// Real time on a SocketCAN interface, against a separate emulator process
-    /// (`armhil sim <kind> --iface IF`). Bus and emulator faults are unavailable.
-    Iface(String),
+    /// Real time on a CAN link (a SocketCAN interface or a socketcand server), against a
+    /// separate emulator process (`armhil sim <kind> --iface IF` or `--socketcand ADDR`). Bus
+    /// and emulator faults are unavailable.
+    Iface(Link),
+}
+
+/// The CAN link of a [`Clock::Iface`] run.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Link {
+    /// A SocketCAN interface, e.g. `vcan0`.
+    SocketCan(String),
+    /// A socketcand server at `HOST:PORT`.
+    Socketcand(String),
+}
+
+impl Link {
+    /// The `armhil sim` option that serves an emulator on this link.
+    pub fn sim_option(&self) -> String {
+        match self {
+            Self::SocketCan(iface) => format!("--iface {iface}"),
+            Self::Socketcand(addr) => format!("--socketcand {addr}"),
+        }
+    }
+}
+
+impl std::fmt::Display for Link {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::SocketCan(iface) => write!(f, "{iface}"),
+            Self::Socketcand(addr) => write!(f, "socketcand {addr}"),
+        }
+    }
 }
 
 impl Clock {
@@ -36,7 +65,8 @@ impl Clock {
         match self {
             Self::Virtual => "virtual".to_owned(),
             Self::Realtime => "realtime".to_owned(),
-            Self::Iface(iface) => format!("iface {iface}"),
+            Self::Iface(Link::SocketCan(iface)) => format!("iface {iface}"),
+            Self::Iface(link @ Link::Socketcand(_)) => link.to_string(),
         }
     }
 }
@@ -90,11 +120,15 @@ pub fn run_scenario_with(
         Clock::Realtime | Clock::Iface(_) => *options,
     };
     let wall_start = std::time::Instant::now();
-    if let Clock::Iface(_) = clock {
+    if let Clock::Iface(link) = clock {
         let needs = scenario.in_process_requirements();
         if !needs.is_empty() {
+            let option = match link {
+                Link::SocketCan(_) => "--iface",
+                Link::Socketcand(_) => "--socketcand",
+            };
             let reason = format!(
-                "needs the in-process emulator (not available with --iface): {}",
+                "needs the in-process emulator (not available with {option}): {}",
                 needs.join(", ")
             );
             return ScenarioResult::not_run(

@@ -1,0 +1,20 @@
+//! socketcand: CAN over TCP in the ASCII protocol of linux-can/socketcand, raw mode.
+//!
+//! - [`SocketcandServer`] serves one [`VirtualBus`](crate::virtual_bus::VirtualBus) to any
+//!   number of TCP clients: each client is a node on that bus, so its frames reach the emulator
+//!   and every other client, and it receives every frame but its own, like a socket on a real
+//!   interface. Tools that speak socketcand (python-can's `socketcand` interface, and through
+//!   it vendor SDKs) reach an emulator on machines without kernel CAN.
+//! - [`SocketcandBus`] is the client side: a [`CanBus`](crate::CanBus) over TCP for armhil's
+//!   own drivers and recorder.
+//! - [`protocol`]: parsing and formatting of the `< … >` elements.
+
+mod client;
+pub mod protocol;
+mod server;
+
+pub use client::{ConnectError, SocketcandBus};
+pub use server::{ServerConfig, ServerError, ServerStats, SocketcandServer};
+
+/// The TCP port socketcand listens on by default.
+pub const DEFAULT_PORT: u16 = 29536;

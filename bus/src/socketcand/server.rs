@@ -1,0 +1,520 @@
+//! The socketcand server: one virtual bus, any number of TCP clients.
+//!
+//! Each connection runs as one task made of three parts that end it when any of them ends:
+//! the reader (commands from the client), the forwarder (frames from the bus to the client)
+//! and the writer (everything queued for the client, to the socket). The queue between them
+//! is bounded; when a client does not read, frames for it are dropped and counted, the way a
+//! SocketCAN socket whose receive queue is full drops frames. The connection itself stays: a
+//! client may only ever send (piper_sdk opens a second connection it never reads), and its
+//! commands must still reach the bus. Nothing a client does can hold up the bus or the other
+//! clients; a client that sends faster than the bus carries frames is slowed through TCP.
+
+use std::net::SocketAddr;
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::sync::Arc;
+use std::time::Duration;
+
+use tokio::io::{AsyncReadExt, AsyncWriteExt};
+use tokio::net::tcp::{OwnedReadHalf, OwnedWriteHalf};
+use tokio::net::{TcpListener, TcpStream};
+use tokio::sync::{mpsc, watch};
+use tokio::task::JoinSet;
+use tokio::time::Instant;
+
+use super::protocol::{self, Command, Element, Framer, Reply};
+use crate::virtual_bus::{NodeOptions, VirtualBus, VirtualNode};
+use crate::{BusError, CanBus, CanFrame};
+
+/// How the server treats its clients.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ServerConfig {
+    /// Messages queued for one client before frames for it are dropped (default 4096, about
+    /// a second of a busy 1 Mbit/s bus).
+    pub client_queue: usize,
+    /// Transmit queue of each client's node on the bus (default 64 frames).
+    pub node_tx_queue: usize,
+    /// How long a `send` waits for room in that queue before the client gets an error
+    /// (default 1 s); meanwhile no further commands of that client are read.
+    pub send_wait: Duration,
+    /// Frames are forwarded only this long after `< ok >` answers `< rawmode >` (default
+    /// 100 ms), or from the client's next command on, whichever comes first: python-can
+    /// reads that `< ok >` with one `recv` and compares it whole, so a frame arriving in the
+    /// same read would fail its handshake. A client that sends a command has read its
+    /// `< ok >` (armhil's client sends `< echo >` at once, so it misses nothing).
+    pub rawmode_grace: Duration,
+    /// Kernel send buffer of each connection in bytes (default 64 KiB, some 1400 frames):
+    /// bounds how stale the frames a lagging client reads can be before drops begin.
+    pub send_buffer: usize,
+}
+
+impl Default for ServerConfig {
+    fn default() -> Self {
+        Self {
+            client_queue: 4096,
+            node_tx_queue: 64,
+            send_wait: Duration::from_secs(1),
+            rawmode_grace: Duration::from_millis(100),
+            send_buffer: 64 * 1024,
+        }
+    }
+}
+
+/// Why the server could not start.
+#[derive(Debug, thiserror::Error)]
+pub enum ServerError {
+    /// The listening socket could not be bound.
+    #[error("cannot listen on {addr}: {source}")]
+    Bind {
+        /// The address asked for.
+        addr: String,
+        /// The underlying error.
+        #[source]
+        source: std::io::Error,
+    },
+}
+
+/// Counters of a running server.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct ServerStats {
+    /// Clients connected now.
+    pub clients: usize,
+    /// Connections accepted since the start.
+    pub connections: u64,
+    /// Frames clients put on the bus.
+    pub frames_from_clients: u64,
+    /// Frames queued to clients.
+    pub frames_to_clients: u64,
+    /// Frames not delivered because a client's queue was full.
+    pub frames_dropped: u64,
+    /// Elements answered with `< error … >`.
+    pub errors: u64,
+}
+
+#[derive(Debug, Default)]
+struct Counters {
+    clients: AtomicUsize,
+    connections: AtomicU64,
+    frames_from_clients: AtomicU64,
+    frames_to_clients: AtomicU64,
+    frames_dropped: AtomicU64,
+    errors: AtomicU64,
+}
+
+impl Counters {
+    fn snapshot(&self) -> ServerStats {
+        ServerStats {
+            clients: self.clients.load(Ordering::Relaxed),
+            connections: self.connections.load(Ordering::Relaxed),
+            frames_from_clients: self.frames_from_clients.load(Ordering::Relaxed),
+            frames_to_clients: self.frames_to_clients.load(Ordering::Relaxed),
+            frames_dropped: self.frames_dropped.load(Ordering::Relaxed),
+            errors: self.errors.load(Ordering::Relaxed),
+        }
+    }
+}
+
+/// What every connection task shares.
+struct Shared {
+    bus: VirtualBus,
+    config: ServerConfig,
+    counters: Counters,
+}
+
+/// A running socketcand server. Dropping it (or [`SocketcandServer::shutdown`]) stops
+/// accepting and closes every connection.
+#[derive(Debug)]
+pub struct SocketcandServer {
+    local_addr: SocketAddr,
+    shared: Arc<SharedHandle>,
+    stop: watch::Sender<bool>,
+    task: Option<tokio::task::JoinHandle<()>>,
+}
+
+/// `Shared` behind a Debug-friendly handle.
+struct SharedHandle(Arc<Shared>);
+
+impl std::fmt::Debug for SharedHandle {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Shared")
+            .field("config", &self.0.config)
+            .finish_non_exhaustive()
+    }
+}
+
+impl SocketcandServer {
+    /// Listen on `addr` (e.g. `127.0.0.1:29536`) and serve `bus` to every client. Must be
+    /// called inside a tokio runtime.
+    pub async fn bind(
+        addr: &str,
+        bus: VirtualBus,
+        config: ServerConfig,
+    ) -> Result<Self, ServerError> {
+        let listener = TcpListener::bind(addr)
+            .await
+            .map_err(|source| ServerError::Bind {
+                addr: addr.to_owned(),
+                source,
+            })?;
+        let local_addr = listener.local_addr().map_err(|source| ServerError::Bind {
+            addr: addr.to_owned(),
+            source,
+        })?;
+        let shared = Arc::new(Shared {
+            bus,
+            config,
+            counters: Counters::default(),
+        });
+        let (stop, stopped) = watch::channel(false);
+        let task = tokio::spawn(accept_loop(listener, Arc::clone(&shared), stopped));
+        tracing::info!(%local_addr, "socketcand server listening");
+        Ok(Self {
+            local_addr,
+            shared: Arc::new(SharedHandle(shared)),
+            stop,
+            task: Some(task),
+        })
+    }
+
+    /// The address the server listens on (the actual port when bound to port 0).
+    pub fn local_addr(&self) -> SocketAddr {
+        self.local_addr
+    }
+
+    /// Counters so far.
+    pub fn stats(&self) -> ServerStats {
+        self.shared.0.counters.snapshot()
+    }
+
+    /// Stop accepting, close every connection and wait until they are closed.
+    pub async fn shutdown(mut self) {
+        self.stop.send_replace(true);
+        if let Some(task) = self.task.take() {
+            let _ = task.await;
+        }
+    }
+}
+
+impl Drop for SocketcandServer {
+    fn drop(&mut self) {
+        self.stop.send_replace(true);
+    }
+}
+
+async fn accept_loop(listener: TcpListener, shared: Arc<Shared>, mut stop: watch::Receiver<bool>) {
+    // Dropping the set (on stop) aborts every connection task, which closes its socket and
+    // detaches its node.
+    let mut connections = JoinSet::new();
+    loop {
+        tokio::select! {
+            accepted = listener.accept() => match accepted {
+                Ok((stream, peer)) => {
+                    connections.spawn(serve(stream, peer, Arc::clone(&shared)));
+                }
+                Err(error) => {
+                    // E.g. out of file descriptors: keep serving the clients we have.
+                    tracing::warn!(%error, "socketcand accept failed");
+                    tokio::time::sleep(Duration::from_millis(50)).await;
+                }
+            },
+            Some(_) = connections.join_next(), if !connections.is_empty() => {}
+            changed = stop.changed() => {
+                if changed.is_err() || *stop.borrow() {
+                    break;
+                }
+            }
+        }
+    }
+    connections.shutdown().await;
+    tracing::info!("socketcand server stopped");
+}
+
+/// Why a connection ended.
+#[derive(Debug)]
+enum End {
+    ClientClosed,
+    ReadFailed(std::io::Error),
+    WriteFailed(std::io::Error),
+    BusClosed,
+}
+
+impl std::fmt::Display for End {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::ClientClosed => write!(f, "client closed the connection"),
+            Self::ReadFailed(e) => write!(f, "reading from the client failed: {e}"),
+            Self::WriteFailed(e) => write!(f, "writing to the client failed: {e}"),
+            Self::BusClosed => write!(f, "the bus was closed"),
+        }
+    }
+}
+
+/// Tracks one client gauge for the life of a connection.
+struct ClientGauge<'a>(&'a Counters);
+
+impl Drop for ClientGauge<'_> {
+    fn drop(&mut self) {
+        self.0.clients.fetch_sub(1, Ordering::Relaxed);
+    }
+}
+
+async fn serve(stream: TcpStream, peer: SocketAddr, shared: Arc<Shared>) {
+    let counters = &shared.counters;
+    counters.connections.fetch_add(1, Ordering::Relaxed);
+    counters.clients.fetch_add(1, Ordering::Relaxed);
+    let _gauge = ClientGauge(counters);
+    tracing::info!(%peer, "socketcand client connected");
+    // Frames are small and latency matters more than packet count.
+    if let Err(error) = stream.set_nodelay(true) {
+        tracing::debug!(%peer, %error, "cannot set TCP_NODELAY");
+    }
+    let sock = socket2::SockRef::from(&stream);
+    if let Err(error) = sock.set_send_buffer_size(shared.config.send_buffer) {
+        tracing::debug!(%peer, %error, "cannot set SO_SNDBUF");
+    }
+    let (read, write) = stream.into_split();
+    let (out, out_rx) = mpsc::channel(shared.config.client_queue.max(1));
+    let (node_tx, node_rx) = watch::channel(None);
+    let (raw_tx, raw_rx) = watch::channel(None);
+    let mut session = Session {
+        peer,
+        shared: &shared,
+        out: out.clone(),
+        node: node_tx,
+        raw: raw_tx,
+    };
+    queue(&session.out, Reply::Hi, counters, peer);
+    let forwarder = Forwarder {
+        peer,
+        shared: &shared,
+        out,
+        dropped: 0,
+    };
+    let end = tokio::select! {
+        end = session.read_loop(read) => end,
+        end = write_loop(write, out_rx) => end,
+        end = forwarder.run(node_rx, raw_rx) => end,
+    };
+    let node = session.node.borrow().clone();
+    if let Some(node) = node {
+        node.close().await;
+    }
+    tracing::info!(%peer, reason = %end, "socketcand client disconnected");
+}
+
+/// Queue a reply; a full queue drops it (the client is not reading anyway).
+fn queue(out: &mpsc::Sender<String>, reply: Reply, counters: &Counters, peer: SocketAddr) {
+    if matches!(reply, Reply::Error(_)) {
+        counters.errors.fetch_add(1, Ordering::Relaxed);
+    }
+    if out.try_send(protocol::format_reply(&reply)).is_err() {
+        tracing::warn!(%peer, ?reply, "client queue full; reply dropped");
+    }
+}
+
+/// The command side of a connection.
+struct Session<'a> {
+    peer: SocketAddr,
+    shared: &'a Shared,
+    out: mpsc::Sender<String>,
+    /// The client's node, once it opened the bus.
+    node: watch::Sender<Option<Arc<VirtualNode>>>,
+    /// In raw mode: when forwarding starts.
+    raw: watch::Sender<Option<Instant>>,
+}
+
+impl Session<'_> {
+    async fn read_loop(&mut self, mut read: OwnedReadHalf) -> End {
+        let mut framer = Framer::default();
+        let mut buf = vec![0u8; 8192];
+        loop {
+            let n = match read.read(&mut buf).await {
+                Ok(0) => return End::ClientClosed,
+                Ok(n) => n,
+                Err(error) => return End::ReadFailed(error),
+            };
+            framer.push(&buf[..n]);
+            while let Some(element) = framer.next_element() {
+                let text = match element {
+                    Element::Complete(text) => text,
+                    Element::Garbage(junk) => {
+                        let shown: String = junk.chars().take(40).collect();
+                        self.reply(Reply::Error(format!("ignored text outside < > {shown:?}")));
+                        continue;
+                    }
+                };
+                if let Err(end) = self.handle(&text).await {
+                    return end;
+                }
+            }
+        }
+    }
+
+    fn reply(&self, reply: Reply) {
+        queue(&self.out, reply, &self.shared.counters, self.peer);
+    }
+
+    async fn handle(&mut self, text: &str) -> Result<(), End> {
+        let command = match protocol::parse_command(text) {
+            Ok(command) => command,
+            Err(error) => {
+                tracing::debug!(peer = %self.peer, %error, text, "malformed socketcand element");
+                self.reply(Reply::Error(error.to_string()));
+                return Ok(());
+            }
+        };
+        if command != Command::RawMode {
+            self.end_grace();
+        }
+        let node = self.node.borrow().clone();
+        match (command, node) {
+            (Command::Open(name), None) => {
+                let options = NodeOptions {
+                    receive_own: false,
+                    tx_queue_len: Some(self.shared.config.node_tx_queue),
+                };
+                let node = self
+                    .shared
+                    .bus
+                    .attach_with(&format!("socketcand {}", self.peer), options);
+                tracing::debug!(peer = %self.peer, bus = name, "bus opened");
+                self.node.send_replace(Some(Arc::new(node)));
+                self.reply(Reply::Ok);
+            }
+            (Command::Open(_), Some(_)) => self.reply(Reply::Error("a bus is already open".into())),
+            (Command::Echo, _) => self.reply(Reply::Echo),
+            (_, None) => self.reply(Reply::Error("no bus open: send < open NAME > first".into())),
+            (Command::RawMode, Some(_)) => {
+                let start = Instant::now() + self.shared.config.rawmode_grace;
+                self.raw.send_replace(Some(start));
+                self.reply(Reply::Ok);
+            }
+            (Command::BcmMode, Some(_)) => {
+                self.raw.send_replace(None);
+                self.reply(Reply::Ok);
+            }
+            (Command::Send(frame), Some(node)) => self.send(&node, frame).await?,
+        }
+        Ok(())
+    }
+
+    /// Start forwarding now if raw mode is still in its grace period.
+    fn end_grace(&self) {
+        let now = Instant::now();
+        self.raw.send_if_modified(|raw| match raw {
+            Some(start) if *start > now => {
+                *raw = Some(now);
+                true
+            }
+            _ => false,
+        });
+    }
+
+    /// Put a client's frame on the bus, waiting (and so not reading that client) while its
+    /// transmit queue is full.
+    async fn send(&self, node: &VirtualNode, frame: CanFrame) -> Result<(), End> {
+        let deadline = Instant::now() + self.shared.config.send_wait;
+        loop {
+            match node.send(frame).await {
+                Ok(()) => {
+                    let counters = &self.shared.counters;
+                    counters.frames_from_clients.fetch_add(1, Ordering::Relaxed);
+                    return Ok(());
+                }
+                Err(BusError::TxQueueFull { .. }) if Instant::now() < deadline => {
+                    tokio::time::sleep(Duration::from_micros(200)).await;
+                }
+                Err(BusError::Closed) => return Err(End::BusClosed),
+                Err(error) => {
+                    self.reply(Reply::Error(format!("frame {frame} not sent: {error}")));
+                    return Ok(());
+                }
+            }
+        }
+    }
+}
+
+/// The bus side of a connection.
+struct Forwarder<'a> {
+    peer: SocketAddr,
+    shared: &'a Shared,
+    out: mpsc::Sender<String>,
+    dropped: u64,
+}
+
+impl Forwarder<'_> {
+    async fn run(
+        mut self,
+        mut node: watch::Receiver<Option<Arc<VirtualNode>>>,
+        raw: watch::Receiver<Option<Instant>>,
+    ) -> End {
+        // An error means the session is gone, and with it the connection.
+        let opened = node
+            .wait_for(Option::is_some)
+            .await
+            .ok()
+            .and_then(|n| n.clone());
+        let Some(node) = opened else {
+            return std::future::pending().await;
+        };
+        loop {
+            let received = match node.recv().await {
+                Ok(received) => received,
+                Err(_) => return End::BusClosed,
+            };
+            // The node drains the bus in every mode; only raw mode forwards.
+            let forwarding = matches!(*raw.borrow(), Some(start) if Instant::now() >= start);
+            if !forwarding {
+                continue;
+            }
+            let text = protocol::format_frame(&received.frame, received.timestamp);
+            let counters = &self.shared.counters;
+            match self.out.try_send(text) {
+                Ok(()) => {
+                    counters.frames_to_clients.fetch_add(1, Ordering::Relaxed);
+                }
+                Err(mpsc::error::TrySendError::Full(_)) => {
+                    counters.frames_dropped.fetch_add(1, Ordering::Relaxed);
+                    self.dropped += 1;
+                    // Log the 1st, 16th, 256th, 4096th, … drop, not every frame.
+                    if self.dropped.is_power_of_two() && self.dropped.ilog2().is_multiple_of(4) {
+                        tracing::warn!(
+                            peer = %self.peer,
+                            dropped = self.dropped,
+                            "client is not reading; frames for it are dropped"
+                        );
+                    }
+                }
+                Err(mpsc::error::TrySendError::Closed(_)) => return End::ClientClosed,
+            }
+        }
+    }
+}
+
+/// Largest write: python-can reads 1024 bytes at a time and warns about every element a read
+/// cuts in two, so a write holds whole elements and fits one such read.
+const MAX_WRITE: usize = 1024;
+
+async fn write_loop(mut write: OwnedWriteHalf, mut queue: mpsc::Receiver<String>) -> End {
+    let mut batch = Vec::with_capacity(MAX_WRITE + protocol::MAX_ELEMENT_LEN);
+    let mut next = queue.recv().await;
+    while let Some(first) = next.take() {
+        batch.clear();
+        batch.extend_from_slice(first.as_bytes());
+        // What else is already queued goes out in the same write, up to MAX_WRITE.
+        while let Ok(more) = queue.try_recv() {
+            if batch.len() + more.len() > MAX_WRITE {
+                next = Some(more);
+                break;
+            }
+            batch.extend_from_slice(more.as_bytes());
+        }
+        if let Err(error) = write.write_all(&batch).await {
+            return End::WriteFailed(error);
+        }
+        if next.is_none() {
+            next = queue.recv().await;
+        }
+    }
+    // Every sender is gone: the other parts have ended the connection already.
+    End::ClientClosed
+}
