@@ -7,6 +7,8 @@
 mod commands;
 mod faults;
 mod feedback;
+#[cfg(test)]
+mod streaming_tests;
 
 use std::path::PathBuf;
 
@@ -71,6 +73,17 @@ impl Motion {
     }
 }
 
+/// The host command a motion was planned from. A command that repeats it (SDK clients
+/// re-send mode + target every few milliseconds) leaves the running profile alone instead of
+/// replanning it from rest.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum TargetKey {
+    /// MOVE P or MOVE L to a wire pose (0x152–0x154).
+    Pose(MoveMode, [i32; 6]),
+    /// MOVE C through three wire poses.
+    Arc([[i32; 6]; 3]),
+}
+
 /// Gripper state.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Gripper {
@@ -128,6 +141,9 @@ pub struct Firmware {
     pub(crate) mit_sticky: bool,
 
     pub(crate) motion: Option<Motion>,
+    /// The pose command the current (or last completed) motion came from; cleared whenever a
+    /// motion is aborted or replaced.
+    pub(crate) target_key: Option<TargetKey>,
     /// Physical reference (rad, v) held when no motion runs.
     pub(crate) hold_ref: [f64; 6],
     pub(crate) ref_vel: [f64; 6],
@@ -302,6 +318,7 @@ impl Firmware {
             periodic_48x: false,
             mit_sticky: false,
             motion: None,
+            target_key: None,
             hold_ref,
             ref_vel: [0.0; 6],
             settling: false,
@@ -414,6 +431,7 @@ impl Firmware {
     /// Stop any motion and hold where the arm is now.
     pub(crate) fn hold_here(&mut self) {
         self.motion = None;
+        self.target_key = None;
         self.settling = false;
         self.hold_ref = self.physical_joints();
         self.ref_vel = [0.0; 6];
@@ -602,7 +620,15 @@ impl Firmware {
     /// Start a motion (physical frame targets) and mark the arm as moving.
     pub(crate) fn start_motion(&mut self, motion: Motion) {
         self.motion = Some(motion);
+        self.target_key = None;
         self.settling = true;
+    }
+
+    /// Drop the running motion where the reference is now (estop, teach button).
+    pub(crate) fn abort_motion(&mut self) {
+        self.motion = None;
+        self.target_key = None;
+        self.settling = false;
     }
 
     /// Add a static obstacle to the world.
