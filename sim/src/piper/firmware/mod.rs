@@ -168,6 +168,9 @@ pub struct Firmware {
     pub(crate) prev_link_pose: Option<[Isometry3<f64>; 6]>,
     pub(crate) prev_link_vel: [[f64; 2]; 6],
     pub(crate) out: Vec<CanFrame>,
+    /// While catching up missed steps: the newest periodic frame of each ID, sent once at the
+    /// end instead of one per missed period.
+    coalesced: Option<Vec<CanFrame>>,
     /// Replies the master sends after a processing delay: (tick due, frame).
     pub(crate) delayed: Vec<(u64, CanFrame)>,
 }
@@ -345,6 +348,7 @@ impl Firmware {
             prev_link_pose: None,
             prev_link_vel: [[0.0; 2]; 6],
             out: Vec::with_capacity(32),
+            coalesced: None,
             delayed: Vec::new(),
             config,
         })
@@ -358,6 +362,20 @@ impl Firmware {
     /// Simulated time since boot, s.
     pub fn time_s(&self) -> f64 {
         self.ticks as f64 * STEP_S
+    }
+
+    /// Run `steps` ticks that are already late (a real-time process woke up behind its clock):
+    /// the physics runs every missed step, but each periodic feedback frame is sent once, with
+    /// the newest values, instead of a backlog burst of one per missed period. Replies and
+    /// other event frames are kept in order.
+    pub fn catch_up(&mut self, steps: u32) {
+        self.coalesced = Some(Vec::new());
+        for _ in 0..steps {
+            self.tick();
+        }
+        if let Some(held) = self.coalesced.take() {
+            self.out.extend(held);
+        }
     }
 
     /// Take the frames produced since the last call, in send order.
@@ -486,6 +504,7 @@ impl Firmware {
         self.v = self.world.joint_velocities();
         self.check_protections();
         self.update_settling();
+        let periodic_from = self.out.len();
         if !self.silent {
             if self.leader_active {
                 if self.ticks.is_multiple_of(HIGH_RATE_DIVIDER) {
@@ -499,6 +518,11 @@ impl Firmware {
                     self.emit_low_rate();
                 }
             }
+        }
+        if let Some(held) = &mut self.coalesced {
+            let fresh: Vec<CanFrame> = self.out.drain(periodic_from..).collect();
+            held.retain(|old| fresh.iter().all(|f| f.raw_id() != old.raw_id()));
+            held.extend(fresh);
         }
         if !self.delayed.is_empty() {
             let now = self.ticks;
