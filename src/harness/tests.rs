@@ -48,6 +48,7 @@ fn defaults_and_units_are_applied() {
             Action::Piper(PiperAction::MoveJ {
                 joints_deg,
                 speed_pct,
+                every_ms: None,
             }),
         ..
     } = &s.steps[0].kind

@@ -7,6 +7,7 @@ mod emulator;
 pub mod model;
 mod observe;
 pub(crate) mod raw;
+mod stream;
 mod trace;
 pub(crate) mod validate;
 pub mod vocab;
@@ -94,7 +95,8 @@ pub(crate) async fn spawn_default(
         obstacles: Vec::new(),
     };
     let node: Arc<dyn CanBus> = Arc::new(bus.attach(name));
-    let sim = PiperSim::spawn(node, &settings).map_err(|e| format!("device `{name}`: emulator: {e}"))?;
+    let sim =
+        PiperSim::spawn(node, &settings).map_err(|e| format!("device `{name}`: emulator: {e}"))?;
     let host: Arc<dyn CanBus> = Arc::new(bus.attach(HOST_NODE));
     let driver = PiperBuilder::new(host)
         .connect()
