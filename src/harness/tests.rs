@@ -48,6 +48,7 @@ fn defaults_and_units_are_applied() {
             Action::Piper(PiperAction::MoveJ {
                 joints_deg,
                 speed_pct,
+                every_ms: None,
             }),
         ..
     } = &s.steps[0].kind
@@ -217,4 +218,33 @@ fn atomic_write_replaces_the_file_and_leaves_no_temp() {
     assert_eq!(std::fs::read(&path).expect("readable"), b"two");
     let leftovers: Vec<_> = std::fs::read_dir(dir.join("sub")).expect("dir").collect();
     assert_eq!(leftovers.len(), 1);
+}
+
+#[test]
+fn every_ms_is_read_and_range_checked() {
+    let s = parse(&format!(
+        "{BENCH}steps:\n  - move_l: {{position_mm: [150, 0, 250], orientation_deg: [0, 85, 0], every_ms: 5}}\n  - gripper: {{stroke_mm: 10}}\n"
+    ));
+    let StepKind::Action {
+        action: Action::Piper(PiperAction::MoveL { every_ms, .. }),
+        ..
+    } = &s.steps[0].kind
+    else {
+        panic!("move_l expected");
+    };
+    assert_eq!(*every_ms, Some(5));
+    let StepKind::Action {
+        action: Action::Piper(PiperAction::Gripper { every_ms, .. }),
+        ..
+    } = &s.steps[1].kind
+    else {
+        panic!("gripper expected");
+    };
+    assert_eq!(*every_ms, None);
+    assert_eq!(
+        error(&format!(
+            "{BENCH}steps:\n  - move_j: {{joints_deg: [0, 0, 0, 0, 0, 0], every_ms: 0}}\n"
+        )),
+        "broken.yaml:5:56: `every_ms` must be 1..=10000, got 0"
+    );
 }

@@ -4,6 +4,12 @@
 //! runs [`Firmware::tick`]) and a transmitter that sends the produced frames in order, retrying
 //! while the bus's transmit queue is full. All timing uses `tokio::time`, so the emulator runs
 //! in virtual time under a paused clock and in real time on a multi-thread runtime.
+//!
+//! Real-time lock: the core counts the 1 ms steps due since boot from the clock, not from its
+//! wake-ups. A late wake-up runs every missed step (emulated time keeps up with the wall
+//! clock) and sends each periodic feedback frame once for the missed periods, never a backlog
+//! burst. A backlog beyond [`MAX_CATCH_UP_STEPS`] is dropped and counted as an overrun rather
+//! than spun through. Under a paused clock no wake-up is ever late, so nothing changes there.
 
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::Duration;
@@ -11,19 +17,25 @@ use std::time::Duration;
 use bus::{BusError, CanBus, CanFrame};
 use tokio::sync::{mpsc, watch};
 use tokio::task::JoinHandle;
-use tokio::time::{interval, sleep, MissedTickBehavior};
+use tokio::time::{interval, sleep, Instant, MissedTickBehavior};
 
 use super::config::{PiperConfig, PiperError};
 use super::faults::{FaultError, PiperFault};
 use super::firmware::{Firmware, STEP_S};
 use super::state::PiperSimState;
 use crate::physics::{ObstacleId, ObstacleShape};
+use crate::realtime::{RealtimeCounters, RealtimeStats};
 
 /// Wait between two attempts to queue a frame on a full transmit queue (about one frame time
 /// at 1 Mbit/s).
 const TX_RETRY_WAIT: Duration = Duration::from_micros(120);
 /// Attempts before a frame is dropped (≈ 12 ms of a blocked bus).
 const TX_RETRIES: u32 = 100;
+/// Largest backlog of missed steps a wake-up runs (100 ms of emulated time); beyond it the
+/// clock skips ahead so a stalled process does not spin through seconds of physics.
+pub const MAX_CATCH_UP_STEPS: u64 = 100;
+/// One control step, ns.
+const STEP_NS: u128 = (STEP_S * 1e9) as u128;
 
 /// Starts Piper emulators. See [`PiperEmulator::spawn`].
 #[derive(Debug, Clone, Copy)]
@@ -34,6 +46,7 @@ pub struct PiperEmulator;
 #[derive(Debug)]
 pub struct PiperHandle {
     core: Arc<Mutex<Firmware>>,
+    counters: Arc<Mutex<RealtimeCounters>>,
     stop: watch::Sender<bool>,
     tasks: Vec<JoinHandle<()>>,
 }
@@ -47,9 +60,36 @@ impl std::fmt::Debug for Firmware {
     }
 }
 
-fn lock(core: &Mutex<Firmware>) -> MutexGuard<'_, Firmware> {
+fn lock<T>(core: &Mutex<T>) -> MutexGuard<'_, T> {
     // A panic inside a tick would poison the lock; the state is still the best we have.
     core.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+/// How many steps a wake-up runs and whether it drops a backlog.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct WakePlan {
+    /// Steps to run now.
+    run: u64,
+    /// Steps dropped (an overrun when non-zero).
+    skipped: u64,
+}
+
+/// Steps due at a wake-up `elapsed` after boot with `done` steps run so far: everything up to
+/// the end of the current wake period, at most [`MAX_CATCH_UP_STEPS`] of it.
+fn plan_wake(elapsed: Duration, done: u64, ticks_per_wake: u64) -> WakePlan {
+    let due = (elapsed.as_nanos() / STEP_NS) as u64 + ticks_per_wake;
+    let missing = due.saturating_sub(done);
+    if missing > MAX_CATCH_UP_STEPS {
+        WakePlan {
+            run: ticks_per_wake,
+            skipped: missing - ticks_per_wake,
+        }
+    } else {
+        WakePlan {
+            run: missing,
+            skipped: 0,
+        }
+    }
 }
 
 impl PiperEmulator {
@@ -64,6 +104,7 @@ impl PiperEmulator {
         let firmware = Firmware::new(config)?;
         tracing::info!(firmware = %firmware.profile(), bus = bus.name(), "Piper emulator starting");
         let core = Arc::new(Mutex::new(firmware));
+        let counters = Arc::new(Mutex::new(RealtimeCounters::new()));
         let (in_tx, mut in_rx) = mpsc::unbounded_channel::<CanFrame>();
         let (out_tx, mut out_rx) = mpsc::unbounded_channel::<CanFrame>();
         let (stop, stop_rx) = watch::channel(false);
@@ -92,12 +133,16 @@ impl PiperEmulator {
         });
 
         let tick_core = Arc::clone(&core);
+        let tick_counters = Arc::clone(&counters);
         let mut tick_stop = stop_rx.clone();
         let ticker = runtime.spawn(async move {
-            let mut clock = interval(Duration::from_secs_f64(STEP_S * f64::from(ticks_per_wake)));
-            // Under a paused clock no tick is ever late. In real time a stalled process skips
-            // the missed steps instead of bursting a backlog of feedback onto the bus.
+            let per_wake = u64::from(ticks_per_wake);
+            let mut clock = interval(Duration::from_secs_f64(STEP_S * per_wake as f64));
+            // The interval only paces the wake-ups; how many steps run comes from the clock
+            // (`plan_wake`), so skipping missed wake-ups loses no emulated time.
             clock.set_missed_tick_behavior(MissedTickBehavior::Skip);
+            let boot = Instant::now();
+            let mut done: u64 = 0;
             let mut produced = Vec::with_capacity(32);
             loop {
                 tokio::select! {
@@ -105,15 +150,39 @@ impl PiperEmulator {
                     _ = clock.tick() => {}
                     _ = tick_stop.changed() => break,
                 }
+                let plan = plan_wake(boot.elapsed(), done, per_wake);
+                done += plan.run + plan.skipped;
+                let late = plan.run > per_wake;
                 {
                     let mut fw = lock(&tick_core);
                     while let Ok(frame) = in_rx.try_recv() {
                         fw.handle_frame(&frame);
                     }
-                    for _ in 0..ticks_per_wake {
-                        fw.tick();
+                    if late {
+                        fw.catch_up(plan.run as u32);
+                    } else {
+                        for _ in 0..plan.run {
+                            fw.tick();
+                        }
                     }
                     fw.drain_output_into(&mut produced);
+                }
+                {
+                    let mut c = lock(&tick_counters);
+                    c.record_wakeup(plan.run, late);
+                    if plan.skipped > 0 {
+                        c.record_overrun(plan.skipped);
+                        tracing::warn!(
+                            dropped_steps = plan.skipped,
+                            "Piper emulator overrun: more than {MAX_CATCH_UP_STEPS} ms behind \
+                             the wall clock, skipping ahead"
+                        );
+                    } else if late {
+                        tracing::debug!(
+                            steps = plan.run,
+                            "Piper emulator caught up a late wake-up"
+                        );
+                    }
                 }
                 for frame in produced.drain(..) {
                     if out_tx.send(frame).is_err() {
@@ -124,6 +193,7 @@ impl PiperEmulator {
         });
 
         let tx_bus = bus;
+        let tx_counters = Arc::clone(&counters);
         let mut tx_stop = stop_rx;
         let transmitter = runtime.spawn(async move {
             let mut dropped: u64 = 0;
@@ -139,7 +209,10 @@ impl PiperEmulator {
                 let mut attempts = 0;
                 loop {
                     match tx_bus.send(frame).await {
-                        Ok(()) => break,
+                        Ok(()) => {
+                            lock(&tx_counters).record_frame(frame.raw_id(), Instant::now());
+                            break;
+                        }
                         Err(BusError::Closed) => return,
                         Err(e) => {
                             attempts += 1;
@@ -159,6 +232,7 @@ impl PiperEmulator {
 
         Ok(PiperHandle {
             core,
+            counters,
             stop,
             tasks: vec![receiver, ticker, transmitter],
         })
@@ -192,6 +266,12 @@ impl PiperHandle {
         lock(&self.core).snapshot()
     }
 
+    /// Timing figures since boot: frames and inter-frame periods per ID, late wake-ups and
+    /// overruns of the real-time clock.
+    pub fn stats(&self) -> RealtimeStats {
+        lock(&self.counters).report()
+    }
+
     /// Stop the emulator and wait for its tasks. It sends nothing afterwards.
     pub async fn shutdown(mut self) {
         let _ = self.stop.send(true);
@@ -204,5 +284,72 @@ impl PiperHandle {
 impl Drop for PiperHandle {
     fn drop(&mut self) {
         let _ = self.stop.send(true);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_on_time_wake_runs_one_period() {
+        let p = plan_wake(Duration::from_millis(10), 10, 5);
+        assert_eq!(p, WakePlan { run: 5, skipped: 0 });
+        // The very first wake-up, at boot.
+        assert_eq!(
+            plan_wake(Duration::ZERO, 0, 1),
+            WakePlan { run: 1, skipped: 0 }
+        );
+    }
+
+    #[test]
+    fn a_late_wake_runs_the_missed_steps() {
+        // Woke 12.4 ms after boot having run 5 steps: steps up to 12 + one period are due.
+        let p = plan_wake(Duration::from_micros(12_400), 5, 5);
+        assert_eq!(
+            p,
+            WakePlan {
+                run: 12,
+                skipped: 0
+            }
+        );
+    }
+
+    #[test]
+    fn a_stall_beyond_the_bound_skips_ahead() {
+        let p = plan_wake(Duration::from_millis(500), 100, 5);
+        assert_eq!(p.run, 5);
+        assert_eq!(p.run + p.skipped, 405);
+    }
+}
+
+#[cfg(test)]
+mod catch_up_tests {
+    use super::super::PiperConfig;
+    use super::*;
+
+    fn count(frames: &[CanFrame], id: u32) -> usize {
+        frames.iter().filter(|f| f.raw_id() == id).count()
+    }
+
+    #[test]
+    fn catch_up_runs_every_step_but_sends_each_feedback_frame_once() {
+        let mut live = Firmware::new(PiperConfig::default()).expect("boots");
+        let mut late = Firmware::new(PiperConfig::default()).expect("boots");
+        for _ in 0..50 {
+            live.tick();
+        }
+        late.catch_up(50);
+        let (live_out, late_out) = (live.take_output(), late.take_output());
+        // 50 ms: ten 200 Hz groups and two 40 Hz groups live; one of each caught up.
+        assert_eq!(count(&live_out, 0x2A1), 10);
+        assert_eq!(count(&live_out, 0x261), 2);
+        assert_eq!(count(&late_out, 0x2A1), 1);
+        assert_eq!(count(&late_out, 0x261), 1);
+        // The physics ran the same 50 steps, and the frame sent is the newest one.
+        assert_eq!(live.time_s(), late.time_s());
+        let last_live = live_out.iter().rev().find(|f| f.raw_id() == 0x2A5);
+        let last_late = late_out.iter().rev().find(|f| f.raw_id() == 0x2A5);
+        assert_eq!(last_live, last_late);
     }
 }

@@ -173,6 +173,19 @@ impl PathMove {
         }
     }
 
+    /// Start moving along the path at the speed of joint velocity `v` projected onto the
+    /// path's initial direction (never backwards), so a replanned path continues the motion
+    /// instead of restarting from rest.
+    pub fn with_initial_velocity(mut self, v: [f64; 6]) -> Self {
+        let (_, dq_ds) = self.at(0.0);
+        let along: f64 = (0..6).map(|j| v[j] * dq_ds[j]).sum();
+        let norm2: f64 = dq_ds.iter().map(|d| d * d).sum();
+        if norm2 > 1e-18 && along.is_finite() {
+            self.s_dot = (along / norm2).max(0.0);
+        }
+        self
+    }
+
     fn at(&self, s: f64) -> ([f64; 6], [f64; 6]) {
         let n = self.waypoints.len();
         if n == 0 {

@@ -117,6 +117,8 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
     tokio::signal::ctrl_c()
         .await
         .context("cannot wait for Ctrl-C")?;
+    // Frames per ID per second, feedback periods and overruns: whether the emulator kept up.
+    eprint!("armhil sim piper: timing\n{}", emu.stats());
     emu.shutdown().await;
     bus.close().await;
     if let Some(rec) = recorder {

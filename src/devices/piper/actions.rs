@@ -6,13 +6,14 @@ use std::future::Future;
 use std::time::Duration;
 
 use driver::piper::{
-    ArmRole, CirclePoint, CtrlMode as DriverCtrl, EndLimitsUpdate, EndPayload, GripperCommand,
-    GripperTeachUpdate, IdShift, Install as DriverInstall, JointLimitsUpdate, JointSelect,
-    MitCommand, ModeCommand, MotorSelect, MoveKind, PiperError, Pose as DriverPose, RoleOffsets,
+    ArmRole, CtrlMode as DriverCtrl, EndLimitsUpdate, EndPayload, GripperTeachUpdate, IdShift,
+    Install as DriverInstall, JointLimitsUpdate, JointSelect, MitCommand, ModeCommand, MotorSelect,
+    MoveKind, PiperError, Pose as DriverPose, RoleOffsets,
 };
 
 use super::device::PiperDevice;
 use super::model::{CtrlMode, Install, MoveMode, Payload, PiperAction, Pose, Role};
+use super::stream;
 use crate::harness::model::{ErrorClass, Near};
 use crate::harness::{DeviceError, Reply};
 
@@ -41,7 +42,7 @@ fn invalid(text: String) -> DeviceError {
     DeviceError::new(ErrorClass::InvalidArgument, text)
 }
 
-fn pose(pose: &Pose) -> DriverPose {
+pub(super) fn pose(pose: &Pose) -> DriverPose {
     DriverPose {
         position_m: pose.position_mm.map(|mm| mm / 1000.0),
         orientation_rad: pose.orientation_deg.map(f64::to_radians),
@@ -131,10 +132,16 @@ impl PiperDevice {
             | PiperAction::Gripper { .. }
             | PiperAction::GripperZero
             | PiperAction::Estop
-            | PiperAction::Reset => self
-                .motion(action, timeout)
-                .await
-                .map(|()| Reply::default()),
+            | PiperAction::Reset => {
+                if let Some(part) = stream::part_of(action) {
+                    self.streams.stop(part);
+                }
+                self.motion(action, timeout).await?;
+                if let Some(period) = stream::period_of(action) {
+                    self.streams.start(&self.driver, action, period);
+                }
+                Ok(Reply::default())
+            }
             PiperAction::QueryFirmware { .. }
             | PiperAction::QueryJointLimits { .. }
             | PiperAction::QueryJointAcc { .. }
@@ -213,40 +220,17 @@ impl PiperDevice {
                     d.wait_for_move_mode(kind, limit).await.map_err(derr)?;
                 }
             }
-            PiperAction::MoveJ {
-                joints_deg,
-                speed_pct,
-            } => {
-                let rad = joints_deg.map(f64::to_radians);
-                Self::within(timeout, "move_j", d.move_joints_rad(rad, *speed_pct)).await?;
+            // Shared with `every_ms` re-sends, which send exactly what the step sent.
+            PiperAction::MoveJ { .. } => {
+                let send = async { stream::send_command(d, action).await.unwrap_or(Ok(())) };
+                Self::within(timeout, "move_j", send).await?;
             }
-            PiperAction::MoveP { pose: p, speed_pct }
-            | PiperAction::MoveL { pose: p, speed_pct } => {
-                let kind = if matches!(action, PiperAction::MoveP { .. }) {
-                    MoveKind::P
-                } else {
-                    MoveKind::L
-                };
-                d.set_move_mode(kind, *speed_pct).await.map_err(derr)?;
-                d.end_pose(pose(p)).await.map_err(derr)?;
-            }
-            PiperAction::MoveC {
-                start,
-                middle,
-                end,
-                speed_pct,
-            } => {
-                for (p, point) in [
-                    (start, CirclePoint::Start),
-                    (middle, CirclePoint::Middle),
-                    (end, CirclePoint::End),
-                ] {
-                    d.end_pose(pose(p)).await.map_err(derr)?;
-                    d.move_c_point(point).await.map_err(derr)?;
-                }
-                d.set_move_mode(MoveKind::C, *speed_pct)
-                    .await
-                    .map_err(derr)?;
+            PiperAction::MoveP { .. }
+            | PiperAction::MoveL { .. }
+            | PiperAction::MoveC { .. }
+            | PiperAction::Gripper { .. } => {
+                let sent = stream::send_command(d, action).await;
+                sent.unwrap_or(Ok(())).map_err(derr)?;
             }
             PiperAction::Mit {
                 joint,
@@ -264,21 +248,6 @@ impl PiperDevice {
                     t_nm: *torque_nm,
                 };
                 d.mit(*joint, command).await.map_err(derr)?;
-            }
-            PiperAction::Gripper {
-                stroke_mm,
-                torque_nm,
-                enable,
-                clear_error,
-            } => {
-                d.gripper(GripperCommand {
-                    stroke_m: stroke_mm / 1000.0,
-                    effort_nm: *torque_nm,
-                    enable: *enable,
-                    clear_error: *clear_error,
-                })
-                .await
-                .map_err(derr)?;
             }
             PiperAction::GripperZero => d.gripper_set_zero().await.map_err(derr)?,
             PiperAction::Estop => d.emergency_stop().await.map_err(derr)?,

@@ -5,6 +5,7 @@ use std::time::Duration;
 use async_trait::async_trait;
 use driver::piper::Piper;
 
+use super::stream::Streams;
 use super::{checks, observe, trace};
 use crate::devices::{Action, Check, DeviceFault};
 use crate::harness::model::Signal;
@@ -28,6 +29,8 @@ pub(crate) struct PiperDevice {
     pub(super) driver: Piper,
     emulator: Option<Box<dyn EmulatorControl>>,
     pub(super) options: RunOptions,
+    /// Commands re-sent in the background (`every_ms`).
+    pub(super) streams: Streams,
 }
 
 impl PiperDevice {
@@ -42,6 +45,7 @@ impl PiperDevice {
             driver,
             emulator,
             options,
+            streams: Streams::default(),
         }
     }
 }
@@ -108,6 +112,7 @@ impl Device for PiperDevice {
     }
 
     async fn shutdown(&self) {
+        self.streams.stop_all();
         self.driver.disconnect().await;
         if let Some(e) = &self.emulator {
             e.shutdown().await;

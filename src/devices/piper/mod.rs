@@ -7,6 +7,7 @@ mod emulator;
 pub mod model;
 mod observe;
 pub(crate) mod raw;
+mod stream;
 mod trace;
 pub(crate) mod validate;
 pub mod vocab;

@@ -149,6 +149,8 @@ pub enum PiperAction {
         joints_deg: [f64; PIPER_JOINTS],
         /// Speed percentage.
         speed_pct: u8,
+        /// Re-send the command every this many ms until the next motion step (`every_ms`).
+        every_ms: Option<u32>,
     },
     /// MOVE P to a pose.
     MoveP {
@@ -156,6 +158,8 @@ pub enum PiperAction {
         pose: Pose,
         /// Speed percentage.
         speed_pct: u8,
+        /// Re-send the command every this many ms until the next motion step (`every_ms`).
+        every_ms: Option<u32>,
     },
     /// MOVE L to a pose.
     MoveL {
@@ -163,6 +167,8 @@ pub enum PiperAction {
         pose: Pose,
         /// Speed percentage.
         speed_pct: u8,
+        /// Re-send the command every this many ms until the next motion step (`every_ms`).
+        every_ms: Option<u32>,
     },
     /// MOVE C through three poses.
     MoveC {
@@ -174,6 +180,8 @@ pub enum PiperAction {
         end: Pose,
         /// Speed percentage.
         speed_pct: u8,
+        /// Re-send the command every this many ms until the next motion step (`every_ms`).
+        every_ms: Option<u32>,
     },
     /// One MIT command.
     Mit {
@@ -200,6 +208,8 @@ pub enum PiperAction {
         enable: bool,
         /// Clear gripper errors.
         clear_error: bool,
+        /// Re-send the command every this many ms until the next gripper or stop step.
+        every_ms: Option<u32>,
     },
     /// Set the gripper's zero.
     GripperZero,

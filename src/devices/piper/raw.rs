@@ -116,17 +116,23 @@ action_args!(RawMode {
     mit: Option<bool>,
     install: Option<S<String>>,
 });
-action_args!(RawMoveJ { joints_deg: Option<S<Vec<f64>>>, speed_pct: Option<S<i64>> });
+action_args!(RawMoveJ {
+    joints_deg: Option<S<Vec<f64>>>,
+    speed_pct: Option<S<i64>>,
+    every_ms: Option<S<i64>>,
+});
 action_args!(RawMovePose {
     position_mm: Option<S<Vec<f64>>>,
     orientation_deg: Option<S<Vec<f64>>>,
     speed_pct: Option<S<i64>>,
+    every_ms: Option<S<i64>>,
 });
 action_args!(RawMoveC {
     start: Option<S<RawPose>>,
     middle: Option<S<RawPose>>,
     end: Option<S<RawPose>>,
     speed_pct: Option<S<i64>>,
+    every_ms: Option<S<i64>>,
 });
 action_args!(RawMit {
     joint: Option<S<i64>>,
@@ -141,6 +147,7 @@ action_args!(RawGripper {
     torque_nm: Option<S<f64>>,
     enable: Option<bool>,
     clear_error: Option<bool>,
+    every_ms: Option<S<i64>>,
 });
 action_args!(RawJointOnly { joint: Option<S<i64>> });
 action_args!(RawQueryFirmware { expect: Option<S<String>> });

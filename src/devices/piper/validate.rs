@@ -14,6 +14,8 @@ use crate::harness::validate::{pos, Ctx, Res};
 
 /// Default MOVE speed percentage.
 const DEFAULT_SPEED_PCT: u8 = 50;
+/// Longest `every_ms` re-send period, ms.
+const MAX_EVERY_MS: i64 = 10_000;
 /// Default tolerance on joint angles.
 const DEFAULT_TOLERANCE_DEG: f64 = 0.5;
 /// Default tolerance on positions and gripper stroke.
@@ -32,6 +34,7 @@ trait PiperCtx {
         allow_all: bool,
     ) -> Res<u8>;
     fn pct(&self, value: &Option<S<i64>>) -> Res<u8>;
+    fn every_ms(&self, value: &Option<S<i64>>) -> Res<Option<u32>>;
     fn optional_list(&self, value: &S<Vec<Option<f64>>>, key: &str) -> Res<Vec<Option<f64>>>;
     fn joints_list(&self, value: &S<Vec<i64>>, key: &str) -> Res<Vec<u8>>;
 }
@@ -75,6 +78,17 @@ impl PiperCtx for Ctx<'_> {
             Some(v) => Err(self.err(
                 pos(v),
                 format!("`speed_pct` must be 0..=100, got {}", v.value),
+            )),
+        }
+    }
+
+    fn every_ms(&self, value: &Option<S<i64>>) -> Res<Option<u32>> {
+        match value {
+            None => Ok(None),
+            Some(v) if (1..=MAX_EVERY_MS).contains(&v.value) => Ok(Some(v.value as u32)),
+            Some(v) => Err(self.err(
+                pos(v),
+                format!("`every_ms` must be 1..={MAX_EVERY_MS}, got {}", v.value),
             )),
         }
     }
@@ -563,6 +577,7 @@ pub(crate) fn step(ctx: &Ctx<'_>, raw: &RawStep, at: Pos) -> Res<(&'static str, 
                     P::MoveJ {
                         joints_deg,
                         speed_pct: ctx.pct(&a.speed_pct)?,
+                        every_ms: ctx.every_ms(&a.every_ms)?,
                     },
                 )?,
             )
@@ -578,6 +593,7 @@ pub(crate) fn step(ctx: &Ctx<'_>, raw: &RawStep, at: Pos) -> Res<(&'static str, 
                     P::MoveP {
                         pose,
                         speed_pct: ctx.pct(&a.speed_pct)?,
+                        every_ms: ctx.every_ms(&a.every_ms)?,
                     },
                 )?,
             )
@@ -593,6 +609,7 @@ pub(crate) fn step(ctx: &Ctx<'_>, raw: &RawStep, at: Pos) -> Res<(&'static str, 
                     P::MoveL {
                         pose,
                         speed_pct: ctx.pct(&a.speed_pct)?,
+                        every_ms: ctx.every_ms(&a.every_ms)?,
                     },
                 )?,
             )
@@ -612,6 +629,7 @@ pub(crate) fn step(ctx: &Ctx<'_>, raw: &RawStep, at: Pos) -> Res<(&'static str, 
                         middle,
                         end,
                         speed_pct: ctx.pct(&a.speed_pct)?,
+                        every_ms: ctx.every_ms(&a.every_ms)?,
                     },
                 )?,
             )
@@ -676,6 +694,7 @@ pub(crate) fn step(ctx: &Ctx<'_>, raw: &RawStep, at: Pos) -> Res<(&'static str, 
                         torque_nm,
                         enable: a.enable.unwrap_or(true),
                         clear_error: a.clear_error.unwrap_or(false),
+                        every_ms: ctx.every_ms(&a.every_ms)?,
                     },
                 )?,
             )

@@ -3,7 +3,7 @@
 use bus::CanFrame;
 use nalgebra::{Isometry3, Vector3};
 
-use super::{Firmware, LeaderHoming, Motion};
+use super::{Firmware, LeaderHoming, Motion, TargetKey};
 use crate::piper::codec::arm::{self, mdeg_to_rad, FirmwareInfo};
 use crate::piper::codec::host::{
     self, CtrlMode, HostCommand, LinkageRole as WireRole, MotorSelect, MoveCPoint, MoveMode,
@@ -329,8 +329,7 @@ impl Firmware {
         match m.quick_stop {
             QuickStop::Stop => {
                 self.estop = true;
-                self.motion = None;
-                self.settling = false;
+                self.abort_motion();
             }
             QuickStop::Reset => self.reset(),
             QuickStop::None => {}
@@ -532,18 +531,30 @@ impl Firmware {
         }
         if self.pose_dirty && self.pose_parts == 0b111 {
             self.pose_dirty = false;
-            if self.accepts_motion() && matches!(self.move_mode, MoveMode::P | MoveMode::L) {
+            let key = TargetKey::Pose(self.move_mode, self.pose_cmd);
+            // A repeated pose keeps the running profile: re-solving the IK from where the arm
+            // is now would give a slightly different target, and a MOVE L would restart its
+            // path from rest (a streaming client then crawls).
+            let repeated = self.target_key == Some(key);
+            let pose_mode = matches!(self.move_mode, MoveMode::P | MoveMode::L);
+            if self.accepts_motion() && pose_mode && !repeated {
                 let target = WirePose::from_wire(self.pose_cmd).to_isometry();
-                if self.move_mode == MoveMode::P {
+                let planned = if self.move_mode == MoveMode::P {
                     let seed = self.reported_joints();
                     match kin::solve(&target, &seed, &self.limits(), self.profile, false) {
                         Some(q) => self.go_to_joints(q, false),
-                        None => self.reject(0x02, 0),
+                        None => {
+                            self.reject(0x02, 0);
+                            false
+                        }
                     }
                 } else {
                     let start = self.reference_pose();
                     let poses = line_samples(&start, &target);
-                    self.follow_poses(&poses, &start, &target);
+                    self.follow_poses(&poses, &start, &target)
+                };
+                if planned {
+                    self.target_key = Some(key);
                 }
             }
         }
@@ -556,7 +567,8 @@ impl Firmware {
         self.target_limit_bits = limit_bits;
     }
 
-    fn go_to_joints(&mut self, target_reported: [f64; 6], direct: bool) {
+    /// Plan a joint move to `target_reported`; false when it was rejected.
+    fn go_to_joints(&mut self, target_reported: [f64; 6], direct: bool) -> bool {
         let mut bits = 0u8;
         for (j, &t) in target_reported.iter().enumerate() {
             let (lo, hi) = self.flash.limits_rad(j);
@@ -566,7 +578,7 @@ impl Firmware {
         }
         if bits != 0 {
             self.reject(0x04, bits);
-            return;
+            return false;
         }
         self.command_status = None;
         self.target_limit_bits = 0;
@@ -576,21 +588,25 @@ impl Firmware {
             // "High-follow" (MOVE J + 0xAD): no smoothing, the target goes straight to the
             // position loop.
             self.motion = None;
+            self.target_key = None;
             self.hold_ref = target;
             self.ref_vel = [0.0; 6];
             self.settling = true;
-            return;
+            return true;
         }
         if let Some(m) = &self.motion {
             if m.target() == target {
-                return;
+                return true;
             }
         } else if self.hold_ref == target {
-            return;
+            return true;
         }
+        // The new profile starts from the reference position *and velocity*, so a changed
+        // target blends from the current speed.
         let (q, v) = self.reference_state();
         let (vl, al) = self.motion_limits();
         self.start_motion(Motion::Joint(JointMove::new(q, v, target, vl, al)));
+        true
     }
 
     /// Flange pose of the current reference (where the arm is heading now).
@@ -600,12 +616,13 @@ impl Firmware {
     }
 
     /// IK every sample, then follow the joint-space path timed by the end-effector limits.
+    /// False when the path was rejected.
     fn follow_poses(
         &mut self,
         poses: &[Isometry3<f64>],
         start: &Isometry3<f64>,
         end: &Isometry3<f64>,
-    ) {
+    ) -> bool {
         let limits = self.limits();
         let mut seed: [f64; 6] =
             std::array::from_fn(|j| self.hold_ref[j] - self.flash.zero_offset_rad[j]);
@@ -617,7 +634,7 @@ impl Firmware {
                     // straight path crosses a singularity.
                     if (0..6).any(|j| (q[j] - seed[j]).abs() > 0.5) && !waypoints.is_empty() {
                         self.reject(0x03, 0);
-                        return;
+                        return false;
                     }
                     seed = q;
                     waypoints.push(std::array::from_fn(|j| {
@@ -626,13 +643,13 @@ impl Firmware {
                 }
                 None => {
                     self.reject(0x02, 0);
-                    return;
+                    return false;
                 }
             }
         }
         if let Some(Motion::Path(p)) = &self.motion {
             if waypoints.last() == Some(&p.target()) {
-                return;
+                return true;
             }
         }
         self.command_status = None;
@@ -644,9 +661,12 @@ impl Firmware {
         let s_dot = (v_lin * pct / length.max(1e-9)).min(v_ang * pct / angle);
         let s_ddot = (a_lin / length.max(1e-9)).min(a_ang / angle);
         let (vl, al) = self.motion_limits();
-        self.start_motion(Motion::Path(PathMove::new(
-            waypoints, s_dot, s_ddot, vl, al,
-        )));
+        // Blend from the current reference velocity (a changed target mid-move).
+        let (_, v_ref) = self.reference_state();
+        self.start_motion(Motion::Path(
+            PathMove::new(waypoints, s_dot, s_ddot, vl, al).with_initial_velocity(v_ref),
+        ));
+        true
     }
 
     /// MOVE C: a line to the start point if the arm is elsewhere, then the arc through the
@@ -656,7 +676,8 @@ impl Firmware {
             return;
         };
         self.move_c_points = [None; 3];
-        if !self.accepts_motion() {
+        let key = TargetKey::Arc([a, b, c]);
+        if !self.accepts_motion() || self.target_key == Some(key) {
             return;
         }
         let (pa, pb, pc) = (
@@ -674,7 +695,9 @@ impl Firmware {
             poses.extend(line_samples(&start, &pa));
         }
         poses.extend(arc);
-        self.follow_poses(&poses, &start, &pc);
+        if self.follow_poses(&poses, &start, &pc) {
+            self.target_key = Some(key);
+        }
     }
 }
 

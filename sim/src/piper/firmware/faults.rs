@@ -200,15 +200,13 @@ impl Firmware {
             PiperFault::Collision { joint } => f.collision[joint_index(joint)?] = true,
             PiperFault::Estop => {
                 self.estop = true;
-                self.motion = None;
-                self.settling = false;
+                self.abort_motion();
             }
             PiperFault::NtcOverTemp { board } => *f.ntc(board) = true,
             PiperFault::GripperSensorFault => f.gripper_sensor_fault = true,
             PiperFault::TeachButton => {
                 self.ctrl_mode = CtrlMode::Teach;
-                self.motion = None;
-                self.settling = false;
+                self.abort_motion();
             }
         }
         self.check_protections();

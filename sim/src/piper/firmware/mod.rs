@@ -7,6 +7,8 @@
 mod commands;
 mod faults;
 mod feedback;
+#[cfg(test)]
+mod streaming_tests;
 
 use std::path::PathBuf;
 
@@ -71,6 +73,17 @@ impl Motion {
     }
 }
 
+/// The host command a motion was planned from. A command that repeats it (SDK clients
+/// re-send mode + target every few milliseconds) leaves the running profile alone instead of
+/// replanning it from rest.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum TargetKey {
+    /// MOVE P or MOVE L to a wire pose (0x152–0x154).
+    Pose(MoveMode, [i32; 6]),
+    /// MOVE C through three wire poses.
+    Arc([[i32; 6]; 3]),
+}
+
 /// Gripper state.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Gripper {
@@ -128,6 +141,9 @@ pub struct Firmware {
     pub(crate) mit_sticky: bool,
 
     pub(crate) motion: Option<Motion>,
+    /// The pose command the current (or last completed) motion came from; cleared whenever a
+    /// motion is aborted or replaced.
+    pub(crate) target_key: Option<TargetKey>,
     /// Physical reference (rad, v) held when no motion runs.
     pub(crate) hold_ref: [f64; 6],
     pub(crate) ref_vel: [f64; 6],
@@ -152,6 +168,9 @@ pub struct Firmware {
     pub(crate) prev_link_pose: Option<[Isometry3<f64>; 6]>,
     pub(crate) prev_link_vel: [[f64; 2]; 6],
     pub(crate) out: Vec<CanFrame>,
+    /// While catching up missed steps: the newest periodic frame of each ID, sent once at the
+    /// end instead of one per missed period.
+    coalesced: Option<Vec<CanFrame>>,
     /// Replies the master sends after a processing delay: (tick due, frame).
     pub(crate) delayed: Vec<(u64, CanFrame)>,
 }
@@ -293,6 +312,7 @@ impl Firmware {
             periodic_48x: false,
             mit_sticky: false,
             motion: None,
+            target_key: None,
             hold_ref,
             ref_vel: [0.0; 6],
             settling: false,
@@ -319,6 +339,7 @@ impl Firmware {
             prev_link_pose: None,
             prev_link_vel: [[0.0; 2]; 6],
             out: Vec::with_capacity(32),
+            coalesced: None,
             delayed: Vec::new(),
             config,
         })
@@ -332,6 +353,20 @@ impl Firmware {
     /// Simulated time since boot, s.
     pub fn time_s(&self) -> f64 {
         self.ticks as f64 * STEP_S
+    }
+
+    /// Run `steps` ticks that are already late (a real-time process woke up behind its clock):
+    /// the physics runs every missed step, but each periodic feedback frame is sent once, with
+    /// the newest values, instead of a backlog burst of one per missed period. Replies and
+    /// other event frames are kept in order.
+    pub fn catch_up(&mut self, steps: u32) {
+        self.coalesced = Some(Vec::new());
+        for _ in 0..steps {
+            self.tick();
+        }
+        if let Some(held) = self.coalesced.take() {
+            self.out.extend(held);
+        }
     }
 
     /// Take the frames produced since the last call, in send order.
@@ -405,6 +440,7 @@ impl Firmware {
     /// Stop any motion and hold where the arm is now.
     pub(crate) fn hold_here(&mut self) {
         self.motion = None;
+        self.target_key = None;
         self.settling = false;
         self.hold_ref = self.physical_joints();
         self.ref_vel = [0.0; 6];
@@ -459,6 +495,7 @@ impl Firmware {
         self.v = self.world.joint_velocities();
         self.check_protections();
         self.update_settling();
+        let periodic_from = self.out.len();
         if !self.silent {
             if self.leader_active {
                 if self.ticks.is_multiple_of(HIGH_RATE_DIVIDER) {
@@ -472,6 +509,11 @@ impl Firmware {
                     self.emit_low_rate();
                 }
             }
+        }
+        if let Some(held) = &mut self.coalesced {
+            let fresh: Vec<CanFrame> = self.out.drain(periodic_from..).collect();
+            held.retain(|old| fresh.iter().all(|f| f.raw_id() != old.raw_id()));
+            held.extend(fresh);
         }
         if !self.delayed.is_empty() {
             let now = self.ticks;
@@ -593,7 +635,15 @@ impl Firmware {
     /// Start a motion (physical frame targets) and mark the arm as moving.
     pub(crate) fn start_motion(&mut self, motion: Motion) {
         self.motion = Some(motion);
+        self.target_key = None;
         self.settling = true;
+    }
+
+    /// Drop the running motion where the reference is now (estop, teach button).
+    pub(crate) fn abort_motion(&mut self) {
+        self.motion = None;
+        self.target_key = None;
+        self.settling = false;
     }
 
     /// Add a static obstacle to the world.
