@@ -6,6 +6,7 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::Duration;
 
 use async_trait::async_trait;
+use bus::virtual_bus::{Fault, FaultHandle, FaultId, FrameFilter};
 use driver::arm::{
     AbcErrorCode, ArmError, ArmInterface, ArmRealtimeState, MoveOptions, Pose, RealtimeSubscription,
 };
@@ -20,8 +21,15 @@ use crate::harness::{Device, DeviceError, Reply, TraceColumn};
 
 /// The vendor's emulator behind the arm.
 pub(crate) enum Emulator {
-    /// A Piper on the virtual bus.
-    Piper(Box<dyn EmulatorControl>),
+    /// A Piper on the virtual bus, with the bus's fault hooks (a cut link drops every frame).
+    Piper {
+        /// The emulator.
+        sim: Box<dyn EmulatorControl>,
+        /// Fault hooks of the bus.
+        bus: FaultHandle,
+        /// The drop-everything fault while the link is cut.
+        cut: Mutex<Option<FaultId>>,
+    },
     /// A Realman controller on in-memory streams (`None` once shut down).
     Realman(Mutex<Option<RealmanHandle>>),
 }
@@ -34,6 +42,10 @@ pub(crate) struct ArmDevice {
     latest: Arc<Mutex<Option<Arc<ArmRealtimeState>>>>,
     listener: tokio::task::JoinHandle<()>,
 }
+
+/// How late a Realman's replies come while its link is cut: past the driver's 500 ms timeout,
+/// so every call times out, and short enough that the stream is clean again soon after.
+const REALMAN_CUT_DELAY_MS: u64 = 1000;
 
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
     m.lock().unwrap_or_else(|p| p.into_inner())
@@ -307,7 +319,7 @@ impl Device for ArmDevice {
         self.arm.disconnect().await;
         self.listener.abort();
         match &self.emulator {
-            Emulator::Piper(sim) => sim.shutdown().await,
+            Emulator::Piper { sim, .. } => sim.shutdown().await,
             Emulator::Realman(handle) => {
                 let handle = lock(handle).take();
                 if let Some(h) = handle {
@@ -330,13 +342,42 @@ impl ArmDevice {
         };
         let emulator = |e: String| DeviceError::unsupported(format!("emulator: {e}"));
         match (&self.emulator, fault.0) {
-            (Emulator::Piper(sim), ArmFaultKind::Estop) => {
+            (Emulator::Piper { sim, .. }, ArmFaultKind::Estop) => {
                 if on {
                     sim.inject(&PiperFault::Estop).map_err(emulator)
                 } else {
                     sim.clear(Some(&PiperFault::Estop)).map_err(emulator)
                 }
             }
+            (Emulator::Piper { bus, cut, .. }, ArmFaultKind::CommLoss) => {
+                let mut cut = lock(cut);
+                if let Some(id) = cut.take() {
+                    bus.remove(id);
+                }
+                if on {
+                    *cut = Some(bus.inject(Fault::drop(FrameFilter::All)));
+                }
+                Ok(())
+            }
+            (Emulator::Realman(handle), ArmFaultKind::CommLoss) => match lock(handle).as_ref() {
+                Some(h) if on => {
+                    for f in [
+                        RealmanFault::ReplyDelay {
+                            delay_ms: REALMAN_CUT_DELAY_MS,
+                        },
+                        RealmanFault::UdpLoss { permille: 1000 },
+                    ] {
+                        h.inject(f).map_err(|e| emulator(e.to_string()))?;
+                    }
+                    Ok(())
+                }
+                Some(h) => {
+                    h.clear(RealmanFaultKind::ReplyDelay);
+                    h.clear(RealmanFaultKind::UdpLoss);
+                    Ok(())
+                }
+                None => Err(DeviceError::unsupported("the emulator has been shut down")),
+            },
             (Emulator::Realman(handle), ArmFaultKind::Estop) => match lock(handle).as_ref() {
                 Some(h) if on => h
                     .inject(RealmanFault::EStop)

@@ -62,7 +62,12 @@ pub(crate) async fn build(
                 .ok_or_else(|| format!("device `{name}`: no bus to attach the Piper to"))?;
             let (sim, piper) = super::piper::spawn_default(name, bus).await?;
             let arm = PiperArm::from_client(name, piper, PiperArmOptions::default());
-            (Arc::new(arm), Emulator::Piper(sim))
+            let emulator = Emulator::Piper {
+                sim,
+                bus: bus.faults(),
+                cut: Mutex::new(None),
+            };
+            (Arc::new(arm), emulator)
         }
         Vendor::Realman => {
             use super::realman::device::{Emulated, HOST_IP, PUSH_PORT};

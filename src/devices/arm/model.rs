@@ -126,16 +126,21 @@ pub enum ArmFaultKind {
     /// The physical emergency stop is pressed: the arm stops and refuses motion until it is
     /// released (the fault cleared) and reset.
     Estop,
+    /// The link between host and arm is cut both ways (Piper: every CAN frame lost; Realman:
+    /// replies held back past the driver's timeout and the state push lost): calls time out
+    /// and the realtime state stops until the fault clears.
+    CommLoss,
 }
 
 impl ArmFaultKind {
     /// Every arm fault.
-    pub const ALL: [Self; 1] = [Self::Estop];
+    pub const ALL: [Self; 2] = [Self::Estop, Self::CommLoss];
 
     /// The scenario name.
     pub fn name(self) -> &'static str {
         match self {
             Self::Estop => "estop",
+            Self::CommLoss => "comm_loss",
         }
     }
 }

@@ -81,6 +81,9 @@ fn reached(s: &PiperState) -> bool {
         .is_some_and(|a| a.value.motion == MotionStatus::Reached)
 }
 
+/// Joint feedback older than this (20 periods at 200 Hz) means the link is gone.
+const FEEDBACK_TIMEOUT: Duration = Duration::from_millis(100);
+
 impl PiperArm {
     fn check_move(&self, opts: &MoveOptions) -> ArmResult<()> {
         opts.validate()?;
@@ -93,8 +96,18 @@ impl PiperArm {
         Ok(())
     }
 
+    /// The latest joint angles; `ARM_TIMEOUT` when the feedback (200 Hz) has stopped, so a
+    /// lost link reads as a timeout, as it does on a Realman, instead of a frozen arm.
     fn current_rad(link: &Link) -> ArmResult<[f64; 6]> {
-        link.piper.state().joints_rad().ok_or_else(|| {
+        let state = link.piper.state();
+        let age = state.joints.as_ref().map(|j| j.received_at.elapsed());
+        if let Some(age) = age.filter(|a| *a > FEEDBACK_TIMEOUT) {
+            return Err(ArmError::new(
+                AbcErrorCode::ArmTimeout,
+                format!("no joint feedback for {} ms", age.as_millis()),
+            ));
+        }
+        state.joints_rad().ok_or_else(|| {
             ArmError::new(
                 AbcErrorCode::ArmDataReceiveFailed,
                 "no joint feedback from the arm yet",
