@@ -20,7 +20,7 @@ fn typo_in_a_key_names_the_key_and_the_valid_ones() {
         format!("{BENCH}steps:\n  - move_j: {{joints_deg: [0, 0, 0, 0, 0, 0], sped_pct: 20}}\n");
     assert_eq!(
         error_of(&text),
-        "broken.yaml:5:46: unknown key `sped_pct`, expected one of device, id, timeout_ms, expect_error, joints_deg, speed_pct; did you mean `speed_pct`?"
+        "broken.yaml:5:46: unknown key `sped_pct`, expected one of device, id, timeout_ms, expect_error, joints_deg, speed_pct, every_ms; did you mean `speed_pct`?"
     );
 }
 

@@ -13,6 +13,8 @@ from pathlib import Path
 
 import pytest
 
+from armhil_process import BIN, require_binary
+
 if os.environ.get("CI"):
     # In CI cantools is installed by .ci/run: missing is a failure, not a skip.
     import cantools
@@ -20,7 +22,6 @@ else:
     cantools = pytest.importorskip("cantools")
 
 REPO = Path(__file__).resolve().parents[2]
-BIN = os.environ.get("ARMHIL_BIN", str(REPO / "target" / "debug" / "armhil"))
 DBC = REPO / "docs" / "dbc" / "piper.dbc"
 SCENARIO = REPO / "scenarios" / "piper" / "move_j_basic.yaml"
 
@@ -51,8 +52,7 @@ def read_candump(path):
 
 @pytest.fixture(scope="module")
 def recorded_log(tmp_path_factory):
-    if not Path(BIN).exists():
-        pytest.fail(f"armhil binary not found at {BIN} (set ARMHIL_BIN or cargo build -p armhil)")
+    require_binary()
     out = tmp_path_factory.mktemp("run")
     result = subprocess.run(
         [BIN, "run", str(SCENARIO), "--out", str(out)],

@@ -14,13 +14,11 @@ server's host and port from its configuration (here the CAN_CONFIG environment v
 
 import json
 import os
-import signal
-import socket
-import subprocess
 import time
-from pathlib import Path
 
 import pytest
+
+from armhil_process import free_port, listening
 
 if os.environ.get("CI"):
     # In CI both are installed by .ci/run: a missing package is a failure, not a skip.
@@ -30,49 +28,19 @@ else:
     can = pytest.importorskip("can")
     piper_sdk = pytest.importorskip("piper_sdk")
 
-REPO = Path(__file__).resolve().parents[2]
-BIN = os.environ.get("ARMHIL_BIN", str(REPO / "target" / "debug" / "armhil"))
 FIRMWARE = "S-V1.8-2"
 TARGET_MDEG = [20000, 40000, -40000, 10000, 20000, -15000]
 GRIPPER_UM = 40000
 
 
-def free_port():
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 @pytest.fixture(scope="module")
 def server():
     """`armhil sim piper --socketcand 127.0.0.1:PORT`; yields (host, port)."""
-    if not Path(BIN).exists():
-        pytest.fail(f"armhil binary not found at {BIN} (set ARMHIL_BIN or cargo build -p armhil)")
     port = free_port()
-    proc = subprocess.Popen(
-        [BIN, "sim", "piper", "--socketcand", f"127.0.0.1:{port}", "--firmware", FIRMWARE],
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
-    deadline = time.monotonic() + 20
-    while True:
-        try:
-            socket.create_connection(("127.0.0.1", port), timeout=0.2).close()
-            break
-        except OSError:
-            if proc.poll() is not None or time.monotonic() > deadline:
-                proc.kill()
-                pytest.fail(f"emulator did not start: {proc.stderr.read()}")
-            time.sleep(0.05)
-    yield ("127.0.0.1", port)
-    proc.send_signal(signal.SIGINT)
-    try:
-        _, stderr = proc.communicate(timeout=10)
-    except subprocess.TimeoutExpired:
-        proc.kill()
-        _, stderr = proc.communicate()
-    assert proc.returncode == 0, f"emulator exit {proc.returncode}: {stderr[-2000:]}"
+    args = ["sim", "piper", "--socketcand", f"127.0.0.1:{port}", "--firmware", FIRMWARE]
+    with listening(args, port) as proc:
+        yield ("127.0.0.1", port)
+    assert proc.returncode == 0, f"emulator exit {proc.returncode}: {proc.stderr_tail}"
 
 
 def open_bus(server, channel="can0"):

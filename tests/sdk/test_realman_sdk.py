@@ -12,14 +12,13 @@ end. Every SDK call below is what a user's program would make; nothing is patche
 import json
 import math
 import os
-import signal
 import socket
-import subprocess
 import threading
 import time
-from pathlib import Path
 
 import pytest
+
+from armhil_process import free_port, listening
 
 if os.environ.get("CI"):
     # In CI the SDK is installed by .ci/run: a missing SDK is a failure, not a skip.
@@ -27,49 +26,16 @@ if os.environ.get("CI"):
 else:
     sdk = pytest.importorskip("Robotic_Arm.rm_robot_interface")
 
-REPO = Path(__file__).resolve().parents[2]
-BIN = os.environ.get("ARMHIL_BIN", str(REPO / "target" / "debug" / "armhil"))
-
-
 # ctypes callbacks handed to the SDK (freeing one the SDK still calls crashes the process).
 KEEP_ALIVE = []
-
-
-def free_port(kind=socket.SOCK_STREAM):
-    with socket.socket(socket.AF_INET, kind) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 @pytest.fixture(scope="module")
 def emulator():
     """`armhil sim realman` on a free port; yields the port."""
-    if not Path(BIN).exists():
-        pytest.fail(f"armhil binary not found at {BIN} (set ARMHIL_BIN or cargo build -p armhil)")
     port = free_port()
-    proc = subprocess.Popen(
-        [BIN, "sim", "realman", "--bind", "127.0.0.1", "--port", str(port)],
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
-    deadline = time.monotonic() + 20
-    while True:
-        try:
-            socket.create_connection(("127.0.0.1", port), timeout=0.2).close()
-            break
-        except OSError:
-            if proc.poll() is not None or time.monotonic() > deadline:
-                proc.kill()
-                pytest.fail(f"emulator did not start: {proc.stderr.read()}")
-            time.sleep(0.05)
-    yield port
-    proc.send_signal(signal.SIGINT)
-    try:
-        proc.wait(timeout=10)
-    except subprocess.TimeoutExpired:
-        proc.kill()
-        proc.wait()
+    with listening(["sim", "realman", "--bind", "127.0.0.1", "--port", str(port)], port):
+        yield port
 
 
 @pytest.fixture(scope="module")
