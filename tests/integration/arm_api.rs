@@ -9,7 +9,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Arc;
 use std::time::Duration;
 
-use bus::virtual_bus::{VirtualBus, VirtualBusConfig};
+use bus::virtual_bus::{Fault, FrameFilter, VirtualBus, VirtualBusConfig};
 use driver::arm::{
     create_arm_from_config, AbcErrorCode, ArmCurrentStatus, ArmError, ArmInterface, IkMode, Method,
     MoveOptions, PeripheralReadWriteParams, PiperArm, PiperArmOptions, Pose, RealmanArm,
@@ -21,7 +21,7 @@ use sim::piper::{PiperConfig, PiperEmulator, PiperHandle};
 use sim::realman::model::ArmModel;
 use sim::realman::{ControllerConfig, EmulatorConfig, RealmanEmulator, RealmanHandle, Transport};
 use tokio::sync::mpsc;
-use tokio::time::sleep;
+use tokio::time::{sleep, Instant};
 
 /// The IP the in-memory Realman client claims, and the push port aimed at it.
 const PEER: Ipv4Addr = Ipv4Addr::new(192, 168, 1, 10);
@@ -650,4 +650,29 @@ async fn a_stopped_piper_refuses_blocking_moves_with_arm_error() {
         .await
         .unwrap_err();
     assert_eq!(e.code, AbcErrorCode::ArmError, "{e}");
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_piper_whose_link_is_cut_times_out_at_once_not_after_the_motion_timeout() {
+    let c = piper_case().await;
+    let Bench::Piper(bus, _) = &c._bench else {
+        panic!("a Piper bench")
+    };
+    c.arm.connect().await.expect("connect");
+    bus.faults().inject(Fault::drop(FrameFilter::All));
+    sleep(Duration::from_millis(50)).await;
+    let start = Instant::now();
+    let e = c
+        .arm
+        .move_joint_position(&c.target_deg, MoveOptions::blocking(50))
+        .await
+        .expect_err("no arm answers");
+    assert_eq!(e.code, AbcErrorCode::ArmTimeout, "{e}");
+    assert!(
+        start.elapsed() < Duration::from_secs(1),
+        "gave up after {:?}, not within the 100 ms feedback timeout",
+        start.elapsed()
+    );
+    let e = c.arm.get_joint_degree().await.expect_err("stale feedback");
+    assert_eq!(e.code, AbcErrorCode::ArmTimeout, "{e}");
 }

@@ -57,11 +57,24 @@ async fn wait_for(
                 return Ok(());
             }
         }
-        match tokio::time::timeout_at(deadline, rx.changed()).await {
-            Err(_) => {
+        // The state changes hundreds of times a second while the link is up: a silence of
+        // FEEDBACK_TIMEOUT means it is down, and waiting out the whole motion timeout would
+        // only delay the same answer.
+        let wake = (Instant::now() + FEEDBACK_TIMEOUT).min(deadline);
+        match tokio::time::timeout_at(wake, rx.changed()).await {
+            Err(_) if Instant::now() >= deadline => {
                 return Err(ArmError::new(
                     AbcErrorCode::ArmTimeout,
                     format!("{what}: not done within {timeout:?}"),
+                ))
+            }
+            Err(_) => {
+                return Err(ArmError::new(
+                    AbcErrorCode::ArmTimeout,
+                    format!(
+                        "{what}: no feedback from the arm for {} ms",
+                        FEEDBACK_TIMEOUT.as_millis()
+                    ),
                 ))
             }
             Ok(Err(_)) => {
