@@ -20,7 +20,7 @@ fn typo_in_a_key_names_the_key_and_the_valid_ones() {
         format!("{BENCH}steps:\n  - move_j: {{joints_deg: [0, 0, 0, 0, 0, 0], sped_pct: 20}}\n");
     assert_eq!(
         error_of(&text),
-        "broken.yaml:5:46: unknown key `sped_pct`, expected one of device, id, timeout_ms, expect_error, joints_deg, speed_pct; did you mean `speed_pct`?"
+        "broken.yaml:5:46: unknown key `sped_pct`, expected one of device, id, timeout_ms, expect_error, joints_deg, speed_pct, every_ms; did you mean `speed_pct`?"
     );
 }
 
@@ -154,4 +154,36 @@ fn piper_fault_with_a_required_joint_cannot_be_written_bare() {
         err.contains("`stall` needs arguments: write `stall: { ... }`"),
         "{err}"
     );
+}
+
+#[test]
+fn durations_longer_than_an_hour_are_refused_at_check_time() {
+    let text = format!("{BENCH}steps:\n  - wait_ms: 1000000000000\n");
+    assert_eq!(
+        error_of(&text),
+        "broken.yaml:5:14: `wait_ms` must be at most 3600000 (one hour, in milliseconds), got 1000000000000"
+    );
+    let text = format!(
+        "{BENCH}steps:\n  - move_j: {{joints_deg: [0, 0, 0, 0, 0, 0], timeout_ms: 3600001}}\n"
+    );
+    let e = error_of(&text);
+    assert!(
+        e.starts_with("broken.yaml:5:58: `timeout_ms` must be at most 3600000"),
+        "{e}"
+    );
+    // One hour itself is fine.
+    let text = format!("{BENCH}steps:\n  - wait_ms: 3600000\n");
+    assert!(parse_scenario(Path::new("ok.yaml"), &text).is_ok());
+}
+
+#[test]
+fn an_overlong_name_is_refused_at_check_time() {
+    let text = format!("name: {}\n{BENCH}steps:\n  - wait_ms: 1\n", "a".repeat(300));
+    let e = error_of(&text);
+    assert!(
+        e.starts_with("broken.yaml:1:7: `name` must be 1 to 100 characters"),
+        "{e}"
+    );
+    let text = format!("name: {}\n{BENCH}steps:\n  - wait_ms: 1\n", "a".repeat(100));
+    assert!(parse_scenario(Path::new("ok.yaml"), &text).is_ok());
 }
