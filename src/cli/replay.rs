@@ -44,7 +44,7 @@ pub fn schedule(entries: &[LogEntry], speed: f64) -> anyhow::Result<Vec<(Duratio
                 .filter(|offset| *offset <= MAX_OFFSET);
             let Some(offset) = offset else {
                 anyhow::bail!(
-                    "frame {} comes {:.3} s after the first; at --speed {speed} that is more \
+                    "frame {} comes {:.3} s after the first; at --speed {speed:?} that is more \
                      than a year of replay",
                     index + 1,
                     gap.as_secs_f64()
