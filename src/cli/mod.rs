@@ -7,3 +7,88 @@ pub mod record;
 pub mod replay;
 pub mod run;
 pub mod sim;
+
+/// Longest run of non-blank characters an error message shows whole; longer ones (a 10 MB bad
+/// token) are cut to their first [`ELIDED_KEEP`] characters and "…".
+const LONGEST_TOKEN: usize = 80;
+/// How many characters of an over-long token an error message keeps.
+const ELIDED_KEEP: usize = 40;
+
+/// An error and its causes as one line for the terminal: "outer: cause: cause", each cause
+/// said once (many errors already print their source in their own text, so anyhow's `{:#}`
+/// would repeat it), with over-long tokens elided.
+pub fn error_text(error: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for cause in error.chain() {
+        let part = cause.to_string();
+        if text.contains(&part) {
+            continue;
+        }
+        if !text.is_empty() {
+            text.push_str(": ");
+        }
+        text.push_str(&part);
+    }
+    elide_long_tokens(&text)
+}
+
+/// Replace every token longer than [`LONGEST_TOKEN`] characters by its start and "…".
+fn elide_long_tokens(text: &str) -> String {
+    let mut out = String::with_capacity(text.len().min(4096));
+    let mut token = String::new();
+    let flush = |token: &mut String, out: &mut String| {
+        if token.chars().count() > LONGEST_TOKEN {
+            out.extend(token.chars().take(ELIDED_KEEP));
+            out.push('…');
+        } else {
+            out.push_str(token);
+        }
+        token.clear();
+    };
+    for c in text.chars() {
+        if c.is_whitespace() {
+            flush(&mut token, &mut out);
+            out.push(c);
+        } else {
+            token.push(c);
+        }
+    }
+    flush(&mut token, &mut out);
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(Debug, thiserror::Error)]
+    #[error("cannot read x.log: {source}")]
+    struct Echoing {
+        source: std::io::Error,
+    }
+
+    #[test]
+    fn a_cause_already_in_the_message_is_said_once() {
+        let io = std::io::Error::from_raw_os_error(2);
+        let error = anyhow::Error::new(Echoing { source: io }).context("replay failed");
+        let text = error_text(&error);
+        assert_eq!(text.matches("os error 2").count(), 1, "{text}");
+        assert!(text.starts_with("replay failed: cannot read x.log: "), "{text}");
+    }
+
+    #[test]
+    fn distinct_causes_are_all_kept() {
+        let error = anyhow::anyhow!("inner").context("outer");
+        assert_eq!(error_text(&error), "outer: inner");
+    }
+
+    #[test]
+    fn long_tokens_are_elided() {
+        let token = "x".repeat(10_000_000);
+        let error = anyhow::anyhow!("bad token {token} here");
+        let text = error_text(&error);
+        assert_eq!(text, format!("bad token {}… here", "x".repeat(40)));
+        let short = "y".repeat(80);
+        assert_eq!(error_text(&anyhow::anyhow!("{short}")), short);
+    }
+}
