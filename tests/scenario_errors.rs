@@ -187,3 +187,41 @@ fn an_overlong_name_is_refused_at_check_time() {
     let text = format!("name: {}\n{BENCH}steps:\n  - wait_ms: 1\n", "a".repeat(100));
     assert!(parse_scenario(Path::new("ok.yaml"), &text).is_ok());
 }
+
+/// Load `bytes` as a file and return the error's headline with the temporary folder cut off.
+fn load_error_of(bytes: &[u8]) -> String {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("bad.yaml");
+    std::fs::write(&path, bytes).unwrap();
+    match armhil::harness::load_scenario(&path) {
+        Ok(_) => panic!("scenario unexpectedly valid"),
+        Err(e) => e
+            .scenario_error()
+            .expect("a scenario error with a position")
+            .headline()
+            .replace(&format!("{}/", dir.path().display()), ""),
+    }
+}
+
+#[test]
+fn invalid_utf8_is_reported_at_its_line_and_column() {
+    let mut bytes = format!("{BENCH}steps:\n  - wait_ms: 1 # caf").into_bytes();
+    let offset = bytes.len();
+    bytes.extend_from_slice(&[0xE9, b'\n']);
+    assert_eq!(
+        load_error_of(&bytes),
+        format!("bad.yaml:5:21: not valid UTF-8 (byte offset {offset}); save the file as UTF-8")
+    );
+}
+
+#[test]
+fn utf16_is_recognised() {
+    let mut bytes = vec![0xFF, 0xFE];
+    for unit in format!("{BENCH}steps:\n  - wait_ms: 1\n").encode_utf16() {
+        bytes.extend_from_slice(&unit.to_le_bytes());
+    }
+    assert_eq!(
+        load_error_of(&bytes),
+        "bad.yaml:1:1: the file is UTF-16; save it as UTF-8"
+    );
+}
