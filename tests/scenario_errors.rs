@@ -225,3 +225,17 @@ fn utf16_is_recognised() {
         "bad.yaml:1:1: the file is UTF-16; save it as UTF-8"
     );
 }
+
+#[test]
+fn yaml_limits_are_reported_in_plain_words() {
+    let aliases = format!(
+        "name: &a x\ntags: [{}]\n{BENCH}steps:\n  - wait_ms: 1\n",
+        "*a, ".repeat(50_001)
+    );
+    let e = error_of(&aliases);
+    assert!(
+        e.contains("the file exceeds the YAML reader's limit on aliases (reached 50001)"),
+        "{e}"
+    );
+    assert!(!e.contains('{') && !e.contains("budget"), "{e}");
+}

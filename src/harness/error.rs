@@ -181,5 +181,26 @@ fn friendlier(message: &str) -> String {
             return format!("{to}{rest}");
         }
     }
+    if let Some(breach) = message.strip_prefix("budget breached: ") {
+        return budget_words(breach);
+    }
     message.to_owned()
+}
+
+/// The YAML parser's resource-limit error, which it renders as Rust debug text
+/// (`Aliases { aliases: 50001 }`), in plain words.
+fn budget_words(breach: &str) -> String {
+    let name = breach.split([' ', '{']).next().unwrap_or(breach);
+    let mut words = String::new();
+    for c in name.chars() {
+        if c.is_uppercase() && !words.is_empty() {
+            words.push(' ');
+        }
+        words.extend(c.to_lowercase());
+    }
+    let count = breach
+        .split(|c: char| !c.is_ascii_digit())
+        .find(|part| !part.is_empty());
+    let reached = count.map_or_else(String::new, |n| format!(" (reached {n})"));
+    format!("the file exceeds the YAML reader's limit on {words}{reached}")
 }
