@@ -206,7 +206,9 @@ mod tests {
 
     #[tokio::test]
     async fn opening_a_missing_interface_is_an_error() {
-        let error = SocketCanBus::open("armhil-nosuch").err().expect("an error");
+        let Err(error) = SocketCanBus::open("armhil-nosuch") else {
+            panic!("a missing interface opened");
+        };
         assert_eq!(error.to_string(), "no such interface armhil-nosuch");
     }
 }

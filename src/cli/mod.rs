@@ -73,7 +73,10 @@ mod tests {
         let error = anyhow::Error::new(Echoing { source: io }).context("replay failed");
         let text = error_text(&error);
         assert_eq!(text.matches("os error 2").count(), 1, "{text}");
-        assert!(text.starts_with("replay failed: cannot read x.log: "), "{text}");
+        assert!(
+            text.starts_with("replay failed: cannot read x.log: "),
+            "{text}"
+        );
     }
 
     #[test]

@@ -174,9 +174,15 @@ mod tests {
         let at = |plan: Vec<(Duration, CanFrame)>| -> Vec<u128> {
             plan.iter().map(|(offset, _)| offset.as_micros()).collect()
         };
-        assert_eq!(at(schedule(&entries, 1.0).unwrap()), vec![0, 10_000, 30_000]);
+        assert_eq!(
+            at(schedule(&entries, 1.0).unwrap()),
+            vec![0, 10_000, 30_000]
+        );
         assert_eq!(at(schedule(&entries, 2.0).unwrap()), vec![0, 5_000, 15_000]);
-        assert_eq!(at(schedule(&entries, 0.5).unwrap()), vec![0, 20_000, 60_000]);
+        assert_eq!(
+            at(schedule(&entries, 0.5).unwrap()),
+            vec![0, 20_000, 60_000]
+        );
         assert!(schedule(&[], 1.0).unwrap().is_empty());
     }
 

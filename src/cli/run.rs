@@ -342,8 +342,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     }
     if let Some(path) = &args.junit {
         let xml = junit_xml("armhil", &results)?;
-        write_atomic(path, xml.as_bytes())
-            .map_err(|e| anyhow::anyhow!("cannot write the JUnit report {}: {e}", path.display()))?;
+        write_atomic(path, xml.as_bytes()).map_err(|e| {
+            anyhow::anyhow!("cannot write the JUnit report {}: {e}", path.display())
+        })?;
         println!("junit: {}", path.display());
     }
     Ok(if failed == 0 && errors == 0 && write_errors == 0 {

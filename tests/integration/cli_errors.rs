@@ -7,7 +7,10 @@ use std::process::{Command, Output};
 const ARMHIL: &str = env!("CARGO_BIN_EXE_armhil");
 
 fn armhil(args: &[&str]) -> Output {
-    Command::new(ARMHIL).args(args).output().expect("armhil runs")
+    Command::new(ARMHIL)
+        .args(args)
+        .output()
+        .expect("armhil runs")
 }
 
 fn stderr(output: &Output) -> String {

@@ -230,7 +230,10 @@ mod tests {
         assert!((half - 4.0).abs() < 1e-9, "{half}");
         assert_eq!(m.command(strong_mit(), 0.0, NO_LOAD_SPEED_RAD_S), 0.0);
         // Braking is never reduced.
-        assert_eq!(m.command(DriveLaw::Damping, 0.0, 20.0), -ESTOP_DAMPING[5] * 20.0);
+        assert_eq!(
+            m.command(DriveLaw::Damping, 0.0, 20.0),
+            -ESTOP_DAMPING[5] * 20.0
+        );
     }
 
     #[test]

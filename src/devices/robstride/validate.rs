@@ -119,9 +119,14 @@ pub(crate) fn settings(ctx: &Ctx<'_>, d: &RawSettings, at: Pos) -> Res<Robstride
         }
         if let Some(f) = &m.value.friction_nm_s_per_rad {
             let friction = ctx.non_negative(f, "friction_nm_s_per_rad")?;
-            config.friction_nm_s_per_rad =
-                bounded(ctx, f, "friction_nm_s_per_rad", false, MAX_FRICTION_NM_S_PER_RAD)
-                    .map(|_| friction)?;
+            config.friction_nm_s_per_rad = bounded(
+                ctx,
+                f,
+                "friction_nm_s_per_rad",
+                false,
+                MAX_FRICTION_NM_S_PER_RAD,
+            )
+            .map(|_| friction)?;
         }
         motors.push(config);
     }
@@ -572,7 +577,10 @@ mod tests {
         let e = error_of(&bench("friction_nm_s_per_rad: 1e300"));
         assert!(e.contains("`friction_nm_s_per_rad` must be between"), "{e}");
         let e = error_of(&bench("start_angle_rad: -1e300"));
-        assert!(e.contains("`start_angle_rad` must be between -100 and 100"), "{e}");
+        assert!(
+            e.contains("`start_angle_rad` must be between -100 and 100"),
+            "{e}"
+        );
     }
 
     #[test]
