@@ -239,3 +239,22 @@ fn yaml_limits_are_reported_in_plain_words() {
     );
     assert!(!e.contains('{') && !e.contains("budget"), "{e}");
 }
+
+#[test]
+fn a_huge_bad_token_is_not_echoed_whole() {
+    let token = "x".repeat(10_000_000);
+    let text = format!("{BENCH}steps:\n  - {token}: 1\n");
+    let error = match parse_scenario(Path::new("broken.yaml"), &text) {
+        Ok(_) => panic!("valid"),
+        Err(e) => e.to_string(),
+    };
+    assert!(error.len() < 1000, "{} bytes of error", error.len());
+    assert!(
+        error.starts_with(&format!(
+            "broken.yaml:5:5: unknown step `{}…",
+            "x".repeat(39)
+        )),
+        "{}",
+        &error[..200.min(error.len())]
+    );
+}

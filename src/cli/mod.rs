@@ -8,12 +8,6 @@ pub mod replay;
 pub mod run;
 pub mod sim;
 
-/// Longest run of non-blank characters an error message shows whole; longer ones (a 10 MB bad
-/// token) are cut to their first [`ELIDED_KEEP`] characters and "…".
-const LONGEST_TOKEN: usize = 80;
-/// How many characters of an over-long token an error message keeps.
-const ELIDED_KEEP: usize = 40;
-
 /// An error and its causes as one line for the terminal: "outer: cause: cause", each cause
 /// said once (many errors already print their source in their own text, so anyhow's `{:#}`
 /// would repeat it), with over-long tokens elided.
@@ -29,32 +23,7 @@ pub fn error_text(error: &anyhow::Error) -> String {
         }
         text.push_str(&part);
     }
-    elide_long_tokens(&text)
-}
-
-/// Replace every token longer than [`LONGEST_TOKEN`] characters by its start and "…".
-fn elide_long_tokens(text: &str) -> String {
-    let mut out = String::with_capacity(text.len().min(4096));
-    let mut token = String::new();
-    let flush = |token: &mut String, out: &mut String| {
-        if token.chars().count() > LONGEST_TOKEN {
-            out.extend(token.chars().take(ELIDED_KEEP));
-            out.push('…');
-        } else {
-            out.push_str(token);
-        }
-        token.clear();
-    };
-    for c in text.chars() {
-        if c.is_whitespace() {
-            flush(&mut token, &mut out);
-            out.push(c);
-        } else {
-            token.push(c);
-        }
-    }
-    flush(&mut token, &mut out);
-    out
+    armhil::harness::elide_long_tokens(&text)
 }
 
 #[cfg(test)]
