@@ -155,3 +155,106 @@ fn piper_fault_with_a_required_joint_cannot_be_written_bare() {
         "{err}"
     );
 }
+
+#[test]
+fn durations_longer_than_an_hour_are_refused_at_check_time() {
+    let text = format!("{BENCH}steps:\n  - wait_ms: 1000000000000\n");
+    assert_eq!(
+        error_of(&text),
+        "broken.yaml:5:14: `wait_ms` must be at most 3600000 (one hour, in milliseconds), got 1000000000000"
+    );
+    let text = format!(
+        "{BENCH}steps:\n  - move_j: {{joints_deg: [0, 0, 0, 0, 0, 0], timeout_ms: 3600001}}\n"
+    );
+    let e = error_of(&text);
+    assert!(
+        e.starts_with("broken.yaml:5:58: `timeout_ms` must be at most 3600000"),
+        "{e}"
+    );
+    // One hour itself is fine.
+    let text = format!("{BENCH}steps:\n  - wait_ms: 3600000\n");
+    assert!(parse_scenario(Path::new("ok.yaml"), &text).is_ok());
+}
+
+#[test]
+fn an_overlong_name_is_refused_at_check_time() {
+    let text = format!("name: {}\n{BENCH}steps:\n  - wait_ms: 1\n", "a".repeat(300));
+    let e = error_of(&text);
+    assert!(
+        e.starts_with("broken.yaml:1:7: `name` must be 1 to 100 characters"),
+        "{e}"
+    );
+    let text = format!("name: {}\n{BENCH}steps:\n  - wait_ms: 1\n", "a".repeat(100));
+    assert!(parse_scenario(Path::new("ok.yaml"), &text).is_ok());
+}
+
+/// Load `bytes` as a file and return the error's headline with the temporary folder cut off.
+fn load_error_of(bytes: &[u8]) -> String {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("bad.yaml");
+    std::fs::write(&path, bytes).unwrap();
+    match armhil::harness::load_scenario(&path) {
+        Ok(_) => panic!("scenario unexpectedly valid"),
+        Err(e) => e
+            .scenario_error()
+            .expect("a scenario error with a position")
+            .headline()
+            .replace(&format!("{}/", dir.path().display()), ""),
+    }
+}
+
+#[test]
+fn invalid_utf8_is_reported_at_its_line_and_column() {
+    let mut bytes = format!("{BENCH}steps:\n  - wait_ms: 1 # caf").into_bytes();
+    let offset = bytes.len();
+    bytes.extend_from_slice(&[0xE9, b'\n']);
+    assert_eq!(
+        load_error_of(&bytes),
+        format!("bad.yaml:5:21: not valid UTF-8 (byte offset {offset}); save the file as UTF-8")
+    );
+}
+
+#[test]
+fn utf16_is_recognised() {
+    let mut bytes = vec![0xFF, 0xFE];
+    for unit in format!("{BENCH}steps:\n  - wait_ms: 1\n").encode_utf16() {
+        bytes.extend_from_slice(&unit.to_le_bytes());
+    }
+    assert_eq!(
+        load_error_of(&bytes),
+        "bad.yaml:1:1: the file is UTF-16; save it as UTF-8"
+    );
+}
+
+#[test]
+fn yaml_limits_are_reported_in_plain_words() {
+    let aliases = format!(
+        "name: &a x\ntags: [{}]\n{BENCH}steps:\n  - wait_ms: 1\n",
+        "*a, ".repeat(50_001)
+    );
+    let e = error_of(&aliases);
+    assert!(
+        e.contains("the file exceeds the YAML reader's limit on aliases (reached 50001)"),
+        "{e}"
+    );
+    assert!(!e.contains('{') && !e.contains("budget"), "{e}");
+}
+
+#[test]
+fn a_huge_bad_token_is_not_echoed_whole() {
+    let token = "x".repeat(10_000_000);
+    let text = format!("{BENCH}steps:\n  - {token}: 1\n");
+    let error = match parse_scenario(Path::new("broken.yaml"), &text) {
+        Ok(_) => panic!("valid"),
+        Err(e) => e.to_string(),
+    };
+    assert!(error.len() < 1000, "{} bytes of error", error.len());
+    assert!(
+        error.starts_with(&format!(
+            "broken.yaml:5:5: unknown step `{}…",
+            "x".repeat(39)
+        )),
+        "{}",
+        &error[..200.min(error.len())]
+    );
+}

@@ -15,7 +15,13 @@ pub enum BusError {
     /// The controller is bus-off and transmits nothing until it recovers.
     #[error("bus-off")]
     BusOff,
-    /// The network interface is down or gone.
+    /// The network interface does not exist (ENODEV / ENXIO: never created, or removed).
+    #[error("no such interface {iface}")]
+    NoSuchInterface {
+        /// Interface name, e.g. `vcan0`.
+        iface: String,
+    },
+    /// The network interface exists but is down (ENETDOWN).
     #[error("interface {iface} is down")]
     InterfaceDown {
         /// Interface name, e.g. `vcan0`.

@@ -121,19 +121,14 @@ fn to_socketcan(frame: &CanFrame) -> Option<socketcan::CanFrame> {
 }
 
 fn io_error(iface: &str, error: io::Error) -> BusError {
-    let gone = matches!(
-        error.raw_os_error(),
-        Some(libc::ENETDOWN | libc::ENODEV | libc::ENXIO)
-    );
-    if gone {
-        BusError::InterfaceDown {
-            iface: iface.to_owned(),
-        }
-    } else {
-        BusError::Io {
-            iface: iface.to_owned(),
+    let iface = iface.to_owned();
+    match error.raw_os_error() {
+        Some(libc::ENETDOWN) => BusError::InterfaceDown { iface },
+        Some(libc::ENODEV | libc::ENXIO) => BusError::NoSuchInterface { iface },
+        _ => BusError::Io {
+            iface,
             source: error,
-        }
+        },
     }
 }
 
@@ -203,12 +198,17 @@ mod tests {
     fn interface_errors_are_classified() {
         let down = io_error("vcan0", io::Error::from_raw_os_error(libc::ENETDOWN));
         assert!(matches!(down, BusError::InterfaceDown { iface } if iface == "vcan0"));
+        let missing = io_error("vcan0", io::Error::from_raw_os_error(libc::ENODEV));
+        assert_eq!(missing.to_string(), "no such interface vcan0");
         let other = io_error("vcan0", io::Error::from_raw_os_error(libc::EPERM));
         assert!(matches!(other, BusError::Io { .. }));
     }
 
     #[tokio::test]
     async fn opening_a_missing_interface_is_an_error() {
-        assert!(SocketCanBus::open("armhil-no-such-if").is_err());
+        let Err(error) = SocketCanBus::open("armhil-nosuch") else {
+            panic!("a missing interface opened");
+        };
+        assert_eq!(error.to_string(), "no such interface armhil-nosuch");
     }
 }

@@ -459,3 +459,49 @@ fn a_stopped_motor_brakes_a_spinning_rotor_unless_damper_is_off() {
     let coasting = spin_then_stop(Some(1));
     assert!(coasting[99] > 9.5, "{}", coasting[99]);
 }
+
+/// Read a float parameter with a type-17 request, the way a host would.
+fn read_f32(motor: &mut Actuator, index: u16) -> f32 {
+    let [lo, hi] = index.to_le_bytes();
+    let frame = CanFrame::extended(0x1100_FD01, &[lo, hi, 0, 0, 0, 0, 0, 0]).unwrap();
+    let reply = motor.handle_frame(&frame)[0];
+    let d = reply.data();
+    f32::from_le_bytes([d[4], d[5], d[6], d[7]])
+}
+
+#[test]
+fn absurd_loads_never_put_nan_on_the_wire() {
+    let loads = [
+        Load::Pendulum {
+            mass_kg: 1e308,
+            length_m: 1e308,
+        },
+        Load::Disc {
+            mass_kg: 1e308,
+            radius_m: 1e200,
+        },
+        Load::Pendulum {
+            mass_kg: 1e-300,
+            length_m: 1e-300,
+        },
+    ];
+    for load in loads {
+        let mut config = MotorConfig::new(MOTOR, Model::RS03).with_load(load);
+        config.start_angle_rad = 1.0;
+        let mut rs03 = Actuator::new(config, None, 1_000_000);
+        write_u8(&mut rs03, 0x7005, 3); // current mode
+        enable(&mut rs03);
+        write_f32(&mut rs03, 0x7006, 20.0); // iq_ref
+        for _ in 0..200 {
+            rs03.tick();
+        }
+        let snapshot = rs03.snapshot();
+        assert!(snapshot.angle_rad.is_finite(), "{load:?}: {snapshot:?}");
+        assert!(snapshot.speed_rad_s.is_finite(), "{load:?}: {snapshot:?}");
+        // mechPos, iqf, mechVel, VBUS: every float a host can read stays finite.
+        for index in [0x7019, 0x701A, 0x701B, 0x701C] {
+            let value = read_f32(&mut rs03, index);
+            assert!(value.is_finite(), "{load:?}: 0x{index:04X} = {value}");
+        }
+    }
+}

@@ -22,15 +22,27 @@ pub struct Args {
     pub duration: Option<f64>,
 }
 
+/// The longest `--duration` accepted: a year (longer would overflow the clock arithmetic).
+pub const MAX_DURATION: std::time::Duration = std::time::Duration::from_secs(365 * 24 * 3600);
+
 /// Run the subcommand.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    if let Some(secs) = args.duration {
-        anyhow::ensure!(
-            secs.is_finite() && secs >= 0.0,
-            "--duration must be a non-negative number of seconds, got {secs}"
-        );
-    }
-    imp::run(args)
+    let duration = args.duration.map(parse_duration).transpose()?;
+    imp::run(args, duration)
+}
+
+/// `--duration SECS` as a [`std::time::Duration`]: finite, not negative, at most
+/// [`MAX_DURATION`].
+pub fn parse_duration(secs: f64) -> anyhow::Result<std::time::Duration> {
+    std::time::Duration::try_from_secs_f64(secs)
+        .ok()
+        .filter(|duration| *duration <= MAX_DURATION)
+        .ok_or_else(|| {
+            anyhow::anyhow!(
+                "--duration must be between 0 and {} seconds (a year), got {secs}",
+                MAX_DURATION.as_secs()
+            )
+        })
 }
 
 /// Open the SocketCAN interface to record.
@@ -57,33 +69,37 @@ mod imp {
 
     use super::*;
 
-    pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    pub fn run(args: Args, duration: Option<Duration>) -> anyhow::Result<ExitCode> {
         let runtime = tokio::runtime::Builder::new_current_thread()
             .enable_all()
             .build()
             .context("cannot start the async runtime")?;
-        runtime.block_on(record(args))
+        runtime.block_on(record(args, duration))
     }
 
-    async fn record(args: Args) -> anyhow::Result<ExitCode> {
+    async fn record(args: Args, duration: Option<Duration>) -> anyhow::Result<ExitCode> {
         // The log's interface column: the interface, or one word for a socketcand bus.
-        let (bus, channel): (std::sync::Arc<dyn CanBus>, String) =
-            match (&args.socketcand, &args.iface) {
-                (Some(addr), _) => {
-                    let bus = SocketcandBus::connect(addr, "can0")
-                        .await
-                        .context("cannot record the socketcand bus")?;
-                    (std::sync::Arc::new(bus), "socketcand".to_owned())
-                }
-                (None, Some(iface)) => (open_iface(iface)?, iface.clone()),
-                (None, None) => anyhow::bail!("give --iface IF or --socketcand HOST:PORT"),
-            };
+        let channel = match (&args.socketcand, &args.iface) {
+            (Some(_), _) => "socketcand".to_owned(),
+            (None, Some(iface)) => iface.clone(),
+            (None, None) => anyhow::bail!("give --iface IF or --socketcand HOST:PORT"),
+        };
+        // The output first: a bad path is reported before any bus is touched.
         let mut recorder = Recorder::create(&args.output, &channel)
             .with_context(|| format!("cannot create {}", args.output.display()))?;
+        let bus: std::sync::Arc<dyn CanBus> = match (&args.socketcand, &args.iface) {
+            (Some(addr), _) => std::sync::Arc::new(
+                SocketcandBus::connect(addr, "can0")
+                    .await
+                    .context("cannot record the socketcand bus")?,
+            ),
+            (None, Some(iface)) => open_iface(iface)?,
+            (None, None) => anyhow::bail!("give --iface IF or --socketcand HOST:PORT"),
+        };
         tracing::info!(on = %bus.name(), output = %args.output.display(), "recording; Ctrl-C stops");
         let stop_after = async {
-            match args.duration {
-                Some(secs) => tokio::time::sleep(Duration::from_secs_f64(secs)).await,
+            match duration {
+                Some(duration) => tokio::time::sleep(duration).await,
                 None => std::future::pending().await,
             }
         };
@@ -122,5 +138,20 @@ mod imp {
             .with_context(|| format!("cannot finish {}", args.output.display()))?;
         tracing::info!(frames, output = %args.output.display(), "recording finished");
         outcome.map(|()| ExitCode::SUCCESS)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn absurd_durations_are_errors_naming_the_option() {
+        for secs in [1e300, -1.0, f64::NAN, f64::INFINITY, 4e7] {
+            let error = parse_duration(secs).unwrap_err().to_string();
+            assert!(error.contains("--duration"), "{error}");
+        }
+        assert_eq!(parse_duration(2.5).unwrap().as_millis(), 2500);
+        assert!(parse_duration(0.0).unwrap().is_zero());
     }
 }

@@ -23,17 +23,34 @@ pub struct Args {
     pub speed: f64,
 }
 
+/// The longest send offset a replay accepts: a year. Longer ones come from a broken log or an
+/// absurd `--speed`, and would overflow the clock arithmetic.
+pub const MAX_OFFSET: Duration = Duration::from_secs(365 * 24 * 3600);
+
 /// Frames with their send offset from the start of the replay: the log's gaps divided by
-/// `speed`. Timestamps that go backwards are sent without a gap.
-pub fn schedule(entries: &[LogEntry], speed: f64) -> Vec<(Duration, CanFrame)> {
+/// `speed`. Timestamps that go backwards are sent without a gap. An offset past
+/// [`MAX_OFFSET`] (a huge timestamp gap, a tiny `speed`) is an error naming both.
+pub fn schedule(entries: &[LogEntry], speed: f64) -> anyhow::Result<Vec<(Duration, CanFrame)>> {
     let Some(first) = entries.first() else {
-        return Vec::new();
+        return Ok(Vec::new());
     };
     entries
         .iter()
-        .map(|entry| {
+        .enumerate()
+        .map(|(index, entry)| {
             let gap = entry.timestamp.saturating_sub(first.timestamp);
-            (gap.div_f64(speed), entry.frame)
+            let offset = Duration::try_from_secs_f64(gap.as_secs_f64() / speed)
+                .ok()
+                .filter(|offset| *offset <= MAX_OFFSET);
+            let Some(offset) = offset else {
+                anyhow::bail!(
+                    "frame {} comes {:.3} s after the first; at --speed {speed:?} that is more \
+                     than a year of replay",
+                    index + 1,
+                    gap.as_secs_f64()
+                );
+            };
+            Ok((offset, entry.frame))
         })
         .collect()
 }
@@ -72,7 +89,7 @@ mod imp {
     pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         let entries = bus::candump::read_log(&args.log)
             .with_context(|| format!("cannot read {}", args.log.display()))?;
-        let plan = schedule(&entries, args.speed);
+        let plan = schedule(&entries, args.speed)?;
         anyhow::ensure!(!plan.is_empty(), "{} holds no frames", args.log.display());
         let runtime = tokio::runtime::Builder::new_current_thread()
             .enable_all()
@@ -103,7 +120,11 @@ mod imp {
             tracing::info!(pass, frames = plan.len(), iface = %args.iface, speed = args.speed, "replaying");
             let start = Instant::now();
             for (offset, frame) in plan {
-                tokio::time::sleep_until(start + *offset).await;
+                // schedule() bounds the offsets, but a clock near its end could still overflow.
+                let due = start
+                    .checked_add(*offset)
+                    .context("the replay's send times overflow the clock")?;
+                tokio::time::sleep_until(due).await;
                 send_patiently(bus, *frame).await?;
             }
             if !args.repeat {
@@ -153,15 +174,35 @@ mod tests {
         let at = |plan: Vec<(Duration, CanFrame)>| -> Vec<u128> {
             plan.iter().map(|(offset, _)| offset.as_micros()).collect()
         };
-        assert_eq!(at(schedule(&entries, 1.0)), vec![0, 10_000, 30_000]);
-        assert_eq!(at(schedule(&entries, 2.0)), vec![0, 5_000, 15_000]);
-        assert_eq!(at(schedule(&entries, 0.5)), vec![0, 20_000, 60_000]);
-        assert!(schedule(&[], 1.0).is_empty());
+        assert_eq!(
+            at(schedule(&entries, 1.0).unwrap()),
+            vec![0, 10_000, 30_000]
+        );
+        assert_eq!(at(schedule(&entries, 2.0).unwrap()), vec![0, 5_000, 15_000]);
+        assert_eq!(
+            at(schedule(&entries, 0.5).unwrap()),
+            vec![0, 20_000, 60_000]
+        );
+        assert!(schedule(&[], 1.0).unwrap().is_empty());
     }
 
     #[test]
     fn backwards_timestamps_do_not_wrap() {
-        let plan = schedule(&[entry(5_000, 1), entry(4_000, 2)], 1.0);
+        let plan = schedule(&[entry(5_000, 1), entry(4_000, 2)], 1.0).unwrap();
         assert_eq!(plan[1].0, Duration::ZERO);
+    }
+
+    #[test]
+    fn absurd_speed_or_gap_is_an_error_not_a_panic() {
+        let entries = [entry(0, 1), entry(1_000_000, 2)];
+        let error = schedule(&entries, 1e-300).unwrap_err().to_string();
+        assert!(error.contains("--speed 1e-300"), "{error}");
+        assert!(error.contains("frame 2"), "{error}");
+        let huge = [entry(0, 1), entry(u64::MAX, 2)];
+        assert!(schedule(&huge, 1.0).is_err());
+        // Just over a year is refused, just under is kept.
+        let year_us = MAX_OFFSET.as_micros() as u64;
+        assert!(schedule(&[entry(0, 1), entry(year_us + 1_000_000, 2)], 1.0).is_err());
+        assert!(schedule(&[entry(0, 1), entry(year_us - 1_000_000, 2)], 1.0).is_ok());
     }
 }

@@ -341,7 +341,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         println!("{write_errors} scenario(s) could not write their outputs");
     }
     if let Some(path) = &args.junit {
-        write_atomic(path, junit_xml("armhil", &results)?.as_bytes())?;
+        let xml = junit_xml("armhil", &results)?;
+        write_atomic(path, xml.as_bytes()).map_err(|e| {
+            anyhow::anyhow!("cannot write the JUnit report {}: {e}", path.display())
+        })?;
         println!("junit: {}", path.display());
     }
     Ok(if failed == 0 && errors == 0 && write_errors == 0 {

@@ -32,16 +32,21 @@ pub(crate) async fn build(
     clock: &Clock,
     options: &RunOptions,
 ) -> Result<BuiltBench, String> {
+    // Frames are held for the candump / pcap files only; counts are kept either way.
+    let keep = scenario.record.candump || scenario.record.pcap;
     let (bus, recorder) = match clock {
         Clock::Virtual | Clock::Realtime => {
             let bus = VirtualBus::new(VirtualBusConfig {
                 bitrate_bps: scenario.bench.bitrate_bps,
                 ..VirtualBusConfig::default()
             });
-            let recorder = Recorder::from_tap(bus.tap());
+            let recorder = Recorder::from_tap(bus.tap(), keep);
             (Some(bus), recorder)
         }
-        Clock::Iface(link) => (None, Recorder::from_bus(open_link(link, "recorder").await?)),
+        Clock::Iface(link) => (
+            None,
+            Recorder::from_bus(open_link(link, "recorder").await?, keep),
+        ),
     };
     let t0 = Instant::now();
     let wiring = Wiring {

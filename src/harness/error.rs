@@ -22,6 +22,40 @@ impl Pos {
     }
 }
 
+/// Longest source line shown under an error, in bytes.
+const MAX_SOURCE_LINE: usize = 240;
+/// Longest run of non-blank characters an error message shows whole; longer ones (a 10 MB bad
+/// token) are cut to their first [`ELIDED_KEEP`] characters and "…".
+const LONGEST_TOKEN: usize = 80;
+/// How many characters of an over-long token an error message keeps.
+const ELIDED_KEEP: usize = 40;
+
+/// `text` with every token (run of non-blank characters) longer than 80 characters cut to its
+/// first 40 and "…", so a huge bad value is not echoed whole.
+pub fn elide_long_tokens(text: &str) -> String {
+    let mut out = String::with_capacity(text.len().min(4096));
+    let mut token = String::new();
+    let flush = |token: &mut String, out: &mut String| {
+        if token.chars().count() > LONGEST_TOKEN {
+            out.extend(token.chars().take(ELIDED_KEEP));
+            out.push('…');
+        } else {
+            out.push_str(token);
+        }
+        token.clear();
+    };
+    for c in text.chars() {
+        if c.is_whitespace() {
+            flush(&mut token, &mut out);
+            out.push(c);
+        } else {
+            token.push(c);
+        }
+    }
+    flush(&mut token, &mut out);
+    out
+}
+
 /// One problem in a scenario file, with where it is and what was expected.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct ScenarioError {
@@ -41,16 +75,21 @@ impl ScenarioError {
         Self {
             file: file.to_path_buf(),
             pos,
-            message: message.into(),
+            message: elide_long_tokens(&message.into()),
             source_line: None,
         }
     }
 
-    /// Attach the source line the position points into, for display.
+    /// Attach the source line the position points into, for display. A line too long to read
+    /// on a terminal is left out: the headline already says where the problem is.
     pub(crate) fn with_source(mut self, text: &str) -> Self {
         if self.pos.line > 0 {
             let index = usize::try_from(self.pos.line - 1).unwrap_or(usize::MAX);
-            self.source_line = text.lines().nth(index).map(str::to_owned);
+            self.source_line = text
+                .lines()
+                .nth(index)
+                .filter(|line| line.len() <= MAX_SOURCE_LINE)
+                .map(str::to_owned);
         }
         self
     }
@@ -181,5 +220,26 @@ fn friendlier(message: &str) -> String {
             return format!("{to}{rest}");
         }
     }
+    if let Some(breach) = message.strip_prefix("budget breached: ") {
+        return budget_words(breach);
+    }
     message.to_owned()
+}
+
+/// The YAML parser's resource-limit error, which it renders as Rust debug text
+/// (`Aliases { aliases: 50001 }`), in plain words.
+fn budget_words(breach: &str) -> String {
+    let name = breach.split([' ', '{']).next().unwrap_or(breach);
+    let mut words = String::new();
+    for c in name.chars() {
+        if c.is_uppercase() && !words.is_empty() {
+            words.push(' ');
+        }
+        words.extend(c.to_lowercase());
+    }
+    let count = breach
+        .split(|c: char| !c.is_ascii_digit())
+        .find(|part| !part.is_empty());
+    let reached = count.map_or_else(String::new, |n| format!(" (reached {n})"));
+    format!("the file exceeds the YAML reader's limit on {words}{reached}")
 }

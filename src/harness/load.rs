@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use super::error::{from_yaml_error, LoadError};
+use super::error::{from_yaml_error, LoadError, Pos, ScenarioError};
 use super::model::Scenario;
 use super::raw::{RawBench, RawScenario, S};
 
@@ -49,10 +49,7 @@ pub fn parse_variant(
 
 /// Read, parse and validate a scenario of a suite (its matrix variant, if any).
 pub fn load_suite_file(file: &SuiteFile) -> Result<Scenario, LoadError> {
-    let text = std::fs::read_to_string(&file.path).map_err(|source| LoadError::Io {
-        path: file.path.clone(),
-        source,
-    })?;
+    let text = read_text(&file.path)?;
     parse_variant(&file.path, &text, file.variant.as_deref())
 }
 
@@ -77,11 +74,41 @@ fn matrix_values(path: &Path) -> Option<Vec<String>> {
 
 /// Read, parse and validate one scenario file.
 pub fn load_scenario(path: &Path) -> Result<Scenario, LoadError> {
-    let text = std::fs::read_to_string(path).map_err(|source| LoadError::Io {
+    let text = read_text(path)?;
+    parse_scenario(path, &text)
+}
+
+/// A scenario file's text; text that is not UTF-8 is an error at the line and column of its
+/// first bad byte (UTF-16, recognised by its byte-order mark, gets a hint to re-save).
+fn read_text(path: &Path) -> Result<String, LoadError> {
+    let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
         path: path.to_path_buf(),
         source,
     })?;
-    parse_scenario(path, &text)
+    String::from_utf8(bytes).map_err(|error| {
+        let bytes = error.as_bytes();
+        let message = if bytes.starts_with(&[0xFF, 0xFE]) || bytes.starts_with(&[0xFE, 0xFF]) {
+            "the file is UTF-16; save it as UTF-8".to_owned()
+        } else {
+            let at = error.utf8_error().valid_up_to();
+            format!("not valid UTF-8 (byte offset {at}); save the file as UTF-8")
+        };
+        LoadError::Invalid(Box::new(ScenarioError::new(
+            path,
+            utf8_pos(bytes, error.utf8_error().valid_up_to()),
+            message,
+        )))
+    })
+}
+
+/// Line and column (in characters) of byte `at` of `bytes`, whose first `at` bytes are UTF-8.
+fn utf8_pos(bytes: &[u8], at: usize) -> Pos {
+    let before = String::from_utf8_lossy(&bytes[..at]);
+    let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+    Pos {
+        line: before.matches('\n').count() as u64 + 1,
+        column: before[line_start..].chars().count() as u64 + 1,
+    }
 }
 
 /// A scenario of a suite and the folder its outputs go to, relative to the output root: its

@@ -12,7 +12,7 @@ pub(crate) mod onekey;
 pub(crate) mod raw;
 pub(crate) mod validate;
 
-pub use error::{LoadError, Pos, ScenarioError};
+pub use error::{elide_long_tokens, LoadError, Pos, ScenarioError};
 pub use load::{
     discover, discover_suite, load_scenario, load_suite_file, parse_scenario, parse_variant,
     SuiteFile,

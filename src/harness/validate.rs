@@ -8,6 +8,12 @@ use super::model::*;
 use super::raw::*;
 use crate::devices;
 
+/// The longest duration any `*_ms` key takes (wait, timeout, `for_ms`, `at_ms`, ...): one hour.
+pub(crate) const MAX_MILLIS: u64 = 3_600_000;
+
+/// The longest scenario `name`, in characters (it names the output folder).
+pub(crate) const MAX_NAME_CHARS: usize = 100;
+
 /// A validation result; errors carry file, line and column.
 pub(crate) type Res<T> = Result<T, Box<ScenarioError>>;
 
@@ -100,6 +106,8 @@ impl<'a> Ctx<'a> {
         Box::new(ScenarioError::new(self.file, at, message).with_source(self.text))
     }
 
+    /// A duration key in milliseconds: 0 ..= [`MAX_MILLIS`] (one hour; longer is a typo that
+    /// would otherwise run for years after passing `armhil check`).
     pub(crate) fn millis(&self, value: &S<i64>, key: &str) -> Res<Duration> {
         let ms = u64::try_from(value.value).map_err(|_| {
             self.err(
@@ -107,6 +115,14 @@ impl<'a> Ctx<'a> {
                 format!("`{key}` must be >= 0 (milliseconds), got {}", value.value),
             )
         })?;
+        if ms > MAX_MILLIS {
+            return Err(self.err(
+                pos(value),
+                format!(
+                    "`{key}` must be at most {MAX_MILLIS} (one hour, in milliseconds), got {ms}"
+                ),
+            ));
+        }
         Ok(Duration::from_millis(ms))
     }
 
@@ -253,6 +269,7 @@ pub(crate) fn validate(ctx: &mut Ctx<'_>, raw: RawScenario) -> Res<Scenario> {
     let name = match &raw.name {
         Some(name) => {
             let ok = !name.value.is_empty()
+                && name.value.len() <= MAX_NAME_CHARS
                 && name
                     .value
                     .chars()
@@ -260,7 +277,7 @@ pub(crate) fn validate(ctx: &mut Ctx<'_>, raw: RawScenario) -> Res<Scenario> {
             if !ok {
                 return Err(ctx.err(
                     pos(name),
-                    "`name` must be non-empty and use only letters, digits, '-', '_' and '.' (it names the output folder)",
+                    format!("`name` must be 1 to {MAX_NAME_CHARS} characters and use only letters, digits, '-', '_' and '.' (it names the output folder)"),
                 ));
             }
             name.value.clone()

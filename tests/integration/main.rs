@@ -1,6 +1,7 @@
 //! Integration tests that run the drivers against the emulators on the virtual bus.
 
 mod arm_api;
+mod cli_errors;
 mod deps;
 mod piper_flow;
 mod realman_flow;

@@ -18,6 +18,15 @@ pub const TORQUE_CONSTANT_NM_PER_A: [f64; 6] =
 /// body that a host's MIT damping gain drives past the step's stability limit.
 pub const ARMATURE_KG_M2: [f64; 6] = [0.1; 6];
 
+/// No-load speed of every joint motor (at the joint), rad/s: the motor cannot drive the joint
+/// faster whatever it is commanded. AgileX publish no motor speed; this is an assumption:
+/// above the 3 rad/s planner limit (docs/protocols/piper.md §9.2) with room for MIT moves and
+/// falls, and inside the ±32.767 rad/s the 0x251–0x256 speed field can carry (§4.5).
+pub const NO_LOAD_SPEED_RAD_S: f64 = 10.0;
+/// Speed above which the driving torque tapers linearly to zero at [`NO_LOAD_SPEED_RAD_S`]
+/// (a torque–speed line's knee), rad/s. Braking torque is never reduced.
+pub const TORQUE_KNEE_SPEED_RAD_S: f64 = 8.0;
+
 /// Position-loop bandwidth of the MOVE-mode drivers, rad/s: J1–J3, then J4–J6.
 pub const LOOP_BANDWIDTH_RAD_S: [f64; 6] = [100.0, 100.0, 100.0, 150.0, 150.0, 150.0];
 /// Damping ratio of the MOVE-mode position loop.
@@ -126,7 +135,8 @@ impl JointMotor {
             DriveLaw::Compliant { tau_ff } => tau_ff,
         };
         let raw = if raw.is_finite() { raw } else { 0.0 };
-        self.torque_nm = raw.clamp(-self.torque_limit_nm, self.torque_limit_nm);
+        let torque = raw.clamp(-self.torque_limit_nm, self.torque_limit_nm);
+        self.torque_nm = torque * speed_derating(torque, v);
         self.torque_nm
     }
 
@@ -188,9 +198,60 @@ impl JointMotor {
     }
 }
 
+/// Fraction of `torque` the motor can still produce at joint speed `v`: 1 when braking or
+/// below the knee, falling linearly to 0 at the no-load speed.
+fn speed_derating(torque: f64, v: f64) -> f64 {
+    if torque * v <= 0.0 || !v.is_finite() {
+        return 1.0;
+    }
+    ((NO_LOAD_SPEED_RAD_S - v.abs()) / (NO_LOAD_SPEED_RAD_S - TORQUE_KNEE_SPEED_RAD_S))
+        .clamp(0.0, 1.0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn strong_mit() -> DriveLaw {
+        DriveLaw::Mit {
+            p_rad: 0.0,
+            v_rad_s: 45.0,
+            kp: 0.0,
+            kd: 5.0,
+            tau_ff: 8.0,
+        }
+    }
+
+    #[test]
+    fn driving_torque_tapers_to_zero_at_the_no_load_speed() {
+        let mut m = JointMotor::new(5, 8.0, 0.1);
+        assert_eq!(m.command(strong_mit(), 0.0, 5.0), 8.0);
+        let half = m.command(strong_mit(), 0.0, 9.0);
+        assert!((half - 4.0).abs() < 1e-9, "{half}");
+        assert_eq!(m.command(strong_mit(), 0.0, NO_LOAD_SPEED_RAD_S), 0.0);
+        // Braking is never reduced.
+        assert_eq!(
+            m.command(DriveLaw::Damping, 0.0, 20.0),
+            -ESTOP_DAMPING[5] * 20.0
+        );
+    }
+
+    #[test]
+    fn a_strong_mit_command_cannot_spin_a_joint_past_the_no_load_speed() {
+        // Joint 6 with its armature alone, driven flat out for 2 s.
+        let inertia = ARMATURE_KG_M2[5];
+        let mut m = JointMotor::new(5, 8.0, inertia);
+        let (mut q, mut v) = (0.0, 0.0);
+        let mut peak: f64 = 0.0;
+        for _ in 0..2000 {
+            let torque = m.command(strong_mit(), q, v);
+            v += torque / inertia * 1e-3;
+            q += v * 1e-3;
+            peak = peak.max(v.abs());
+        }
+        assert!(peak <= NO_LOAD_SPEED_RAD_S + 0.1, "peak {peak} rad/s");
+        assert!(peak > TORQUE_KNEE_SPEED_RAD_S, "peak {peak} rad/s");
+    }
 
     #[test]
     fn torque_is_clamped_and_current_follows() {

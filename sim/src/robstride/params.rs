@@ -421,7 +421,15 @@ pub fn encode_value(ty: ParamType, value: f64) -> [u8; 4] {
         }
         ParamType::U32 => out
             .copy_from_slice(&(value.round().clamp(0.0, f64::from(u32::MAX)) as u32).to_le_bytes()),
-        ParamType::F32 => out.copy_from_slice(&(value as f32).to_le_bytes()),
+        ParamType::F32 => {
+            // Never NaN or inf on the wire: NaN reads 0, out-of-range values saturate.
+            let value = if value.is_nan() {
+                0.0
+            } else {
+                value.clamp(f64::from(f32::MIN), f64::from(f32::MAX)) as f32
+            };
+            out.copy_from_slice(&value.to_le_bytes())
+        }
     }
     out
 }
@@ -500,6 +508,15 @@ mod tests {
 
     fn store(model: Model) -> ParamStore {
         ParamStore::new(model, &model.ranges(RangeTable::Manual))
+    }
+
+    #[test]
+    fn float_values_on_the_wire_are_always_finite() {
+        let f = |value: f64| f32::from_le_bytes(encode_value(ParamType::F32, value));
+        assert_eq!(f(f64::NAN), 0.0);
+        assert_eq!(f(f64::INFINITY), f32::MAX);
+        assert_eq!(f(-1e300), f32::MIN);
+        assert_eq!(f(1.5), 1.5);
     }
 
     #[test]

@@ -114,8 +114,16 @@ impl Plant for RigPlant {
         // Friction treated implicitly so a large coefficient cannot make the step unstable.
         let j = self.inertia_kg_m2;
         let b = self.friction_nm_s_per_rad;
-        self.velocity_rad_s = (j * self.velocity_rad_s + dt_s * driving) / (j + dt_s * b);
-        self.position_rad += self.velocity_rad_s * dt_s;
+        let velocity = (j * self.velocity_rad_s + dt_s * driving) / (j + dt_s * b);
+        let position = self.position_rad + velocity * dt_s;
+        // An absurd load (validation bounds it, but the library takes any f64) can overflow
+        // to inf/NaN; the shaft then stalls where it is rather than reporting NaN.
+        if velocity.is_finite() && position.is_finite() {
+            self.velocity_rad_s = velocity;
+            self.position_rad = position;
+        } else {
+            self.velocity_rad_s = 0.0;
+        }
     }
 
     fn position_rad(&self) -> f64 {

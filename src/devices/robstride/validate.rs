@@ -45,6 +45,34 @@ fn positive(ctx: &Ctx<'_>, v: &S<f64>, key: &str) -> Res<f64> {
     }
 }
 
+/// Largest load mass, kg: far beyond any RobStride rig, small enough for finite physics.
+const MAX_MASS_KG: f64 = 1000.0;
+/// Largest disc radius or pendulum length, m.
+const MAX_LENGTH_M: f64 = 10.0;
+/// Largest rig friction, N·m·s/rad.
+const MAX_FRICTION_NM_S_PER_RAD: f64 = 1000.0;
+/// Largest |start angle|, rad (the protocol's position range is ±4π).
+const MAX_START_ANGLE_RAD: f64 = 100.0;
+
+/// A physical parameter in `min ..= max` (`min` itself excluded when `positive`); a finite
+/// but absurd value (`mass_kg: 1e308`) would turn the rig's physics into NaN.
+fn bounded(ctx: &Ctx<'_>, v: &S<f64>, key: &str, positive_only: bool, max: f64) -> Res<f64> {
+    let x = if positive_only {
+        positive(ctx, v, key)?
+    } else {
+        ctx.finite(v, key)?
+    };
+    if x.abs() > max {
+        let range = if positive_only {
+            format!("at most {max}")
+        } else {
+            format!("between -{max} and {max}")
+        };
+        return Err(ctx.err(pos(v), format!("`{key}` must be {range}, got {x:?}")));
+    }
+    Ok(x)
+}
+
 /// The settings of a `kind: robstride` device.
 pub(crate) fn settings(ctx: &Ctx<'_>, d: &RawSettings, at: Pos) -> Res<RobstrideSettings> {
     let Some(list) = &d.motors else {
@@ -76,20 +104,29 @@ pub(crate) fn settings(ctx: &Ctx<'_>, d: &RawSettings, at: Pos) -> Res<Robstride
             config.load = match &load.value {
                 RawRsLoad::NoLoad(_) => Load::None,
                 RawRsLoad::Disc(disc) => Load::Disc {
-                    mass_kg: positive(ctx, &disc.mass_kg, "mass_kg")?,
-                    radius_m: positive(ctx, &disc.radius_m, "radius_m")?,
+                    mass_kg: bounded(ctx, &disc.mass_kg, "mass_kg", true, MAX_MASS_KG)?,
+                    radius_m: bounded(ctx, &disc.radius_m, "radius_m", true, MAX_LENGTH_M)?,
                 },
                 RawRsLoad::Pendulum(p) => Load::Pendulum {
-                    mass_kg: positive(ctx, &p.mass_kg, "mass_kg")?,
-                    length_m: positive(ctx, &p.length_m, "length_m")?,
+                    mass_kg: bounded(ctx, &p.mass_kg, "mass_kg", true, MAX_MASS_KG)?,
+                    length_m: bounded(ctx, &p.length_m, "length_m", true, MAX_LENGTH_M)?,
                 },
             };
         }
         if let Some(a) = &m.value.start_angle_rad {
-            config.start_angle_rad = ctx.finite(a, "start_angle_rad")?;
+            config.start_angle_rad =
+                bounded(ctx, a, "start_angle_rad", false, MAX_START_ANGLE_RAD)?;
         }
         if let Some(f) = &m.value.friction_nm_s_per_rad {
-            config.friction_nm_s_per_rad = ctx.non_negative(f, "friction_nm_s_per_rad")?;
+            let friction = ctx.non_negative(f, "friction_nm_s_per_rad")?;
+            config.friction_nm_s_per_rad = bounded(
+                ctx,
+                f,
+                "friction_nm_s_per_rad",
+                false,
+                MAX_FRICTION_NM_S_PER_RAD,
+            )
+            .map(|_| friction)?;
         }
         motors.push(config);
     }
@@ -521,6 +558,29 @@ mod tests {
             motor: 2,
             cond: MotorCond::StatusFaults(vec!["under_voltage", "stall_overload"])
         })));
+    }
+
+    #[test]
+    fn absurd_load_parameters_are_refused_at_their_position() {
+        let bench = |load: &str| {
+            format!("bench:\n  devices:\n    bus: {{kind: robstride, motors: [{{id: 1, model: RS03, {load}}}]}}\nsteps:\n  - wait_ms: 1\n")
+        };
+        let e = error_of(&bench("load: {pendulum: {mass_kg: 1e308, length_m: 0.3}}"));
+        assert!(
+            e.starts_with("broken.yaml:3:85: `mass_kg` must be at most 1000, got 1e308"),
+            "{e}"
+        );
+        let e = error_of(&bench("load: {pendulum: {mass_kg: 1.0, length_m: 1e308}}"));
+        assert!(e.contains("`length_m` must be at most 10"), "{e}");
+        let e = error_of(&bench("load: {disc: {mass_kg: 1.0, radius_m: 1e200}}"));
+        assert!(e.contains("`radius_m` must be at most 10"), "{e}");
+        let e = error_of(&bench("friction_nm_s_per_rad: 1e300"));
+        assert!(e.contains("`friction_nm_s_per_rad` must be between"), "{e}");
+        let e = error_of(&bench("start_angle_rad: -1e300"));
+        assert!(
+            e.contains("`start_angle_rad` must be between -100 and 100"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -4,7 +4,6 @@ mod faults;
 mod recorder;
 mod trace;
 
-use std::collections::BTreeMap;
 use std::sync::Arc;
 use std::time::Duration;
 
@@ -238,7 +237,7 @@ async fn run_async(scenario: &Scenario, clock: &Clock, options: &RunOptions) -> 
         dev.shutdown().await;
     }
     let stats = bus.as_ref().map(bus::virtual_bus::VirtualBus::stats);
-    let (frames, missed) = recorder.finish().await;
+    let (capture, missed) = recorder.finish().await;
     if missed > 0 {
         tracing::warn!(
             scenario = %scenario.name,
@@ -247,13 +246,9 @@ async fn run_async(scenario: &Scenario, clock: &Clock, options: &RunOptions) -> 
         );
     }
 
-    let mut frames_by_id = BTreeMap::new();
-    for f in &frames {
-        *frames_by_id.entry(f.frame.raw_id()).or_insert(0u64) += 1;
-    }
     let summary = BusSummary {
-        frames: frames.len() as u64,
-        frames_by_id,
+        frames: capture.count,
+        frames_by_id: capture.by_id,
         load_percent: stats.as_ref().map(|s| s.load_percent),
         errors: stats.as_ref().map_or(0, |s| s.errors),
         dropped: stats.as_ref().map_or(0, |s| s.dropped),
@@ -277,7 +272,7 @@ async fn run_async(scenario: &Scenario, clock: &Clock, options: &RunOptions) -> 
         faults: fault_events,
         trace,
         bus: summary,
-        frames,
+        frames: capture.frames,
         duration,
         wall: Duration::ZERO,
     }

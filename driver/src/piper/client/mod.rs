@@ -341,7 +341,9 @@ impl Piper {
 fn record_fault(inner: &Inner, error: &BusError) {
     let fault = match error {
         BusError::BusOff => BusFault::BusOff,
-        BusError::InterfaceDown { .. } => BusFault::InterfaceDown,
+        BusError::InterfaceDown { .. } | BusError::NoSuchInterface { .. } => {
+            BusFault::InterfaceDown
+        }
         BusError::Closed => BusFault::Closed,
         BusError::TxQueueFull { .. } => BusFault::TxQueueFull,
         BusError::Io { source, .. } => BusFault::Io(source.to_string()),
@@ -373,7 +375,10 @@ async fn receive_task(weak: std::sync::Weak<Inner>) {
                 record_fault(&inner, &error);
                 let reopen = matches!(
                     error,
-                    BusError::InterfaceDown { .. } | BusError::Io { .. } | BusError::Closed
+                    BusError::InterfaceDown { .. }
+                        | BusError::NoSuchInterface { .. }
+                        | BusError::Io { .. }
+                        | BusError::Closed
                 );
                 if matches!(error, BusError::Closed) && inner.opener.is_none() {
                     // A shared endpoint that was closed will not come back.

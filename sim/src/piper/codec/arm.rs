@@ -244,6 +244,14 @@ mod tests {
     use super::*;
 
     #[test]
+    fn high_speed_feedback_saturates_speeds_beyond_the_field() {
+        for (speed_rad_s, wire) in [(40.0, i16::MAX), (-40.0, i16::MIN), (1.5, 1500)] {
+            let f = encode_high_speed(5, sat_i16((speed_rad_s * 1000.0_f64).round()), 0, 0);
+            assert_eq!(i16::from_be_bytes([f.data()[0], f.data()[1]]), wire);
+        }
+    }
+
+    #[test]
     fn low_speed_matches_real_capture() {
         // (AGX) _HEX_261_LOW_SPD: 01 E0 00 19 19 40 00 00.
         let f = encode_low_speed(0, 480, 25, 25, 0x40, 0);

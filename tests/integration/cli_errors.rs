@@ -1,0 +1,112 @@
+//! The `armhil` binary under bad input: clear errors naming the option or path, never a panic
+//! (exit 101) and never a silent success.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+const ARMHIL: &str = env!("CARGO_BIN_EXE_armhil");
+
+fn armhil(args: &[&str]) -> Output {
+    Command::new(ARMHIL)
+        .args(args)
+        .output()
+        .expect("armhil runs")
+}
+
+fn stderr(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stderr).into_owned()
+}
+
+#[test]
+fn replay_with_an_absurd_speed_is_an_error_not_a_panic() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("x.log");
+    std::fs::write(&log, "(1.000000) vcan0 123#00\n(2.000000) vcan0 123#01\n").unwrap();
+    let out = armhil(&[
+        "replay",
+        log.to_str().unwrap(),
+        "--iface",
+        "armhil-nosuch",
+        "--speed",
+        "1e-300",
+    ]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(stderr(&out).contains("--speed 1e-300"), "{}", stderr(&out));
+}
+
+#[test]
+fn record_with_an_absurd_duration_is_an_error_not_a_panic() {
+    let out = armhil(&[
+        "record",
+        "--iface",
+        "armhil-nosuch",
+        "-o",
+        "/nonexistent/x.log",
+        "--duration",
+        "1e300",
+    ]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(stderr(&out).contains("--duration"), "{}", stderr(&out));
+}
+
+#[test]
+fn record_reports_a_bad_output_path_before_opening_the_interface() {
+    let dir = tempfile::tempdir().unwrap();
+    let output = dir.path().join("missing-folder").join("x.log");
+    let output = output.to_str().unwrap();
+    let out = armhil(&["record", "--iface", "armhil-nosuch", "-o", output]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    let text = stderr(&out);
+    assert!(text.contains(output), "{text}");
+    assert!(!text.contains("armhil-nosuch"), "{text}");
+    // The I/O error is said once.
+    assert_eq!(text.matches("os error 2").count(), 1, "{text}");
+}
+
+fn scenario(dir: &Path) -> String {
+    let path = dir.join("tiny.yaml");
+    std::fs::write(
+        &path,
+        "bench:\n  devices:\n    arm: {kind: piper}\nsteps:\n  - wait_ms: 1\n",
+    )
+    .unwrap();
+    path.to_str().unwrap().to_owned()
+}
+
+#[test]
+fn an_unwritable_junit_path_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = scenario(dir.path());
+    let out_dir = dir.path().join("out");
+    // Under a regular file, so not even root can create it.
+    let blocker = dir.path().join("blocker");
+    std::fs::write(&blocker, "").unwrap();
+    let junit = blocker.join("report.xml");
+    let out = armhil(&[
+        "run",
+        &file,
+        "--out",
+        out_dir.to_str().unwrap(),
+        "--junit",
+        junit.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains(junit.to_str().unwrap()),
+        "{}",
+        stderr(&out)
+    );
+}
+
+#[test]
+fn outputs_that_cannot_be_written_fail_the_run_naming_the_path() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = scenario(dir.path());
+    // The output root is a regular file, so no folder can be created under it.
+    let blocker = dir.path().join("blocker");
+    std::fs::write(&blocker, "").unwrap();
+    let out = armhil(&["run", &file, "--out", blocker.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains(blocker.to_str().unwrap()), "{stdout}");
+}
