@@ -50,6 +50,10 @@ pub struct Args {
     /// time.
     #[arg(long, value_name = "FACTOR", default_value_t = 1.0)]
     time_scale: f64,
+    /// Add this many milliseconds to every deadline after scaling, in real-time runs: room for
+    /// the multi-second stalls of an emulated VM. Ignored in virtual time.
+    #[arg(long, value_name = "MS", default_value_t = 0, value_parser = clap::value_parser!(u64).range(0..=600_000))]
+    deadline_slack_ms: u64,
 }
 
 /// `K/N` with 1 <= K <= N.
@@ -132,6 +136,7 @@ fn run_one(file: &SuiteFile, args: &Args) -> Ran {
     };
     let options = RunOptions {
         time_scale: args.time_scale,
+        deadline_slack: std::time::Duration::from_millis(args.deadline_slack_ms),
     };
     let result = run_scenario_with(
         &scenario,

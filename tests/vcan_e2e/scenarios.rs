@@ -41,13 +41,20 @@ impl Drop for Sim {
     }
 }
 
-/// Deadline factor for `armhil run --time-scale` (the VM runs several times slower than the
-/// host): `ARMHIL_E2E_TIME_SCALE`, default 150. Only deadlines are scaled (waits and holds are
-/// not), so a generous factor costs time only when a scenario fails. Under TCG the emulator's
-/// status stream (0x2A1, 200 Hz on hardware) was measured at 40–55 Hz with stalls of up to
-/// 2.2 s in passing runs, and a 20 ms e-stop deadline scaled by 60 (1.2 s) fell inside one.
+/// Deadline factor and slack for `armhil run --time-scale F --deadline-slack-ms S` (the VM
+/// runs several times slower than the host): `ARMHIL_E2E_TIME_SCALE` (default 10) and
+/// `ARMHIL_E2E_DEADLINE_SLACK_MS` (default 3000). Only deadlines change (waits and holds do
+/// not), so generous values cost time only when a scenario fails. Under TCG the emulator's
+/// status stream (0x2A1, 200 Hz on hardware) was measured at 10–55 Hz with stalls of up to
+/// 2.2 s in passing runs: a factor alone either left a 20 ms deadline inside one stall (×60 =
+/// 1.2 s) or stretched a failing 3 s wait to minutes (×150 = 450 s), so the stall allowance is
+/// a fixed slack and the factor covers the general slowness.
 fn time_scale() -> String {
-    std::env::var("ARMHIL_E2E_TIME_SCALE").unwrap_or_else(|_| "150".to_owned())
+    std::env::var("ARMHIL_E2E_TIME_SCALE").unwrap_or_else(|_| "10".to_owned())
+}
+
+fn deadline_slack_ms() -> String {
+    std::env::var("ARMHIL_E2E_DEADLINE_SLACK_MS").unwrap_or_else(|_| "3000".to_owned())
 }
 
 /// Wait until the emulator streams its status frame (0x2A1) on the interface.
@@ -113,6 +120,8 @@ fn run_into(file: &Path, out: &Path) -> Output {
             &iface(),
             "--time-scale",
             &time_scale(),
+            "--deadline-slack-ms",
+            &deadline_slack_ms(),
             "--out",
         ])
         .arg(out)

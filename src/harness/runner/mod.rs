@@ -77,22 +77,30 @@ pub struct RunOptions {
     /// timeouts) for real-time runs on slow machines (e.g. a vcan VM under emulation). Waits
     /// (`wait_ms`) and hold durations (`for_ms`) are not scaled. 1 in virtual time.
     pub time_scale: f64,
+    /// Added to every deadline after scaling: room for the stalls of a slow machine (a VM
+    /// under emulation pauses a process for seconds now and then), which a factor alone would
+    /// give short deadlines too little of and long ones far too much. Zero in virtual time.
+    pub deadline_slack: Duration,
 }
 
 impl Default for RunOptions {
     fn default() -> Self {
-        Self { time_scale: 1.0 }
+        Self {
+            time_scale: 1.0,
+            deadline_slack: Duration::ZERO,
+        }
     }
 }
 
 impl RunOptions {
-    /// Scale a deadline.
+    /// Scale a deadline and add the slack.
     pub(crate) fn deadline(&self, d: Duration) -> Duration {
-        if self.time_scale.is_finite() && self.time_scale > 0.0 {
+        let scaled = if self.time_scale.is_finite() && self.time_scale > 0.0 {
             d.mul_f64(self.time_scale)
         } else {
             d
-        }
+        };
+        scaled.saturating_add(self.deadline_slack)
     }
 }
 
