@@ -472,3 +472,28 @@ fn missing_device(index: usize) -> Outcome {
         actual: "not on the bench".to_owned(),
     }
 }
+
+#[cfg(test)]
+mod deadline_tests {
+    use super::*;
+
+    #[test]
+    fn deadlines_are_scaled_then_given_the_slack() {
+        let options = RunOptions {
+            time_scale: 10.0,
+            deadline_slack: Duration::from_secs(3),
+        };
+        assert_eq!(
+            options.deadline(Duration::from_millis(20)),
+            Duration::from_millis(3200)
+        );
+        assert_eq!(
+            options.deadline(Duration::from_secs(3)),
+            Duration::from_secs(33)
+        );
+        assert_eq!(
+            RunOptions::default().deadline(Duration::from_millis(20)),
+            Duration::from_millis(20)
+        );
+    }
+}
