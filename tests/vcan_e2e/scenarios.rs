@@ -92,8 +92,14 @@ fn start_sim_logged(firmware: &str, log: Option<&Path>) -> Sim {
         }
         None => Stdio::null(),
     };
+    // A TCG VM cannot run physics in real time: with the default catch-up budget (100 ms of
+    // steps per wake) the emulator spent whole wakes catching up and starved the runner for
+    // seconds (an e-stop deadline of 6 s missed); 5 ms lets it fall behind instead.
+    let catch_up_ms =
+        std::env::var("ARMHIL_E2E_MAX_CATCH_UP_MS").unwrap_or_else(|_| "5".to_owned());
     let child = Command::new(armhil())
         .args(["sim", "piper", "--iface", &iface(), "--firmware", firmware])
+        .args(["--max-catch-up-ms", &catch_up_ms])
         .stdout(Stdio::null())
         .stderr(stderr)
         .spawn()

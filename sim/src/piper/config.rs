@@ -37,6 +37,10 @@ pub struct PiperConfig {
     /// `ticks_per_wake − 1` ms extra latency before a host command is seen. `armhil sim piper`
     /// uses 5 (one wake-up per 200 Hz feedback group).
     pub ticks_per_wake: u32,
+    /// Most missed 1 ms steps one wake-up catches up in real time (`None`: 100). A machine too
+    /// slow to run physics in real time (an emulated VM) does better with a small budget: the
+    /// emulator then falls behind the wall clock instead of starving the other processes.
+    pub max_catch_up_steps: Option<u64>,
 }
 
 impl Default for PiperConfig {
@@ -51,6 +55,7 @@ impl Default for PiperConfig {
             bus_voltage_v: 48.0,
             periodic_48x_on_code: 0x01,
             ticks_per_wake: 1,
+            max_catch_up_steps: None,
         }
     }
 }

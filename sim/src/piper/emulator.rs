@@ -77,9 +77,19 @@ struct WakePlan {
 /// Steps due at a wake-up `elapsed` after boot with `done` steps run so far: everything up to
 /// the end of the current wake period, at most [`MAX_CATCH_UP_STEPS`] of it.
 fn plan_wake(elapsed: Duration, done: u64, ticks_per_wake: u64) -> WakePlan {
+    plan_wake_within(elapsed, done, ticks_per_wake, MAX_CATCH_UP_STEPS)
+}
+
+/// [`plan_wake`] with another catch-up budget (`max_catch_up` steps, at least one wake's).
+fn plan_wake_within(
+    elapsed: Duration,
+    done: u64,
+    ticks_per_wake: u64,
+    max_catch_up: u64,
+) -> WakePlan {
     let due = (elapsed.as_nanos() / STEP_NS) as u64 + ticks_per_wake;
     let missing = due.saturating_sub(done);
-    if missing > MAX_CATCH_UP_STEPS {
+    if missing > max_catch_up.max(ticks_per_wake) {
         WakePlan {
             run: ticks_per_wake,
             skipped: missing - ticks_per_wake,
@@ -101,6 +111,7 @@ impl PiperEmulator {
     pub fn spawn(bus: Arc<dyn CanBus>, config: PiperConfig) -> Result<PiperHandle, PiperError> {
         let runtime = tokio::runtime::Handle::try_current().map_err(|_| PiperError::NoRuntime)?;
         let ticks_per_wake = config.ticks_per_wake.clamp(1, 25);
+        let max_catch_up = config.max_catch_up_steps.unwrap_or(MAX_CATCH_UP_STEPS);
         let firmware = Firmware::new(config)?;
         tracing::info!(firmware = %firmware.profile(), bus = bus.name(), "Piper emulator starting");
         let core = Arc::new(Mutex::new(firmware));
@@ -150,7 +161,7 @@ impl PiperEmulator {
                     _ = clock.tick() => {}
                     _ = tick_stop.changed() => break,
                 }
-                let plan = plan_wake(boot.elapsed(), done, per_wake);
+                let plan = plan_wake_within(boot.elapsed(), done, per_wake, max_catch_up);
                 done += plan.run + plan.skipped;
                 let late = plan.run > per_wake;
                 {
@@ -290,6 +301,15 @@ impl Drop for PiperHandle {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_smaller_catch_up_budget_skips_sooner() {
+        // 50 steps behind: within the default budget, beyond a 5-step one.
+        let p = plan_wake_within(Duration::from_millis(50), 5, 5, 5);
+        assert_eq!((p.run, p.skipped), (5, 45));
+        let p = plan_wake_within(Duration::from_millis(50), 5, 5, MAX_CATCH_UP_STEPS);
+        assert_eq!((p.run, p.skipped), (50, 0));
+    }
 
     #[test]
     fn an_on_time_wake_runs_one_period() {

@@ -40,6 +40,11 @@ pub struct Args {
     /// feedback group (less CPU, up to 4 ms extra command latency); 1 = every millisecond.
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=25))]
     pub ticks_per_wake: u32,
+    /// Most missed milliseconds of physics one wake-up catches up (default 100). On a machine
+    /// too slow for real-time physics (an emulated VM) a small value, e.g. 5, lets the
+    /// emulator fall behind the wall clock instead of starving its clients.
+    #[arg(long, value_name = "MS", value_parser = clap::value_parser!(u64).range(1..=1000))]
+    pub max_catch_up_ms: Option<u64>,
 }
 
 /// Run the emulator until Ctrl-C.
@@ -70,6 +75,7 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
         state_file: args.state_file.clone(),
         urdf_path: args.urdf.clone(),
         ticks_per_wake: args.ticks_per_wake,
+        max_catch_up_steps: args.max_catch_up_ms,
         ..PiperConfig::default()
     };
     let (bus, tap, server, place) = match &args.socketcand {
