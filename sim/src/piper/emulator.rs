@@ -76,11 +76,13 @@ struct WakePlan {
 
 /// Steps due at a wake-up `elapsed` after boot with `done` steps run so far: everything up to
 /// the end of the current wake period, at most [`MAX_CATCH_UP_STEPS`] of it.
+#[cfg(test)]
 fn plan_wake(elapsed: Duration, done: u64, ticks_per_wake: u64) -> WakePlan {
     plan_wake_within(elapsed, done, ticks_per_wake, MAX_CATCH_UP_STEPS)
 }
 
-/// [`plan_wake`] with another catch-up budget (`max_catch_up` steps, at least one wake's).
+/// What a wake-up runs: every step due by the end of the current wake period, at most
+/// `max_catch_up` of them (at least one wake's worth); the rest are skipped.
 fn plan_wake_within(
     elapsed: Duration,
     done: u64,
@@ -150,7 +152,7 @@ impl PiperEmulator {
             let per_wake = u64::from(ticks_per_wake);
             let mut clock = interval(Duration::from_secs_f64(STEP_S * per_wake as f64));
             // The interval only paces the wake-ups; how many steps run comes from the clock
-            // (`plan_wake`), so skipping missed wake-ups loses no emulated time.
+            // (`plan_wake_within`), so skipping missed wake-ups loses no emulated time.
             clock.set_missed_tick_behavior(MissedTickBehavior::Skip);
             let boot = Instant::now();
             let mut done: u64 = 0;
