@@ -676,3 +676,33 @@ async fn a_piper_whose_link_is_cut_times_out_at_once_not_after_the_motion_timeou
     let e = c.arm.get_joint_degree().await.expect_err("stale feedback");
     assert_eq!(e.code, AbcErrorCode::ArmTimeout, "{e}");
 }
+
+#[tokio::test(start_paused = true)]
+async fn realman_peripheral_arguments_out_of_range_are_param_out_of_range() {
+    let c = realman_case(5).await;
+    c.arm.connect().await.expect("connect");
+    let codes = [
+        c.arm.set_plus_mode(1).await.expect_err("no such mode").code,
+        c.arm
+            .set_modbus_mode(0, 19_200, 1)
+            .await
+            .expect_err("no such baud rate")
+            .code,
+        c.arm
+            .write_registers(
+                &PeripheralReadWriteParams {
+                    port: 0,
+                    address: 0,
+                    device: 1,
+                    num: 11,
+                },
+                &[0; 11],
+            )
+            .await
+            .expect_err("more than 10 registers")
+            .code,
+    ];
+    assert_eq!(codes, [AbcErrorCode::ParamOutOfRange; 3]);
+    let e = c.arm.close_modbus_mode(3).await.expect_err("Modbus TCP");
+    assert_eq!(e.code, AbcErrorCode::NotImplemented, "{e}");
+}

@@ -16,7 +16,6 @@ use crate::arm::types::{
     in_range, joints_to_rad, ErrorFlags, GripperState, IkMode, MoveOptions,
     PeripheralReadWriteParams, Pose, TrajectoryMode,
 };
-use crate::realman::codec::request as rq;
 use crate::realman::{CartesianTarget, Connect, MoveOpts, RealmanError};
 
 fn move_opts(o: &MoveOptions) -> ArmResult<MoveOpts> {
@@ -322,14 +321,8 @@ impl ArmInterface for RealmanArm {
     }
 
     async fn set_plus_mode(&self, mode: u32) -> ArmResult<()> {
+        // The driver's encoder refuses a mode outside its table (PARAM_OUT_OF_RANGE).
         let link = self.link().await?;
-        if !rq::PLUS_MODES.contains(&mode) {
-            return Err(ArmError::out_of_range(
-                "mode",
-                mode,
-                "0, 9600, 115200, 256000 or 460800",
-            ));
-        }
         link.client
             .set_rm_plus_mode(mode)
             .await
@@ -339,13 +332,7 @@ impl ArmInterface for RealmanArm {
     async fn set_modbus_mode(&self, port: u8, baudrate: u32, timeout_100ms: u32) -> ArmResult<()> {
         let link = self.link().await?;
         let port = rtu_port(port)?;
-        if !rq::MODBUS_BAUD_RATES.contains(&baudrate) {
-            return Err(ArmError::out_of_range(
-                "baudrate",
-                baudrate,
-                "9600, 115200 or 460800",
-            ));
-        }
+        // The baud rate is checked by the driver's encoder (PARAM_OUT_OF_RANGE).
         let timeout = in_range("timeout", i64::from(timeout_100ms), 0, 65_535)?;
         link.client
             .set_modbus_mode(port, baudrate, timeout)
@@ -378,12 +365,7 @@ impl ArmInterface for RealmanArm {
                 ),
             ));
         }
-        in_range(
-            "num",
-            values.len() as i64,
-            1,
-            rq::MAX_REGISTERS_PER_WRITE as i64,
-        )?;
+        // 1..=10 registers: checked by the driver's encoder (PARAM_OUT_OF_RANGE).
         link.client
             .write_registers(port, params.device, params.address, values)
             .await
