@@ -6,6 +6,7 @@ pub mod logging;
 pub mod record;
 pub mod replay;
 pub mod run;
+pub mod signals;
 pub mod sim;
 
 /// An error and its causes as one line for the terminal: "outer: cause: cause", each cause

@@ -104,15 +104,13 @@ mod imp {
             }
         };
         tokio::pin!(stop_after);
+        let mut signals = super::super::signals::StopSignals::listen()?;
         // Flush now and then so a killed process leaves at most a second unwritten.
         let mut flush = tokio::time::interval(Duration::from_secs(1));
         let outcome = loop {
             tokio::select! {
-                signal = tokio::signal::ctrl_c() => {
-                    if let Err(error) = signal {
-                        tracing::warn!(%error, "cannot listen for Ctrl-C");
-                    }
-                    tracing::info!("interrupted");
+                signal = signals.next() => {
+                    tracing::info!(signal, "stopping");
                     break Ok(());
                 }
                 () = &mut stop_after => break Ok(()),

@@ -7,10 +7,12 @@ use std::time::Duration;
 
 use armhil::harness::report::{junit_xml, write_atomic, write_outputs, Written};
 use armhil::harness::{
-    discover_suite, load_suite_file, run_scenario_with, Clock, Link, Outcome, RunOptions,
-    ScenarioResult, SuiteFile, Verdict,
+    discover_suite, load_suite_file, run_scenario_with, Clock, Interrupt, Link, Outcome,
+    RunOptions, ScenarioResult, SuiteFile, Verdict,
 };
 use indicatif::{ProgressBar, ProgressStyle};
+
+use super::signals::interrupt_on_signals;
 
 /// Arguments of `armhil run`.
 #[derive(Debug, clap::Args)]
@@ -106,7 +108,7 @@ struct Ran {
 }
 
 /// Load, run and write one scenario.
-fn run_one(file: &SuiteFile, args: &Args) -> Ran {
+fn run_one(file: &SuiteFile, args: &Args, interrupt: &Interrupt) -> Ran {
     let clock_for = |bench_iface: Option<&String>| {
         if let Some(addr) = &args.socketcand {
             return Clock::Iface(Link::Socketcand(addr.clone()));
@@ -137,6 +139,7 @@ fn run_one(file: &SuiteFile, args: &Args) -> Ran {
     let options = RunOptions {
         time_scale: args.time_scale,
         deadline_slack: std::time::Duration::from_millis(args.deadline_slack_ms),
+        interrupt: interrupt.clone(),
     };
     let result = run_scenario_with(
         &scenario,
@@ -158,11 +161,13 @@ fn run_one(file: &SuiteFile, args: &Args) -> Ran {
     ran
 }
 
-/// Run `files` on `jobs` threads; results in file order whatever order they finish in.
+/// Run `files` on `jobs` threads; results in file order whatever order they finish in. Once
+/// `interrupt` fires no further file is started, so fewer results than files come back.
 fn run_parallel(
     files: &[SuiteFile],
     args: &Args,
     jobs: usize,
+    interrupt: &Interrupt,
     done: &(dyn Fn(&Ran) + Sync),
 ) -> Vec<Ran> {
     let next = std::sync::atomic::AtomicUsize::new(0);
@@ -171,9 +176,12 @@ fn run_parallel(
     std::thread::scope(|scope| {
         for _ in 0..jobs.clamp(1, files.len().max(1)) {
             scope.spawn(|| loop {
+                if interrupt.reason().is_some() {
+                    break;
+                }
                 let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                 let Some(file) = files.get(i) else { break };
-                let ran = run_one(file, args);
+                let ran = run_one(file, args, interrupt);
                 done(&ran);
                 *slots[i]
                     .lock()
@@ -317,7 +325,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             bar.inc(1);
         }
     };
-    let ran = run_parallel(&files, &args, jobs, &done);
+    let (trigger, interrupt) = Interrupt::new();
+    interrupt_on_signals(trigger)?;
+    let ran = run_parallel(&files, &args, jobs, &interrupt, &done);
     if let Some(bar) = progress {
         bar.finish_and_clear();
     }
@@ -351,6 +361,15 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             anyhow::anyhow!("cannot write the JUnit report {}: {e}", path.display())
         })?;
         println!("junit: {}", path.display());
+    }
+    if let Some(reason) = interrupt.reason() {
+        println!(
+            "interrupted by {reason}: {} of {} scenario files not run",
+            files.len() - results.len(),
+            files.len()
+        );
+        // 128 + SIGINT, the shell's convention for a run stopped by the user.
+        return Ok(ExitCode::from(130));
     }
     Ok(if failed == 0 && errors == 0 && write_errors == 0 {
         ExitCode::SUCCESS

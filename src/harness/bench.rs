@@ -8,7 +8,7 @@ use tokio::time::Instant;
 
 use super::device::Device;
 use super::model::Scenario;
-use super::runner::{Clock, Link, Recorder, RunOptions};
+use super::runner::{Clock, Link, Recorder, RunOptions, Spool};
 use crate::devices::Wiring;
 
 /// Node name of the drivers on the virtual bus (bus faults can target it as `host`).
@@ -32,20 +32,22 @@ pub(crate) async fn build(
     clock: &Clock,
     options: &RunOptions,
 ) -> Result<BuiltBench, String> {
-    // Frames are held for the candump / pcap files only; counts are kept either way.
-    let keep = scenario.record.candump || scenario.record.pcap;
+    // Frames are written to the candump / pcap spool files only when asked; counts are kept
+    // either way.
+    let spool = Spool::create(scenario.record.candump, scenario.record.pcap)
+        .map_err(|e| format!("cannot create a temporary file for the bus recording: {e}"))?;
     let (bus, recorder) = match clock {
         Clock::Virtual | Clock::Realtime => {
             let bus = VirtualBus::new(VirtualBusConfig {
                 bitrate_bps: scenario.bench.bitrate_bps,
                 ..VirtualBusConfig::default()
             });
-            let recorder = Recorder::from_tap(bus.tap(), keep);
+            let recorder = Recorder::from_tap(bus.tap(), spool);
             (Some(bus), recorder)
         }
         Clock::Iface(link) => (
             None,
-            Recorder::from_bus(open_link(link, "recorder").await?, keep),
+            Recorder::from_bus(open_link(link, "recorder").await?, spool),
         ),
     };
     let t0 = Instant::now();

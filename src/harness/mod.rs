@@ -6,6 +6,7 @@
 //! column ([`ScenarioError`]). The grammar is documented in `scenarios/README.md`.
 
 pub(crate) mod error;
+mod interrupt;
 mod load;
 pub mod model;
 pub(crate) mod onekey;
@@ -26,8 +27,9 @@ mod runner;
 
 pub use bench::HOST_NODE;
 pub use device::{Device, DeviceError, Reply, TraceColumn};
+pub use interrupt::{Interrupt, InterruptTrigger};
 pub use result::{Outcome, ScenarioResult, StepResult, Verdict};
-pub use runner::{run_scenario, run_scenario_with, Clock, Link, RunOptions};
+pub use runner::{run_scenario, run_scenario_with, Clock, Link, Recording, RunOptions};
 #[cfg(test)]
 pub(crate) mod test_support;
 #[cfg(test)]

@@ -4,7 +4,7 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::Duration;
 
-use bus::ReceivedFrame;
+use super::runner::Recording;
 
 /// How one step ended.
 #[derive(Debug, Clone, PartialEq)]
@@ -171,8 +171,8 @@ pub struct ScenarioResult {
     pub trace: Trace,
     /// Bus figures.
     pub bus: BusSummary,
-    /// Every frame on the wire, for candump / pcap.
-    pub frames: Vec<ReceivedFrame>,
+    /// The bus recordings asked for (temporary files until the report copies them).
+    pub recording: Recording,
     /// Scenario time the run took.
     pub duration: Duration,
     /// Wall-clock time the run took (never in snapshots).
@@ -191,7 +191,7 @@ impl ScenarioResult {
             faults: Vec::new(),
             trace: Trace::default(),
             bus: BusSummary::default(),
-            frames: Vec::new(),
+            recording: Recording::default(),
             duration: Duration::ZERO,
             wall: Duration::ZERO,
         }

@@ -109,6 +109,9 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
         }
         _ => None,
     };
+    // Listen before the emulator runs: a signal that arrives earlier would otherwise kill the
+    // process with the recording unfinished.
+    let mut stop_signals = super::super::signals::StopSignals::listen()?;
     let emu = PiperEmulator::spawn(Arc::clone(&bus), config)
         .with_context(|| format!("cannot start the Piper emulator on {place}"))?;
     tracing::info!(
@@ -120,9 +123,8 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
         "armhil sim piper: {} on {place} (Ctrl-C to stop)",
         args.firmware
     );
-    tokio::signal::ctrl_c()
-        .await
-        .context("cannot wait for Ctrl-C")?;
+    let signal = stop_signals.next().await;
+    tracing::info!(signal, "stopping");
     // Frames per ID per second, feedback periods and overruns: whether the emulator kept up.
     eprint!("armhil sim piper: timing\n{}", emu.stats());
     emu.shutdown().await;
@@ -162,7 +164,8 @@ mod socket {
     }
 }
 
-/// A task that writes every frame seen on the interface to a candump log.
+/// A task that writes every frame seen on the interface to a candump log or a pcap (by the
+/// file's extension).
 struct Recorder {
     stop: tokio::sync::watch::Sender<bool>,
     task: tokio::task::JoinHandle<anyhow::Result<()>>,
@@ -176,29 +179,45 @@ impl Recorder {
 }
 
 /// Write what `tap` receives (a second socket on the interface, or a silent node on the
-/// socketcand bus: both see the emulator's and the clients' frames) to a candump log.
+/// socketcand bus: both see the emulator's and the clients' frames) to `path`. The file is
+/// flushed every second, so even a killed process leaves at most a second unwritten, and
+/// finished (flushed and synced) when the recorder stops.
 fn start_recorder(
     tap: Arc<dyn CanBus>,
     channel: &str,
     path: &std::path::Path,
 ) -> anyhow::Result<Recorder> {
-    let mut writer = bus::candump::CandumpWriter::create(path, channel)
+    let mut file = bus::recorder::Recorder::create(path, channel)
         .with_context(|| format!("cannot create {}", path.display()))?;
     let (stop, mut stopped) = tokio::sync::watch::channel(false);
+    let shown = path.display().to_string();
     let task = tokio::spawn(async move {
-        loop {
+        let mut flush = tokio::time::interval(std::time::Duration::from_secs(1));
+        let outcome = loop {
             tokio::select! {
                 r = tap.recv() => match r {
-                    Ok(frame) => writer.write(&frame).context("cannot write the candump log")?,
-                    Err(bus::BusError::Closed) => break,
+                    Ok(frame) => {
+                        if let Err(e) = file.write(&frame) {
+                            break Err(anyhow::Error::new(e).context(format!("cannot write {shown}")));
+                        }
+                    }
+                    Err(bus::BusError::Closed) => break Ok(()),
                     Err(e) => tracing::warn!(error = %e, "recorder receive error"),
                 },
-                _ = stopped.changed() => break,
+                _ = flush.tick() => {
+                    if let Err(e) = file.flush() {
+                        break Err(anyhow::Error::new(e).context(format!("cannot write {shown}")));
+                    }
+                }
+                _ = stopped.changed() => break Ok(()),
             }
-        }
+        };
         tap.close().await;
-        writer.flush().context("cannot flush the candump log")?;
-        Ok(())
+        let frames = file
+            .finish()
+            .with_context(|| format!("cannot finish {shown}"))?;
+        tracing::info!(frames, path = %shown, "recording finished");
+        outcome
     });
     Ok(Recorder { stop, task })
 }

@@ -91,20 +91,7 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
 
 /// Ctrl-C, or SIGTERM on Unix (how CI runners and process managers stop a service).
 async fn wait_for_stop() -> anyhow::Result<()> {
-    #[cfg(unix)]
-    {
-        use tokio::signal::unix::{signal, SignalKind};
-        let mut term = signal(SignalKind::terminate()).context("cannot watch SIGTERM")?;
-        tokio::select! {
-            r = tokio::signal::ctrl_c() => r.context("cannot wait for Ctrl-C")?,
-            _ = term.recv() => {}
-        }
-        Ok(())
-    }
-    #[cfg(not(unix))]
-    {
-        tokio::signal::ctrl_c()
-            .await
-            .context("cannot wait for Ctrl-C")
-    }
+    let signal = super::super::signals::StopSignals::listen()?.next().await;
+    tracing::info!(signal, "stopping");
+    Ok(())
 }

@@ -168,6 +168,7 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
         .iter()
         .map(|m| format!("{}:{}", m.can_id, m.model.name()))
         .collect();
+    let mut stop_signals = super::super::signals::StopSignals::listen()?;
     let emulator = RobstrideBus::spawn(Arc::clone(&bus), config)
         .with_context(|| format!("cannot start the RobStride emulator on {place}"))?;
     tracing::info!(on = %place, motors = ?motors, "RobStride emulator running; Ctrl-C to stop");
@@ -175,9 +176,8 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
         "armhil sim robstride: {} on {place} (Ctrl-C to stop)",
         motors.join(", "),
     );
-    tokio::signal::ctrl_c()
-        .await
-        .context("cannot wait for Ctrl-C")?;
+    let signal = stop_signals.next().await;
+    tracing::info!(signal, "stopping");
     emulator.shutdown().await;
     bus.close().await;
     if let Some(server) = server {

@@ -125,7 +125,7 @@ pub(crate) async fn build(
                 name,
                 driver,
                 Some(Box::new(sim)),
-                *wiring.options,
+                wiring.options.clone(),
             )))
         }
         (None, Clock::Iface(link)) => {
@@ -144,7 +144,7 @@ pub(crate) async fn build(
                 name,
                 driver,
                 None,
-                *wiring.options,
+                wiring.options.clone(),
             )))
         }
         (None, _) => Err(format!("device `{name}`: no bus to attach to")),

@@ -2,7 +2,6 @@
 //! file is written completely or not at all (temp file + rename).
 
 mod junit;
-mod recording;
 mod snapshot;
 mod svg;
 
@@ -18,6 +17,23 @@ use super::result::ScenarioResult;
 
 /// Write `bytes` to `path` atomically: a temporary file beside it, then a rename.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    write_atomic_with(path, |file| file.write_all(bytes))
+}
+
+/// Copy the file `from` to `path` atomically (streamed, never held in memory whole).
+pub fn copy_atomic(from: &Path, path: &Path) -> std::io::Result<()> {
+    write_atomic_with(path, |file| {
+        let mut source = std::fs::File::open(from)?;
+        std::io::copy(&mut source, file).map(drop)
+    })
+}
+
+/// Create a temporary file beside `path`, let `fill` write it, sync it and rename it over
+/// `path`; on any error the temporary file is removed and `path` is left as it was.
+fn write_atomic_with(
+    path: &Path,
+    fill: impl FnOnce(&mut std::fs::File) -> std::io::Result<()>,
+) -> std::io::Result<()> {
     if let Some(dir) = path.parent() {
         if !dir.as_os_str().is_empty() {
             std::fs::create_dir_all(dir)?;
@@ -29,7 +45,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     let tmp = path.with_file_name(format!(".{file_name}.tmp{}", std::process::id()));
     let result = (|| {
         let mut file = std::fs::File::create(&tmp)?;
-        file.write_all(bytes)?;
+        fill(&mut file)?;
         file.sync_all()?;
         std::fs::rename(&tmp, path)
     })();
@@ -62,14 +78,22 @@ pub fn write_outputs(
     let snapshot = dir.join("result.yaml");
     write_atomic(&snapshot, snapshot_yaml(result).as_bytes())?;
     written.snapshot = Some(snapshot);
-    if record.candump {
+    if let Some(error) = &result.recording.error {
+        return Err(std::io::Error::other(error.clone()));
+    }
+    if let Some(spooled) = result
+        .recording
+        .candump
+        .as_deref()
+        .filter(|_| record.candump)
+    {
         let path = dir.join("bus.log");
-        write_atomic(&path, &recording::candump_bytes(&result.frames)?)?;
+        copy_atomic(spooled, &path)?;
         written.candump = Some(path);
     }
-    if record.pcap {
+    if let Some(spooled) = result.recording.pcap.as_deref().filter(|_| record.pcap) {
         let path = dir.join("bus.pcap");
-        write_atomic(&path, &recording::pcap_bytes(&result.frames)?)?;
+        copy_atomic(spooled, &path)?;
         written.pcap = Some(path);
     }
     if record.plot {

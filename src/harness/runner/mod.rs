@@ -2,6 +2,7 @@
 
 mod faults;
 mod recorder;
+mod spool;
 mod trace;
 
 use std::sync::Arc;
@@ -9,7 +10,11 @@ use std::time::Duration;
 
 use tokio::time::Instant;
 
+use super::interrupt::Interrupt;
+
 pub(crate) use recorder::Recorder;
+pub use spool::Recording;
+pub(crate) use spool::Spool;
 
 use super::bench::{self, BuiltBench};
 use super::device::Device;
@@ -71,7 +76,7 @@ impl Clock {
 }
 
 /// Options of a run beyond the clock.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone)]
 pub struct RunOptions {
     /// Multiplies every deadline (`wait_until` and action `timeout_ms`, the driver's own
     /// timeouts) for real-time runs on slow machines (e.g. a vcan VM under emulation). Waits
@@ -81,6 +86,9 @@ pub struct RunOptions {
     /// under emulation pauses a process for seconds now and then), which a factor alone would
     /// give short deadlines too little of and long ones far too much. Zero in virtual time.
     pub deadline_slack: Duration,
+    /// Fired to stop the run early (SIGINT, SIGTERM): the step running ends at once, the
+    /// rest are not run, and the outputs are still written.
+    pub interrupt: Interrupt,
 }
 
 impl Default for RunOptions {
@@ -88,6 +96,7 @@ impl Default for RunOptions {
         Self {
             time_scale: 1.0,
             deadline_slack: Duration::ZERO,
+            interrupt: Interrupt::default(),
         }
     }
 }
@@ -123,8 +132,11 @@ pub fn run_scenario_with(
 ) -> ScenarioResult {
     // Virtual time is exact: scaling deadlines there would only hide regressions.
     let options = match clock {
-        Clock::Virtual => RunOptions::default(),
-        Clock::Realtime | Clock::Iface(_) => *options,
+        Clock::Virtual => RunOptions {
+            interrupt: options.interrupt.clone(),
+            ..RunOptions::default()
+        },
+        Clock::Realtime | Clock::Iface(_) => options.clone(),
     };
     let wall_start = std::time::Instant::now();
     if let Clock::Iface(link) = clock {
@@ -202,8 +214,18 @@ async fn run_async(scenario: &Scenario, clock: &Clock, options: &RunOptions) -> 
 
     let mut steps = Vec::new();
     let mut failed = false;
+    let mut interrupted: Option<String> = None;
     for step in &scenario.steps {
-        if failed {
+        if interrupted.is_none() {
+            interrupted = options.interrupt.reason().map(|reason| {
+                format!(
+                    "interrupted by {reason} before step {} (line {})",
+                    step.index + 1,
+                    step.line
+                )
+            });
+        }
+        if failed || interrupted.is_some() {
             steps.push(StepResult {
                 index: step.index,
                 line: step.line,
@@ -218,7 +240,17 @@ async fn run_async(scenario: &Scenario, clock: &Clock, options: &RunOptions) -> 
         }
         let started = t0.elapsed();
         let step_start = Instant::now();
-        let (outcome, reply) = run_step(step, &devices, &faults, options).await;
+        let (outcome, reply) = tokio::select! {
+            ran = run_step(step, &devices, &faults, options) => ran,
+            reason = options.interrupt.fired() => {
+                interrupted = Some(format!(
+                    "interrupted by {reason} during step {} (line {})",
+                    step.index + 1,
+                    step.line
+                ));
+                (Outcome::NotRun, Vec::new())
+            }
+        };
         failed = !outcome.passed();
         steps.push(StepResult {
             index: step.index,
@@ -262,7 +294,10 @@ async fn run_async(scenario: &Scenario, clock: &Clock, options: &RunOptions) -> 
         dropped: stats.as_ref().map_or(0, |s| s.dropped),
         recorder_missed: missed,
     };
-    let verdict = if let Some(err) = fault_errors.first() {
+    let verdict = if let Some(why) = interrupted {
+        failed = true;
+        Verdict::Error(why)
+    } else if let Some(err) = fault_errors.first() {
         failed = true;
         Verdict::Error(format!("scheduled fault failed: {err}"))
     } else if failed {
@@ -280,7 +315,7 @@ async fn run_async(scenario: &Scenario, clock: &Clock, options: &RunOptions) -> 
         faults: fault_events,
         trace,
         bus: summary,
-        frames: capture.frames,
+        recording: capture.recording,
         duration,
         wall: Duration::ZERO,
     }
@@ -482,6 +517,7 @@ mod deadline_tests {
         let options = RunOptions {
             time_scale: 10.0,
             deadline_slack: Duration::from_secs(3),
+            ..RunOptions::default()
         };
         assert_eq!(
             options.deadline(Duration::from_millis(20)),

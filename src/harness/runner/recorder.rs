@@ -1,5 +1,6 @@
-//! Counts every frame on the bus, and keeps them for the candump / pcap writers only when a
-//! recording was asked for (a long scenario would otherwise hold every frame in memory).
+//! Counts every frame on the bus and, when a recording was asked for, writes it to the
+//! candump / pcap spool files as it arrives (never holding frames in memory: a long scenario
+//! would otherwise grow without bound).
 
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -8,13 +9,16 @@ use bus::{CanBus, ReceivedFrame};
 use tokio::sync::{broadcast, oneshot};
 use tokio::task::JoinHandle;
 
-/// What a recorder saw: counts always, the frames themselves only when kept.
-#[derive(Debug, Default)]
+use super::spool::{Recording, Spool};
+
+/// What a recorder saw: counts always, the frames themselves in the spool files when a
+/// recording was asked for.
+#[derive(Default)]
 pub(crate) struct Capture {
-    /// Whether frames are kept (a candump or pcap recording was asked for).
-    keep: bool,
-    /// The frames, when kept.
-    pub frames: Vec<ReceivedFrame>,
+    /// Where frames are written, when recorded.
+    spool: Option<Spool>,
+    /// The finished recording (set by [`Recorder::finish`]).
+    pub recording: Recording,
     /// Frames seen.
     pub count: u64,
     /// Frames seen per CAN ID.
@@ -22,9 +26,9 @@ pub(crate) struct Capture {
 }
 
 impl Capture {
-    fn new(keep: bool) -> Self {
+    fn new(spool: Spool) -> Self {
         Self {
-            keep,
+            spool: spool.is_recording().then_some(spool),
             ..Self::default()
         }
     }
@@ -32,9 +36,17 @@ impl Capture {
     fn push(&mut self, frame: ReceivedFrame) {
         self.count += 1;
         *self.by_id.entry(frame.frame.raw_id()).or_insert(0) += 1;
-        if self.keep {
-            self.frames.push(frame);
+        if let Some(spool) = &mut self.spool {
+            spool.write(&frame);
         }
+    }
+
+    /// Close the spool files and keep the finished recording.
+    fn close(mut self) -> Self {
+        if let Some(spool) = self.spool.take() {
+            self.recording = spool.finish();
+        }
+        self
     }
 }
 
@@ -45,12 +57,11 @@ pub(crate) struct Recorder {
 }
 
 impl Recorder {
-    /// Record from a virtual bus tap (every frame that completed on the wire); `keep`: hold
-    /// the frames, not just their counts.
-    pub fn from_tap(mut tap: broadcast::Receiver<ReceivedFrame>, keep: bool) -> Self {
+    /// Record from a virtual bus tap (every frame that completed on the wire) into `spool`.
+    pub fn from_tap(mut tap: broadcast::Receiver<ReceivedFrame>, spool: Spool) -> Self {
         let (stop, mut stopped) = oneshot::channel::<()>();
         let task = tokio::spawn(async move {
-            let mut frames = Capture::new(keep);
+            let mut frames = Capture::new(spool);
             let mut missed = 0u64;
             loop {
                 tokio::select! {
@@ -73,7 +84,7 @@ impl Recorder {
                     }
                 }
             }
-            (frames, missed)
+            (frames.close(), missed)
         });
         Self {
             stop: Some(stop),
@@ -81,11 +92,12 @@ impl Recorder {
         }
     }
 
-    /// Record from a bus endpoint that receives every frame (a second SocketCAN socket).
-    pub fn from_bus(bus: Arc<dyn CanBus>, keep: bool) -> Self {
+    /// Record from a bus endpoint that receives every frame (a second SocketCAN socket) into
+    /// `spool`.
+    pub fn from_bus(bus: Arc<dyn CanBus>, spool: Spool) -> Self {
         let (stop, mut stopped) = oneshot::channel::<()>();
         let task = tokio::spawn(async move {
-            let mut frames = Capture::new(keep);
+            let mut frames = Capture::new(spool);
             loop {
                 tokio::select! {
                     biased;
@@ -97,7 +109,7 @@ impl Recorder {
                 }
             }
             bus.close().await;
-            (frames, 0)
+            (frames.close(), 0)
         });
         Self {
             stop: Some(stop),
@@ -124,7 +136,7 @@ mod tests {
 
     async fn capture(keep: bool) -> Capture {
         let (tx, rx) = broadcast::channel(4096);
-        let recorder = Recorder::from_tap(rx, keep);
+        let recorder = Recorder::from_tap(rx, Spool::create(keep, false).unwrap());
         for i in 0..1000u16 {
             let frame = CanFrame::standard(0x100 + i % 3, &[]).unwrap();
             tx.send(ReceivedFrame {
@@ -139,13 +151,18 @@ mod tests {
     }
 
     #[tokio::test]
-    async fn frames_are_held_only_when_a_recording_is_asked_for() {
+    async fn frames_are_written_only_when_a_recording_is_asked_for() {
         let counted = capture(false).await;
         assert_eq!(counted.count, 1000);
         assert_eq!(counted.by_id.get(&0x100), Some(&334));
-        assert_eq!(counted.frames.len(), 0, "frames held with recordings off");
+        assert!(
+            counted.recording.candump.is_none(),
+            "recorded with recordings off"
+        );
         let kept = capture(true).await;
         assert_eq!(kept.count, 1000);
-        assert_eq!(kept.frames.len(), 1000);
+        let log = bus::candump::read_log(kept.recording.candump.as_deref().unwrap()).unwrap();
+        assert_eq!(log.len(), 1000);
+        assert_eq!(log[999].frame.raw_id(), 0x100);
     }
 }

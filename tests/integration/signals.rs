@@ -1,0 +1,195 @@
+//! SIGINT and SIGTERM at any moment leave complete, readable files: `armhil run` writes the
+//! interrupted scenario's outputs and the JUnit report, `armhil sim piper --record` and
+//! `armhil record` finish their candump logs and pcaps. On the host through the virtual bus
+//! and socketcand; the SocketCAN variants run in the vcan VM suite.
+
+use std::path::Path;
+use std::process::{Child, Command, ExitStatus, Stdio};
+use std::time::Duration;
+
+use super::support::{start_sim, ARMHIL};
+
+/// The moments (after start) the signals are sent: early, while setting up, mid-run.
+const MOMENTS_MS: [u64; 3] = [150, 700, 2000];
+
+/// From this moment on each command must have its signal handlers in place: dying of the
+/// signal (no exit code) fails the test.
+const LISTENING_BY_MS: u64 = 700;
+
+/// Whether the process died of the signal itself (before it listened), which is only
+/// accepted early on.
+fn killed_early(status: ExitStatus, moment_ms: u64, what: &str) -> bool {
+    if status.code().is_some() {
+        return false;
+    }
+    assert!(
+        moment_ms < LISTENING_BY_MS,
+        "{what}: the process died of the signal instead of finishing its files"
+    );
+    true
+}
+
+fn send(child: &Child, signal: &str) {
+    let status = Command::new("kill")
+        .args([format!("-{signal}"), child.id().to_string()])
+        .status()
+        .expect("kill runs");
+    assert!(status.success(), "kill -{signal} failed");
+}
+
+/// Send `signal` after `after`, then wait (at most 60 s) for the process to end.
+fn stop(mut child: Child, signal: &str, after: Duration) -> ExitStatus {
+    std::thread::sleep(after);
+    send(&child, signal);
+    for _ in 0..600 {
+        if let Some(status) = child.try_wait().expect("wait works") {
+            return status;
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    let _ = child.kill();
+    panic!("the process did not stop within 60 s of {signal}");
+}
+
+/// A candump log every line of which reads back (none cut short).
+fn assert_complete_candump(path: &Path) -> usize {
+    let entries = bus::candump::read_log(path)
+        .unwrap_or_else(|e| panic!("{} is not a complete candump log: {e}", path.display()));
+    let text = std::fs::read_to_string(path).unwrap();
+    assert!(
+        text.is_empty() || text.ends_with('\n'),
+        "{} ends mid-line",
+        path.display()
+    );
+    entries.len()
+}
+
+/// A pcap every record of which reads back.
+fn assert_complete_pcap(path: &Path) -> usize {
+    let bytes = std::fs::read(path).unwrap();
+    bus::pcap::parse_capture(&bytes)
+        .unwrap_or_else(|e| panic!("{} is not a complete pcap: {e:?}", path.display()))
+        .len()
+}
+
+fn scenario(dir: &Path) -> std::path::PathBuf {
+    let path = dir.join("long.yaml");
+    std::fs::write(
+        &path,
+        "name: long\nbench:\n  devices:\n    arm: {kind: piper}\nrecord: {candump: true, pcap: true}\nsteps:\n  - enable: {}\n  - wait_ms: 600000\n",
+    )
+    .unwrap();
+    path
+}
+
+#[test]
+fn an_interrupted_run_still_writes_complete_outputs() {
+    for signal in ["INT", "TERM"] {
+        for moment in MOMENTS_MS {
+            let dir = tempfile::tempdir().unwrap();
+            let file = scenario(dir.path());
+            let out = dir.path().join("out");
+            let junit = dir.path().join("junit.xml");
+            let child = Command::new(ARMHIL)
+                .args(["run", "--out"])
+                .arg(&out)
+                .arg("--junit")
+                .arg(&junit)
+                .arg(&file)
+                .stdout(Stdio::null())
+                .stderr(Stdio::null())
+                .spawn()
+                .unwrap();
+            let status = stop(child, signal, Duration::from_millis(moment));
+            let what = format!("SIG{signal} after {moment} ms");
+            if killed_early(status, moment, &what) {
+                // Killed before the handler was installed: nothing may have been written.
+                assert!(
+                    !out.exists() && !junit.exists(),
+                    "{what}: files from a killed run"
+                );
+                continue;
+            }
+            assert_eq!(status.code(), Some(130), "{what}");
+            let result = std::fs::read_to_string(out.join("long/result.yaml")).unwrap();
+            assert!(
+                result.contains(&format!("interrupted by SIG{signal}")),
+                "{what}: {result}"
+            );
+            let frames = assert_complete_candump(&out.join("long/bus.log"));
+            assert_eq!(
+                assert_complete_pcap(&out.join("long/bus.pcap")),
+                frames,
+                "{what}: the two recordings differ"
+            );
+            let xml = std::fs::read_to_string(&junit).unwrap();
+            assert!(xml.trim_end().ends_with("</testsuites>"), "{what}: {xml}");
+            assert!(xml.contains("interrupted by"), "{what}: {xml}");
+        }
+    }
+}
+
+#[test]
+fn an_emulator_stopped_by_a_signal_finishes_its_recording() {
+    for (signal, name) in [("INT", "sim.log"), ("TERM", "sim.pcap")] {
+        for moment in MOMENTS_MS {
+            let dir = tempfile::tempdir().unwrap();
+            let path = dir.path().join(name);
+            let port = super::support::free_port();
+            let child = Command::new(ARMHIL)
+                .args(["sim", "piper", "--socketcand", &format!("127.0.0.1:{port}")])
+                .arg("--record")
+                .arg(&path)
+                .stdout(Stdio::null())
+                .stderr(Stdio::null())
+                .spawn()
+                .unwrap();
+            let status = stop(child, signal, Duration::from_millis(moment));
+            let what = format!("SIG{signal} after {moment} ms");
+            if killed_early(status, moment, &what) {
+                continue; // Killed before it listened for signals (no recording started).
+            }
+            assert_eq!(status.code(), Some(0), "{what}");
+            let frames = if name.ends_with(".pcap") {
+                assert_complete_pcap(&path)
+            } else {
+                assert_complete_candump(&path)
+            };
+            if moment >= 700 {
+                assert!(frames > 100, "{what}: only {frames} frames recorded");
+            }
+        }
+    }
+}
+
+#[test]
+fn a_recording_stopped_by_a_signal_is_complete() {
+    let (_sim, addr) = start_sim(&["piper"]);
+    for (signal, name) in [("INT", "rec.pcap"), ("TERM", "rec.log")] {
+        for moment in MOMENTS_MS {
+            let dir = tempfile::tempdir().unwrap();
+            let path = dir.path().join(name);
+            let child = Command::new(ARMHIL)
+                .args(["record", "--socketcand", &addr, "-o"])
+                .arg(&path)
+                .stdout(Stdio::null())
+                .stderr(Stdio::null())
+                .spawn()
+                .unwrap();
+            let status = stop(child, signal, Duration::from_millis(moment));
+            let what = format!("SIG{signal} after {moment} ms");
+            if killed_early(status, moment, &what) {
+                continue;
+            }
+            assert_eq!(status.code(), Some(0), "{what}");
+            let frames = if name.ends_with(".pcap") {
+                assert_complete_pcap(&path)
+            } else {
+                assert_complete_candump(&path)
+            };
+            if moment >= 2000 {
+                assert!(frames > 100, "{what}: only {frames} frames recorded");
+            }
+        }
+    }
+}
