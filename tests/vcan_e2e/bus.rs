@@ -107,12 +107,17 @@ impl ChildGuard {
 
     /// SIGINT (Ctrl-C), then wait for the exit.
     async fn interrupt(&mut self) -> ExitStatus {
+        self.signal("INT").await
+    }
+
+    /// Send `signal` (`INT`, `TERM`), then wait for the exit.
+    async fn signal(&mut self, signal: &str) -> ExitStatus {
         let pid = self.child.id().to_string();
         let sent = Command::new("kill")
-            .args(["-INT", &pid])
+            .args([&format!("-{signal}"), &pid])
             .status()
             .expect("run kill");
-        assert!(sent.success(), "kill -INT {pid} failed");
+        assert!(sent.success(), "kill -{signal} {pid} failed");
         self.wait().await
     }
 
@@ -447,5 +452,74 @@ async fn replay_is_seen_by_candump() {
     assert!(
         span + spacing >= original,
         "replay took {span:?} for a capture spanning {original:?}"
+    );
+}
+
+/// Wait (probing the bus with `probe_id` frames) until `done` says the file shows them.
+async fn wait_for_file(bus: &SocketCanBus, probe_id: u16, done: impl Fn() -> bool) {
+    let deadline = Instant::now() + 3 * WAIT;
+    while !done() {
+        assert!(
+            Instant::now() < deadline,
+            "nothing recorded within {:?}",
+            3 * WAIT
+        );
+        bus.send(std_frame(probe_id, &[0xEE]))
+            .await
+            .expect("send probe");
+        sleep(Duration::from_millis(100)).await;
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+#[ignore = "needs vcan; run by scripts/vcan-e2e.sh"]
+async fn sigterm_leaves_complete_recordings_on_socketcan() {
+    let dir = scratch_dir("signals");
+    let iface = iface();
+    let bus = open();
+
+    // `armhil record` into a pcap, stopped by SIGTERM.
+    let pcap = dir.join("recorded.pcap");
+    let mut recorder = ChildGuard::spawn(
+        "armhil record",
+        Command::new(armhil_bin())
+            .args(["record", "--iface", &iface, "-o"])
+            .arg(&pcap),
+    );
+    // The pcap header is 24 bytes; each frame record 32 more, flushed every second.
+    wait_for_file(&bus, 0x7E1, || {
+        std::fs::metadata(&pcap).is_ok_and(|m| m.len() > 24)
+    })
+    .await;
+    let status = recorder.signal("TERM").await;
+    assert!(status.success(), "armhil record exited with {status}");
+    let bytes = std::fs::read(&pcap).expect("read the pcap");
+    let frames = bus::pcap::parse_capture(&bytes)
+        .unwrap_or_else(|e| panic!("{} is incomplete: {e:?}", pcap.display()));
+    assert!(
+        frames.iter().any(|f| f.frame.raw_id() == 0x7E1),
+        "no probe frame in {}",
+        pcap.display()
+    );
+
+    // `armhil sim piper --record` into a candump log, stopped by SIGTERM.
+    let log = dir.join("sim.log");
+    let mut sim = ChildGuard::spawn(
+        "armhil sim piper",
+        Command::new(armhil_bin())
+            .args(["sim", "piper", "--iface", &iface, "--record"])
+            .arg(&log)
+            .stderr(Stdio::null()),
+    );
+    wait_for_file(&bus, 0x7E2, || file_mentions(&log, " 7E2#")).await;
+    let status = sim.signal("TERM").await;
+    assert!(status.success(), "armhil sim piper exited with {status}");
+    let text = std::fs::read_to_string(&log).expect("read the log");
+    assert!(text.ends_with('\n'), "{} ends mid-line", log.display());
+    let entries = parse_log(&text).unwrap_or_else(|e| panic!("{}: {e}", log.display()));
+    assert!(
+        entries.iter().any(|e| e.frame.raw_id() == 0x2A1),
+        "no Piper feedback in {}",
+        log.display()
     );
 }
