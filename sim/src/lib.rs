@@ -1,11 +1,13 @@
 //! Firmware emulators of robot arms and actuators on a rapier3d physics world.
 //!
+//! - [`cpu_budget`]: how much a late real-time wake-up may catch up, bounded by CPU.
 //! - [`physics`]: URDF loading into rapier3d, fixed-step stepping, torque-driven joints.
 //! - [`piper`]: the AgileX Piper arm's firmware (CAN, 11-bit IDs).
 //! - [`realman`]: the Realman arm controller (JSON over TCP, realtime push over UDP).
 //! - [`realtime`]: timing figures a real-time emulator keeps (frame periods, overruns).
 //! - [`robstride`]: RobStride quasi-direct-drive actuators (CAN, 29-bit IDs).
 
+pub mod cpu_budget;
 pub mod physics;
 pub mod piper;
 pub mod realman;

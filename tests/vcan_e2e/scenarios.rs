@@ -92,14 +92,18 @@ fn start_sim_logged(firmware: &str, log: Option<&Path>) -> Sim {
         }
         None => Stdio::null(),
     };
-    // A TCG VM cannot run physics in real time: with the default catch-up budget (100 ms of
-    // steps per wake) the emulator spent whole wakes catching up and starved the runner for
-    // seconds (an e-stop deadline of 6 s missed); 5 ms lets it fall behind instead.
-    let catch_up_ms =
-        std::env::var("ARMHIL_E2E_MAX_CATCH_UP_MS").unwrap_or_else(|_| "5".to_owned());
-    let child = Command::new(armhil())
-        .args(["sim", "piper", "--iface", &iface(), "--firmware", firmware])
-        .args(["--max-catch-up-ms", &catch_up_ms])
+    // A TCG VM cannot run physics in real time. The emulator's CPU budget makes it fall
+    // behind rather than starve the runner (a catch-up of 100 ms of steps per wake once cost an
+    // e-stop deadline of 6 s); ARMHIL_E2E_MAX_CATCH_UP_MS adds a fixed limit on top.
+    let mut command = Command::new(armhil());
+    command.args(["sim", "piper", "--iface", &iface(), "--firmware", firmware]);
+    if let Some(ms) = std::env::var("ARMHIL_E2E_MAX_CATCH_UP_MS")
+        .ok()
+        .filter(|ms| !ms.is_empty())
+    {
+        command.args(["--max-catch-up-ms", &ms]);
+    }
+    let child = command
         .stdout(Stdio::null())
         .stderr(stderr)
         .spawn()

@@ -8,8 +8,11 @@
 //! Real-time lock: the core counts the 1 ms steps due since boot from the clock, not from its
 //! wake-ups. A late wake-up runs every missed step (emulated time keeps up with the wall
 //! clock) and sends each periodic feedback frame once for the missed periods, never a backlog
-//! burst. A backlog beyond [`MAX_CATCH_UP_STEPS`] is dropped and counted as an overrun rather
-//! than spun through. Under a paused clock no wake-up is ever late, so nothing changes there.
+//! burst. A backlog beyond [`MAX_CATCH_UP_STEPS`], or beyond what half a core can run in the
+//! time since the previous wake-up at the measured cost of a step ([`CpuBudget`]), is dropped
+//! and counted as an overrun rather than spun through: on a machine too slow for real time the
+//! emulator falls behind instead of starving its clients. Under a paused clock no wake-up is
+//! ever late and computing takes no time, so nothing changes there.
 
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::Duration;
@@ -23,6 +26,7 @@ use super::config::{PiperConfig, PiperError};
 use super::faults::{FaultError, PiperFault};
 use super::firmware::{Firmware, STEP_S};
 use super::state::PiperSimState;
+use crate::cpu_budget::CpuBudget;
 use crate::physics::{ObstacleId, ObstacleShape};
 use crate::realtime::{RealtimeCounters, RealtimeStats};
 
@@ -157,13 +161,20 @@ impl PiperEmulator {
             let boot = Instant::now();
             let mut done: u64 = 0;
             let mut produced = Vec::with_capacity(32);
+            let mut budget = CpuBudget::default();
+            let mut last_wake = boot;
             loop {
                 tokio::select! {
                     biased;
                     _ = clock.tick() => {}
                     _ = tick_stop.changed() => break,
                 }
-                let plan = plan_wake_within(boot.elapsed(), done, per_wake, max_catch_up);
+                let woke = Instant::now();
+                // On a machine too slow for real time, catching up a backlog would take the
+                // CPU from the clients; the budget lets the emulator fall behind instead.
+                let affordable = budget.limit(woke - last_wake, per_wake, max_catch_up);
+                last_wake = woke;
+                let plan = plan_wake_within(woke - boot, done, per_wake, affordable);
                 done += plan.run + plan.skipped;
                 let late = plan.run > per_wake;
                 {
@@ -180,6 +191,7 @@ impl PiperEmulator {
                     }
                     fw.drain_output_into(&mut produced);
                 }
+                budget.observe(plan.run, woke.elapsed());
                 {
                     let mut c = lock(&tick_counters);
                     c.record_wakeup(plan.run, late);
@@ -187,8 +199,10 @@ impl PiperEmulator {
                         c.record_overrun(plan.skipped);
                         tracing::warn!(
                             dropped_steps = plan.skipped,
-                            "Piper emulator overrun: more than {MAX_CATCH_UP_STEPS} ms behind \
-                             the wall clock, skipping ahead"
+                            affordable,
+                            "Piper emulator overrun: further behind the wall clock than a \
+                             wake-up may catch up (the catch-up limit, or the CPU a catch-up \
+                             may take), skipping ahead"
                         );
                     } else if late {
                         tracing::debug!(
