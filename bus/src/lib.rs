@@ -5,6 +5,7 @@
 //! - [`virtual_bus`]: an in-process bus that models bit timing, arbitration, queues, load and
 //!   faults, and runs under tokio's paused clock for deterministic virtual time.
 //! - `socketcan_bus` (Linux only): real SocketCAN interfaces such as `vcan0` or `can0`.
+//! - `vxcan` (Linux only): creating a vxcan pair for a vendor SDK and an emulator.
 //! - [`socketcand`]: CAN over TCP (the socketcand protocol), server and client.
 //! - [`candump`], [`pcap`] and [`recorder`]: logs for can-utils and Wireshark, and a reader.
 //! - [`fixtures`]: the annotated candump test vectors in `fixtures/` that drivers and emulators
@@ -25,6 +26,8 @@ pub mod socketcand;
 pub mod timing;
 pub mod transcript;
 pub mod virtual_bus;
+#[cfg(target_os = "linux")]
+pub mod vxcan;
 
 pub use error::BusError;
 pub use frame::{

@@ -9,3 +9,4 @@ mod piper_driver;
 mod piper_sdk;
 mod robstride;
 mod scenarios;
+mod vxcan;

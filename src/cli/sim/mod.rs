@@ -59,6 +59,25 @@ pub(crate) async fn socketcand_server(
     Ok((bus, server))
 }
 
+/// `--create-vxcan PEER`: make sure the vxcan pair `iface` ↔ `peer` exists and is up, and tell
+/// the user which end their client takes.
+fn create_vxcan(iface: &str, peer: &str) -> anyhow::Result<()> {
+    #[cfg(target_os = "linux")]
+    {
+        use bus::vxcan::{ensure_pair, PairSetup};
+        let done = match ensure_pair(iface, peer)? {
+            PairSetup::Created => "created",
+            PairSetup::AlreadyThere => "using the existing",
+        };
+        eprintln!("{done} vxcan pair {iface} ↔ {peer}: the emulator is on {iface}, point your client at {peer}");
+        Ok(())
+    }
+    #[cfg(not(target_os = "linux"))]
+    {
+        anyhow::bail!("--create-vxcan {peer}: vxcan pairs exist only on Linux (use --socketcand)")
+    }
+}
+
 /// Run the chosen emulator until Ctrl-C.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     match args.device {

@@ -20,6 +20,10 @@ pub struct Args {
     /// opens reaches the emulator; several clients may connect at once.
     #[arg(long, value_name = "HOST:PORT", conflicts_with = "iface")]
     pub socketcand: Option<String>,
+    /// Create the vxcan pair `--iface` ↔ PEER first (needs root; kept after exit), so a client
+    /// on PEER, such as a vendor SDK, reaches the emulator whatever its socket options.
+    #[arg(long, value_name = "PEER", conflicts_with = "socketcand")]
+    pub create_vxcan: Option<String>,
     /// Firmware to impersonate: S-V1.5-8, S-V1.6-3, S-V1.8-2 or S-V1.8-8.
     #[arg(long, default_value = "S-V1.8-2")]
     pub firmware: FirmwareProfile,
@@ -33,7 +37,8 @@ pub struct Args {
     /// Joint angles at power-on, degrees, comma-separated J1..J6.
     #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
     pub initial_joints_deg: Option<Vec<f64>>,
-    /// Record every frame on the interface to this candump log until Ctrl-C.
+    /// Record every frame on the interface until stopped (Ctrl-C or SIGTERM): a pcap when the
+    /// name ends in `.pcap`, else a candump log.
     #[arg(long)]
     pub record: Option<PathBuf>,
     /// Physics steps (1 ms each) per wake-up of the emulator: 5 = one wake-up per 200 Hz
@@ -91,6 +96,9 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
             (node, tap, Some(server), place)
         }
         None => {
+            if let Some(peer) = &args.create_vxcan {
+                super::create_vxcan(&args.iface, peer)?;
+            }
             let tap = match &args.record {
                 Some(_) => Some(open_bus(&args.iface)?),
                 None => None,

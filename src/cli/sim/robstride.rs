@@ -23,6 +23,10 @@ pub struct Args {
     /// opens reaches the motors; several clients may connect at once.
     #[arg(long, value_name = "HOST:PORT", conflicts_with = "iface")]
     pub socketcand: Option<String>,
+    /// Create the vxcan pair `--iface` ↔ PEER first (needs root; kept after exit), so a client
+    /// on PEER, such as a vendor SDK, reaches the emulator whatever its socket options.
+    #[arg(long, value_name = "PEER", conflicts_with = "socketcand")]
+    pub create_vxcan: Option<String>,
     /// A motor as ID:MODEL, e.g. `1:RS03` (repeat for more motors; default `127:RS03`).
     #[arg(long = "motor", value_name = "ID:MODEL")]
     pub motors: Vec<MotorSpec>,
@@ -161,7 +165,12 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
             let place = format!("socketcand {}", server.local_addr());
             (node, Some(server), place)
         }
-        None => (open_bus(&args.iface)?, None, args.iface.clone()),
+        None => {
+            if let Some(peer) = &args.create_vxcan {
+                super::create_vxcan(&args.iface, peer)?;
+            }
+            (open_bus(&args.iface)?, None, args.iface.clone())
+        }
     };
     let motors: Vec<String> = config
         .motors
