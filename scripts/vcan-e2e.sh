@@ -16,8 +16,8 @@
 #   ARMHIL_VM_TIMEOUT_S   hard limit for the whole VM run, boot included (default 1200)
 #   ARMHIL_E2E_TEST_TIMEOUT_S / ARMHIL_E2E_HOOK_TIMEOUT_S  passed to the inner runner
 #   ARMHIL_E2E_FILTER     test name filter passed to the test binary (default: all)
-#   ARMHIL_E2E_MAX_CATCH_UP_MS  `armhil sim piper --max-catch-up-ms` for the scenarios (default:
-#                         none; the emulator's CPU budget bounds its catch-up)
+#   ARMHIL_E2E_MAX_CATCH_UP_MS  `armhil sim piper --max-catch-up-ms` for the scenarios (default
+#                         5; empty: none, only the emulator's CPU budget bounds catch-up)
 #   ARMHIL_E2E_HOOKS      folder of hook scripts (default scripts/e2e)
 set -euo pipefail
 
@@ -86,7 +86,7 @@ inner_env=(
     "ARMHIL_E2E_HOOKS=${ARMHIL_E2E_HOOKS:-$repo/scripts/e2e}"
     "ARMHIL_E2E_PYTHON=$python_bin"
     "ARMHIL_E2E_FILTER=${ARMHIL_E2E_FILTER:-}"
-    "ARMHIL_E2E_MAX_CATCH_UP_MS=${ARMHIL_E2E_MAX_CATCH_UP_MS:-}"
+    "ARMHIL_E2E_MAX_CATCH_UP_MS=${ARMHIL_E2E_MAX_CATCH_UP_MS-5}"
     "ARMHIL_E2E_TEST_TIMEOUT_S=${ARMHIL_E2E_TEST_TIMEOUT_S:-600}"
     "ARMHIL_E2E_HOOK_TIMEOUT_S=${ARMHIL_E2E_HOOK_TIMEOUT_S:-300}"
     "RUST_BACKTRACE=1"

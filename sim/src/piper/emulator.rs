@@ -40,6 +40,8 @@ const TX_RETRIES: u32 = 100;
 pub const MAX_CATCH_UP_STEPS: u64 = 100;
 /// One control step, ns.
 const STEP_NS: u128 = (STEP_S * 1e9) as u128;
+/// Overruns are logged at most this often (summed in between).
+const OVERRUN_REPORT_PERIOD: Duration = Duration::from_secs(1);
 
 /// Starts Piper emulators. See [`PiperEmulator::spawn`].
 #[derive(Debug, Clone, Copy)]
@@ -163,6 +165,8 @@ impl PiperEmulator {
             let mut produced = Vec::with_capacity(32);
             let mut budget = CpuBudget::default();
             let mut last_wake = boot;
+            let mut unreported_drops: u64 = 0;
+            let mut last_report: Option<Instant> = None;
             loop {
                 tokio::select! {
                     biased;
@@ -197,13 +201,20 @@ impl PiperEmulator {
                     c.record_wakeup(plan.run, late);
                     if plan.skipped > 0 {
                         c.record_overrun(plan.skipped);
-                        tracing::warn!(
-                            dropped_steps = plan.skipped,
-                            affordable,
-                            "Piper emulator overrun: further behind the wall clock than a \
-                             wake-up may catch up (the catch-up limit, or the CPU a catch-up \
-                             may take), skipping ahead"
-                        );
+                        unreported_drops += plan.skipped;
+                        // A machine too slow for real time overruns at every wake-up: one
+                        // line a second with the total, not a line per wake-up.
+                        if last_report.is_none_or(|at| woke - at >= OVERRUN_REPORT_PERIOD) {
+                            tracing::warn!(
+                                dropped_steps = unreported_drops,
+                                step_cost_us = budget.step_cost().map(|d| d.as_micros()),
+                                "Piper emulator behind the wall clock by more than a wake-up \
+                                 may catch up (the catch-up limit, or the CPU a catch-up may \
+                                 take): steps dropped since the last report"
+                            );
+                            unreported_drops = 0;
+                            last_report = Some(woke);
+                        }
                     } else if late {
                         tracing::debug!(
                             steps = plan.run,
