@@ -511,7 +511,12 @@ async fn sigterm_leaves_complete_recordings_on_socketcan() {
             .arg(&log)
             .stderr(Stdio::null()),
     );
-    wait_for_file(&bus, 0x7E2, || file_mentions(&log, " 7E2#")).await;
+    // Both the probe and the emulator's own feedback (which under emulation starts a while
+    // after the recording does).
+    wait_for_file(&bus, 0x7E2, || {
+        file_mentions(&log, " 7E2#") && file_mentions(&log, " 2A1#")
+    })
+    .await;
     let status = sim.signal("TERM").await;
     assert!(status.success(), "armhil sim piper exited with {status}");
     let text = std::fs::read_to_string(&log).expect("read the log");
