@@ -3,6 +3,7 @@
 //! `armhil record` finish their candump logs and pcaps. On the host through the virtual bus
 //! and socketcand; the SocketCAN variants run in the vcan VM suite.
 
+use std::ffi::OsStr;
 use std::path::Path;
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::time::Duration;
@@ -72,6 +73,30 @@ fn assert_complete_pcap(path: &Path) -> usize {
         .len()
 }
 
+/// A candump log or a pcap (by extension) that reads back whole; its frame count.
+fn assert_complete_recording(path: &Path) -> usize {
+    if path.extension().is_some_and(|e| e == "pcap") {
+        assert_complete_pcap(path)
+    } else {
+        assert_complete_candump(path)
+    }
+}
+
+/// `armhil ARGS` with its output discarded, sent `SIG<signal>` after `moment_ms`: its exit
+/// status, or `None` when it died of the signal before listening for it.
+fn signalled(args: &[&OsStr], signal: &str, moment_ms: u64) -> (Option<ExitStatus>, String) {
+    let child = Command::new(ARMHIL)
+        .args(args)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let status = stop(child, signal, Duration::from_millis(moment_ms));
+    let what = format!("SIG{signal} after {moment_ms} ms");
+    let status = (!killed_early(status, moment_ms, &what)).then_some(status);
+    (status, what)
+}
+
 fn scenario(dir: &Path) -> std::path::PathBuf {
     let path = dir.join("long.yaml");
     std::fs::write(
@@ -90,26 +115,19 @@ fn an_interrupted_run_still_writes_complete_outputs() {
             let file = scenario(dir.path());
             let out = dir.path().join("out");
             let junit = dir.path().join("junit.xml");
-            let child = Command::new(ARMHIL)
-                .args(["run", "--out"])
-                .arg(&out)
-                .arg("--junit")
-                .arg(&junit)
-                .arg(&file)
-                .stdout(Stdio::null())
-                .stderr(Stdio::null())
-                .spawn()
-                .unwrap();
-            let status = stop(child, signal, Duration::from_millis(moment));
-            let what = format!("SIG{signal} after {moment} ms");
-            if killed_early(status, moment, &what) {
+            let args = [
+                "run".as_ref(),
+                "--out".as_ref(),
+                out.as_os_str(),
+                "--junit".as_ref(),
+                junit.as_os_str(),
+                file.as_os_str(),
+            ];
+            let (Some(status), what) = signalled(&args, signal, moment) else {
                 // Killed before the handler was installed: nothing may have been written.
-                assert!(
-                    !out.exists() && !junit.exists(),
-                    "{what}: files from a killed run"
-                );
+                assert!(!out.exists() && !junit.exists(), "files from a killed run");
                 continue;
-            }
+            };
             assert_eq!(status.code(), Some(130), "{what}");
             let result = std::fs::read_to_string(out.join("long/result.yaml")).unwrap();
             assert!(
@@ -135,26 +153,20 @@ fn an_emulator_stopped_by_a_signal_finishes_its_recording() {
         for moment in MOMENTS_MS {
             let dir = tempfile::tempdir().unwrap();
             let path = dir.path().join(name);
-            let port = super::support::free_port();
-            let child = Command::new(ARMHIL)
-                .args(["sim", "piper", "--socketcand", &format!("127.0.0.1:{port}")])
-                .arg("--record")
-                .arg(&path)
-                .stdout(Stdio::null())
-                .stderr(Stdio::null())
-                .spawn()
-                .unwrap();
-            let status = stop(child, signal, Duration::from_millis(moment));
-            let what = format!("SIG{signal} after {moment} ms");
-            if killed_early(status, moment, &what) {
+            let addr = format!("127.0.0.1:{}", super::support::free_port());
+            let args = [
+                "sim".as_ref(),
+                "piper".as_ref(),
+                "--socketcand".as_ref(),
+                addr.as_ref(),
+                "--record".as_ref(),
+                path.as_os_str(),
+            ];
+            let (Some(status), what) = signalled(&args, signal, moment) else {
                 continue; // Killed before it listened for signals (no recording started).
-            }
-            assert_eq!(status.code(), Some(0), "{what}");
-            let frames = if name.ends_with(".pcap") {
-                assert_complete_pcap(&path)
-            } else {
-                assert_complete_candump(&path)
             };
+            assert_eq!(status.code(), Some(0), "{what}");
+            let frames = assert_complete_recording(&path);
             if moment >= 700 {
                 assert!(frames > 100, "{what}: only {frames} frames recorded");
             }
@@ -169,24 +181,18 @@ fn a_recording_stopped_by_a_signal_is_complete() {
         for moment in MOMENTS_MS {
             let dir = tempfile::tempdir().unwrap();
             let path = dir.path().join(name);
-            let child = Command::new(ARMHIL)
-                .args(["record", "--socketcand", &addr, "-o"])
-                .arg(&path)
-                .stdout(Stdio::null())
-                .stderr(Stdio::null())
-                .spawn()
-                .unwrap();
-            let status = stop(child, signal, Duration::from_millis(moment));
-            let what = format!("SIG{signal} after {moment} ms");
-            if killed_early(status, moment, &what) {
+            let args = [
+                "record".as_ref(),
+                "--socketcand".as_ref(),
+                addr.as_ref(),
+                "-o".as_ref(),
+                path.as_os_str(),
+            ];
+            let (Some(status), what) = signalled(&args, signal, moment) else {
                 continue;
-            }
-            assert_eq!(status.code(), Some(0), "{what}");
-            let frames = if name.ends_with(".pcap") {
-                assert_complete_pcap(&path)
-            } else {
-                assert_complete_candump(&path)
             };
+            assert_eq!(status.code(), Some(0), "{what}");
+            let frames = assert_complete_recording(&path);
             if moment >= 2000 {
                 assert!(frames > 100, "{what}: only {frames} frames recorded");
             }
