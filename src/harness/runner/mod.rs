@@ -283,6 +283,7 @@ async fn run_async(scenario: &Scenario, clock: &Clock, options: &RunOptions) -> 
         frames: capture.frames,
         duration,
         wall: Duration::ZERO,
+        bench_info: crate::harness::report::bench_info(scenario),
     }
 }
 
