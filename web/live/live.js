@@ -22,7 +22,8 @@
 
   // What tests and scripts read: the angles last drawn, frames drawn per second, the last
   // state and acknowledgement.
-  const live = { ready: false, state: null, hello: null, acks: [], fps: 0, renderedDeg: () => [] };
+  const live = { ready: false, state: null, hello: null, acks: [], fps: 0, states: 0,
+    renderedDeg: () => [], framesDrawn: () => 0 };
   window.armhilLive = live;
 
   const header = el("header", {}, [el("h1", { id: "title", text: "armhil live" }),
@@ -116,6 +117,7 @@
       fit(armCanvas);
       view = A.createArmView(armCanvas, h.model);
       live.renderedDeg = () => view.renderedDeg();
+      live.framesDrawn = () => view.framesDrawn();
     }
     buildFaultPanel(h.faults || []);
     const n = h.model ? A.armJoints(h.model).length : 6;
@@ -123,10 +125,24 @@
     live.ready = true;
   }
 
+  // Text panels change slowly to the eye: rebuilt at most this often, so the canvas keeps the
+  // frame rate.
+  const PANEL_PERIOD_MS = 200;
+  let panelsAt = 0;
+
   function onState(s) {
     live.state = s;
-    document.getElementById("clock").textContent = "t = " + s.t.toFixed(2) + " s";
+    live.states++;
     if (view) view.set(s.physical_deg || s.joints_deg, s.gripper_mm / 1000);
+    pushHistory(s);
+    const now = performance.now();
+    if (now - panelsAt < PANEL_PERIOD_MS) return;
+    panelsAt = now;
+    showPanels(s);
+  }
+
+  function showPanels(s) {
+    document.getElementById("clock").textContent = "t = " + s.t.toFixed(2) + " s";
     const st = s.status || {};
     kv([
       ["ctrl_mode", st.ctrl_mode], ["arm_status", st.arm_status], ["motion", st.motion],
@@ -146,7 +162,10 @@
     const rows = bus.ids.map((r) => el("tr", {}, [el("td", { text: r[0] }), el("td", { text: String(r[1]) }), el("td", { text: r[2].toFixed(0) })]));
     const t = el("table", {}, [el("thead", {}, [el("tr", {}, ["ID", "frames", "per s"].map((h) => el("th", { text: h })))]), el("tbody", {}, rows)]);
     busPanel.appendChild(el("div", { class: "scroll", style: "max-height: 220px" }, [t]));
-    // Strips: keep the last HISTORY_S seconds.
+  }
+
+  // Strips: keep the last HISTORY_S seconds.
+  function pushHistory(s) {
     history.t.push(s.t);
     let drop = 0;
     while (drop < history.t.length && history.t[drop] < s.t - HISTORY_S) drop++;

@@ -182,7 +182,7 @@
   // changes the pose; `renderedDeg()` returns the angles last drawn (tests read it).
   function createArmView(canvas, model) {
     const ctx = canvas.getContext("2d");
-    const cam = { yaw: 0.9, pitch: 0.45, distance: 1.6, target: [0, 0, 0.25] };
+    const cam = { yaw: 0.9, pitch: 0.4, distance: 1.1, target: [0, 0, 0.2] };
     let pose = { deg: [], gripperM: undefined };
     let drawn = [];
     let dirty = true;
