@@ -271,14 +271,10 @@ fn write_index(out: &Path, files: &[SuiteFile], ran: &[Ran]) -> Result<(), Strin
         .zip(ran)
         .map(|(file, r)| IndexEntry {
             result: &r.result,
-            report: r
-                .written
-                .as_ref()
-                .and_then(|w| w.html.as_ref())
-                .map(|_| {
-                    let rel = file.out_dir.join("report.html");
-                    rel.to_string_lossy().replace('\\', "/")
-                }),
+            report: r.written.as_ref().and_then(|w| w.html.as_ref()).map(|_| {
+                let rel = file.out_dir.join("report.html");
+                rel.to_string_lossy().replace('\\', "/")
+            }),
         })
         .collect();
     let path = out.join("index.html");

@@ -83,10 +83,11 @@ impl BusTap {
         tokio::spawn(async move {
             loop {
                 match tap.recv().await {
-                    Ok(f) => shared
-                        .lock()
-                        .unwrap_or_else(PoisonError::into_inner)
-                        .count(&f.frame, Instant::now(), bitrate_bps),
+                    Ok(f) => shared.lock().unwrap_or_else(PoisonError::into_inner).count(
+                        &f.frame,
+                        Instant::now(),
+                        bitrate_bps,
+                    ),
                     Err(BusError::Closed) => break,
                     Err(e) => tracing::debug!(error = %e, "web view bus tap"),
                 }

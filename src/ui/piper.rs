@@ -226,7 +226,10 @@ mod tests {
             })
         );
         assert_eq!(
-            piper_fault("external_torque", &args(json!({"joint": "3", "torque_nm": "1.5"}))),
+            piper_fault(
+                "external_torque",
+                &args(json!({"joint": "3", "torque_nm": "1.5"}))
+            ),
             Ok(PiperFault::ExternalTorque {
                 joint: 3,
                 torque_nm: 1.5

@@ -68,6 +68,7 @@
 
   function fmt(v) {
     if (v === null || v === undefined) return "–";
+    if (v === 0) return "0";
     const a = Math.abs(v);
     return a >= 100 ? v.toFixed(1) : a >= 1 ? v.toFixed(2) : v.toFixed(3);
   }

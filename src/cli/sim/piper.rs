@@ -6,9 +6,9 @@ use std::process::ExitCode;
 use std::sync::Arc;
 
 use anyhow::Context;
-use bus::CanBus;
 use armhil::ui::bus_tap::BusTap;
 use armhil::ui::piper::PiperLive;
+use bus::CanBus;
 use sim::piper::{FirmwareProfile, PiperConfig, PiperEmulator};
 
 /// The Piper's CAN bit rate (for the web view's bus load).
@@ -112,7 +112,13 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
                 Some(_) => Some(open_bus(&args.iface)?),
                 None => None,
             };
-            (open_bus(&args.iface)?, tap, ui_tap, None, args.iface.clone())
+            (
+                open_bus(&args.iface)?,
+                tap,
+                ui_tap,
+                None,
+                args.iface.clone(),
+            )
         }
     };
     let recorder = match (&args.record, tap) {

@@ -124,6 +124,8 @@ test("the live view follows a MOVE J and injects and clears a fault", async (t) 
   }), 5000);
   const ack = await page.textContent("#fault-ack");
   assert.match(ack, /injected motor_over_temp/);
+  // The text panels refresh at 5 Hz.
+  await until("the panel to show the fault", async () => /over_temp/.test(await page.textContent("#status")), 2000);
   await page.screenshot({ path: path.join(SHOTS, "live_fault.png") });
   await page.click("#fault-clear");
   await until("the fault to clear", () => page.evaluate(() => window.armhilLive.state.faults.length === 0

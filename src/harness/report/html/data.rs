@@ -24,9 +24,10 @@ fn secs(d: Duration) -> f64 {
 
 fn step_json(s: &StepResult) -> Value {
     let (expected, actual) = match &s.outcome {
-        Outcome::Failed { expected, actual } | Outcome::TimedOut { expected, actual, .. } => {
-            (Some(expected.as_str()), Some(actual.as_str()))
-        }
+        Outcome::Failed { expected, actual }
+        | Outcome::TimedOut {
+            expected, actual, ..
+        } => (Some(expected.as_str()), Some(actual.as_str())),
         Outcome::Passed | Outcome::NotRun => (None, None),
     };
     json!({
@@ -126,7 +127,14 @@ fn frames_json(result: &ScenarioResult) -> Value {
                 ),
                 None => (String::new(), String::new()),
             };
-            json!([i, secs(f.timestamp.saturating_sub(t0)), id, data, name, fields])
+            json!([
+                i,
+                secs(f.timestamp.saturating_sub(t0)),
+                id,
+                data,
+                name,
+                fields
+            ])
         })
         .collect();
     json!({"total": frames.len(), "rows": rows})
@@ -194,7 +202,10 @@ mod tests {
         assert_eq!(picked.len(), MAX_FRAMES);
         assert_eq!(picked[0], 0);
         assert!(picked.contains(&9000), "the failure's frame is listed");
-        assert!(picked.windows(2).all(|w| w[0] < w[1]), "in order, no repeats");
+        assert!(
+            picked.windows(2).all(|w| w[0] < w[1]),
+            "in order, no repeats"
+        );
         let few = frames(10);
         assert_eq!(frame_selection(&few, Duration::ZERO, None).len(), 10);
     }

@@ -51,7 +51,10 @@ pub fn escape(text: &str) -> String {
 
 /// JSON safe inside a `<script>` element: `</script>` and `<!--` cannot occur.
 pub fn script_json(value: &serde_json::Value) -> String {
-    value.to_string().replace("</", "<\\/").replace("<!--", "<\\!--")
+    value
+        .to_string()
+        .replace("</", "<\\/")
+        .replace("<!--", "<\\!--")
 }
 
 fn verdict_class(v: &Verdict) -> &'static str {
@@ -89,8 +92,10 @@ fn summary_html(result: &ScenarioResult) -> String {
             step.outcome.name().replace('_', " "),
             (step.started + step.took).as_secs_f64(),
         );
-        if let Outcome::Failed { expected, actual } | Outcome::TimedOut { expected, actual, .. } =
-            &step.outcome
+        if let Outcome::Failed { expected, actual }
+        | Outcome::TimedOut {
+            expected, actual, ..
+        } = &step.outcome
         {
             let _ = write!(
                 out,
@@ -122,7 +127,11 @@ fn page(title: &str, body: &str, scripts: &[&str]) -> String {
 /// The live page: styles, the shared scripts and `script` (it builds the page and connects to
 /// `/ws` on the server that sent it).
 pub fn live_page(title: &str, script: &str) -> String {
-    page(title, "<main id=\"app\"></main>", &[ARM3D_JS, PLOT_JS, script])
+    page(
+        title,
+        "<main id=\"app\"></main>",
+        &[ARM3D_JS, PLOT_JS, script],
+    )
 }
 
 /// The model JSON of the arm a run drove, if it has one that can be read.

@@ -63,9 +63,15 @@ fn the_embedded_document_round_trips_with_model_and_windows() {
     assert_eq!(doc["verdict"], "FAIL");
     assert_eq!(doc["steps"][0]["outcome"], "timed_out");
     assert_eq!(doc["windows"][0]["label"], "estop");
-    assert_eq!(doc["windows"][0]["to"], 0.8, "open until the end of the run");
+    assert_eq!(
+        doc["windows"][0]["to"], 0.8,
+        "open until the end of the run"
+    );
     assert_eq!(doc["model"]["root"], "base_link");
-    assert!(html.contains("function createArmView"), "scripts are inline");
+    assert!(
+        html.contains("function createArmView"),
+        "scripts are inline"
+    );
     assert!(!html.contains("src=\"http"), "nothing fetched");
 }
 
