@@ -13,6 +13,7 @@
 
 pub mod bus_tap;
 pub mod piper;
+pub mod robstride;
 
 use std::net::SocketAddr;
 use std::sync::Arc;
@@ -46,13 +47,14 @@ pub struct Command {
 }
 
 /// What the page shows: one emulator.
+#[async_trait::async_trait]
 pub trait LiveSource: Send + Sync + 'static {
     /// The message sent once per connection.
     fn hello(&self) -> Value;
     /// The current state message.
-    fn state(&self) -> Value;
+    async fn state(&self) -> Value;
     /// Apply a fault command; `Ok` carries a line for the page, `Err` why it was refused.
-    fn command(&self, command: &Command) -> Result<String, String>;
+    async fn command(&self, command: &Command) -> Result<String, String>;
 }
 
 /// Why the server could not start.
@@ -151,7 +153,7 @@ async fn index(State(app): State<App>) -> impl IntoResponse {
 }
 
 async fn state_json(State(app): State<App>) -> Json<Value> {
-    Json(app.source.state())
+    Json(app.source.state().await)
 }
 
 async fn hello_json(State(app): State<App>) -> Json<Value> {
@@ -173,13 +175,14 @@ async fn stream(app: App, mut socket: WebSocket) {
     loop {
         tokio::select! {
             _ = tick.tick() => {
-                if send(&mut socket, &app.source.state()).await.is_err() {
+                let state = app.source.state().await;
+                if send(&mut socket, &state).await.is_err() {
                     break;
                 }
             }
             message = socket.recv() => match message {
                 Some(Ok(Message::Text(text))) => {
-                    let reply = answer(app.source.as_ref(), text.as_str());
+                    let reply = answer(app.source.as_ref(), text.as_str()).await;
                     if send(&mut socket, &reply).await.is_err() {
                         break;
                     }
@@ -194,10 +197,10 @@ async fn stream(app: App, mut socket: WebSocket) {
 }
 
 /// The reply to one text message (malformed ones get an error reply, never a panic).
-pub fn answer(source: &dyn LiveSource, text: &str) -> Value {
+pub async fn answer(source: &dyn LiveSource, text: &str) -> Value {
     let result = match serde_json::from_str::<Command>(text) {
         Ok(command) if matches!(command.action.as_str(), "inject" | "clear") => {
-            source.command(&command)
+            source.command(&command).await
         }
         Ok(command) => Err(format!("unknown command `{}`", command.action)),
         Err(e) => Err(format!("bad message: {e}")),

@@ -140,12 +140,13 @@ fn name_or_code(name: Option<&'static str>, code: u8) -> String {
     name.map_or_else(|| format!("0x{code:02X}"), str::to_owned)
 }
 
+#[async_trait::async_trait]
 impl LiveSource for PiperLive {
     fn hello(&self) -> Value {
         self.hello.clone()
     }
 
-    fn state(&self) -> Value {
+    async fn state(&self) -> Value {
         let s = self.monitor.snapshot();
         let st = &s.status;
         let bus = match &self.tap {
@@ -191,7 +192,7 @@ impl LiveSource for PiperLive {
         })
     }
 
-    fn command(&self, command: &Command) -> Result<String, String> {
+    async fn command(&self, command: &Command) -> Result<String, String> {
         let fault = piper_fault(&command.fault, &command.args)?;
         let text = fault.to_string();
         let mut active = self.active.lock().unwrap_or_else(PoisonError::into_inner);

@@ -78,7 +78,8 @@
       for (const p of (f ? f.params : [])) {
         params.appendChild(el("label", { for: "fault-arg-" + p.name, text: p.name + (p.required ? " *" : "") }));
         params.appendChild(el("input", { id: "fault-arg-" + p.name, "data-param": p.name, title: p.description,
-          placeholder: p.default === null ? "" : String(p.default), value: p.name === "joint" ? "1" : "" }));
+          placeholder: p.default === null ? "" : String(p.default),
+          value: p.name === "joint" ? "1" : p.required && p.default !== null ? String(p.default) : "" }));
       }
     }
     function send(type) {
@@ -110,18 +111,67 @@
     }
   }
 
+  // One dial per motor (RobStride): the angle as a needle, the turn count beside it.
+  function createDials(canvas, ids) {
+    const ctx = canvas.getContext("2d");
+    let angles = ids.map(() => 0), drawn = [], frames = 0, dirty = true;
+    function draw() {
+      const w = canvas.width, h = canvas.height, n = ids.length;
+      const r = Math.min(h / 2 - 30, w / (2 * n) - 16);
+      ctx.clearRect(0, 0, w, h);
+      ctx.fillStyle = "#f7fafc"; ctx.fillRect(0, 0, w, h);
+      ids.forEach((id, i) => {
+        const cx = (w / n) * (i + 0.5), cy = h / 2;
+        ctx.strokeStyle = "#a0aec0"; ctx.lineWidth = 2;
+        ctx.beginPath(); ctx.arc(cx, cy, r, 0, 2 * Math.PI); ctx.stroke();
+        for (let k = 0; k < 12; k++) {
+          const a = (k * Math.PI) / 6;
+          ctx.beginPath(); ctx.moveTo(cx + r * 0.9 * Math.sin(a), cy - r * 0.9 * Math.cos(a));
+          ctx.lineTo(cx + r * Math.sin(a), cy - r * Math.cos(a)); ctx.stroke();
+        }
+        const a = (angles[i] * Math.PI) / 180;
+        ctx.strokeStyle = "#c05621"; ctx.lineWidth = 5; ctx.lineCap = "round";
+        ctx.beginPath(); ctx.moveTo(cx, cy); ctx.lineTo(cx + r * 0.8 * Math.sin(a), cy - r * 0.8 * Math.cos(a)); ctx.stroke();
+        ctx.fillStyle = "#1a202c"; ctx.font = "13px sans-serif"; ctx.textAlign = "center";
+        ctx.fillText("motor " + id + ": " + angles[i].toFixed(1) + "°", cx, cy + r + 20);
+        ctx.textAlign = "start";
+      });
+      drawn = angles.slice();
+      frames++;
+      canvas.dataset.angles = drawn.map((x) => x.toFixed(2)).join(",");
+      canvas.dataset.frames = String(frames);
+    }
+    (function loop() { if (dirty) { dirty = false; draw(); } requestAnimationFrame(loop); })();
+    return {
+      set(deg) { angles = deg.slice(); dirty = true; },
+      renderedDeg: () => drawn.slice(),
+      framesDrawn: () => frames,
+    };
+  }
+
   function onHello(h) {
     live.hello = h;
     document.getElementById("title").textContent = h.title || h.device;
+    let names;
     if (h.model) {
       fit(armCanvas);
       view = A.createArmView(armCanvas, h.model);
+      names = A.armJoints(h.model).map((_, i) => "J" + (i + 1));
+    } else if (h.motors) {
+      armCanvas.style.height = "260px";
+      fit(armCanvas);
+      const dials = createDials(armCanvas, h.motors);
+      view = { set: (deg) => dials.set(deg), renderedDeg: dials.renderedDeg, framesDrawn: dials.framesDrawn };
+      names = h.motors.map((id) => "motor " + id);
+    } else {
+      names = [];
+    }
+    if (view) {
       live.renderedDeg = () => view.renderedDeg();
       live.framesDrawn = () => view.framesDrawn();
     }
     buildFaultPanel(h.faults || []);
-    const n = h.model ? A.armJoints(h.model).length : 6;
-    buildStrips(Array.from({ length: n }, (_, i) => "J" + (i + 1)));
+    buildStrips(names);
     live.ready = true;
   }
 
@@ -133,7 +183,7 @@
   function onState(s) {
     live.state = s;
     live.states++;
-    if (view) view.set(s.physical_deg || s.joints_deg, s.gripper_mm / 1000);
+    if (view) view.set(s.physical_deg || s.joints_deg, s.gripper_mm === undefined ? undefined : s.gripper_mm / 1000);
     pushHistory(s);
     const now = performance.now();
     if (now - panelsAt < PANEL_PERIOD_MS) return;
@@ -144,6 +194,13 @@
   function showPanels(s) {
     document.getElementById("clock").textContent = "t = " + s.t.toFixed(2) + " s";
     const st = s.status || {};
+    if (s.motors) {
+      kv(s.motors.map((m) => ["motor " + m.id + " (" + m.model + ")",
+        m.mode + ", run_mode " + m.run_mode + ", " + m.bus_voltage_v.toFixed(1) + " V, faults: " +
+        (m.faults.length ? m.faults.join(",") : "none") + (m.listening ? "" : " (deaf to this bus)")]));
+      showFaultsAndBus(s);
+      return;
+    }
     kv([
       ["ctrl_mode", st.ctrl_mode], ["arm_status", st.arm_status], ["motion", st.motion],
       ["enabled", (st.enabled || []).map((e, i) => (e ? "J" + (i + 1) : "")).filter(Boolean).join(" ") || "none"],
@@ -151,6 +208,10 @@
       ["gripper", s.gripper_mm.toFixed(1) + " mm, " + s.gripper_force_n.toFixed(1) + " N" + (st.gripper_enabled ? "" : " (off)")],
       ["contacts", String(s.contacts)],
     ]);
+    showFaultsAndBus(s);
+  }
+
+  function showFaultsAndBus(s) {
     const active = document.getElementById("faults-active");
     if (active) {
       active.textContent = "";

@@ -88,7 +88,8 @@
     const range = () => {
       if (followS && ts.length) {
         const end = ts[ts.length - 1];
-        return [end - followS, end];
+        const start = Math.max(ts[0], end - followS);
+        return [start, Math.max(end, start + 1e-3)];
       }
       return view || full();
     };

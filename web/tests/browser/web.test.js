@@ -131,11 +131,48 @@ test("the live view follows a MOVE J and injects and clears a fault", async (t) 
   await until("the fault to clear", () => page.evaluate(() => window.armhilLive.state.faults.length === 0
     && window.armhilLive.state.temperature_c[1] < 90), 5000);
   // A malformed command is refused, not fatal.
+  const acks = await page.evaluate(() => window.armhilLive.acks.length);
   await page.selectOption("#fault-kind", "external_torque");
   await page.fill("#fault-arg-joint", "9");
   await page.click("#fault-inject");
-  await until("the refusal", async () => /joint/.test(await page.textContent("#fault-ack")), 5000);
-  assert.equal(await page.evaluate(() => window.armhilLive.acks.at(-1).ok), false);
+  const refusal = await until("the refusal", () => page.evaluate((n) => window.armhilLive.acks[n], acks), 5000);
+  assert.equal(refusal.ok, false);
+  assert.match(refusal.message, /joint/);
+  assert.match(await page.textContent("#fault-ack"), /joint/);
+});
+
+test("the RobStride live view shows each motor's dial and reports an injected fault", async (t) => {
+  const can = await freePort();
+  const ui = await freePort();
+  let err = "";
+  const sim = spawn(BIN, ["sim", "robstride", "--socketcand", `127.0.0.1:${can}`, "--ui", `127.0.0.1:${ui}`,
+    "--motor", "1:RS03", "--motor", "2:RS00"], { stdio: ["ignore", "ignore", "pipe"] });
+  sim.stderr.on("data", (d) => { err += d; });
+  t.after(() => sim.kill("SIGINT"));
+  await until("the web view to start", () => {
+    if (sim.exitCode !== null) throw new Error("armhil sim exited: " + err);
+    return err.includes("web view on http://");
+  }, 30000);
+  const { context } = await browser();
+  t.after(() => context.close());
+  const page = await context.newPage();
+  await page.goto(`http://127.0.0.1:${ui}/`);
+  await page.waitForFunction(() => window.armhilLive && window.armhilLive.ready && window.armhilLive.state, null, { timeout: 10000 });
+  await until("two dials drawn", async () => ((await page.getAttribute("#arm-view", "data-angles")) || "").split(",").length === 2, 5000);
+  await page.selectOption("#fault-kind", "under_voltage");
+  await page.fill("#fault-arg-motor", "2");
+  await page.click("#fault-inject");
+  await until("motor 2 to report under_voltage", () => page.evaluate(() => {
+    const m = window.armhilLive.state.motors.find((x) => x.id === 2);
+    return m.faults.includes("under_voltage") && m.bus_voltage_v < 12;
+  }), 5000);
+  const m1 = await page.evaluate(() => window.armhilLive.state.motors.find((x) => x.id === 1).faults);
+  assert.deepEqual(m1, [], "motor 1 untouched");
+  await until("the panel to show the fault", async () => /under_voltage/.test(await page.textContent("#status")), 2000);
+  await page.screenshot({ path: path.join(SHOTS, "live_robstride.png") });
+  await page.click("#fault-clear");
+  await until("the cause to clear", () => page.evaluate(() => window.armhilLive.state.faults.length === 0
+    && window.armhilLive.state.motors.find((x) => x.id === 2).bus_voltage_v > 20), 5000);
 });
 
 test("a failing scenario's report.html shows the failure and replays with the slider", async (t) => {
