@@ -33,7 +33,7 @@ node --test web/tests/browser/
 
 if [ "${1:-}" = "--docs" ]; then
     mkdir -p docs/img
-    cp "$ARMHIL_SCREENSHOTS"/{live,live_fault,report,report_plots}.png docs/img/
+    cp "$ARMHIL_SCREENSHOTS"/{live,live_fault,live_robstride,live_realman,report,report_plots}.png docs/img/
     echo "web.sh: screenshots copied to docs/img/"
 fi
 echo "web.sh: screenshots in $ROOT/$ARMHIL_SCREENSHOTS"

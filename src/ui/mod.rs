@@ -13,6 +13,7 @@
 
 pub mod bus_tap;
 pub mod piper;
+pub mod realman;
 pub mod robstride;
 
 use std::net::SocketAddr;

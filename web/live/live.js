@@ -194,6 +194,11 @@
   function showPanels(s) {
     document.getElementById("clock").textContent = "t = " + s.t.toFixed(2) + " s";
     const st = s.status || {};
+    if (s.panel) {
+      kv(s.panel);
+      showFaultsAndBus(s);
+      return;
+    }
     if (s.motors) {
       kv(s.motors.map((m) => ["motor " + m.id + " (" + m.model + ")",
         m.mode + ", run_mode " + m.run_mode + ", " + m.bus_voltage_v.toFixed(1) + " V, faults: " +
@@ -217,8 +222,12 @@
       active.textContent = "";
       for (const f of s.faults) active.appendChild(el("span", { text: f }));
     }
-    const bus = s.bus || { ids: [] };
     busPanel.textContent = "";
+    if (!s.bus) {
+      busPanel.appendChild(el("p", { class: "meta", text: "no CAN bus (JSON over TCP, state over UDP)" }));
+      return;
+    }
+    const bus = s.bus;
     busPanel.appendChild(el("p", { id: "bus-load", text: "load: " + (bus.load_percent === null ? "–" : bus.load_percent.toFixed(1) + " %") }));
     const rows = bus.ids.map((r) => el("tr", {}, [el("td", { text: r[0] }), el("td", { text: String(r[1]) }), el("td", { text: r[2].toFixed(0) })]));
     const t = el("table", {}, [el("thead", {}, [el("tr", {}, ["ID", "frames", "per s"].map((h) => el("th", { text: h })))]), el("tbody", {}, rows)]);

@@ -182,7 +182,9 @@
   // changes the pose; `renderedDeg()` returns the angles last drawn (tests read it).
   function createArmView(canvas, model) {
     const ctx = canvas.getContext("2d");
-    const cam = { yaw: 0.9, pitch: 0.4, distance: 1.1, target: [0, 0, 0.2] };
+    // Frame the arm whatever its pose: its size is bounded by the sum of the joint offsets.
+    const size = Math.max(0.3, model.joints.reduce((sum, j) => sum + Math.hypot(...(j.xyz || [0, 0, 0])), 0));
+    const cam = { yaw: 0.9, pitch: 0.4, distance: 1.3 * size, target: [0, 0, 0.3 * size] };
     let pose = { deg: [], gripperM: undefined };
     let drawn = [];
     let dirty = true;

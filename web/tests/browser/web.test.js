@@ -175,6 +175,44 @@ test("the RobStride live view shows each motor's dial and reports an injected fa
     && window.armhilLive.state.motors.find((x) => x.id === 2).bus_voltage_v > 20), 5000);
 });
 
+test("the Realman live view follows a movej, lists its TCP client and reports a joint error", async (t) => {
+  const tcp = await freePort();
+  const ui = await freePort();
+  let err = "";
+  const sim = spawn(BIN, ["sim", "realman", "--port", String(tcp), "--ui", `127.0.0.1:${ui}`], { stdio: ["ignore", "ignore", "pipe"] });
+  sim.stderr.on("data", (d) => { err += d; });
+  t.after(() => sim.kill("SIGINT"));
+  await until("the web view to start", () => {
+    if (sim.exitCode !== null) throw new Error("armhil sim exited: " + err);
+    return err.includes("web view on http://");
+  }, 30000);
+  const { context } = await browser();
+  t.after(() => context.close());
+  const page = await context.newPage();
+  await page.goto(`http://127.0.0.1:${ui}/`);
+  await page.waitForFunction(() => window.armhilLive && window.armhilLive.ready && window.armhilLive.state, null, { timeout: 10000 });
+  // A client of the JSON protocol: joints in 0.001°.
+  const client = net.connect(tcp, "127.0.0.1");
+  t.after(() => client.destroy());
+  await new Promise((r) => client.once("connect", r));
+  const target = [30, 20, -40, 10, 25, -15];
+  client.write(JSON.stringify({ command: "movej", joint: target.map((d) => d * 1000), v: 50, r: 0, trajectory_connect: 0 }) + "\r\n");
+  await until("the drawn arm to reach the movej target", async () => {
+    const a = await page.evaluate(() => window.armhilLive.renderedDeg());
+    return a.length === 6 && a.every((v, i) => Math.abs(v - target[i]) < 1.0);
+  }, 20000);
+  const clients = await page.evaluate(() => window.armhilLive.state.clients);
+  assert.equal(clients.length, 1, `one TCP client: ${clients}`);
+  await page.selectOption("#fault-kind", "joint_error");
+  await page.fill("#fault-arg-joint", "3");
+  await page.fill("#fault-arg-code", "8");
+  await page.click("#fault-inject");
+  await until("the controller to report the joint error", () => page.evaluate(() => window.armhilLive.state.errors.length > 0
+    && window.armhilLive.state.faults.includes("joint_error")), 5000);
+  await until("the panel to show it", async () => /0x/.test(await page.textContent("#status")), 2000);
+  await page.screenshot({ path: path.join(SHOTS, "live_realman.png") });
+});
+
 test("a failing scenario's report.html shows the failure and replays with the slider", async (t) => {
   const out = fs.mkdtempSync(path.join(os.tmpdir(), "armhil-report-"));
   const r = spawnSync(BIN, ["run", "--out", out, path.join(FIXTURES, "report_failing.yaml")], { encoding: "utf8" });
