@@ -12,7 +12,7 @@ use armhil::harness::{load_scenario, run_scenario, Clock};
 const SCENARIOS: [&str; 4] = [
     "scenarios/piper/fault_comm_loss.yaml",
     "scenarios/piper/bus_lossy_feedback.yaml",
-    "scenarios/arm/move_joint_position.yaml",
+    "scenarios/realman/fault_joint_error.yaml",
     "scenarios/robstride/csp_pendulum.yaml",
 ];
 

@@ -1,6 +1,8 @@
 //! A run as the JSON document report.html embeds: steps, faults, the trace (column-major,
 //! integers in the column's quantum), bus figures and a decoded excerpt of the recording.
 
+use std::collections::HashMap;
+use std::fmt::Write as _;
 use std::time::Duration;
 
 use bus::{CanId, ReceivedFrame};
@@ -106,26 +108,41 @@ fn frames_json(result: &ScenarioResult) -> Value {
         _ => Duration::ZERO,
     };
     let focus = result.first_failure().map(|s| s.started + s.took);
+    // Feedback repeats itself (an arm at rest sends the same payloads): decode each distinct
+    // frame once.
+    let mut decoded: HashMap<(u32, bool, Vec<u8>), (String, String)> = HashMap::new();
     let rows: Vec<Value> = frame_selection(frames, t0, focus)
         .into_iter()
         .map(|i| {
             let f = &frames[i];
-            let data: String = f.frame.data().iter().map(|b| format!("{b:02X}")).collect();
+            let key = (
+                f.frame.raw_id(),
+                f.frame.is_extended(),
+                f.frame.data().to_vec(),
+            );
+            let (name, fields) = decoded
+                .entry(key)
+                .or_insert_with(|| match decode(f, &result.bench_info) {
+                    Some(d) => {
+                        let fields = d
+                            .fields
+                            .iter()
+                            .map(|x| format!("{}={}{}", x.name, x.value, x.unit))
+                            .collect::<Vec<_>>()
+                            .join(" ");
+                        (d.name, fields)
+                    }
+                    None => (String::new(), String::new()),
+                })
+                .clone();
+            let mut data = String::with_capacity(16);
+            for b in f.frame.data() {
+                let _ = write!(data, "{b:02X}");
+            }
             let id = if f.frame.is_extended() {
                 format!("{:08X}", f.frame.raw_id())
             } else {
                 format!("{:03X}", f.frame.raw_id())
-            };
-            let (name, fields) = match decode(f, &result.bench_info) {
-                Some(d) => (
-                    d.name,
-                    d.fields
-                        .iter()
-                        .map(|x| format!("{}={}{}", x.name, x.value, x.unit))
-                        .collect::<Vec<_>>()
-                        .join(" "),
-                ),
-                None => (String::new(), String::new()),
             };
             json!([
                 i,

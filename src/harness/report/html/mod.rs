@@ -136,9 +136,21 @@ pub fn live_page(title: &str, script: &str) -> String {
 
 /// The model JSON of the arm a run drove, if it has one that can be read.
 fn model_value(result: &ScenarioResult) -> Option<serde_json::Value> {
+    // The bundled URDFs are few and every report of a suite draws one of them: parse each once.
+    static MODELS: std::sync::Mutex<Vec<(&'static str, Option<serde_json::Value>)>> =
+        std::sync::Mutex::new(Vec::new());
     let urdf = result.bench_info.arm_urdf?;
-    let model = arm_model(urdf).ok()?;
-    serde_json::to_value(model).ok()
+    let mut models = MODELS
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    if let Some((_, model)) = models.iter().find(|(u, _)| std::ptr::eq(*u, urdf)) {
+        return model.clone();
+    }
+    let model = arm_model(urdf)
+        .ok()
+        .and_then(|m| serde_json::to_value(m).ok());
+    models.push((urdf, model.clone()));
+    model
 }
 
 /// The report page of one run.
