@@ -1,49 +1,60 @@
-//! What report.html costs per scenario, printed (run: `cargo bench --bench report_html`):
-//! for a few scenarios of the suite, the time to build the page (decoding the listed frames
-//! included) next to the time the scenario itself took to run in virtual time, and the page's
-//! size. `armhil run` and the scenario tests write one per scenario.
+//! What report.html costs, printed (run: `cargo bench --bench report_html`): every scenario of
+//! `scenarios/` is run in virtual time, then its report is built; the figures are the total
+//! run time, the total report time (decoding the listed frames included), the largest
+//! reports and the total size. `armhil run` and the scenario tests write one per scenario.
 
-use std::path::Path;
-use std::time::Instant;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
 
 use armhil::harness::report::report_html;
-use armhil::harness::{load_scenario, run_scenario, Clock};
-
-const SCENARIOS: [&str; 4] = [
-    "scenarios/piper/fault_comm_loss.yaml",
-    "scenarios/piper/bus_lossy_feedback.yaml",
-    "scenarios/realman/fault_joint_error.yaml",
-    "scenarios/robstride/csp_pendulum.yaml",
-];
-
-/// Pages built per scenario for the timing.
-const ROUNDS: u32 = 20;
+use armhil::harness::{discover_suite, load_suite_file, run_scenario, Clock};
 
 fn main() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    println!(
-        "{:<44} {:>8} {:>10} {:>12} {:>10}",
-        "scenario", "frames", "run (ms)", "report (ms)", "size (KB)"
-    );
-    for name in SCENARIOS {
-        let path = root.join(name);
-        let Ok(scenario) = load_scenario(&path) else {
-            println!("{name:<44} (not found, skipped)");
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenarios");
+    let files = match discover_suite(&[root]) {
+        Ok(f) => f,
+        Err(e) => {
+            println!("cannot list the scenarios: {e}");
+            return;
+        }
+    };
+    let (mut run, mut report, mut bytes) = (Duration::ZERO, Duration::ZERO, 0usize);
+    let mut rows = Vec::new();
+    for file in &files {
+        let Ok(scenario) = load_suite_file(file) else {
             continue;
         };
         let started = Instant::now();
         let result = run_scenario(&scenario, &Clock::Virtual);
-        let run_ms = started.elapsed().as_secs_f64() * 1e3;
+        let ran = started.elapsed();
         let started = Instant::now();
-        let mut size = 0;
-        for _ in 0..ROUNDS {
-            size = report_html(&result).len();
-        }
-        let report_ms = started.elapsed().as_secs_f64() * 1e3 / f64::from(ROUNDS);
+        let html = report_html(&result);
+        let built = started.elapsed();
+        run += ran;
+        report += built;
+        bytes += html.len();
+        rows.push((built, ran, html.len(), result.frames.len(), result.name));
+    }
+    rows.sort_by(|a, b| b.0.cmp(&a.0));
+    println!(
+        "{:<40} {:>8} {:>10} {:>12} {:>10}",
+        "slowest reports", "frames", "run (ms)", "report (ms)", "size (KB)"
+    );
+    for (built, ran, size, frames, name) in rows.iter().take(5) {
         println!(
-            "{name:<44} {:>8} {run_ms:>10.1} {report_ms:>12.2} {:>10.1}",
-            result.frames.len(),
-            size as f64 / 1024.0
+            "{name:<40} {frames:>8} {:>10.1} {:>12.2} {:>10.1}",
+            ran.as_secs_f64() * 1e3,
+            built.as_secs_f64() * 1e3,
+            *size as f64 / 1024.0
         );
     }
+    println!(
+        "{} scenarios: run {:.2} s, reports {:.2} s (+{:.1} %), {:.1} MB of HTML ({:.0} KB each on average)",
+        rows.len(),
+        run.as_secs_f64(),
+        report.as_secs_f64(),
+        100.0 * report.as_secs_f64() / run.as_secs_f64().max(1e-9),
+        bytes as f64 / 1e6,
+        bytes as f64 / 1024.0 / rows.len().max(1) as f64
+    );
 }

@@ -10,6 +10,7 @@
 //!   `{"type": "ack", "ok": bool, "message": TEXT}`.
 //!
 //! `GET /state.json` returns one state message, `GET /hello.json` the hello (for scripts).
+//! A WebSocket request from a browser page of another origin is refused ([`same_origin`]).
 
 pub mod bus_tap;
 pub mod piper;
@@ -161,8 +162,40 @@ async fn hello_json(State(app): State<App>) -> Json<Value> {
     Json(app.source.hello())
 }
 
-async fn ws(State(app): State<App>, upgrade: WebSocketUpgrade) -> impl IntoResponse {
-    upgrade.on_upgrade(move |socket| stream(app, socket))
+async fn ws(
+    State(app): State<App>,
+    headers: axum::http::HeaderMap,
+    upgrade: WebSocketUpgrade,
+) -> axum::response::Response {
+    let header =
+        |name: axum::http::header::HeaderName| headers.get(name).and_then(|v| v.to_str().ok());
+    if !same_origin(
+        header(axum::http::header::ORIGIN),
+        header(axum::http::header::HOST),
+    ) {
+        // Another site open in the same browser must not inject faults.
+        return (
+            axum::http::StatusCode::FORBIDDEN,
+            "cross-origin WebSocket refused",
+        )
+            .into_response();
+    }
+    upgrade
+        .on_upgrade(move |socket| stream(app, socket))
+        .into_response()
+}
+
+/// Whether a WebSocket request comes from the page this server sent: no `Origin` (a script,
+/// not a browser) or an `Origin` whose host and port are the request's `Host`.
+pub fn same_origin(origin: Option<&str>, host: Option<&str>) -> bool {
+    match (origin, host) {
+        (None, _) => true,
+        (Some(origin), Some(host)) => origin
+            .strip_prefix("http://")
+            .or_else(|| origin.strip_prefix("https://"))
+            .is_some_and(|rest| rest.eq_ignore_ascii_case(host)),
+        (Some(_), None) => false,
+    }
 }
 
 /// One page: hello, then state every period, commands answered as they come.
@@ -214,4 +247,63 @@ pub async fn answer(source: &dyn LiveSource, text: &str) -> Value {
 
 async fn send(socket: &mut WebSocket, value: &Value) -> Result<(), axum::Error> {
     socket.send(Message::Text(value.to_string().into())).await
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn only_the_served_page_or_a_script_may_open_the_socket() {
+        assert!(same_origin(None, Some("127.0.0.1:8000")));
+        assert!(same_origin(
+            Some("http://127.0.0.1:8000"),
+            Some("127.0.0.1:8000")
+        ));
+        assert!(!same_origin(
+            Some("http://evil.example"),
+            Some("127.0.0.1:8000")
+        ));
+        assert!(!same_origin(
+            Some("http://127.0.0.1:9000"),
+            Some("127.0.0.1:8000")
+        ));
+        assert!(!same_origin(Some("null"), Some("127.0.0.1:8000")));
+        assert!(!same_origin(Some("http://127.0.0.1:8000"), None));
+    }
+
+    struct Echo;
+
+    #[async_trait::async_trait]
+    impl LiveSource for Echo {
+        fn hello(&self) -> Value {
+            json!({"type": "hello"})
+        }
+        async fn state(&self) -> Value {
+            json!({"type": "state"})
+        }
+        async fn command(&self, command: &Command) -> Result<String, String> {
+            Ok(format!("{} {}", command.action, command.fault))
+        }
+    }
+
+    #[tokio::test]
+    async fn malformed_and_unknown_commands_get_error_replies() {
+        let ok = answer(&Echo, r#"{"type": "inject", "fault": "estop"}"#).await;
+        assert_eq!(ok["ok"], true);
+        assert_eq!(ok["message"], "inject estop");
+        let unknown = answer(&Echo, r#"{"type": "reboot", "fault": "estop"}"#).await;
+        assert_eq!(unknown["ok"], false);
+        for bad in [
+            "",
+            "{",
+            "[1]",
+            r#"{"type": "inject"}"#,
+            r#"{"type": 3, "fault": "x"}"#,
+        ] {
+            let reply = answer(&Echo, bad).await;
+            assert_eq!(reply["ok"], false, "{bad}");
+            assert_eq!(reply["type"], "ack");
+        }
+    }
 }
