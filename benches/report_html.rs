@@ -35,7 +35,7 @@ fn main() {
         bytes += html.len();
         rows.push((built, ran, html.len(), result.frames.len(), result.name));
     }
-    rows.sort_by(|a, b| b.0.cmp(&a.0));
+    rows.sort_by_key(|r| std::cmp::Reverse(r.0));
     println!(
         "{:<40} {:>8} {:>10} {:>12} {:>10}",
         "slowest reports", "frames", "run (ms)", "report (ms)", "size (KB)"
