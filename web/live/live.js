@@ -178,7 +178,9 @@
   // Text panels change slowly to the eye: rebuilt at most this often, so the canvas keeps the
   // frame rate.
   const PANEL_PERIOD_MS = 200;
+  const STRIP_PERIOD_MS = 40;
   let panelsAt = 0;
+  let stripsAt = 0;
 
   function onState(s) {
     live.state = s;
@@ -247,7 +249,14 @@
         ys.push(s[strip.key] ? s[strip.key][i] : null);
         if (drop) ys.splice(0, drop);
       });
-      strip.plot.setData(history.t, series);
+    }
+    // The strips scroll smoothly at 25 Hz; drawing them at every message would take frames
+    // from the 3D view.
+    const now = performance.now();
+    if (now - stripsAt < STRIP_PERIOD_MS) return;
+    stripsAt = now;
+    for (const strip of strips) {
+      if (strip.plot) strip.plot.setData(history.t, history.series[strip.key]);
     }
   }
 
