@@ -19,7 +19,7 @@ if [ ${#need_apt[@]} -gt 0 ]; then
 fi
 
 # The page scripts' own tests need nothing installed.
-node --test web/tests/unit/
+node --test web/tests/unit/*.test.js
 
 (cd web/tests && npm ci --no-audit --no-fund --loglevel=error)
 
@@ -29,7 +29,7 @@ export ARMHIL_BIN="$TARGET_DIR/debug/armhil"
 export ARMHIL_SCREENSHOTS="${ARMHIL_SCREENSHOTS:-out/web}"
 export CHROMIUM="${CHROMIUM:-/usr/bin/chromium}"
 
-node --test web/tests/browser/
+node --test web/tests/browser/*.test.js
 
 if [ "${1:-}" = "--docs" ]; then
     mkdir -p docs/img

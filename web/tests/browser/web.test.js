@@ -67,8 +67,11 @@ test("the live view follows a MOVE J and injects and clears a fault", async (t) 
     return err.includes("web view on http://");
   }, 30000);
 
-  const { context } = await browser();
-  t.after(() => context.close());
+  const { context, profile } = await browser();
+  t.after(async () => {
+    await context.close();
+    fs.rmSync(profile, { recursive: true, force: true });
+  });
   const page = await context.newPage();
   await page.goto(`http://127.0.0.1:${ui}/`);
   await page.waitForFunction(() => window.armhilLive && window.armhilLive.ready && window.armhilLive.state, null, { timeout: 10000 });
@@ -153,8 +156,11 @@ test("the RobStride live view shows each motor's dial and reports an injected fa
     if (sim.exitCode !== null) throw new Error("armhil sim exited: " + err);
     return err.includes("web view on http://");
   }, 30000);
-  const { context } = await browser();
-  t.after(() => context.close());
+  const { context, profile } = await browser();
+  t.after(async () => {
+    await context.close();
+    fs.rmSync(profile, { recursive: true, force: true });
+  });
   const page = await context.newPage();
   await page.goto(`http://127.0.0.1:${ui}/`);
   await page.waitForFunction(() => window.armhilLive && window.armhilLive.ready && window.armhilLive.state, null, { timeout: 10000 });
@@ -186,8 +192,11 @@ test("the Realman live view follows a movej, lists its TCP client and reports a 
     if (sim.exitCode !== null) throw new Error("armhil sim exited: " + err);
     return err.includes("web view on http://");
   }, 30000);
-  const { context } = await browser();
-  t.after(() => context.close());
+  const { context, profile } = await browser();
+  t.after(async () => {
+    await context.close();
+    fs.rmSync(profile, { recursive: true, force: true });
+  });
   const page = await context.newPage();
   await page.goto(`http://127.0.0.1:${ui}/`);
   await page.waitForFunction(() => window.armhilLive && window.armhilLive.ready && window.armhilLive.state, null, { timeout: 10000 });
@@ -220,8 +229,11 @@ test("a failing scenario's report.html shows the failure and replays with the sl
   const report = path.join(out, "report_failing", "report.html");
   assert.ok(fs.existsSync(path.join(out, "index.html")), "index.html per suite");
 
-  const { context } = await browser();
-  t.after(() => context.close());
+  const { context, profile } = await browser();
+  t.after(async () => {
+    await context.close();
+    fs.rmSync(profile, { recursive: true, force: true });
+  });
   const page = await context.newPage();
   const errors = [];
   page.on("pageerror", (e) => errors.push(String(e)));
