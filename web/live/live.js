@@ -111,44 +111,6 @@
     }
   }
 
-  // One dial per motor (RobStride): the angle as a needle, the turn count beside it.
-  function createDials(canvas, ids) {
-    const ctx = canvas.getContext("2d");
-    let angles = ids.map(() => 0), drawn = [], frames = 0, dirty = true;
-    function draw() {
-      const w = canvas.width, h = canvas.height, n = ids.length;
-      const r = Math.min(h / 2 - 30, w / (2 * n) - 16);
-      ctx.clearRect(0, 0, w, h);
-      ctx.fillStyle = "#f7fafc"; ctx.fillRect(0, 0, w, h);
-      ids.forEach((id, i) => {
-        const cx = (w / n) * (i + 0.5), cy = h / 2;
-        ctx.strokeStyle = "#a0aec0"; ctx.lineWidth = 2;
-        ctx.beginPath(); ctx.arc(cx, cy, r, 0, 2 * Math.PI); ctx.stroke();
-        for (let k = 0; k < 12; k++) {
-          const a = (k * Math.PI) / 6;
-          ctx.beginPath(); ctx.moveTo(cx + r * 0.9 * Math.sin(a), cy - r * 0.9 * Math.cos(a));
-          ctx.lineTo(cx + r * Math.sin(a), cy - r * Math.cos(a)); ctx.stroke();
-        }
-        const a = (angles[i] * Math.PI) / 180;
-        ctx.strokeStyle = "#c05621"; ctx.lineWidth = 5; ctx.lineCap = "round";
-        ctx.beginPath(); ctx.moveTo(cx, cy); ctx.lineTo(cx + r * 0.8 * Math.sin(a), cy - r * 0.8 * Math.cos(a)); ctx.stroke();
-        ctx.fillStyle = "#1a202c"; ctx.font = "13px sans-serif"; ctx.textAlign = "center";
-        ctx.fillText("motor " + id + ": " + angles[i].toFixed(1) + "°", cx, cy + r + 20);
-        ctx.textAlign = "start";
-      });
-      drawn = angles.slice();
-      frames++;
-      canvas.dataset.angles = drawn.map((x) => x.toFixed(2)).join(",");
-      canvas.dataset.frames = String(frames);
-    }
-    (function loop() { if (dirty) { dirty = false; draw(); } requestAnimationFrame(loop); })();
-    return {
-      set(deg) { angles = deg.slice(); dirty = true; },
-      renderedDeg: () => drawn.slice(),
-      framesDrawn: () => frames,
-    };
-  }
-
   function onHello(h) {
     live.hello = h;
     document.getElementById("title").textContent = h.title || h.device;
@@ -160,7 +122,7 @@
     } else if (h.motors) {
       armCanvas.style.height = "260px";
       fit(armCanvas);
-      const dials = createDials(armCanvas, h.motors);
+      const dials = A.createDialsView(armCanvas, h.motors.map((id) => "motor " + id));
       view = { set: (deg) => dials.set(deg), renderedDeg: dials.renderedDeg, framesDrawn: dials.framesDrawn };
       names = h.motors.map((id) => "motor " + id);
     } else {

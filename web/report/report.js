@@ -74,6 +74,8 @@
   const replay = el("div", { class: "panel grow", id: "replay" });
   const jointCols = Object.keys(cols).filter((n) => /^j\d+_deg$/.test(n))
     .sort((a, b) => parseInt(a.slice(1)) - parseInt(b.slice(1)));
+  // RobStride motors: angle columns m<ID>_rad, drawn as dials.
+  const motorCols = Object.keys(cols).filter((n) => /^m\d+_rad$/.test(n));
   const slider = el("input", { type: "range", min: "0", max: String(data.duration || 0), step: "0.001", value: "0", id: "time-slider" });
   const timeLabel = el("span", { id: "time-label", text: "0.000 s" });
   replay.appendChild(el("h2", { text: "Replay" }));
@@ -86,6 +88,14 @@
       view = A.createArmView(canvas, data.model);
       poseAt(cursorT);
     });
+  } else if (motorCols.length) {
+    const canvas = el("canvas", { class: "arm", id: "arm-view", style: "height: 260px" });
+    replay.appendChild(canvas);
+    requestAnimationFrame(() => {
+      fitCanvas(canvas);
+      view = A.createDialsView(canvas, motorCols.map((n) => "motor " + n.slice(1, -4)));
+      poseAt(cursorT);
+    });
   } else {
     replay.appendChild(el("p", { class: "meta", text: "No arm to draw for this bench (or no joint angles traced)." }));
   }
@@ -95,6 +105,10 @@
     timeLabel.textContent = t.toFixed(3) + " s";
     if (!view || !ts.length) return;
     const i = A.nearestIndex(ts, t);
+    if (!jointCols.length) {
+      view.set(motorCols.map((n) => (cols[n].values[i] === null ? NaN : (cols[n].values[i] * 180) / Math.PI)));
+      return;
+    }
     const deg = jointCols.map((n) => cols[n].values[i]);
     const g = cols.gripper_mm ? cols.gripper_mm.values[i] : null;
     view.set(deg.map((v) => (v === null ? NaN : v)), g === null ? undefined : g / 1000);

@@ -269,7 +269,48 @@
     };
   }
 
+  // One dial per motor (RobStride): the angle as a needle and its value in degrees. Same
+  // interface as createArmView: set(anglesDeg), renderedDeg(), framesDrawn().
+  function createDialsView(canvas, labels) {
+    const ctx = canvas.getContext("2d");
+    let angles = labels.map(() => 0), drawn = [], frames = 0, dirty = true;
+    function draw() {
+      const w = canvas.width, h = canvas.height, n = labels.length;
+      const r = Math.min(h / 2 - 30, w / (2 * n) - 16);
+      ctx.clearRect(0, 0, w, h);
+      ctx.fillStyle = "#f7fafc"; ctx.fillRect(0, 0, w, h);
+      labels.forEach((label, i) => {
+        const cx = (w / n) * (i + 0.5), cy = h / 2;
+        ctx.strokeStyle = "#a0aec0"; ctx.lineWidth = 2;
+        ctx.beginPath(); ctx.arc(cx, cy, r, 0, 2 * Math.PI); ctx.stroke();
+        for (let k = 0; k < 12; k++) {
+          const a = (k * Math.PI) / 6;
+          ctx.beginPath(); ctx.moveTo(cx + r * 0.9 * Math.sin(a), cy - r * 0.9 * Math.cos(a));
+          ctx.lineTo(cx + r * Math.sin(a), cy - r * Math.cos(a)); ctx.stroke();
+        }
+        const a = ((angles[i] || 0) * Math.PI) / 180;
+        ctx.strokeStyle = "#c05621"; ctx.lineWidth = 5; ctx.lineCap = "round";
+        ctx.beginPath(); ctx.moveTo(cx, cy); ctx.lineTo(cx + r * 0.8 * Math.sin(a), cy - r * 0.8 * Math.cos(a)); ctx.stroke();
+        ctx.fillStyle = "#1a202c"; ctx.font = "13px sans-serif"; ctx.textAlign = "center";
+        ctx.fillText(label + ": " + (isFinite(angles[i]) ? angles[i].toFixed(1) : "–") + "°", cx, cy + r + 20);
+        ctx.textAlign = "start";
+      });
+      drawn = angles.slice();
+      frames++;
+      canvas.dataset.angles = drawn.map((x) => x.toFixed(2)).join(",");
+      canvas.dataset.frames = String(frames);
+    }
+    (function loop() { if (dirty) { dirty = false; draw(); } requestAnimationFrame(loop); })();
+    return {
+      set(deg) { angles = deg.slice(); dirty = true; },
+      redraw() { dirty = true; },
+      renderedDeg: () => drawn.slice(),
+      framesDrawn: () => frames,
+    };
+  }
+
   return {
+    createDialsView,
     mul, fromXyzRpy, rotation, translation, apply, origin,
     linkFrames, valuesFromDeg, armJoints, actuatedJoints, projector, segments, createArmView,
   };
