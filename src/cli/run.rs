@@ -5,7 +5,9 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Duration;
 
-use armhil::harness::report::{junit_xml, write_atomic, write_outputs, Written};
+use armhil::harness::report::{
+    index_html, junit_xml, write_atomic, write_outputs, IndexEntry, Written,
+};
 use armhil::harness::{
     discover_suite, load_suite_file, run_scenario_with, Clock, Interrupt, Link, Outcome,
     RunOptions, ScenarioResult, SuiteFile, Verdict,
@@ -263,7 +265,29 @@ fn where_written(w: &Written) -> String {
     if let Some(s) = show(&w.plot) {
         parts.push(format!("      plot:      {s}"));
     }
+    if let Some(s) = show(&w.html) {
+        parts.push(format!("      report:    {s}"));
+    }
     parts.join("\n")
+}
+
+/// Write `out/index.html`: every scenario of the run with its verdict and a link to its
+/// report.html.
+fn write_index(out: &Path, files: &[SuiteFile], ran: &[Ran]) -> Result<(), String> {
+    let entries: Vec<IndexEntry<'_>> = files
+        .iter()
+        .zip(ran)
+        .map(|(file, r)| IndexEntry {
+            result: &r.result,
+            report: r.written.as_ref().and_then(|w| w.html.as_ref()).map(|_| {
+                let rel = file.out_dir.join("report.html");
+                rel.to_string_lossy().replace('\\', "/")
+            }),
+        })
+        .collect();
+    let path = out.join("index.html");
+    write_atomic(&path, index_html("armhil run", &entries).as_bytes())
+        .map_err(|e| format!("writing {}: {e}", path.display()))
 }
 
 /// Run every scenario; exit 0 only when none failed and every output was written.
@@ -331,7 +355,11 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if let Some(bar) = progress {
         bar.finish_and_clear();
     }
-    let write_errors = ran.iter().filter(|r| r.write_error.is_some()).count();
+    let mut write_errors = ran.iter().filter(|r| r.write_error.is_some()).count();
+    if let Err(e) = write_index(&args.out, &files, &ran) {
+        println!("error {e}");
+        write_errors += 1;
+    }
     let results: Vec<ScenarioResult> = ran.into_iter().map(|r| r.result).collect();
     let count = |f: fn(&Verdict) -> bool| results.iter().filter(|r| f(&r.verdict)).count();
     let passed = count(|v| matches!(v, Verdict::Passed));
@@ -348,7 +376,8 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             secs(wall)
         );
         println!(
-            "outputs: {}/<scenario path>/{{result.yaml, bus.log, bus.pcap, plot.svg}}",
+            "outputs: {}/<scenario path>/{{result.yaml, bus.log, bus.pcap, plot.svg, report.html}}, {}/index.html",
+            args.out.display(),
             args.out.display()
         );
     }

@@ -152,6 +152,16 @@ impl Verdict {
     }
 }
 
+/// What the HTML report needs to know about the bench to draw and decode (never in
+/// snapshots).
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct BenchInfo {
+    /// URDF of the arm the scenario drives, to draw it.
+    pub arm_urdf: Option<&'static str>,
+    /// RobStride motors on the bus (CAN ID, model name), to decode their frames.
+    pub robstride_motors: Vec<(u8, &'static str)>,
+}
+
 /// Everything one scenario run produced.
 #[derive(Debug, Clone)]
 pub struct ScenarioResult {
@@ -177,6 +187,8 @@ pub struct ScenarioResult {
     pub duration: Duration,
     /// Wall-clock time the run took (never in snapshots).
     pub wall: Duration,
+    /// The bench, for the HTML report.
+    pub bench_info: BenchInfo,
 }
 
 impl ScenarioResult {
@@ -194,6 +206,7 @@ impl ScenarioResult {
             recording: Recording::default(),
             duration: Duration::ZERO,
             wall: Duration::ZERO,
+            bench_info: BenchInfo::default(),
         }
     }
 

@@ -310,12 +310,52 @@ impl PiperHandle {
         lock(&self.counters).report()
     }
 
+    /// A cloneable view of this emulator for monitors (the web view of `armhil sim --ui`):
+    /// the same snapshot, fault and timing calls as the handle, shareable between tasks.
+    pub fn monitor(&self) -> PiperMonitor {
+        PiperMonitor {
+            core: Arc::clone(&self.core),
+            counters: Arc::clone(&self.counters),
+        }
+    }
+
     /// Stop the emulator and wait for its tasks. It sends nothing afterwards.
     pub async fn shutdown(mut self) {
         let _ = self.stop.send(true);
         for task in self.tasks.drain(..) {
             let _ = task.await;
         }
+    }
+}
+
+/// A shared view of a running emulator, from [`PiperHandle::monitor`]. It does not keep the
+/// emulator running: after the handle shuts it down, [`PiperMonitor::snapshot`] returns the
+/// last state.
+#[derive(Debug, Clone)]
+pub struct PiperMonitor {
+    core: Arc<Mutex<Firmware>>,
+    counters: Arc<Mutex<RealtimeCounters>>,
+}
+
+impl PiperMonitor {
+    /// See [`PiperHandle::inject`].
+    pub fn inject(&self, fault: PiperFault) -> Result<(), FaultError> {
+        lock(&self.core).inject(fault)
+    }
+
+    /// See [`PiperHandle::clear`].
+    pub fn clear(&self, fault: PiperFault) -> Result<(), FaultError> {
+        lock(&self.core).clear(fault)
+    }
+
+    /// See [`PiperHandle::snapshot`].
+    pub fn snapshot(&self) -> PiperSimState {
+        lock(&self.core).snapshot()
+    }
+
+    /// See [`PiperHandle::stats`].
+    pub fn stats(&self) -> RealtimeStats {
+        lock(&self.counters).report()
     }
 }
 

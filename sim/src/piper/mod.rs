@@ -63,7 +63,7 @@ mod state;
 pub mod trajectory;
 
 pub use config::{PiperConfig, PiperError, BUNDLED_URDF};
-pub use emulator::{PiperEmulator, PiperHandle};
+pub use emulator::{PiperEmulator, PiperHandle, PiperMonitor};
 pub use faults::{FaultError, FaultKind, FaultParam, NtcBoard, PiperFault};
 pub use firmware::Firmware;
 pub use flash::Flash;

@@ -77,5 +77,6 @@ pub use controller::{Answer, ClientId, Controller, ControllerConfig, ControllerE
 pub use faults::{FaultError, RealmanFault, RealmanFaultKind};
 pub use profile::FirmwareProfile;
 pub use server::{
-    EmulatorConfig, RealmanEmulator, RealmanHandle, ServerError, ServerStats, Transport,
+    EmulatorConfig, RealmanEmulator, RealmanHandle, RealmanMonitor, ServerError, ServerStats,
+    Transport,
 };

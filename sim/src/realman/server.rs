@@ -152,6 +152,95 @@ fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
     m.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
+/// Apply `fault` to the transport or the controller.
+fn inject_fault(shared: &Shared, fault: RealmanFault) -> Result<(), FaultError> {
+    tracing::info!(fault = fault.name(), "Realman fault injected");
+    match fault {
+        RealmanFault::ConnectionDrop { peer_ip } => {
+            for client in lock(&shared.clients).values() {
+                if peer_ip.is_none_or(|ip| ip == client.peer.ip()) {
+                    let _ = client.kill.send(true);
+                }
+            }
+        }
+        RealmanFault::ReplyDelay { delay_ms } => {
+            lock(&shared.wire).reply_delay = Some(Duration::from_millis(delay_ms));
+        }
+        RealmanFault::MalformedReply { count } => lock(&shared.wire).truncate_next = count,
+        RealmanFault::UdpLoss { permille } => {
+            if permille > 1000 {
+                return Err(FaultError::BadProbability { permille });
+            }
+            lock(&shared.push_faults).loss_permille = permille;
+        }
+        RealmanFault::UdpReorder => lock(&shared.push_faults).reorder = true,
+        ref other => {
+            lock(&shared.core).inject(other)?;
+            route_events(shared);
+        }
+    }
+    Ok(())
+}
+
+/// Remove a fault of `kind` from the transport or the controller.
+fn clear_fault(shared: &Shared, kind: RealmanFaultKind) {
+    match kind {
+        RealmanFaultKind::ConnectionDrop => {}
+        RealmanFaultKind::ReplyDelay => lock(&shared.wire).reply_delay = None,
+        RealmanFaultKind::MalformedReply => lock(&shared.wire).truncate_next = 0,
+        RealmanFaultKind::UdpLoss => lock(&shared.push_faults).loss_permille = 0,
+        RealmanFaultKind::UdpReorder => lock(&shared.push_faults).reorder = false,
+        other => lock(&shared.core).clear(other),
+    }
+}
+
+/// A shared view of a running emulator, from [`RealmanHandle::monitor`].
+#[derive(Clone)]
+pub struct RealmanMonitor {
+    shared: Arc<Shared>,
+}
+
+impl std::fmt::Debug for RealmanMonitor {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("RealmanMonitor").finish_non_exhaustive()
+    }
+}
+
+impl RealmanMonitor {
+    /// See [`RealmanHandle::inject`].
+    pub fn inject(&self, fault: RealmanFault) -> Result<(), FaultError> {
+        inject_fault(&self.shared, fault)
+    }
+
+    /// See [`RealmanHandle::clear`].
+    pub fn clear(&self, kind: RealmanFaultKind) {
+        clear_fault(&self.shared, kind);
+    }
+
+    /// See [`RealmanHandle::snapshot`].
+    pub fn snapshot(&self) -> ArmSnapshot {
+        lock(&self.shared.core).snapshot()
+    }
+
+    /// See [`RealmanHandle::with_controller`].
+    pub fn with_controller<R>(&self, f: impl FnOnce(&mut Controller) -> R) -> R {
+        f(&mut lock(&self.shared.core))
+    }
+
+    /// Peer addresses of the TCP clients connected now.
+    pub fn clients(&self) -> Vec<SocketAddr> {
+        lock(&self.shared.clients)
+            .values()
+            .map(|c| c.peer)
+            .collect()
+    }
+
+    /// See [`RealmanHandle::stats`].
+    pub fn stats(&self) -> ServerStats {
+        *lock(&self.shared.stats)
+    }
+}
+
 /// Starts Realman emulators. See [`RealmanEmulator::spawn`].
 #[derive(Debug, Clone, Copy)]
 pub struct RealmanEmulator;
@@ -261,43 +350,19 @@ impl RealmanHandle {
 
     /// Inject a fault.
     pub fn inject(&self, fault: RealmanFault) -> Result<(), FaultError> {
-        tracing::info!(fault = fault.name(), "Realman fault injected");
-        match fault {
-            RealmanFault::ConnectionDrop { peer_ip } => {
-                for client in lock(&self.shared.clients).values() {
-                    if peer_ip.is_none_or(|ip| ip == client.peer.ip()) {
-                        let _ = client.kill.send(true);
-                    }
-                }
-            }
-            RealmanFault::ReplyDelay { delay_ms } => {
-                lock(&self.shared.wire).reply_delay = Some(Duration::from_millis(delay_ms));
-            }
-            RealmanFault::MalformedReply { count } => lock(&self.shared.wire).truncate_next = count,
-            RealmanFault::UdpLoss { permille } => {
-                if permille > 1000 {
-                    return Err(FaultError::BadProbability { permille });
-                }
-                lock(&self.shared.push_faults).loss_permille = permille;
-            }
-            RealmanFault::UdpReorder => lock(&self.shared.push_faults).reorder = true,
-            ref other => {
-                lock(&self.shared.core).inject(other)?;
-                route_events(&self.shared);
-            }
-        }
-        Ok(())
+        inject_fault(&self.shared, fault)
     }
 
     /// Remove a fault.
     pub fn clear(&self, kind: RealmanFaultKind) {
-        match kind {
-            RealmanFaultKind::ConnectionDrop => {}
-            RealmanFaultKind::ReplyDelay => lock(&self.shared.wire).reply_delay = None,
-            RealmanFaultKind::MalformedReply => lock(&self.shared.wire).truncate_next = 0,
-            RealmanFaultKind::UdpLoss => lock(&self.shared.push_faults).loss_permille = 0,
-            RealmanFaultKind::UdpReorder => lock(&self.shared.push_faults).reorder = false,
-            other => lock(&self.shared.core).clear(other),
+        clear_fault(&self.shared, kind);
+    }
+
+    /// A cloneable view of this emulator for monitors (the web view of `armhil sim --ui`):
+    /// snapshot, faults and the connected clients, shareable between tasks.
+    pub fn monitor(&self) -> RealmanMonitor {
+        RealmanMonitor {
+            shared: Arc::clone(&self.shared),
         }
     }
 

@@ -41,4 +41,6 @@ pub use actuator::{
 pub use faults::{Fault, Phase};
 pub use model::{Model, ModelSpec, RangeTable, Ranges};
 pub use rig::{Load, Plant, RigPlant, WorldPlant};
-pub use runner::{RobstrideBus, RobstrideConfig, RobstrideError, RobstrideHandle};
+pub use runner::{
+    RobstrideBus, RobstrideConfig, RobstrideError, RobstrideHandle, RobstrideMonitor,
+};

@@ -190,12 +190,57 @@ impl RobstrideHandle {
         self.ask(Request::Snapshot).await
     }
 
+    /// A cloneable view of this emulator for monitors (the web view of `armhil sim --ui`):
+    /// snapshot and fault calls, shareable between tasks; they fail with
+    /// [`RobstrideError::Stopped`] once the emulator is shut down.
+    pub fn monitor(&self) -> RobstrideMonitor {
+        RobstrideMonitor {
+            requests: self.requests.clone(),
+        }
+    }
+
     /// Stop the emulator (the motors "lose power"); persistent state is already on disk.
     pub async fn shutdown(mut self) {
         let _ = self.ask(Request::Shutdown).await;
         if let Some(task) = self.task.take() {
             let _ = task.await;
         }
+    }
+}
+
+/// A shared view of a running emulator, from [`RobstrideHandle::monitor`].
+#[derive(Debug, Clone)]
+pub struct RobstrideMonitor {
+    requests: mpsc::UnboundedSender<Request>,
+}
+
+impl RobstrideMonitor {
+    async fn ask<T>(
+        &self,
+        make: impl FnOnce(oneshot::Sender<T>) -> Request,
+    ) -> Result<T, RobstrideError> {
+        let (reply, answer) = oneshot::channel();
+        self.requests
+            .send(make(reply))
+            .map_err(|_| RobstrideError::Stopped)?;
+        answer.await.map_err(|_| RobstrideError::Stopped)
+    }
+
+    /// See [`RobstrideHandle::inject`].
+    pub async fn inject(&self, can_id: u8, fault: Fault) -> Result<(), RobstrideError> {
+        self.ask(|reply| Request::Inject(can_id, fault, reply))
+            .await?
+    }
+
+    /// See [`RobstrideHandle::clear`].
+    pub async fn clear(&self, can_id: u8, fault: Fault) -> Result<(), RobstrideError> {
+        self.ask(|reply| Request::RemoveCause(can_id, fault, reply))
+            .await?
+    }
+
+    /// See [`RobstrideHandle::snapshot`].
+    pub async fn snapshot(&self) -> Result<Vec<MotorSnapshot>, RobstrideError> {
+        self.ask(Request::Snapshot).await
     }
 }
 

@@ -6,8 +6,13 @@ use std::process::ExitCode;
 use std::sync::Arc;
 
 use anyhow::Context;
+use armhil::ui::bus_tap::BusTap;
+use armhil::ui::piper::PiperLive;
 use bus::CanBus;
 use sim::piper::{FirmwareProfile, PiperConfig, PiperEmulator};
+
+/// The Piper's CAN bit rate (for the web view's bus load).
+const PIPER_BITRATE_BPS: u32 = 1_000_000;
 
 /// Arguments of `armhil sim piper`.
 #[derive(Debug, clap::Args)]
@@ -50,6 +55,10 @@ pub struct Args {
     /// emulator fall behind the wall clock instead of starving its clients.
     #[arg(long, value_name = "MS", value_parser = clap::value_parser!(u64).range(1..=1000))]
     pub max_catch_up_ms: Option<u64>,
+    /// Serve a live web view (the arm in 3D, joint strips, controller state, bus figures and a
+    /// fault panel) on HOST:PORT, e.g. `127.0.0.1:8000` (a bare port means 127.0.0.1).
+    #[arg(long, value_name = "HOST:PORT")]
+    pub ui: Option<String>,
 }
 
 /// Run the emulator until Ctrl-C.
@@ -83,17 +92,21 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
         max_catch_up_steps: args.max_catch_up_ms,
         ..PiperConfig::default()
     };
-    let (bus, tap, server, place) = match &args.socketcand {
+    let (bus, tap, ui_tap, server, place) = match &args.socketcand {
         Some(addr) => {
             let (virtual_bus, server) = super::socketcand_server(addr).await?;
             let node: Arc<dyn CanBus> = Arc::new(virtual_bus.attach("piper"));
+            let ui_tap: Option<Arc<dyn CanBus>> = args
+                .ui
+                .as_ref()
+                .map(|_| Arc::new(virtual_bus.attach("ui")) as Arc<dyn CanBus>);
             // A node that never sends receives every frame on the bus.
             let tap: Option<Arc<dyn CanBus>> = args
                 .record
                 .as_ref()
                 .map(|_| Arc::new(virtual_bus.attach("recorder")) as Arc<dyn CanBus>);
             let place = format!("socketcand {}", server.local_addr());
-            (node, tap, Some(server), place)
+            (node, tap, ui_tap, Some(server), place)
         }
         None => {
             if let Some(peer) = &args.create_vxcan {
@@ -103,7 +116,17 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
                 Some(_) => Some(open_bus(&args.iface)?),
                 None => None,
             };
-            (open_bus(&args.iface)?, tap, None, args.iface.clone())
+            let ui_tap = match &args.ui {
+                Some(_) => Some(open_bus(&args.iface)?),
+                None => None,
+            };
+            (
+                open_bus(&args.iface)?,
+                tap,
+                ui_tap,
+                None,
+                args.iface.clone(),
+            )
         }
     };
     let recorder = match (&args.record, tap) {
@@ -117,11 +140,30 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
         }
         _ => None,
     };
+    let urdf = match &args.urdf {
+        Some(path) => std::fs::read_to_string(path)
+            .with_context(|| format!("cannot read {}", path.display()))?,
+        None => sim::piper::BUNDLED_URDF.to_owned(),
+    };
     // Listen before the emulator runs: a signal that arrives earlier would otherwise kill the
     // process with the recording unfinished.
     let mut stop_signals = super::super::signals::StopSignals::listen()?;
     let emu = PiperEmulator::spawn(Arc::clone(&bus), config)
         .with_context(|| format!("cannot start the Piper emulator on {place}"))?;
+    let ui = match &args.ui {
+        Some(addr) => {
+            let tap = ui_tap.map(|t| BusTap::spawn(t, PIPER_BITRATE_BPS));
+            let title = format!("Piper {} on {place}", args.firmware);
+            let live = PiperLive::new(emu.monitor(), tap, &urdf, &title);
+            let server = armhil::ui::serve(addr, Arc::new(live)).await?;
+            eprintln!(
+                "armhil sim piper: web view on http://{}/",
+                server.local_addr()
+            );
+            Some(server)
+        }
+        None => None,
+    };
     tracing::info!(
         on = %place,
         firmware = %args.firmware,
@@ -134,6 +176,9 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
     let signal = stop_signals.next().await;
     tracing::info!(signal, "stopping");
     // Frames per ID per second, feedback periods and overruns: whether the emulator kept up.
+    if let Some(ui) = ui {
+        ui.shutdown().await;
+    }
     eprint!("armhil sim piper: timing\n{}", emu.stats());
     emu.shutdown().await;
     bus.close().await;

@@ -5,7 +5,10 @@ use std::net::{IpAddr, SocketAddr};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+use std::sync::Arc;
+
 use anyhow::Context;
+use armhil::ui::realman::RealmanLive;
 use sim::realman::model::ArmModel;
 use sim::realman::{ControllerConfig, EmulatorConfig, FirmwareProfile, RealmanEmulator, Transport};
 
@@ -40,6 +43,11 @@ pub struct Args {
     /// Run without a gripper on the flange.
     #[arg(long)]
     pub no_gripper: bool,
+    /// Serve a live web view (the arm in 3D, joint strips, controller state, TCP clients, UDP
+    /// push targets and a fault panel) on HOST:PORT, e.g. `127.0.0.1:8000` (a bare port means
+    /// 127.0.0.1).
+    #[arg(long, value_name = "HOST:PORT")]
+    pub ui: Option<String>,
 }
 
 /// Run the emulator until Ctrl-C.
@@ -55,6 +63,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
 async fn serve(args: Args) -> anyhow::Result<ExitCode> {
     let model = ArmModel::from_product(&args.model)
         .with_context(|| format!("unknown Realman model {:?} (try RM65-B)", args.model))?;
+    let urdf = sim::realman::plant::urdf_for(&model);
     let mut controller = ControllerConfig::new(model);
     controller.firmware = args.firmware;
     controller.state_file = args.state_file.clone();
@@ -76,7 +85,27 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
         "armhil sim realman: {} ({}) on tcp://{bound} (Ctrl-C to stop)",
         args.model, args.firmware
     );
+    let ui = match (&args.ui, urdf) {
+        (Some(ui_addr), Some(urdf)) => {
+            let title = format!(
+                "Realman {} ({}) on tcp://{bound}",
+                args.model, args.firmware
+            );
+            let live = RealmanLive::new(emu.monitor(), urdf, &title);
+            let server = armhil::ui::serve(ui_addr, Arc::new(live)).await?;
+            eprintln!(
+                "armhil sim realman: web view on http://{}/",
+                server.local_addr()
+            );
+            Some(server)
+        }
+        (Some(_), None) => anyhow::bail!("no URDF to draw {} in the web view", args.model),
+        (None, _) => None,
+    };
     wait_for_stop().await?;
+    if let Some(ui) = ui {
+        ui.shutdown().await;
+    }
     let stats = emu.stats();
     emu.shutdown().await;
     tracing::info!(

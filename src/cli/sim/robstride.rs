@@ -7,6 +7,8 @@ use std::str::FromStr;
 use std::sync::Arc;
 
 use anyhow::Context;
+use armhil::ui::bus_tap::BusTap;
+use armhil::ui::robstride::RobstrideLive;
 use bus::CanBus;
 use sim::robstride::{
     Load, Model, MotorConfig, PlantKind, RangeTable, RobstrideBus, RobstrideConfig,
@@ -47,6 +49,10 @@ pub struct Args {
     /// runs (the motors' flash).
     #[arg(long)]
     pub state_file: Option<PathBuf>,
+    /// Serve a live web view (each motor's dial and strips, faults, bus figures) on
+    /// HOST:PORT, e.g. `127.0.0.1:8000` (a bare port means 127.0.0.1).
+    #[arg(long, value_name = "HOST:PORT")]
+    pub ui: Option<String>,
 }
 
 /// `ID:MODEL` from the command line.
@@ -158,20 +164,31 @@ fn config(args: &Args) -> anyhow::Result<RobstrideConfig> {
 
 async fn serve(args: Args) -> anyhow::Result<ExitCode> {
     let config = config(&args)?;
-    let (bus, server, place) = match &args.socketcand {
+    let (bus, ui_tap, server, place) = match &args.socketcand {
         Some(addr) => {
             let (virtual_bus, server) = super::socketcand_server(addr).await?;
             let node: Arc<dyn CanBus> = Arc::new(virtual_bus.attach("robstride"));
+            // A node that never sends sees every frame on the bus.
+            let ui_tap: Option<Arc<dyn CanBus>> = args
+                .ui
+                .as_ref()
+                .map(|_| Arc::new(virtual_bus.attach("ui")) as Arc<dyn CanBus>);
             let place = format!("socketcand {}", server.local_addr());
-            (node, Some(server), place)
+            (node, ui_tap, Some(server), place)
         }
         None => {
             if let Some(peer) = &args.create_vxcan {
                 super::create_vxcan(&args.iface, peer)?;
             }
-            (open_bus(&args.iface)?, None, args.iface.clone())
+            let ui_tap = match &args.ui {
+                Some(_) => Some(open_bus(&args.iface)?),
+                None => None,
+            };
+            (open_bus(&args.iface)?, ui_tap, None, args.iface.clone())
         }
     };
+    let ids: Vec<u8> = config.motors.iter().map(|m| m.can_id).collect();
+    let bitrate_bps = config.bus_bitrate_bps;
     let motors: Vec<String> = config
         .motors
         .iter()
@@ -180,6 +197,20 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
     let mut stop_signals = super::super::signals::StopSignals::listen()?;
     let emulator = RobstrideBus::spawn(Arc::clone(&bus), config)
         .with_context(|| format!("cannot start the RobStride emulator on {place}"))?;
+    let ui = match &args.ui {
+        Some(addr) => {
+            let tap = ui_tap.map(|t| BusTap::spawn(t, bitrate_bps));
+            let title = format!("RobStride {} on {place}", motors.join(", "));
+            let live = RobstrideLive::new(emulator.monitor(), tap, &ids, &title);
+            let server = armhil::ui::serve(addr, Arc::new(live)).await?;
+            eprintln!(
+                "armhil sim robstride: web view on http://{}/",
+                server.local_addr()
+            );
+            Some(server)
+        }
+        None => None,
+    };
     tracing::info!(on = %place, motors = ?motors, "RobStride emulator running; Ctrl-C to stop");
     eprintln!(
         "armhil sim robstride: {} on {place} (Ctrl-C to stop)",
@@ -187,6 +218,9 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
     );
     let signal = stop_signals.next().await;
     tracing::info!(signal, "stopping");
+    if let Some(ui) = ui {
+        ui.shutdown().await;
+    }
     emulator.shutdown().await;
     bus.close().await;
     if let Some(server) = server {

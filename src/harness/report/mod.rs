@@ -1,6 +1,7 @@
-//! Outputs of a run: the snapshot document, the plot, the bus recordings, JUnit XML. Every
-//! file is written completely or not at all (temp file + rename).
+//! Outputs of a run: the snapshot document, the plot, the bus recordings, JUnit XML and the
+//! HTML report. Every file is written completely or not at all (temp file + rename).
 
+pub mod html;
 mod junit;
 mod snapshot;
 mod svg;
@@ -8,12 +9,33 @@ mod svg;
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
+pub use html::{index_html, report_html, IndexEntry};
 pub use junit::junit_xml;
 pub use snapshot::snapshot_yaml;
 pub use svg::plot_svg;
 
 use super::model::Record;
-use super::result::ScenarioResult;
+use super::result::{BenchInfo, ScenarioResult};
+use super::Scenario;
+use crate::devices::DeviceKind;
+
+/// What the HTML report needs to know about `scenario`'s bench.
+pub fn bench_info(scenario: &Scenario) -> BenchInfo {
+    let robstride_motors = scenario
+        .bench
+        .devices
+        .iter()
+        .filter_map(|d| match &d.kind {
+            DeviceKind::Robstride(s) => Some(s.motors.iter().map(|m| (m.can_id, m.model.name()))),
+            _ => None,
+        })
+        .flatten()
+        .collect();
+    BenchInfo {
+        arm_urdf: html::scenario_urdf(scenario),
+        robstride_motors,
+    }
+}
 
 /// Write `bytes` to `path` atomically: a temporary file beside it, then a rename.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
@@ -66,6 +88,8 @@ pub struct Written {
     pub pcap: Option<PathBuf>,
     /// The plot (`plot.svg`).
     pub plot: Option<PathBuf>,
+    /// The HTML report (`report.html`).
+    pub html: Option<PathBuf>,
 }
 
 /// Write the outputs of `result` into `dir`, as `record` asks.
@@ -101,5 +125,8 @@ pub fn write_outputs(
         write_atomic(&path, plot_svg(result).as_bytes())?;
         written.plot = Some(path);
     }
+    let path = dir.join("report.html");
+    write_atomic(&path, report_html(result).as_bytes())?;
+    written.html = Some(path);
     Ok(written)
 }

@@ -26,13 +26,17 @@ const GROUPS: [(&str, &str); 5] = [
 ];
 
 /// A shaded time window with its label.
-struct Window {
-    from: Duration,
-    to: Duration,
-    label: String,
+pub(super) struct Window {
+    /// Start (scenario time).
+    pub from: Duration,
+    /// End (scenario time).
+    pub to: Duration,
+    /// The fault.
+    pub label: String,
 }
 
-fn fault_windows(result: &ScenarioResult) -> Vec<Window> {
+/// The time windows during which each fault was active.
+pub(super) fn fault_windows(result: &ScenarioResult) -> Vec<Window> {
     let mut open: Vec<(Duration, String, String)> = Vec::new();
     let mut windows = Vec::new();
     for e in &result.faults {

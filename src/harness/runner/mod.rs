@@ -318,6 +318,7 @@ async fn run_async(scenario: &Scenario, clock: &Clock, options: &RunOptions) -> 
         recording: capture.recording,
         duration,
         wall: Duration::ZERO,
+        bench_info: crate::harness::report::bench_info(scenario),
     }
 }
 

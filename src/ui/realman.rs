@@ -1,0 +1,275 @@
+//! Realman's live source: the arm from the controller's snapshot, the TCP clients connected
+//! and the UDP push targets, faults from the emulator's table ([`sim::realman::RealmanFaultKind`])
+//! with the parameters scenario files give them.
+
+use std::sync::{Mutex, PoisonError};
+
+use serde_json::{json, Map, Value};
+use sim::realman::{RealmanFault, RealmanFaultKind, RealmanMonitor};
+
+use super::{Command, LiveSource};
+use crate::harness::report::html::arm_model;
+
+/// A parameter of a fault kind: name, description, lowest and highest value.
+type Param = (&'static str, &'static str, i64, i64);
+
+/// The parameters of each kind, as in scenario files (all required).
+fn params(kind: RealmanFaultKind) -> &'static [Param] {
+    match kind {
+        RealmanFaultKind::ReplyDelay => &[("delay_ms", "reply delay, ms", 1, 60_000)],
+        RealmanFaultKind::MalformedReply => &[("count", "replies truncated", 1, 1000)],
+        RealmanFaultKind::UdpLoss => &[("permille", "loss probability, 1/1000", 0, 1000)],
+        RealmanFaultKind::JointError => &[
+            ("joint", "joint, 1-based", 1, 7),
+            (
+                "code",
+                "joint error bits (e.g. 8 = over-temperature)",
+                1,
+                0xFFFF,
+            ),
+        ],
+        RealmanFaultKind::GripperFault => &[("bits", "gripper error bits", 1, 0xFF)],
+        RealmanFaultKind::ConnectionDrop
+        | RealmanFaultKind::UdpReorder
+        | RealmanFaultKind::PowerLoss
+        | RealmanFaultKind::Collision
+        | RealmanFaultKind::EStop => &[],
+    }
+}
+
+fn int(args: &Map<String, Value>, p: &Param) -> Result<i64, String> {
+    let (name, _, lo, hi) = *p;
+    let v = args
+        .get(name)
+        .and_then(|v| v.as_f64().or_else(|| v.as_str()?.trim().parse().ok()))
+        .ok_or_else(|| format!("`{name}` is required"))?;
+    if v.fract() != 0.0 || v < lo as f64 || v > hi as f64 {
+        return Err(format!(
+            "`{name}` must be an integer in {lo}..={hi}, got {v}"
+        ));
+    }
+    Ok(v as i64)
+}
+
+/// The fault a page command names.
+pub fn realman_fault(name: &str, args: &Map<String, Value>) -> Result<RealmanFault, String> {
+    let kind =
+        RealmanFaultKind::from_name(name).ok_or_else(|| format!("no Realman fault `{name}`"))?;
+    let p = params(kind);
+    let n = |i: usize| int(args, &p[i]);
+    Ok(match kind {
+        RealmanFaultKind::ConnectionDrop => RealmanFault::ConnectionDrop { peer_ip: None },
+        RealmanFaultKind::ReplyDelay => RealmanFault::ReplyDelay {
+            delay_ms: n(0)? as u64,
+        },
+        RealmanFaultKind::MalformedReply => RealmanFault::MalformedReply {
+            count: n(0)? as u32,
+        },
+        RealmanFaultKind::UdpLoss => RealmanFault::UdpLoss {
+            permille: n(0)? as u16,
+        },
+        RealmanFaultKind::UdpReorder => RealmanFault::UdpReorder,
+        RealmanFaultKind::JointError => RealmanFault::JointError {
+            joint: n(0)? as u8,
+            code: n(1)? as u16,
+        },
+        RealmanFaultKind::PowerLoss => RealmanFault::PowerLoss,
+        RealmanFaultKind::Collision => RealmanFault::Collision,
+        RealmanFaultKind::EStop => RealmanFault::EStop,
+        RealmanFaultKind::GripperFault => RealmanFault::GripperFault { bits: n(0)? as u8 },
+    })
+}
+
+/// A running Realman emulator as the web view sees it.
+#[derive(Debug)]
+pub struct RealmanLive {
+    monitor: RealmanMonitor,
+    hello: Value,
+    active: Mutex<Vec<RealmanFaultKind>>,
+}
+
+impl RealmanLive {
+    /// A source for `monitor`; `urdf` is the arm's model, `title` names the run.
+    pub fn new(monitor: RealmanMonitor, urdf: &str, title: &str) -> Self {
+        let model = arm_model(urdf)
+            .ok()
+            .and_then(|m| serde_json::to_value(m).ok());
+        let faults: Vec<Value> = RealmanFaultKind::ALL
+            .iter()
+            .map(|k| {
+                let params: Vec<Value> = params(*k)
+                    .iter()
+                    .map(|(name, description, _, _)| {
+                        json!({"name": name, "description": description,
+                               "required": true, "default": null})
+                    })
+                    .collect();
+                json!({"name": k.name(), "description": k.description(), "params": params})
+            })
+            .collect();
+        let hello = json!({"type": "hello", "device": "realman", "title": title,
+                           "model": model, "faults": faults});
+        Self {
+            monitor,
+            hello,
+            active: Mutex::new(Vec::new()),
+        }
+    }
+}
+
+fn round3(v: f64) -> f64 {
+    (v * 1000.0).round() / 1000.0
+}
+
+#[async_trait::async_trait]
+impl LiveSource for RealmanLive {
+    fn hello(&self) -> Value {
+        self.hello.clone()
+    }
+
+    async fn state(&self) -> Value {
+        let s = self.monitor.snapshot();
+        let push = self.monitor.with_controller(|c| c.params().push.clone());
+        let clients = self.monitor.clients();
+        let stats = self.monitor.stats();
+        // An empty push IP means every host holding a TCP connection.
+        let targets: Vec<String> = match (push.enable, push.ip.is_empty()) {
+            (false, _) => Vec::new(),
+            (true, false) => vec![format!("{}:{}", push.ip, push.port)],
+            (true, true) => clients
+                .iter()
+                .map(|c| format!("{}:{}", c.ip(), push.port))
+                .collect(),
+        };
+        let deg = |v: &[f64]| v.iter().map(|x| round3(x.to_degrees())).collect::<Vec<_>>();
+        let errors: Vec<String> = s.errors.iter().map(|e| format!("0x{e:04X}")).collect();
+        let active: Vec<&str> = self
+            .active
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .iter()
+            .map(|k| k.name())
+            .collect();
+        let p = s.pose.position_m;
+        let panel = vec![
+            json!(["status", s.status]),
+            json!(["power", if s.power_on { "on" } else { "off" }]),
+            json!([
+                "enabled",
+                s.enabled
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, e)| **e)
+                    .map(|(i, _)| format!("J{}", i + 1))
+                    .collect::<Vec<_>>()
+                    .join(" ")
+            ]),
+            json!([
+                "errors",
+                if errors.is_empty() {
+                    "none".to_owned()
+                } else {
+                    errors.join(" ")
+                }
+            ]),
+            json!(["queued moves", s.queued_moves.to_string()]),
+            json!([
+                "pose (mm)",
+                format!("{:.1}, {:.1}, {:.1}", p[0] * 1e3, p[1] * 1e3, p[2] * 1e3)
+            ]),
+            json!([
+                "TCP clients",
+                if clients.is_empty() {
+                    "none".to_owned()
+                } else {
+                    clients
+                        .iter()
+                        .map(ToString::to_string)
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                }
+            ]),
+            json!([
+                "UDP push",
+                if targets.is_empty() {
+                    "off".to_owned()
+                } else {
+                    format!(
+                        "{} every {} ms ({} sent)",
+                        targets.join(", "),
+                        push.cycle * 5,
+                        stats.push.sent
+                    )
+                }
+            ]),
+        ];
+        json!({
+            "type": "state",
+            "t": round3(s.time_ms as f64 / 1000.0),
+            "joints_deg": deg(&s.joints_rad),
+            "velocity_deg_s": deg(&s.speeds_rad_s),
+            "setpoint_deg": deg(&s.setpoint_rad),
+            "clients": clients.iter().map(ToString::to_string).collect::<Vec<_>>(),
+            "push_targets": targets,
+            "errors": errors,
+            "status": {"status": s.status, "power_on": s.power_on, "enabled": s.enabled},
+            "panel": panel,
+            "bus": null,
+            "faults": active,
+        })
+    }
+
+    async fn command(&self, command: &Command) -> Result<String, String> {
+        let kind = RealmanFaultKind::from_name(&command.fault)
+            .ok_or_else(|| format!("no Realman fault `{}`", command.fault))?;
+        let mut active = self.active.lock().unwrap_or_else(PoisonError::into_inner);
+        if command.action == "inject" {
+            let fault = realman_fault(&command.fault, &command.args)?;
+            self.monitor.inject(fault).map_err(|e| e.to_string())?;
+            active.retain(|k| *k != kind);
+            // A connection drop is an event, not a state: nothing to clear.
+            if kind != RealmanFaultKind::ConnectionDrop {
+                active.push(kind);
+            }
+            Ok(format!("injected {}", kind.name()))
+        } else {
+            self.monitor.clear(kind);
+            active.retain(|k| *k != kind);
+            Ok(format!("cleared {}", kind.name()))
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn args(v: Value) -> Map<String, Value> {
+        v.as_object().cloned().unwrap_or_default()
+    }
+
+    #[test]
+    fn page_commands_become_emulator_faults_in_range() {
+        assert_eq!(
+            realman_fault("joint_error", &args(json!({"joint": 3, "code": 8}))),
+            Ok(RealmanFault::JointError { joint: 3, code: 8 })
+        );
+        assert_eq!(
+            realman_fault("reply_delay", &args(json!({"delay_ms": "600"}))),
+            Ok(RealmanFault::ReplyDelay { delay_ms: 600 })
+        );
+        assert!(realman_fault("joint_error", &args(json!({"joint": 8, "code": 8}))).is_err());
+        assert!(realman_fault("udp_loss", &args(json!({"permille": 1001}))).is_err());
+        assert!(realman_fault("reply_delay", &Map::new()).is_err());
+        assert!(realman_fault("nope", &Map::new()).is_err());
+        let full = args(
+            json!({"delay_ms": 1, "count": 1, "permille": 1, "joint": 1, "code": 1, "bits": 1}),
+        );
+        for kind in RealmanFaultKind::ALL {
+            assert_eq!(
+                realman_fault(kind.name(), &full).map(|f| f.kind()),
+                Ok(kind)
+            );
+        }
+    }
+}

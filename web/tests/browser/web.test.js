@@ -1,0 +1,269 @@
+// Browser tests in headless Chromium (playwright-core, the system's /usr/bin/chromium):
+// the live view of `armhil sim piper --ui` follows a MOVE J and injects/clears a fault, and a
+// failing scenario's report.html opened from disk shows the failure and replays with the
+// slider. Screenshots go to $ARMHIL_SCREENSHOTS (default out/web).
+//
+// Needs ARMHIL_BIN (the armhil binary); scripts/ci/web.sh sets it.
+const test = require("node:test");
+const assert = require("node:assert/strict");
+const fs = require("node:fs");
+const os = require("node:os");
+const path = require("node:path");
+const net = require("node:net");
+const { spawn, spawnSync } = require("node:child_process");
+const { chromium } = require("playwright-core");
+
+const ROOT = path.resolve(__dirname, "..", "..", "..");
+const BIN = process.env.ARMHIL_BIN || path.join(ROOT, "target", "debug", "armhil");
+const CHROMIUM = process.env.CHROMIUM || "/usr/bin/chromium";
+const SHOTS = path.resolve(ROOT, process.env.ARMHIL_SCREENSHOTS || "out/web");
+const FIXTURES = path.join(__dirname, "..", "fixtures");
+const FLAGS = ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+  "--disable-background-networking", "--disable-component-update", "--disable-sync"];
+
+fs.mkdirSync(SHOTS, { recursive: true });
+
+function freePort() {
+  return new Promise((resolve, reject) => {
+    const srv = net.createServer();
+    srv.listen(0, "127.0.0.1", () => {
+      const { port } = srv.address();
+      srv.close(() => resolve(port));
+    });
+    srv.on("error", reject);
+  });
+}
+
+async function browser() {
+  const profile = fs.mkdtempSync(path.join(os.tmpdir(), "armhil-chromium-"));
+  const context = await chromium.launchPersistentContext(profile, {
+    executablePath: CHROMIUM, headless: true, args: ["--headless", ...FLAGS],
+    viewport: { width: 1280, height: 900 },
+  });
+  return { context, profile };
+}
+
+async function until(what, check, timeoutMs) {
+  const end = Date.now() + timeoutMs;
+  let last;
+  while (Date.now() < end) {
+    last = await check();
+    if (last) return last;
+    await new Promise((r) => setTimeout(r, 100));
+  }
+  throw new Error(`timed out waiting for ${what}`);
+}
+
+test("the live view follows a MOVE J and injects and clears a fault", async (t) => {
+  const can = await freePort();
+  const ui = await freePort();
+  let err = "";
+  const sim = spawn(BIN, ["sim", "piper", "--socketcand", `127.0.0.1:${can}`, "--ui", `127.0.0.1:${ui}`],
+    { stdio: ["ignore", "ignore", "pipe"] });
+  sim.stderr.on("data", (d) => { err += d; });
+  t.after(() => sim.kill("SIGINT"));
+  await until("the web view to start", () => {
+    if (sim.exitCode !== null) throw new Error("armhil sim exited: " + err);
+    return err.includes("web view on http://");
+  }, 30000);
+
+  const { context, profile } = await browser();
+  t.after(async () => {
+    await context.close();
+    fs.rmSync(profile, { recursive: true, force: true });
+  });
+  const page = await context.newPage();
+  await page.goto(`http://127.0.0.1:${ui}/`);
+  await page.waitForFunction(() => window.armhilLive && window.armhilLive.ready && window.armhilLive.state, null, { timeout: 10000 });
+  // Before any command the drawn arm is where the emulator's physics has it (a disabled arm
+  // sags under gravity).
+  const before = await until("the drawn angles", () => page.evaluate(() => {
+    const a = window.armhilLive.renderedDeg();
+    const s = window.armhilLive.state.physical_deg;
+    return a.length === 6 && a.every((v, i) => Math.abs(v - s[i]) < 2) ? a : null;
+  }), 5000);
+  assert.equal(before.length, 6);
+
+  // Drive the emulator with a scenario over socketcand while the page watches.
+  const out = fs.mkdtempSync(path.join(os.tmpdir(), "armhil-live-"));
+  const run = spawn(BIN, ["run", "--socketcand", `127.0.0.1:${can}`, "--out", out, path.join(FIXTURES, "live_move_j.yaml")],
+    { stdio: ["ignore", "pipe", "pipe"] });
+  let runOut = "";
+  run.stdout.on("data", (d) => { runOut += d; });
+  run.stderr.on("data", (d) => { runOut += d; });
+  const target = [40, 50, -60, 20, 30, 45];
+  const drawn = await until("the drawn arm to reach the MOVE J target", async () => {
+    const a = await page.evaluate(() => window.armhilLive.renderedDeg());
+    return a.every((v, i) => Math.abs(v - target[i]) < 1.0) ? a : null;
+  }, 30000);
+  const runCode = await new Promise((r) => (run.exitCode !== null ? r(run.exitCode) : run.on("exit", r)));
+  assert.equal(runCode, 0, runOut);
+  // The canvas carries the same angles for anyone reading the DOM.
+  const attr = await page.getAttribute("#arm-view", "data-angles");
+  const fromDom = attr.split(",").map(Number);
+  assert.ok(fromDom.every((v, i) => Math.abs(v - target[i]) < 1.0), `data-angles ${attr} (drawn ${drawn})`);
+  // Frame rate over 3 s while the arm holds still (each state message is drawn).
+  const count = () => page.evaluate(() => [window.armhilLive.framesDrawn(), window.armhilLive.states, performance.now()]);
+  const [f0, s0, t0] = await count();
+  await new Promise((r) => setTimeout(r, 3000));
+  const [f1, s1, t1] = await count();
+  const fps = ((f1 - f0) * 1000) / (t1 - t0);
+  const sps = ((s1 - s0) * 1000) / (t1 - t0);
+  console.log(`# live view: ${fps.toFixed(1)} frames/s drawn, ${sps.toFixed(1)} state messages/s`);
+  assert.ok(fps >= 30, `draws at ${fps} frames/s`);
+  const ids = await page.evaluate(() => window.armhilLive.state.bus.ids.map((r) => r[0]));
+  assert.ok(ids.includes("2A5"), `bus figures list the joint feedback: ${ids}`);
+  await page.screenshot({ path: path.join(SHOTS, "live.png") });
+
+  // A fault from the panel: the emulator reports it in the state it streams.
+  await page.selectOption("#fault-kind", "motor_over_temp");
+  await page.fill("#fault-arg-joint", "2");
+  await page.fill("#fault-arg-temp_c", "95");
+  await page.click("#fault-inject");
+  await until("the emulator to report the fault", () => page.evaluate(() => {
+    const s = window.armhilLive.state;
+    return s.faults.some((f) => f.includes("motor_over_temp")) && s.status.driver_faults[1].length > 0
+      && Math.abs(s.temperature_c[1] - 95) < 1;
+  }), 5000);
+  const ack = await page.textContent("#fault-ack");
+  assert.match(ack, /injected motor_over_temp/);
+  // The text panels refresh at 5 Hz.
+  await until("the panel to show the fault", async () => /over_temp/.test(await page.textContent("#status")), 2000);
+  await page.screenshot({ path: path.join(SHOTS, "live_fault.png") });
+  await page.click("#fault-clear");
+  await until("the fault to clear", () => page.evaluate(() => window.armhilLive.state.faults.length === 0
+    && window.armhilLive.state.temperature_c[1] < 90), 5000);
+  // A malformed command is refused, not fatal.
+  const acks = await page.evaluate(() => window.armhilLive.acks.length);
+  await page.selectOption("#fault-kind", "external_torque");
+  await page.fill("#fault-arg-joint", "9");
+  await page.click("#fault-inject");
+  const refusal = await until("the refusal", () => page.evaluate((n) => window.armhilLive.acks[n], acks), 5000);
+  assert.equal(refusal.ok, false);
+  assert.match(refusal.message, /joint/);
+  assert.match(await page.textContent("#fault-ack"), /joint/);
+});
+
+test("the RobStride live view shows each motor's dial and reports an injected fault", async (t) => {
+  const can = await freePort();
+  const ui = await freePort();
+  let err = "";
+  const sim = spawn(BIN, ["sim", "robstride", "--socketcand", `127.0.0.1:${can}`, "--ui", `127.0.0.1:${ui}`,
+    "--motor", "1:RS03", "--motor", "2:RS00"], { stdio: ["ignore", "ignore", "pipe"] });
+  sim.stderr.on("data", (d) => { err += d; });
+  t.after(() => sim.kill("SIGINT"));
+  await until("the web view to start", () => {
+    if (sim.exitCode !== null) throw new Error("armhil sim exited: " + err);
+    return err.includes("web view on http://");
+  }, 30000);
+  const { context, profile } = await browser();
+  t.after(async () => {
+    await context.close();
+    fs.rmSync(profile, { recursive: true, force: true });
+  });
+  const page = await context.newPage();
+  await page.goto(`http://127.0.0.1:${ui}/`);
+  await page.waitForFunction(() => window.armhilLive && window.armhilLive.ready && window.armhilLive.state, null, { timeout: 10000 });
+  await until("two dials drawn", async () => ((await page.getAttribute("#arm-view", "data-angles")) || "").split(",").length === 2, 5000);
+  await page.selectOption("#fault-kind", "under_voltage");
+  await page.fill("#fault-arg-motor", "2");
+  await page.click("#fault-inject");
+  await until("motor 2 to report under_voltage", () => page.evaluate(() => {
+    const m = window.armhilLive.state.motors.find((x) => x.id === 2);
+    return m.faults.includes("under_voltage") && m.bus_voltage_v < 12;
+  }), 5000);
+  const m1 = await page.evaluate(() => window.armhilLive.state.motors.find((x) => x.id === 1).faults);
+  assert.deepEqual(m1, [], "motor 1 untouched");
+  await until("the panel to show the fault", async () => /under_voltage/.test(await page.textContent("#status")), 2000);
+  await page.screenshot({ path: path.join(SHOTS, "live_robstride.png") });
+  await page.click("#fault-clear");
+  await until("the cause to clear", () => page.evaluate(() => window.armhilLive.state.faults.length === 0
+    && window.armhilLive.state.motors.find((x) => x.id === 2).bus_voltage_v > 20), 5000);
+});
+
+test("the Realman live view follows a movej, lists its TCP client and reports a joint error", async (t) => {
+  const tcp = await freePort();
+  const ui = await freePort();
+  let err = "";
+  const sim = spawn(BIN, ["sim", "realman", "--port", String(tcp), "--ui", `127.0.0.1:${ui}`], { stdio: ["ignore", "ignore", "pipe"] });
+  sim.stderr.on("data", (d) => { err += d; });
+  t.after(() => sim.kill("SIGINT"));
+  await until("the web view to start", () => {
+    if (sim.exitCode !== null) throw new Error("armhil sim exited: " + err);
+    return err.includes("web view on http://");
+  }, 30000);
+  const { context, profile } = await browser();
+  t.after(async () => {
+    await context.close();
+    fs.rmSync(profile, { recursive: true, force: true });
+  });
+  const page = await context.newPage();
+  await page.goto(`http://127.0.0.1:${ui}/`);
+  await page.waitForFunction(() => window.armhilLive && window.armhilLive.ready && window.armhilLive.state, null, { timeout: 10000 });
+  // A client of the JSON protocol: joints in 0.001°.
+  const client = net.connect(tcp, "127.0.0.1");
+  t.after(() => client.destroy());
+  await new Promise((r) => client.once("connect", r));
+  const target = [30, 20, -40, 10, 25, -15];
+  client.write(JSON.stringify({ command: "movej", joint: target.map((d) => d * 1000), v: 50, r: 0, trajectory_connect: 0 }) + "\r\n");
+  await until("the drawn arm to reach the movej target", async () => {
+    const a = await page.evaluate(() => window.armhilLive.renderedDeg());
+    return a.length === 6 && a.every((v, i) => Math.abs(v - target[i]) < 1.0);
+  }, 20000);
+  const clients = await page.evaluate(() => window.armhilLive.state.clients);
+  assert.equal(clients.length, 1, `one TCP client: ${clients}`);
+  await page.selectOption("#fault-kind", "joint_error");
+  await page.fill("#fault-arg-joint", "3");
+  await page.fill("#fault-arg-code", "8");
+  await page.click("#fault-inject");
+  await until("the controller to report the joint error", () => page.evaluate(() => window.armhilLive.state.errors.length > 0
+    && window.armhilLive.state.faults.includes("joint_error")), 5000);
+  await until("the panel to show it", async () => /0x/.test(await page.textContent("#status")), 2000);
+  await page.screenshot({ path: path.join(SHOTS, "live_realman.png") });
+});
+
+test("a failing scenario's report.html shows the failure and replays with the slider", async (t) => {
+  const out = fs.mkdtempSync(path.join(os.tmpdir(), "armhil-report-"));
+  const r = spawnSync(BIN, ["run", "--out", out, path.join(FIXTURES, "report_failing.yaml")], { encoding: "utf8" });
+  assert.equal(r.status, 1, "the scenario fails: " + r.stdout + r.stderr);
+  const report = path.join(out, "report_failing", "report.html");
+  assert.ok(fs.existsSync(path.join(out, "index.html")), "index.html per suite");
+
+  const { context, profile } = await browser();
+  t.after(async () => {
+    await context.close();
+    fs.rmSync(profile, { recursive: true, force: true });
+  });
+  const page = await context.newPage();
+  const errors = [];
+  page.on("pageerror", (e) => errors.push(String(e)));
+  await page.goto("file://" + report);
+  const failure = await page.textContent("#first-failure");
+  assert.match(failure, /Step 3 `wait_until` \(line \d+\) timed out/);
+  assert.match(failure, /expected:/);
+  await page.waitForFunction(() => document.querySelectorAll("canvas.plot").length >= 4 && document.getElementById("arm-view").dataset.frames);
+  // The cursor starts at the failure; move the slider to the start, then to the middle.
+  const duration = await page.evaluate(() => window.armhilReport.data.duration);
+  await page.fill("#time-slider", "0");
+  await until("the replay at 0 s", async () => (await page.getAttribute("#arm-view", "data-angles")).split(",").every((a) => Math.abs(Number(a)) < 0.5), 3000);
+  const mid = (duration / 2).toFixed(3);
+  await page.fill("#time-slider", mid);
+  assert.equal(await page.evaluate(() => window.armhilReport.cursor()), Number(mid));
+  const angles = await until("the replay to move", async () => {
+    const a = (await page.getAttribute("#arm-view", "data-angles")).split(",").map(Number);
+    return a.some((v) => Math.abs(v) > 5) ? a : null;
+  }, 3000);
+  // The drawn pose is the traced one at the cursor.
+  const traced = await page.evaluate((t) => {
+    const d = window.armhilReport.data;
+    const i = window.ArmHil.nearestIndex(d.trace.t, t);
+    const c = d.trace.columns.find((x) => x.name === "j1_deg");
+    return c.values[i] * c.quantum;
+  }, Number(mid));
+  assert.ok(Math.abs(angles[0] - traced) < 0.01, `J1 ${angles[0]} vs traced ${traced}`);
+  assert.equal(await page.locator("#frames tbody tr").count() > 100, true, "decoded frames listed");
+  assert.match(await page.textContent("#frames"), /JointFeedback12/);
+  assert.deepEqual(errors, []);
+  await page.screenshot({ path: path.join(SHOTS, "report.png"), fullPage: false });
+  await page.locator("#plots").screenshot({ path: path.join(SHOTS, "report_plots.png") });
+});

@@ -1,0 +1,68 @@
+// Forward kinematics of the drawn arm against the emulator's own (fixture written by the Rust
+// test `the_page_fk_fixture_is_current`), plus the transforms it is built from.
+const test = require("node:test");
+const assert = require("node:assert/strict");
+const path = require("node:path");
+const fs = require("node:fs");
+const A = require("../../shared/arm3d.js");
+
+const close = (a, b, tol, what) => {
+  for (let i = 0; i < 3; i++) assert.ok(Math.abs(a[i] - b[i]) < tol, `${what}: ${a} vs ${b}`);
+};
+
+test("rpy is fixed-axis X then Y then Z", () => {
+  const m = A.fromXyzRpy([1, 2, 3], [0, 0, Math.PI / 2]);
+  close(A.apply(m, [1, 0, 0]), [1, 3, 3], 1e-12, "yaw turns x into y");
+  const p = A.fromXyzRpy([0, 0, 0], [Math.PI / 2, 0, Math.PI / 2]);
+  // Roll first (y -> z), then yaw (x -> y): y ends on z.
+  close(A.apply(p, [0, 1, 0]), [0, 0, 1], 1e-12, "roll then yaw");
+});
+
+test("a two-link planar arm reaches where trigonometry says", () => {
+  const model = {
+    joints: [
+      { name: "a", type: "revolute", parent: "base", child: "l1", xyz: [0, 0, 0.1], rpy: [0, 0, 0], axis: [0, 0, 1] },
+      { name: "b", type: "revolute", parent: "l1", child: "l2", xyz: [0.3, 0, 0], rpy: [0, 0, 0], axis: [0, 0, 1] },
+      { name: "tip", type: "fixed", parent: "l2", child: "tip", xyz: [0.2, 0, 0], rpy: [0, 0, 0], axis: [1, 0, 0] },
+    ],
+  };
+  const frames = A.linkFrames(model, A.valuesFromDeg(model, [90, -90]));
+  close(A.origin(frames.l2), [0, 0.3, 0.1], 1e-12, "elbow");
+  close(A.origin(frames.tip), [0.2, 0.3, 0.1], 1e-12, "tip");
+  assert.deepEqual(A.armJoints(model).map((j) => j.name), ["a", "b"]);
+});
+
+test("mimic joints follow their leader", () => {
+  const model = {
+    joints: [
+      { name: "f1", type: "prismatic", parent: "base", child: "a", xyz: [0, 0, 0], rpy: [0, 0, 0], axis: [0, 1, 0] },
+      { name: "f2", type: "prismatic", parent: "base", child: "b", xyz: [0, 0, 0], rpy: [0, 0, 0], axis: [0, 1, 0], mimic: { joint: "f1", multiplier: -1, offset: 0 } },
+    ],
+  };
+  const frames = A.linkFrames(model, A.valuesFromDeg(model, [], 0.06));
+  close(A.origin(frames.a), [0, 0.03, 0], 1e-12, "finger 1");
+  close(A.origin(frames.b), [0, -0.03, 0], 1e-12, "finger 2");
+});
+
+test("Piper links match the emulator's kinematics", () => {
+  const file = path.join(__dirname, "..", "fixtures", "piper_fk.json");
+  const { model, cases } = JSON.parse(fs.readFileSync(file, "utf8"));
+  assert.equal(A.armJoints(model).length, 6);
+  for (const c of cases) {
+    const frames = A.linkFrames(model, A.valuesFromDeg(model, c.deg, c.gripper_m));
+    for (const [link, want] of Object.entries(c.links)) {
+      assert.ok(frames[link], `link ${link} drawn`);
+      close(A.origin(frames[link]), want, 1e-6, `${link} at ${c.deg}`);
+    }
+  }
+});
+
+test("the projection puts the target in the middle and nearer points lower in depth", () => {
+  const cam = { yaw: 0.3, pitch: 0.4, distance: 2, target: [0, 0, 0.2] };
+  const proj = A.projector(cam, 400, 300);
+  const c = proj([0, 0, 0.2]);
+  assert.ok(Math.abs(c[0] - 200) < 1e-9 && Math.abs(c[1] - 150) < 1e-9);
+  assert.ok(Math.abs(c[2] - 2) < 1e-9);
+  const up = proj([0, 0, 0.5]);
+  assert.ok(up[1] < c[1], "higher in the world is higher on screen");
+});
