@@ -55,23 +55,25 @@ pub(crate) fn sim_runtime() -> &'static tokio::runtime::Runtime {
     RT.get_or_init(|| build_runtime("armhil-sim"))
 }
 
-/// Runs `fut` to completion on `rt` with the GIL released. From inside a runtime thread (a
-/// realtime callback calling the arm) `block_on` is not allowed, so a helper thread waits.
+/// Runs `fut` to completion on `rt` with the GIL released. Inside a runtime thread (a
+/// realtime callback calling the arm) `block_on` is not allowed, and simply blocking the
+/// worker could starve the very tasks `fut` waits for (a worker's next-task slot is never
+/// stolen): the worker hands its queue over first (`block_in_place`).
 pub(crate) fn block_on<F>(py: Python<'_>, rt: &'static tokio::runtime::Runtime, fut: F) -> F::Output
 where
     F: Future + Send,
     F::Output: Send,
 {
-    py.detach(|| {
-        if tokio::runtime::Handle::try_current().is_ok() {
-            std::thread::scope(|s| {
-                s.spawn(|| rt.block_on(fut))
-                    .join()
-                    .unwrap_or_else(|p| std::panic::resume_unwind(p))
-            })
-        } else {
-            rt.block_on(fut)
-        }
+    use tokio::runtime::{Handle, RuntimeFlavor};
+    py.detach(|| match Handle::try_current().map(|h| h.runtime_flavor()) {
+        Err(_) => rt.block_on(fut),
+        Ok(RuntimeFlavor::MultiThread) => tokio::task::block_in_place(|| rt.block_on(fut)),
+        // Not one of ours (ours are multi-thread): wait on a helper thread.
+        Ok(_) => std::thread::scope(|s| {
+            s.spawn(|| rt.block_on(fut))
+                .join()
+                .unwrap_or_else(|p| std::panic::resume_unwind(p))
+        }),
     })
 }
 
