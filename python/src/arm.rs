@@ -770,10 +770,7 @@ fn trajectory_mode_of(mode: i64, radio: i64) -> ArmResult<TrajectoryMode> {
 
 /// Hands one realtime state to the Python callback (GIL taken on this driver thread).
 fn deliver(cb: &Py<PyAny>, state: &darm::ArmRealtimeState) {
-    if crate::shutting_down() {
-        return;
-    }
-    Python::attach(|py| {
+    crate::with_python(|py| {
         let r = ArmRealtimeState::from_driver(py, state)
             .and_then(|s| Py::new(py, s))
             .and_then(|s| cb.call1(py, (s,)));

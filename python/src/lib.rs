@@ -13,8 +13,9 @@
 #![allow(unsafe_code)]
 
 use std::future::Future;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::OnceLock;
+use std::time::{Duration, Instant};
 
 use driver::arm::AbcErrorCode;
 use pyo3::exceptions::PyRuntimeError;
@@ -28,9 +29,19 @@ pub mod types;
 /// Set at interpreter exit: realtime callbacks stop calling into Python.
 static SHUTTING_DOWN: AtomicBool = AtomicBool::new(false);
 
-/// Whether the interpreter is exiting.
-pub(crate) fn shutting_down() -> bool {
-    SHUTTING_DOWN.load(Ordering::Relaxed)
+/// Driver threads inside (or about to enter) Python. A thread that holds the GIL when the
+/// interpreter finalizes aborts the process, so exit waits for them.
+static IN_PYTHON: AtomicUsize = AtomicUsize::new(0);
+
+/// Runs `f` with the GIL from a driver thread, unless the interpreter is exiting.
+pub(crate) fn with_python(f: impl FnOnce(Python<'_>)) {
+    // Counted before the flag is read: `_shutdown` sets the flag, then waits for the count,
+    // so every thread either sees the flag or is waited for.
+    IN_PYTHON.fetch_add(1, Ordering::SeqCst);
+    if !SHUTTING_DOWN.load(Ordering::SeqCst) {
+        Python::attach(f);
+    }
+    IN_PYTHON.fetch_sub(1, Ordering::SeqCst);
 }
 
 fn build_runtime(name: &str) -> tokio::runtime::Runtime {
@@ -122,10 +133,18 @@ fn make_codes(m: &Bound<'_, PyModule>) -> PyResult<()> {
     Ok(())
 }
 
-/// Called at interpreter exit: realtime callbacks stop entering Python.
+/// Called at interpreter exit: realtime callbacks stop entering Python, and those already
+/// in it finish (the GIL is released meanwhile) before finalization starts.
 #[pyfunction]
-fn _shutdown() {
-    SHUTTING_DOWN.store(true, Ordering::Relaxed);
+fn _shutdown(py: Python<'_>) {
+    SHUTTING_DOWN.store(true, Ordering::SeqCst);
+    py.detach(|| {
+        // A callback stuck in user code must not hang the exit forever.
+        let end = Instant::now() + Duration::from_secs(5);
+        while IN_PYTHON.load(Ordering::SeqCst) > 0 && Instant::now() < end {
+            std::thread::sleep(Duration::from_millis(1));
+        }
+    });
 }
 
 /// Converts a message into the `RuntimeError` the API raises for bad parameters.
