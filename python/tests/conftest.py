@@ -43,6 +43,17 @@ def measure_rate(arm: ArmInterface, seconds: float = 1.0) -> float:
     return n / seconds
 
 
+def stops_growing(items: list, quiet_s: float = 0.3, timeout_s: float = 5.0) -> bool:
+    """Whether `items` stops growing (no new entry for `quiet_s`) within `timeout_s`."""
+    end = time.monotonic() + timeout_s
+    while time.monotonic() < end:
+        before = len(items)
+        time.sleep(quiet_s)
+        if len(items) == before:
+            return True
+    return False
+
+
 def returns_within(fn: Callable[[], object], timeout_s: float) -> bool:
     """Runs `fn` on a thread; whether it returned within `timeout_s` (no deadlock)."""
     t = threading.Thread(target=fn, daemon=True)
