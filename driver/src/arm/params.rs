@@ -125,8 +125,12 @@ pub struct ArmFactoryParam {
     pub udp_cycle: u32,
     /// Whether a gripper is fitted and should be read (`enable_gripper`, default false).
     pub enable_gripper: bool,
-    /// SocketCAN interface (`can_interface`, Piper, default "can0").
+    /// SocketCAN interface (`can_interface`, Piper, default "can0"); with `socketcand`, the
+    /// bus name opened on the server.
     pub can_interface: String,
+    /// A socketcand server (`socketcand`, Piper, `HOST:PORT`) to reach the CAN bus through
+    /// instead of a local SocketCAN interface; `None` = SocketCAN.
+    pub socketcand: Option<String>,
 }
 
 impl ArmFactoryParam {
@@ -142,6 +146,7 @@ impl ArmFactoryParam {
             udp_cycle: 1,
             enable_gripper: false,
             can_interface: DEFAULT_CAN_INTERFACE.to_string(),
+            socketcand: None,
         }
     }
 
@@ -157,12 +162,23 @@ impl ArmFactoryParam {
             udp_cycle: 1,
             enable_gripper: false,
             can_interface: can_interface.to_string(),
+            socketcand: None,
+        }
+    }
+
+    /// Piper parameters for the bus `bus_name` of the socketcand server at `addr`
+    /// (`HOST:PORT`).
+    pub fn piper_socketcand(arm_name: &str, addr: &str, bus_name: &str) -> Self {
+        Self {
+            socketcand: Some(addr.to_string()),
+            ..Self::piper(arm_name, bus_name)
         }
     }
 
     /// Validates string key/value pairs (the API's dictionary form). Realman needs `ip`,
     /// `port`, `udp_ip`, `udp_port` and `udp_cycle`; every vendor needs `arm_type` and
-    /// `arm_name`; `enable_gripper` ("true"/"false") and `can_interface` are optional. Keys
+    /// `arm_name`; `enable_gripper` ("true"/"false"), `can_interface` and `socketcand`
+    /// (`HOST:PORT`) are optional. Keys
     /// a vendor does not use are still checked when present.
     pub fn from_map(map: &BTreeMap<String, String>) -> Result<Self, ParamError> {
         let get = |key: &'static str| map.get(key).map(String::as_str);
@@ -210,6 +226,9 @@ impl ArmFactoryParam {
                 return Err(bad("can_interface", v, "an interface name"));
             }
             p.can_interface = v.to_string();
+        }
+        if let Some(v) = get("socketcand") {
+            p.socketcand = Some(parse_host_port(v)?);
         }
         Ok(p)
     }
@@ -264,6 +283,19 @@ fn parse_cycle(v: &str) -> Result<u32, ParamError> {
         });
     }
     Ok(n as u32)
+}
+
+/// `HOST:PORT` with a port 1–65535 (the host is resolved when connecting).
+fn parse_host_port(v: &str) -> Result<String, ParamError> {
+    let text = v.trim();
+    let Some((host, port)) = text.rsplit_once(':') else {
+        return Err(bad("socketcand", v, "HOST:PORT"));
+    };
+    if host.is_empty() {
+        return Err(bad("socketcand", v, "HOST:PORT"));
+    }
+    parse_port("socketcand", port, 1)?;
+    Ok(text.to_string())
 }
 
 fn parse_bool(v: &str) -> Result<bool, ParamError> {
@@ -393,8 +425,32 @@ mod tests {
             ArmFactoryParam::from_map(&m2).unwrap().can_interface,
             "vxcan0"
         );
-        let mut m3 = m;
+        let mut m3 = m.clone();
         m3.insert("port".into(), "x".into());
         assert!(ArmFactoryParam::from_map(&m3).is_err());
+        assert_eq!(ArmFactoryParam::from_map(&m).unwrap().socketcand, None);
+    }
+
+    #[test]
+    fn socketcand_takes_host_and_port() {
+        let mut m: BTreeMap<String, String> = [("arm_type", "piper"), ("arm_name", "right")]
+            .into_iter()
+            .map(|(k, v)| (k.to_string(), v.to_string()))
+            .collect();
+        m.insert("socketcand".into(), "127.0.0.1:29536".into());
+        let p = ArmFactoryParam::from_map(&m).unwrap();
+        assert_eq!(p.socketcand.as_deref(), Some("127.0.0.1:29536"));
+        assert_eq!(p.can_interface, DEFAULT_CAN_INTERFACE);
+        for (value, code) in [
+            ("127.0.0.1", AbcErrorCode::ParamError),
+            (":29536", AbcErrorCode::ParamError),
+            ("host:port", AbcErrorCode::ParamError),
+            ("localhost:0", AbcErrorCode::ParamOutOfRange),
+        ] {
+            m.insert("socketcand".into(), value.into());
+            let e = ArmFactoryParam::from_map(&m).unwrap_err();
+            assert_eq!(e.code(), code, "{value}: {e}");
+            assert!(e.to_string().contains("socketcand"), "{e}");
+        }
     }
 }

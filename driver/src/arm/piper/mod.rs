@@ -95,10 +95,40 @@ async fn open_interface(iface: &str) -> ArmResult<Piper> {
     ))
 }
 
+/// Opens the driver on bus `bus_name` of the socketcand server at `addr` (no re-open when
+/// the connection drops: the link then reads as lost, as an unplugged adapter does).
+async fn open_socketcand(addr: &str, bus_name: &str) -> ArmResult<Piper> {
+    let bus = bus::socketcand::SocketcandBus::connect(addr, bus_name)
+        .await
+        .map_err(|e| ArmError::caused_by(super::AbcErrorCode::ArmDataSendFailed, e))?;
+    crate::piper::PiperBuilder::new(Arc::new(bus))
+        .connect()
+        .await
+        .map_err(|e| {
+            let mut err = convert::error(e);
+            err.message = format!("socketcand {addr} bus {bus_name:?}: {}", err.message);
+            err
+        })
+}
+
+/// Where a Piper created from parameters finds its bus.
+#[derive(Debug, Clone)]
+enum BusPlace {
+    /// A SocketCAN interface.
+    Interface(String),
+    /// A bus on a socketcand server.
+    Socketcand {
+        /// `HOST:PORT`.
+        addr: String,
+        /// The bus name opened on the server.
+        bus_name: String,
+    },
+}
+
 /// A Piper arm behind the Arm API.
 pub struct PiperArm {
     name: String,
-    can_interface: Option<String>,
+    bus_place: Option<BusPlace>,
     options: PiperArmOptions,
     prebuilt: Mutex<Option<Piper>>,
     hub: Arc<RealtimeHub>,
@@ -118,11 +148,19 @@ impl Drop for Link {
 }
 
 impl PiperArm {
-    /// An arm on the SocketCAN interface named in `params.can_interface`.
+    /// An arm on the SocketCAN interface named in `params.can_interface`, or with
+    /// `params.socketcand` on that bus of the socketcand server.
     pub fn new(params: ArmFactoryParam) -> Self {
+        let place = match params.socketcand {
+            Some(addr) => BusPlace::Socketcand {
+                addr,
+                bus_name: params.can_interface,
+            },
+            None => BusPlace::Interface(params.can_interface),
+        };
         Self {
             name: params.arm_name,
-            can_interface: Some(params.can_interface),
+            bus_place: Some(place),
             options: PiperArmOptions::default(),
             prebuilt: Mutex::new(None),
             hub: Arc::new(RealtimeHub::default()),
@@ -135,7 +173,7 @@ impl PiperArm {
     pub fn from_client(name: &str, piper: Piper, options: PiperArmOptions) -> Self {
         Self {
             name: name.to_string(),
-            can_interface: None,
+            bus_place: None,
             options,
             prebuilt: Mutex::new(Some(piper)),
             hub: Arc::new(RealtimeHub::default()),
@@ -157,9 +195,12 @@ impl PiperArm {
             .lock()
             .unwrap_or_else(|p| p.into_inner())
             .take();
-        let piper = match (taken, &self.can_interface) {
+        let piper = match (taken, &self.bus_place) {
             (Some(p), _) => p,
-            (None, Some(iface)) => open_interface(iface).await?,
+            (None, Some(BusPlace::Interface(iface))) => open_interface(iface).await?,
+            (None, Some(BusPlace::Socketcand { addr, bus_name })) => {
+                open_socketcand(addr, bus_name).await?
+            }
             (None, None) => {
                 return Err(ArmError::new(
                     super::AbcErrorCode::InvalidHandle,

@@ -1,0 +1,64 @@
+"""Emulators running in this process in real time, started as ``armhil sim <device>`` starts
+them. Each is a context manager (the emulator stops at the end of the ``with`` block):
+
+    with armhil.sim.realman() as emu:
+        arm = ArmFactory.create_arm("realman", "left_arm", emu.params)
+
+Faults use each emulator's own names: ``emu.inject("reply_delay", delay_ms=600)`` on the
+Realman, ``emu.inject("comm_loss", joint=3)`` on the Piper, then ``emu.clear(...)``.
+"""
+
+from typing import List, Optional, Sequence
+
+from armhil._armhil import (
+    PiperEmulator,
+    RealmanEmulator,
+    RobstrideEmulator,
+    sim_piper as _piper,
+    sim_realman as _realman,
+    sim_robstride as _robstride,
+)
+
+__all__ = [
+    "PiperEmulator",
+    "RealmanEmulator",
+    "RobstrideEmulator",
+    "piper",
+    "realman",
+    "robstride",
+]
+
+
+def realman(
+    port: int = 0,
+    host: str = "127.0.0.1",
+    model: str = "RM65-B",
+    firmware: str = "V1.7.0",
+    initial_joints_deg: Optional[Sequence[float]] = None,
+    gripper: bool = True,
+) -> RealmanEmulator:
+    """A Realman controller on TCP ``host:port`` (port 0 = a free port; see ``emu.port``)."""
+    joints = None if initial_joints_deg is None else [float(j) for j in initial_joints_deg]
+    return _realman(port, host, model, firmware, joints, gripper)
+
+
+def piper(
+    iface: Optional[str] = None,
+    socketcand: str = "127.0.0.1:0",
+    firmware: str = "S-V1.8-2",
+    initial_joints_deg: Optional[Sequence[float]] = None,
+) -> PiperEmulator:
+    """A Piper on SocketCAN ``iface``, or (default) behind a socketcand server on
+    ``socketcand`` (HOST:PORT, port 0 = a free port; see ``emu.host`` / ``emu.port``)."""
+    joints = None if initial_joints_deg is None else [float(j) for j in initial_joints_deg]
+    return _piper(iface, socketcand, firmware, joints)
+
+
+def robstride(
+    motors: Optional[List[str]] = None,
+    iface: Optional[str] = None,
+    socketcand: str = "127.0.0.1:0",
+) -> RobstrideEmulator:
+    """RobStride actuators (``motors``: "ID:MODEL" strings, default ``["127:RS03"]``) on
+    SocketCAN ``iface`` or (default) behind a socketcand server."""
+    return _robstride(motors, iface, socketcand)
