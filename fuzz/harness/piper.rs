@@ -67,7 +67,7 @@ pub fn piper_emulator(data: &[u8]) {
     while !input.is_empty() && ticks < MAX_TICKS {
         let before = offsets_zero(&fw);
         let tag = input.byte().unwrap_or(0);
-        if tag % 4 == 0 {
+        if tag.is_multiple_of(4) {
             let n = u32::from(input.byte().unwrap_or(0) % 32) + 1;
             for _ in 0..n {
                 fw.tick();

@@ -38,7 +38,7 @@ pub fn robstride_emulator(data: &[u8]) {
     let mut ticks = 0u32;
     while !input.is_empty() && ticks < MAX_TICKS {
         let tag = input.byte().unwrap_or(0);
-        let out = if tag % 4 == 0 {
+        let out = if tag.is_multiple_of(4) {
             let n = u32::from(input.byte().unwrap_or(0) % 64) + 1;
             let mut out = Vec::new();
             for _ in 0..n {

@@ -23,11 +23,11 @@ pub fn seeds(target: &str, root: &Path) -> std::io::Result<Vec<Seed>> {
     let fixtures = root.join("fixtures");
     Ok(match target {
         "candump_reader" => candump_seeds(&fixtures)?,
-        "pcap_reader" => per_log(&fixtures, |frames| pcap(frames))?,
-        "piper_driver_decode" => per_log(&fixtures.join("piper"), |f| piper_decode(f))?,
-        "piper_emulator" => per_log(&fixtures.join("piper"), |f| piper_ops(f))?,
-        "robstride_driver_decode" => per_log(&fixtures.join("robstride"), |f| rs_decode(f))?,
-        "robstride_emulator" => per_log(&fixtures.join("robstride"), |f| rs_ops(f))?,
+        "pcap_reader" => per_log(&fixtures, pcap)?,
+        "piper_driver_decode" => per_log(&fixtures.join("piper"), piper_decode)?,
+        "piper_emulator" => per_log(&fixtures.join("piper"), piper_ops)?,
+        "robstride_driver_decode" => per_log(&fixtures.join("robstride"), rs_decode)?,
+        "robstride_emulator" => per_log(&fixtures.join("robstride"), rs_ops)?,
         "scenario_check" => files(&root.join("scenarios"), &["yaml", "yml"])?
             .into_iter()
             .map(|p| Ok((name_of(&p), std::fs::read(&p)?)))
