@@ -160,6 +160,7 @@ pub fn piper_driver_decode(data: &[u8]) {
             Ok(Some(message)) => check_message(&message),
             Ok(None) | Err(_) => {}
         }
+        decode_each(&frame);
         for packing in [MitPacking::Torque8Crc, MitPacking::Torque12] {
             if let Ok((joint, raw)) = MitRaw::decode(&frame, packing) {
                 let si = raw.to_si(packing);
@@ -169,6 +170,33 @@ pub fn piper_driver_decode(data: &[u8]) {
             }
         }
     }
+}
+
+/// Every public per-message decoder on any frame (callers may hand them frames the dispatcher
+/// would not): errors are fine, panics are not.
+fn decode_each(frame: &bus::CanFrame) {
+    let _ = format!(
+        "{:?}{:?}{:?}{:?}{:?}{:?}{:?}{:?}{:?}{:?}{:?}{:?}{:?}{:?}{:?}{:?}{:?}{:?}{:?}",
+        dcodec::ArmStatus::decode(frame),
+        dcodec::EndPosePart::decode(frame),
+        dcodec::JointPair::decode_feedback(frame),
+        dcodec::JointPair::decode_command(frame),
+        dcodec::GripperFeedback::decode(frame),
+        dcodec::HighSpeedFeedback::decode(frame),
+        dcodec::LowSpeedFeedback::decode(frame),
+        dcodec::EndVelAccFeedback::decode(frame),
+        dcodec::JointLimits::decode(frame),
+        dcodec::JointMaxAcc::decode(frame),
+        dcodec::Ack::decode(frame),
+        dcodec::EndParams::decode(frame),
+        dcodec::CollisionLevels::decode(frame),
+        dcodec::GripperTeachParams::decode(frame),
+        dcodec::AssistLevels::decode(frame),
+        dcodec::FirmwarePart::decode(frame),
+        dcodec::CpvFrame::decode(frame),
+        dcodec::ModeCtrl::decode(frame),
+        dcodec::GripperCtrl::decode(frame),
+    );
 }
 
 /// Every message the driver decodes must turn into finite SI values.

@@ -1,8 +1,8 @@
 //! MIT per-joint command frames 0x15A–0x15F and their two firmware packings.
 
-use bus::{CanFrame, CanId};
+use bus::CanFrame;
 
-use super::{frame, ids, payload, DecodeError};
+use super::{block_offset, frame, ids, payload, DecodeError};
 
 /// How the MIT frame packs its torque (firmware dependent, spec §5.7).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -142,19 +142,7 @@ impl MitRaw {
     /// [`DecodeError::Extended`], another 11-bit id with [`DecodeError::OutOfRange`] on the
     /// joint it would stand for.
     pub fn decode(frame: &CanFrame, packing: MitPacking) -> Result<(u8, Self), DecodeError> {
-        let id = match frame.id() {
-            CanId::Standard(id) => id,
-            CanId::Extended(id) => return Err(DecodeError::Extended { id }),
-        };
-        if !(ids::MIT_J1..=ids::MIT_J6).contains(&id) {
-            // Found by the piper_driver_decode fuzz target: any frame used to decode, with a
-            // made-up joint (0 for 0x150, a truncated id for extended frames).
-            return Err(DecodeError::OutOfRange {
-                id,
-                field: "joint",
-                value: u8::try_from(id.saturating_sub(0x159)).unwrap_or(u8::MAX),
-            });
-        }
+        let (id, offset) = block_offset(frame, ids::MIT_J1, ids::MIT_J6, "joint")?;
         let d = payload(id, frame, 8)?;
         let w = |b: u8| u16::from(b);
         let p = (w(d[0]) << 8) | w(d[1]);
@@ -172,8 +160,7 @@ impl MitRaw {
             }
             MitPacking::Torque12 => ((w(d[6]) & 0xF) << 8) | w(d[7]),
         };
-        // In range: 0x15A..=0x15F is joint 1..=6.
-        Ok(((id - 0x159) as u8, Self { p, v, kp, kd, t }))
+        Ok((offset + 1, Self { p, v, kp, kd, t }))
     }
 }
 
