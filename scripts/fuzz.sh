@@ -18,6 +18,7 @@
 #   FUZZ_TARGET_DIR  cargo target dir of the fuzz build (default: target/fuzzing)
 #   FUZZ_WORK_DIR    scratch folder for seeds, corpora, logs (default: a new temp folder;
 #                    name one to keep the corpus between runs)
+#   FUZZ_JOBS        targets fuzzed at the same time (default 1)
 #   FUZZ_ARGS        extra libFuzzer flags
 set -euo pipefail
 
@@ -53,7 +54,7 @@ mkdir -p "$work"
 echo "fuzz: ${#targets[@]} target(s), ${secs}s each, sanitizer $sanitizer, scratch $work"
 
 # Seeds: the fixtures and scenarios in each target's input encoding.
-"${cargo[@]}" run --quiet --example fuzz_seeds -- "$work/seeds" "${targets[@]}"
+"${cargo[@]}" run --quiet -p armhil-bus --example fuzz_seeds -- "$work/seeds" "${targets[@]}"
 
 # One build for all targets. Release with debug assertions: integer overflow panics, so a
 # value that would wrap is a crash.
@@ -72,29 +73,23 @@ final_stat() { # final_stat NAME LOG: a final libFuzzer statistic
     sed -n "s/^stat::$1: *//p" "$2" | tail -n 1
 }
 
-failed=()
-summary=()
-for t in "${targets[@]}"; do
-    corpus=$work/corpus/$t
-    artifacts=$work/artifacts/$t
-    log=$work/$t.log
+# run_target NAME: fuzz one target; writes its summary line to $work/NAME.result.
+run_target() {
+    local t=$1 corpus=$work/corpus/$1 artifacts=$work/artifacts/$1 log=$work/$1.log
     mkdir -p "$corpus" "$artifacts"
     echo "fuzz: running $t for ${secs}s (log $log)"
-    set +e
+    local status=0
     # shellcheck disable=SC2086 # FUZZ_ARGS is a list of flags
     "${cargo[@]}" fuzz run "${fuzz_flags[@]}" "$t" "$corpus" "$work/seeds/$t" -- \
         -max_total_time="$secs" -print_final_stats=1 -artifact_prefix="$artifacts/" \
-        -max_len=8192 -timeout=30 -rss_limit_mb=4096 ${FUZZ_ARGS:-} >"$log" 2>&1
-    status=$?
-    set -e
+        -max_len=8192 -timeout=30 -rss_limit_mb=4096 ${FUZZ_ARGS:-} >"$log" 2>&1 || status=$?
+    local execs rate cov ft verdict=ok
     execs=$(final_stat number_of_executed_units "$log")
     rate=$(final_stat average_exec_per_sec "$log")
     cov=$(grep -o 'cov: [0-9]*' "$log" | tail -n 1 | cut -d' ' -f2)
     ft=$(grep -o 'ft: [0-9]*' "$log" | tail -n 1 | cut -d' ' -f2)
-    verdict=ok
     if [ $status -ne 0 ]; then
         verdict="CRASH (exit $status)"
-        failed+=("$t")
         mkdir -p "fuzz/regressions/$t"
         for a in "$artifacts"/*; do
             [ -f "$a" ] || continue
@@ -103,12 +98,29 @@ for t in "${targets[@]}"; do
         done
         tail -n 40 "$log"
     fi
-    summary+=("$(printf '%-24s %12s %8s %7s %7s  %s' "$t" "${execs:-?}" "${rate:-?}" \
-        "${cov:-?}" "${ft:-?}" "$verdict")")
+    printf '%-24s %12s %8s %7s %7s  %s\n' "$t" "${execs:-?}" "${rate:-?}" "${cov:-?}" \
+        "${ft:-?}" "$verdict" >"$work/$t.result"
+}
+
+# FUZZ_JOBS targets at a time (one process each).
+jobs=${FUZZ_JOBS:-1}
+running=0
+for t in "${targets[@]}"; do
+    if [ "$running" -ge "$jobs" ]; then
+        wait -n || true
+        running=$((running - 1))
+    fi
+    run_target "$t" &
+    running=$((running + 1))
 done
+wait
 
 printf '\n%-24s %12s %8s %7s %7s  %s\n' target executions exec/s cov ft result
-printf '%s\n' "${summary[@]}"
+failed=()
+for t in "${targets[@]}"; do
+    cat "$work/$t.result"
+    grep -q CRASH "$work/$t.result" && failed+=("$t")
+done
 if [ ${#failed[@]} -gt 0 ]; then
     echo "fuzz: crashed: ${failed[*]} (inputs kept in fuzz/regressions/; replay with" \
         "cargo test --test fuzz_regressions)" >&2

@@ -1,7 +1,7 @@
 //! The seed corpus of every fuzz target, built from the repository's test vectors
 //! (`fixtures/`) and scenarios (`scenarios/`) in each target's input encoding.
 //!
-//! Generated at run time (`scripts/fuzz.sh` runs `cargo run --example fuzz_seeds`), never
+//! Generated at run time (`scripts/fuzz.sh` runs `cargo run -p armhil-bus --example fuzz_seeds`), never
 //! committed: the fixtures stay the single source.
 
 use std::path::{Path, PathBuf};
