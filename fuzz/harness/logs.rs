@@ -44,7 +44,7 @@ pub fn candump_reader(data: &[u8]) {
 /// Arbitrary bytes through the pcap capture reader.
 ///
 /// Asserts: no panic; a capture that reads writes back (`PcapWriter`) to bytes that read to
-/// the same frames and timestamps.
+/// the same frames, and the same timestamps while they fit pcap's 32-bit seconds.
 pub fn pcap_reader(data: &[u8]) {
     let frames = match parse_capture(data) {
         Ok(frames) => frames,
@@ -59,5 +59,13 @@ pub fn pcap_reader(data: &[u8]) {
     }
     let bytes = writer.finish().expect("writing to memory");
     let again = parse_capture(&bytes).expect("a written capture reads back");
-    assert_eq!(again, frames);
+    // pcap stores 32-bit seconds: the writer wraps later times (documented). The reader also
+    // carries a microsecond field of 10⁶ or more into the seconds, which can pass 2³² s.
+    let fits = |f: &ReceivedFrame| f.timestamp.as_secs() <= u64::from(u32::MAX);
+    if frames.iter().all(fits) {
+        assert_eq!(again, frames);
+    } else {
+        let frames_only = |v: &[ReceivedFrame]| v.iter().map(|f| f.frame).collect::<Vec<_>>();
+        assert_eq!(frames_only(&again), frames_only(&frames));
+    }
 }
