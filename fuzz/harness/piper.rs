@@ -5,8 +5,9 @@ use sim::piper::{ids, Firmware, FirmwareProfile, PiperConfig, PiperSimState};
 
 use super::input::{assert_finite, extended, standard, Input};
 
-/// Most simulated milliseconds one input may run (keeps one execution short).
-const MAX_TICKS: u32 = 1500;
+/// Most simulated milliseconds one input may run (keeps one execution short: the physics
+/// dominates the cost).
+const MAX_TICKS: u32 = 300;
 
 /// Identifiers the master controller listens to, so most generated frames reach a handler.
 const HOST_IDS: &[u16] = &[
@@ -48,7 +49,7 @@ const HOST_IDS: &[u16] = &[
 /// Frames and 1 ms ticks into a freshly booted Piper firmware.
 ///
 /// Input: byte 0 picks the firmware profile; then operations: a tag byte (`% 4 == 0`: run
-/// `1..=32` ticks given by the next byte; otherwise one frame: an id selector byte — mostly a
+/// `1..=16` ticks given by the next byte; otherwise one frame: an id selector byte — mostly a
 /// host command id, sometimes a raw 11-bit or 29-bit id — a length byte and the payload).
 ///
 /// Asserts: no panic; every emitted frame is an 11-bit frame the driver's decoder accepts
@@ -68,7 +69,7 @@ pub fn piper_emulator(data: &[u8]) {
         let before = offsets_zero(&fw);
         let tag = input.byte().unwrap_or(0);
         if tag.is_multiple_of(4) {
-            let n = u32::from(input.byte().unwrap_or(0) % 32) + 1;
+            let n = u32::from(input.byte().unwrap_or(0) % 16) + 1;
             for _ in 0..n {
                 fw.tick();
             }
