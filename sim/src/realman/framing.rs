@@ -78,8 +78,16 @@ impl Splitter {
     /// Consume `bytes`, appending every unit completed by them to `out`.
     pub fn feed(&mut self, bytes: &[u8], out: &mut Vec<Unit>) -> Result<(), Oversize> {
         for &byte in bytes {
+            let before = out.len();
             self.step(byte, out);
-            if self.current.len() > self.limit_bytes {
+            // The closing brace hands the object out at once: check what was handed out too
+            // (an object one byte over the limit used to pass; found by realman_framing).
+            let completed_too_long = out.len() > before
+                && matches!(out.last(), Some(Unit::Object(b)) if b.len() > self.limit_bytes);
+            if completed_too_long {
+                out.pop();
+            }
+            if completed_too_long || self.current.len() > self.limit_bytes {
                 self.current = Vec::new();
                 self.scan = Scan::Idle;
                 return Err(Oversize {
@@ -239,5 +247,22 @@ mod tests {
         assert_eq!(splitter.pending_bytes(), 0);
         splitter.feed(b"{\"a\":1}", &mut out).unwrap();
         assert_eq!(out, vec![obj("{\"a\":1}")]);
+    }
+
+    #[test]
+    fn an_object_is_refused_from_one_byte_over_the_limit() {
+        let at_limit = format!("{{\"a\":\"{}\"}}", "x".repeat(8));
+        assert_eq!(at_limit.len(), 16);
+        let mut out = Vec::new();
+        Splitter::new(16)
+            .feed(at_limit.as_bytes(), &mut out)
+            .unwrap();
+        assert_eq!(out, vec![obj(&at_limit)]);
+        let over = format!("{{\"a\":\"{}\"}}", "x".repeat(9));
+        let mut out = Vec::new();
+        let mut splitter = Splitter::new(16);
+        assert!(splitter.feed(over.as_bytes(), &mut out).is_err());
+        assert!(out.is_empty());
+        assert_eq!(splitter.pending_bytes(), 0);
     }
 }

@@ -3,8 +3,8 @@
 use bus::CanFrame;
 
 use super::{
-    be_i32, be_u16, frame, ids, payload, CtrlMode, DecodeError, EmergencyStop, InstallPosition,
-    MitMode, MoveCPoint, MoveMode, TeachStatus, TrackCommand,
+    be_i32, be_u16, block_offset, frame, ids, payload, CtrlMode, DecodeError, EmergencyStop,
+    InstallPosition, MitMode, MoveCPoint, MoveMode, TeachStatus, TrackCommand,
 };
 
 /// 0x150 motion control 1: quick stop / resume, offline trajectory, drag teach.
@@ -323,15 +323,47 @@ impl CpvFrame {
         frame(0x180 + u16::from(self.motor), &data)
     }
 
-    /// Decode a 0x181–0x187 frame (7 or 8 bytes).
+    /// Decode a 0x181–0x187 frame (7 or 8 bytes); any other id is refused
+    /// ([`DecodeError::Extended`], or [`DecodeError::OutOfRange`] on the motor).
     pub fn decode(frame: &CanFrame) -> Result<Self, DecodeError> {
-        let id = frame.raw_id() as u16;
+        let (id, offset) = block_offset(frame, ids::CPV_1, ids::CPV_7, "motor")?;
         let d = payload(id, frame, 7)?;
         Ok(Self {
-            motor: (id - 0x180) as u8,
+            motor: offset + 1,
             mode: d[0].into(),
             param: [d[1], d[2]],
             value: be_i32(d, 3),
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cpv_decode_refuses_ids_outside_its_range_without_panicking() {
+        let good = CpvFrame {
+            motor: 2,
+            mode: CpvMode::Answer,
+            param: *b"kp",
+            value: -5,
+        };
+        assert_eq!(CpvFrame::decode(&good.encode()), Ok(good));
+        for id in [0x000, 0x17F, 0x180, 0x188, 0x7FF] {
+            let frame = CanFrame::standard(id, good.encode().data()).unwrap();
+            assert!(
+                matches!(
+                    CpvFrame::decode(&frame),
+                    Err(DecodeError::OutOfRange { field: "motor", .. })
+                ),
+                "{frame}"
+            );
+        }
+        let extended = CanFrame::extended(0x182, good.encode().data()).unwrap();
+        assert_eq!(
+            CpvFrame::decode(&extended),
+            Err(DecodeError::Extended { id: 0x182 })
+        );
     }
 }

@@ -3,8 +3,8 @@
 use bus::CanFrame;
 
 use super::{
-    be_i16, be_i32, be_u16, ids, payload, ArmStatusCode, CtrlMode, DecodeError, DriverStatus,
-    GripperStatus, JointMask, MotionStatus, MoveMode, TeachStatus,
+    be_i16, be_i32, be_u16, block_offset, ids, payload, ArmStatusCode, CtrlMode, DecodeError,
+    DriverStatus, GripperStatus, JointMask, MotionStatus, MoveMode, TeachStatus,
 };
 
 /// 0x2A1 arm status.
@@ -121,10 +121,10 @@ pub struct JointPair {
 
 impl JointPair {
     fn decode_at(frame: &CanFrame, base: u16) -> Result<Self, DecodeError> {
-        let id = frame.raw_id() as u16;
-        let d = payload(id, frame, 8)?;
         // base, base+1, base+2 carry joints 1-2, 3-4, 5-6.
-        let first_joint = ((id.saturating_sub(base)) as u8) * 2 + 1;
+        let (id, pair) = block_offset(frame, base, base + 2, "joint pair")?;
+        let d = payload(id, frame, 8)?;
+        let first_joint = pair * 2 + 1;
         Ok(Self {
             first_joint,
             a_mdeg: be_i32(d, 0),
@@ -132,12 +132,13 @@ impl JointPair {
         })
     }
 
-    /// Decode a 0x2A5–0x2A7 feedback frame.
+    /// Decode a 0x2A5–0x2A7 feedback frame (another id is refused).
     pub fn decode_feedback(frame: &CanFrame) -> Result<Self, DecodeError> {
         Self::decode_at(frame, ids::JOINTS_12)
     }
 
-    /// Decode a 0x155–0x157 target frame (a leader arm's emission or a host command).
+    /// Decode a 0x155–0x157 target frame (a leader arm’s emission or a host command; another
+    /// id is refused).
     pub fn decode_command(frame: &CanFrame) -> Result<Self, DecodeError> {
         Self::decode_at(frame, ids::JOINT_CMD_12)
     }
@@ -180,12 +181,12 @@ pub struct HighSpeedFeedback {
 }
 
 impl HighSpeedFeedback {
-    /// Decode a 0x251–0x256 frame.
+    /// Decode a 0x251–0x256 frame (another id is refused).
     pub fn decode(frame: &CanFrame) -> Result<Self, DecodeError> {
-        let id = frame.raw_id() as u16;
+        let (id, offset) = block_offset(frame, ids::HIGH_SPEED_1, ids::HIGH_SPEED_6, "joint")?;
         let d = payload(id, frame, 8)?;
         Ok(Self {
-            joint: (id - 0x250) as u8,
+            joint: offset + 1,
             speed_mrad_s: be_i16(d, 0),
             current_ma: be_i16(d, 2),
             position_mrad: be_i32(d, 4),
@@ -217,12 +218,12 @@ pub struct LowSpeedFeedback {
 }
 
 impl LowSpeedFeedback {
-    /// Decode a 0x261–0x266 frame.
+    /// Decode a 0x261–0x266 frame (another id is refused).
     pub fn decode(frame: &CanFrame) -> Result<Self, DecodeError> {
-        let id = frame.raw_id() as u16;
+        let (id, offset) = block_offset(frame, ids::LOW_SPEED_1, ids::LOW_SPEED_6, "joint")?;
         let d = payload(id, frame, 8)?;
         Ok(Self {
-            joint: (id - 0x260) as u8,
+            joint: offset + 1,
             bus_voltage_dv: be_u16(d, 0),
             driver_temp_c: be_i16(d, 2),
             motor_temp_c: i8::from_be_bytes([d[4]]),
@@ -248,16 +249,50 @@ pub struct EndVelAccFeedback {
 }
 
 impl EndVelAccFeedback {
-    /// Decode a 0x481–0x486 frame.
+    /// Decode a 0x481–0x486 frame (another id is refused).
     pub fn decode(frame: &CanFrame) -> Result<Self, DecodeError> {
-        let id = frame.raw_id() as u16;
+        let (id, offset) = block_offset(frame, ids::END_VEL_ACC_1, ids::END_VEL_ACC_6, "joint")?;
         let d = payload(id, frame, 8)?;
         Ok(Self {
-            joint: (id - 0x480) as u8,
+            joint: offset + 1,
             lin_vel_mm_s: be_u16(d, 0),
             ang_vel_mrad_s: be_u16(d, 2),
             lin_acc_mm_s2: be_u16(d, 4),
             ang_acc_mrad_s2: be_u16(d, 6),
         })
+    }
+}
+
+#[cfg(test)]
+mod block_tests {
+    use super::*;
+
+    #[test]
+    fn per_joint_decoders_refuse_ids_outside_their_block() {
+        let data = [0x11; 8];
+        for id in [
+            0x000, 0x150, 0x250, 0x257, 0x260, 0x267, 0x2A4, 0x2A8, 0x480, 0x487, 0x7FF,
+        ] {
+            let frame = CanFrame::standard(id, &data).unwrap();
+            assert!(
+                matches!(
+                    HighSpeedFeedback::decode(&frame),
+                    Err(DecodeError::OutOfRange { field: "joint", .. })
+                ),
+                "{id:#x}"
+            );
+            assert!(LowSpeedFeedback::decode(&frame).is_err(), "{id:#x}");
+            assert!(EndVelAccFeedback::decode(&frame).is_err(), "{id:#x}");
+            assert!(JointPair::decode_feedback(&frame).is_err(), "{id:#x}");
+        }
+        let j3 = CanFrame::standard(0x263, &data).unwrap();
+        assert_eq!(LowSpeedFeedback::decode(&j3).unwrap().joint, 3);
+        let j56 = CanFrame::standard(0x2A7, &data).unwrap();
+        assert_eq!(JointPair::decode_feedback(&j56).unwrap().first_joint, 5);
+        let extended = CanFrame::extended(0x481, &data).unwrap();
+        assert_eq!(
+            EndVelAccFeedback::decode(&extended),
+            Err(DecodeError::Extended { id: 0x481 })
+        );
     }
 }

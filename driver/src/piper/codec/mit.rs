@@ -2,7 +2,7 @@
 
 use bus::CanFrame;
 
-use super::{frame, payload, DecodeError};
+use super::{block_offset, frame, ids, payload, DecodeError};
 
 /// How the MIT frame packs its torque (firmware dependent, spec §5.7).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -138,9 +138,11 @@ impl MitRaw {
     }
 
     /// Decode a 0x15A–0x15F frame with the given packing (checks the nibble of
-    /// [`MitPacking::Torque8Crc`]).
+    /// [`MitPacking::Torque8Crc`]). Any other id is refused: an extended frame with
+    /// [`DecodeError::Extended`], another 11-bit id with [`DecodeError::OutOfRange`] on the
+    /// joint it would stand for.
     pub fn decode(frame: &CanFrame, packing: MitPacking) -> Result<(u8, Self), DecodeError> {
-        let id = frame.raw_id() as u16;
+        let (id, offset) = block_offset(frame, ids::MIT_J1, ids::MIT_J6, "joint")?;
         let d = payload(id, frame, 8)?;
         let w = |b: u8| u16::from(b);
         let p = (w(d[0]) << 8) | w(d[1]);
@@ -158,6 +160,42 @@ impl MitRaw {
             }
             MitPacking::Torque12 => ((w(d[6]) & 0xF) << 8) | w(d[7]),
         };
-        Ok(((id.saturating_sub(0x159)) as u8, Self { p, v, kp, kd, t }))
+        Ok((offset + 1, Self { p, v, kp, kd, t }))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn decode_refuses_frames_that_are_not_mit_commands() {
+        let raw = MitRaw {
+            p: 0x8000,
+            v: 0x7FF,
+            kp: 0x100,
+            kd: 0x80,
+            t: 0x7F,
+        };
+        for packing in [MitPacking::Torque8Crc, MitPacking::Torque12] {
+            let good = raw.encode(3, packing);
+            assert_eq!(MitRaw::decode(&good, packing), Ok((3, raw)));
+            // Same payload on a neighbouring id or as an extended frame: not an MIT command.
+            for id in [0x150, 0x159, 0x160, 0x2A5] {
+                let other = CanFrame::standard(id, good.data()).unwrap();
+                assert!(
+                    matches!(
+                        MitRaw::decode(&other, packing),
+                        Err(DecodeError::OutOfRange { field: "joint", .. })
+                    ),
+                    "{other}"
+                );
+            }
+            let extended = CanFrame::extended(0x15C, good.data()).unwrap();
+            assert_eq!(
+                MitRaw::decode(&extended, packing),
+                Err(DecodeError::Extended { id: 0x15C })
+            );
+        }
     }
 }

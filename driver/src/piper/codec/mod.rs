@@ -204,6 +204,31 @@ pub(crate) fn be_u16(data: &[u8], at: usize) -> u16 {
     u16::from_be_bytes([data[at], data[at + 1]])
 }
 
+/// Where `frame` sits in the id block `first..=last`: its id and its 0-based offset. The
+/// per-message decoders are public and may be handed any frame, so an id outside the block is
+/// an error (before, the offset arithmetic underflowed: a panic in debug builds, found by the
+/// piper_driver_decode fuzz target).
+pub(crate) fn block_offset(
+    frame: &CanFrame,
+    first: u16,
+    last: u16,
+    field: &'static str,
+) -> Result<(u16, u8), DecodeError> {
+    let id = match frame.id() {
+        CanId::Standard(id) => id,
+        CanId::Extended(id) => return Err(DecodeError::Extended { id }),
+    };
+    match id.checked_sub(first) {
+        Some(offset) if id <= last => Ok((id, offset as u8)),
+        _ => Err(DecodeError::OutOfRange {
+            id,
+            field,
+            // The number the id would stand for, as far as it fits.
+            value: u8::try_from(id.wrapping_sub(first).wrapping_add(1)).unwrap_or(u8::MAX),
+        }),
+    }
+}
+
 /// Check a 1–6 joint index.
 pub(crate) fn joint_index(id: u16, field: &'static str, value: u8) -> Result<u8, DecodeError> {
     if (1..=6).contains(&value) {
