@@ -54,7 +54,11 @@ async fn start_and_hear_feedback() -> String {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 #[ignore = "needs vcan; run by scripts/vcan-e2e.sh"]
 async fn create_vxcan_makes_the_pair_and_reuses_it() {
-    let _ = Command::new("ip").args(["link", "del", PEER]).status();
+    // A pair left over from an earlier run would make the first start reuse it.
+    let _ = Command::new("ip")
+        .args(["link", "del", PEER])
+        .stderr(Stdio::null())
+        .status();
     let first = start_and_hear_feedback().await;
     assert!(
         first.contains(&format!("created vxcan pair {OURS} ↔ {PEER}")),
