@@ -351,17 +351,28 @@ fn check_rs_status(
     else {
         return Ok(());
     };
-    // The wire value is the simulated one clamped into ±range: a runaway motor reads as the
-    // end of the range with its sign, never as a wrapped value.
-    for (got, x, max) in [
-        (f.angle_rad, m.angle_rad, r.angle_rad),
-        (f.speed_rad_s, m.speed_rad_s, r.speed_rad_s),
-        (f.torque_nm, m.torque_nm, r.torque_nm),
+    // Speed and torque on the wire are the simulated values clamped into ±range: a runaway
+    // motor reads as the end of the range with its sign, never as a wrapped value. The angle
+    // is periodic instead: the firmware wraps it into [−range, range) (docs/protocols/
+    // robstride.md §3.3), so a shaft past −4π reads near +4π.
+    let angle_max = f64::from(r.angle_rad);
+    let wrapped_angle = (m.angle_rad + angle_max).rem_euclid(2.0 * angle_max) - angle_max;
+    for (got, want, max) in [
+        (f.angle_rad, wrapped_angle as f32, r.angle_rad),
+        (
+            f.speed_rad_s,
+            (m.speed_rad_s as f32).clamp(-r.speed_rad_s, r.speed_rad_s),
+            r.speed_rad_s,
+        ),
+        (
+            f.torque_nm,
+            (m.torque_nm as f32).clamp(-r.torque_nm, r.torque_nm),
+            r.torque_nm,
+        ),
     ] {
-        let want = (x as f32).clamp(-max, max);
         prop_assert!(
             (got - want).abs() <= 3.0 * max / 65535.0 + max * 1e-5,
-            "{frame}: wire {got} for simulated {x} over ±{max}"
+            "{frame}: wire {got}, expected {want} (range ±{max})"
         );
     }
     prop_assert!(f.temperature_c >= 0.0 && f.temperature_c.is_finite());
