@@ -322,14 +322,7 @@ struct CanPlace {
 
 /// A socketcand server on `addr` with a real-time virtual bus, as `armhil sim --socketcand`.
 async fn socketcand_place(addr: &str, node_name: &str) -> Result<CanPlace, String> {
-    let epoch = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .unwrap_or_default();
-    let bus = VirtualBus::new(VirtualBusConfig {
-        epoch,
-        ..VirtualBusConfig::default()
-    });
-    let server = SocketcandServer::bind(addr, bus.clone(), ServerConfig::default())
+    let (bus, server) = SocketcandServer::bind_realtime_bus(addr)
         .await
         .map_err(|e| format!("cannot serve socketcand on {addr}: {e}"))?;
     Ok(CanPlace {

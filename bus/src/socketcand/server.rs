@@ -175,6 +175,21 @@ impl SocketcandServer {
         })
     }
 
+    /// A real-time virtual bus served on `addr`, as a separate emulator process offers its
+    /// bus: frames are stamped with Unix time, as a SocketCAN socket stamps them. Returns the
+    /// bus (for the emulator's node and any taps) and the server.
+    pub async fn bind_realtime_bus(addr: &str) -> Result<(VirtualBus, Self), ServerError> {
+        let epoch = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .unwrap_or_default();
+        let bus = VirtualBus::new(crate::virtual_bus::VirtualBusConfig {
+            epoch,
+            ..crate::virtual_bus::VirtualBusConfig::default()
+        });
+        let server = Self::bind(addr, bus.clone(), ServerConfig::default()).await?;
+        Ok((bus, server))
+    }
+
     /// The address the server listens on (the actual port when bound to port 0).
     pub fn local_addr(&self) -> SocketAddr {
         self.local_addr

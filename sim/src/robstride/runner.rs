@@ -86,7 +86,8 @@ enum Request {
 /// The harness's handle on a running emulator.
 #[derive(Debug)]
 pub struct RobstrideHandle {
-    requests: mpsc::UnboundedSender<Request>,
+    /// The request channel to the runner, shared with the monitors it hands out.
+    view: RobstrideMonitor,
     task: Option<JoinHandle<()>>,
 }
 
@@ -132,7 +133,7 @@ impl RobstrideBus {
         };
         let task = tokio::spawn(runner.run(inbox));
         Ok(RobstrideHandle {
-            requests,
+            view: RobstrideMonitor { requests },
             task: Some(task),
         })
     }
@@ -143,24 +144,18 @@ impl RobstrideHandle {
         &self,
         make: impl FnOnce(oneshot::Sender<T>) -> Request,
     ) -> Result<T, RobstrideError> {
-        let (reply, answer) = oneshot::channel();
-        self.requests
-            .send(make(reply))
-            .map_err(|_| RobstrideError::Stopped)?;
-        answer.await.map_err(|_| RobstrideError::Stopped)
+        self.view.ask(make).await
     }
 
     /// Inject a fault into a motor: its cause is set (heat, supply) or a one-shot event
     /// latched; the motor drops to reset and sends a type-21 frame.
     pub async fn inject(&self, can_id: u8, fault: Fault) -> Result<(), RobstrideError> {
-        self.ask(|reply| Request::Inject(can_id, fault, reply))
-            .await?
+        self.view.inject(can_id, fault).await
     }
 
     /// Remove a fault's cause; the latched bit stays until the host sends stop + clear.
     pub async fn clear(&self, can_id: u8, fault: Fault) -> Result<(), RobstrideError> {
-        self.ask(|reply| Request::RemoveCause(can_id, fault, reply))
-            .await?
+        self.view.clear(can_id, fault).await
     }
 
     /// Set a motor's supply voltage (V).
@@ -187,16 +182,14 @@ impl RobstrideHandle {
 
     /// Every motor's state, in configuration order.
     pub async fn snapshot(&self) -> Result<Vec<MotorSnapshot>, RobstrideError> {
-        self.ask(Request::Snapshot).await
+        self.view.snapshot().await
     }
 
     /// A cloneable view of this emulator for monitors (the web view of `armhil sim --ui`):
     /// snapshot and fault calls, shareable between tasks; they fail with
     /// [`RobstrideError::Stopped`] once the emulator is shut down.
     pub fn monitor(&self) -> RobstrideMonitor {
-        RobstrideMonitor {
-            requests: self.requests.clone(),
-        }
+        self.view.clone()
     }
 
     /// Stop the emulator (the motors "lose power"); persistent state is already on disk.

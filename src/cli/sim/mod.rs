@@ -42,21 +42,11 @@ pub(crate) async fn socketcand_server(
     bus::socketcand::SocketcandServer,
 )> {
     use anyhow::Context as _;
-    use bus::socketcand::{ServerConfig, SocketcandServer};
-    use bus::virtual_bus::{VirtualBus, VirtualBusConfig};
 
-    let epoch = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .unwrap_or_default();
-    let bus = VirtualBus::new(VirtualBusConfig {
-        epoch,
-        ..VirtualBusConfig::default()
-    });
     let addr = socketcand_addr(addr);
-    let server = SocketcandServer::bind(&addr, bus.clone(), ServerConfig::default())
+    bus::socketcand::SocketcandServer::bind_realtime_bus(&addr)
         .await
-        .with_context(|| format!("cannot serve socketcand on {addr}"))?;
-    Ok((bus, server))
+        .with_context(|| format!("cannot serve socketcand on {addr}"))
 }
 
 /// `--create-vxcan PEER`: make sure the vxcan pair `iface` ↔ `peer` exists and is up, and tell

@@ -4,7 +4,7 @@ const test = require("node:test");
 const assert = require("node:assert/strict");
 const path = require("node:path");
 const fs = require("node:fs");
-const A = require("../../shared/arm3d.js");
+const A = require("../../common/arm3d.js");
 
 const close = (a, b, tol, what) => {
   for (let i = 0; i < 3; i++) assert.ok(Math.abs(a[i] - b[i]) < tol, `${what}: ${a} vs ${b}`);

@@ -1,7 +1,7 @@
 // Plot scaling: ticks, bounds, nearest sample and zoom.
 const test = require("node:test");
 const assert = require("node:assert/strict");
-const P = require("../../shared/plot.js");
+const P = require("../../common/plot.js");
 
 test("ticks are round numbers covering the range", () => {
   assert.deepEqual(P.niceTicks(0, 10, 5), [0, 2, 4, 6, 8, 10]);

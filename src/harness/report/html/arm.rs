@@ -1,5 +1,5 @@
 //! The arm drawn by the web pages: joint origins, axes and limits read from a URDF, as JSON.
-//! The pages compute the forward kinematics themselves (web/shared/arm3d.js).
+//! The pages compute the forward kinematics themselves (web/common/arm3d.js).
 
 use serde::Serialize;
 

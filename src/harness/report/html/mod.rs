@@ -1,7 +1,7 @@
 //! `report.html` for one scenario and `index.html` for a suite: self-contained pages (styles,
 //! scripts and data inline, nothing fetched) that a browser opens from disk.
 //!
-//! The scripts are web/shared/*.js and web/report/report.js, built into the binary. The data is
+//! The scripts are web/common/*.js and web/report/report.js, built into the binary. The data is
 //! one JSON document ([`data::report_json`]) in a `<script type="application/json">` element;
 //! the verdict and the first failure are also written as plain HTML so they show even before
 //! (or without) the scripts.
@@ -23,11 +23,11 @@ macro_rules! web_asset {
 }
 
 /// Styles shared by every page.
-pub const STYLE_CSS: &str = web_asset!("shared/style.css");
+pub const STYLE_CSS: &str = web_asset!("common/style.css");
 /// The arm's forward kinematics and renderer.
-pub const ARM3D_JS: &str = web_asset!("shared/arm3d.js");
+pub const ARM3D_JS: &str = web_asset!("common/arm3d.js");
 /// The time plots.
-pub const PLOT_JS: &str = web_asset!("shared/plot.js");
+pub const PLOT_JS: &str = web_asset!("common/plot.js");
 /// The report page's script.
 pub const REPORT_JS: &str = web_asset!("report/report.js");
 /// The live page's script (`armhil sim ... --ui`).
