@@ -8,8 +8,8 @@ use std::collections::BTreeMap;
 use std::net::{IpAddr, SocketAddr};
 use std::sync::{Arc, Mutex};
 
-use bus::socketcand::{ServerConfig, SocketcandServer};
-use bus::virtual_bus::{FaultId, VirtualBus, VirtualBusConfig};
+use bus::socketcand::SocketcandServer;
+use bus::virtual_bus::{FaultId, VirtualBus};
 use bus::CanBus;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
