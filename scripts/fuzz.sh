@@ -20,6 +20,8 @@
 #                    name one to keep the corpus between runs)
 #   FUZZ_JOBS        targets fuzzed at the same time (default 1)
 #   FUZZ_ARGS        extra libFuzzer flags
+#   FUZZ_BUILD_TIMEOUT_S  give up the build after this many seconds (exit 3, nothing fuzzed):
+#                    for CI, where a build slower than its time budget must not fail the run
 set -euo pipefail
 
 cd "$(dirname "$0")/.."
@@ -62,10 +64,28 @@ fuzz_flags=(--fuzz-dir fuzz --target-dir "$target_dir" --release --debug-asserti
     --sanitizer "$sanitizer")
 export RUSTC_BOOTSTRAP=1
 build_start=$(date +%s)
+# build CARGO_FUZZ_BUILD_ARGS...: one cargo-fuzz build, under what is left of FUZZ_BUILD_TIMEOUT_S.
+build() {
+    if [ -z "${FUZZ_BUILD_TIMEOUT_S:-}" ]; then
+        "${cargo[@]}" fuzz build "${fuzz_flags[@]}" "$@"
+        return
+    fi
+    local left=$((build_start + FUZZ_BUILD_TIMEOUT_S - $(date +%s)))
+    [ $left -gt 0 ] || return 124
+    timeout "$left" "${cargo[@]}" fuzz build "${fuzz_flags[@]}" "$@"
+}
+build_status=0
 if [ ${#targets[@]} -eq ${#all[@]} ]; then
-    "${cargo[@]}" fuzz build "${fuzz_flags[@]}"
+    build || build_status=$?
 else
-    for t in "${targets[@]}"; do "${cargo[@]}" fuzz build "${fuzz_flags[@]}" "$t"; done
+    for t in "${targets[@]}"; do build "$t" || { build_status=$?; break; }; done
+fi
+if [ $build_status -eq 124 ]; then
+    echo "fuzz: build did not finish within ${FUZZ_BUILD_TIMEOUT_S} s; nothing fuzzed" >&2
+    exit 3
+elif [ $build_status -ne 0 ]; then
+    echo "fuzz: build failed (exit $build_status)" >&2
+    exit $build_status
 fi
 echo "fuzz: build took $(($(date +%s) - build_start)) s"
 
