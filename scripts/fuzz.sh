@@ -22,6 +22,8 @@
 #   FUZZ_ARGS        extra libFuzzer flags
 #   FUZZ_BUILD_TIMEOUT_S  give up the build after this many seconds (exit 3, nothing fuzzed):
 #                    for CI, where a build slower than its time budget must not fail the run
+#   FUZZ_RUN_UNTIL   a time (seconds since the epoch) to fill: after the build, each target
+#                    runs longer than SECONDS_PER_TARGET if the time left allows (never shorter)
 set -euo pipefail
 
 cd "$(dirname "$0")/.."
@@ -88,6 +90,17 @@ elif [ $build_status -ne 0 ]; then
     exit $build_status
 fi
 echo "fuzz: build took $(($(date +%s) - build_start)) s"
+
+# Stretch the runs over the time left before FUZZ_RUN_UNTIL (rounds of FUZZ_JOBS targets, a
+# minute kept for the reports), so a fast build leaves the fuzzers more time, not CI idle.
+if [ -n "${FUZZ_RUN_UNTIL:-}" ]; then
+    rounds=$(((${#targets[@]} + ${FUZZ_JOBS:-1} - 1) / ${FUZZ_JOBS:-1}))
+    stretched=$(((FUZZ_RUN_UNTIL - $(date +%s) - 60) / rounds))
+    if [ "$stretched" -gt "$secs" ]; then
+        secs=$stretched
+        echo "fuzz: the time left allows ${secs}s per target"
+    fi
+fi
 
 final_stat() { # final_stat NAME LOG: a final libFuzzer statistic
     sed -n "s/^stat::$1: *//p" "$2" | tail -n 1
