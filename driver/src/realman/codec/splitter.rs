@@ -111,11 +111,14 @@ impl Splitter {
             self.pos = 1;
             return Outside::ObjectStart;
         }
-        // Stray text ends at a line end or at the next object.
-        let end = self.buf.iter().position(|&b| b == b'\n' || b == b'{');
-        let end = match end {
+        // Stray text ends at a line end, at the next object, or after `max_frame` bytes,
+        // whichever comes first. Looking only at the first `max_frame` bytes makes the cut the
+        // same however the stream was segmented (a whole-buffer search would let a stray run
+        // past the limit when its line end happened to arrive in the same read).
+        let window = &self.buf[..self.buf.len().min(self.max_frame)];
+        let end = match window.iter().position(|&b| b == b'\n' || b == b'{') {
             Some(e) => e,
-            None if self.buf.len() > self.max_frame => self.buf.len(),
+            None if self.buf.len() >= self.max_frame => self.max_frame,
             None => return Outside::NeedMore,
         };
         let stray: Vec<u8> = self.buf.drain(..end).collect();
@@ -276,7 +279,42 @@ mod tests {
     fn endless_stray_text_is_bounded() {
         let mut s = Splitter::new(16);
         s.push(&[b'q'; 40]);
-        assert!(matches!(s.next_frame(), Some(Frame::Stray(t)) if t.len() == 40));
-        assert_eq!(s.buffered(), 0);
+        assert_eq!(
+            all(&mut s),
+            vec![Frame::Stray("q".repeat(16)), Frame::Stray("q".repeat(16))]
+        );
+        assert_eq!(
+            s.buffered(),
+            8,
+            "the last 8 bytes wait for more or a line end"
+        );
+    }
+
+    /// Found by the `realman_reply` fuzz target: a stray run longer than the limit whose line
+    /// end arrives in the same read as the limit was cut at the line end when read whole but
+    /// at the limit when read byte by byte.
+    #[test]
+    fn long_stray_text_is_cut_the_same_however_the_stream_arrives() {
+        let mut stream = vec![b'x'; 40];
+        stream.extend_from_slice(b"true}\r\n{\"ok\":1}\r\n");
+        let mut whole = Splitter::new(16);
+        whole.push(&stream);
+        let whole = all(&mut whole);
+        let mut bytewise = Splitter::new(16);
+        let mut pieces = Vec::new();
+        for b in &stream {
+            bytewise.push(&[*b]);
+            pieces.extend(all(&mut bytewise));
+        }
+        assert_eq!(whole, pieces);
+        assert_eq!(
+            whole,
+            vec![
+                Frame::Stray("x".repeat(16)),
+                Frame::Stray("x".repeat(16)),
+                Frame::Stray("xxxxxxxxtrue}".into()),
+                Frame::Object("{\"ok\":1}".into()),
+            ]
+        );
     }
 }
