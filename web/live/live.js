@@ -6,19 +6,8 @@
   const app = document.getElementById("app");
   const HISTORY_S = 15;
 
-  function el(tag, attrs, children) {
-    const e = document.createElement(tag);
-    for (const [k, v] of Object.entries(attrs || {})) {
-      if (k === "text") e.textContent = v; else e.setAttribute(k, v);
-    }
-    for (const c of children || []) e.appendChild(typeof c === "string" ? document.createTextNode(c) : c);
-    return e;
-  }
-  function fit(c) {
-    const r = c.getBoundingClientRect();
-    c.width = Math.max(200, Math.round(r.width));
-    c.height = Math.max(100, Math.round(r.height));
-  }
+  const el = A.el;
+  const fit = A.fitCanvas;
 
   // What tests and scripts read: the angles last drawn, frames drawn per second, the last
   // state and acknowledgement.

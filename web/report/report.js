@@ -6,14 +6,8 @@
   const data = JSON.parse(document.getElementById("armhil-data").textContent);
   const app = document.getElementById("app");
 
-  function el(tag, attrs, children) {
-    const e = document.createElement(tag);
-    for (const [k, v] of Object.entries(attrs || {})) {
-      if (k === "text") e.textContent = v; else e.setAttribute(k, v);
-    }
-    for (const c of children || []) e.appendChild(typeof c === "string" ? document.createTextNode(c) : c);
-    return e;
-  }
+  const el = A.el;
+  const fitCanvas = A.fitCanvas;
   function table(headers, rows, cls) {
     const t = el("table", cls ? { class: cls } : {});
     t.appendChild(el("thead", {}, [el("tr", {}, headers.map((h) => el("th", { text: h })))]));
@@ -21,11 +15,6 @@
     for (const r of rows) body.appendChild(r);
     t.appendChild(body);
     return t;
-  }
-  function fitCanvas(c) {
-    const r = c.getBoundingClientRect();
-    c.width = Math.max(200, Math.round(r.width));
-    c.height = Math.max(100, Math.round(r.height));
   }
 
   // Trace columns as floats (integers × quantum), by name.

@@ -28,6 +28,8 @@ pub const STYLE_CSS: &str = web_asset!("common/style.css");
 pub const ARM3D_JS: &str = web_asset!("common/arm3d.js");
 /// The time plots.
 pub const PLOT_JS: &str = web_asset!("common/plot.js");
+/// Page-building helpers of the live page and the report.
+pub const DOM_JS: &str = web_asset!("common/dom.js");
 /// The report page's script.
 pub const REPORT_JS: &str = web_asset!("report/report.js");
 /// The live page's script (`armhil sim ... --ui`).
@@ -130,7 +132,7 @@ pub fn live_page(title: &str, script: &str) -> String {
     page(
         title,
         "<main id=\"app\"></main>",
-        &[ARM3D_JS, PLOT_JS, script],
+        &[ARM3D_JS, PLOT_JS, DOM_JS, script],
     )
 }
 
@@ -164,7 +166,7 @@ pub fn report_html(result: &ScenarioResult) -> String {
     page(
         &format!("{} — {}", result.name, result.verdict.word()),
         &body,
-        &[ARM3D_JS, PLOT_JS, REPORT_JS],
+        &[ARM3D_JS, PLOT_JS, DOM_JS, REPORT_JS],
     )
 }
 

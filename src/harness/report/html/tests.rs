@@ -52,7 +52,7 @@ fn a_failed_report_names_the_step_in_plain_html() {
     assert!(summary.contains("arm_status &lt;estop&gt;"));
     assert!(summary.contains("class=\"verdict fail\""));
     // The name cannot end the data script early.
-    assert_eq!(html.matches("</script>").count(), 4, "data + three scripts");
+    assert_eq!(html.matches("</script>").count(), 5, "data + four scripts");
 }
 
 #[test]
