@@ -20,10 +20,10 @@
 #                    name one to keep the corpus between runs)
 #   FUZZ_JOBS        targets fuzzed at the same time (default 1)
 #   FUZZ_ARGS        extra libFuzzer flags
-#   FUZZ_BUILD_TIMEOUT_S  give up the build after this many seconds (exit 3, nothing fuzzed):
-#                    for CI, where a build slower than its time budget must not fail the run
-#   FUZZ_RUN_UNTIL   a time (seconds since the epoch) to fill: after the build, each target
-#                    runs longer than SECONDS_PER_TARGET if the time left allows (never shorter)
+#   FUZZ_RUN_UNTIL   a time (seconds since the epoch) the whole run must end by, for CI: the
+#                    build gets what is left after reserving SECONDS_PER_TARGET for every
+#                    target and is stopped if it needs more (exit 3, nothing fuzzed); time it
+#                    leaves over lengthens each target's run (never below SECONDS_PER_TARGET)
 set -euo pipefail
 
 cd "$(dirname "$0")/.."
@@ -66,13 +66,17 @@ fuzz_flags=(--fuzz-dir fuzz --target-dir "$target_dir" --release --debug-asserti
     --sanitizer "$sanitizer")
 export RUSTC_BOOTSTRAP=1
 build_start=$(date +%s)
-# build CARGO_FUZZ_BUILD_ARGS...: one cargo-fuzz build, under what is left of FUZZ_BUILD_TIMEOUT_S.
+jobs=${FUZZ_JOBS:-1}
+# Targets run FUZZ_JOBS at a time: this many rounds, plus a minute for seeds and reports.
+rounds=$(((${#targets[@]} + jobs - 1) / jobs))
+# build CARGO_FUZZ_BUILD_ARGS...: one cargo-fuzz build, stopped where FUZZ_RUN_UNTIL leaves
+# only the runs' own time.
 build() {
-    if [ -z "${FUZZ_BUILD_TIMEOUT_S:-}" ]; then
+    if [ -z "${FUZZ_RUN_UNTIL:-}" ]; then
         "${cargo[@]}" fuzz build "${fuzz_flags[@]}" "$@"
         return
     fi
-    local left=$((build_start + FUZZ_BUILD_TIMEOUT_S - $(date +%s)))
+    local left=$((FUZZ_RUN_UNTIL - rounds * secs - 60 - $(date +%s)))
     [ $left -gt 0 ] || return 124
     timeout "$left" "${cargo[@]}" fuzz build "${fuzz_flags[@]}" "$@"
 }
@@ -83,7 +87,7 @@ else
     for t in "${targets[@]}"; do build "$t" || { build_status=$?; break; }; done
 fi
 if [ $build_status -eq 124 ]; then
-    echo "fuzz: build did not finish within ${FUZZ_BUILD_TIMEOUT_S} s; nothing fuzzed" >&2
+    echo "fuzz: build did not finish in the time FUZZ_RUN_UNTIL leaves; nothing fuzzed" >&2
     exit 3
 elif [ $build_status -ne 0 ]; then
     echo "fuzz: build failed (exit $build_status)" >&2
@@ -91,10 +95,9 @@ elif [ $build_status -ne 0 ]; then
 fi
 echo "fuzz: build took $(($(date +%s) - build_start)) s"
 
-# Stretch the runs over the time left before FUZZ_RUN_UNTIL (rounds of FUZZ_JOBS targets, a
-# minute kept for the reports), so a fast build leaves the fuzzers more time, not CI idle.
+# Stretch the runs over the time left before FUZZ_RUN_UNTIL, so a fast build leaves the
+# fuzzers more time, not CI idle.
 if [ -n "${FUZZ_RUN_UNTIL:-}" ]; then
-    rounds=$(((${#targets[@]} + ${FUZZ_JOBS:-1} - 1) / ${FUZZ_JOBS:-1}))
     stretched=$(((FUZZ_RUN_UNTIL - $(date +%s) - 60) / rounds))
     if [ "$stretched" -gt "$secs" ]; then
         secs=$stretched
@@ -136,7 +139,6 @@ run_target() {
 }
 
 # FUZZ_JOBS targets at a time (one process each).
-jobs=${FUZZ_JOBS:-1}
 running=0
 for t in "${targets[@]}"; do
     if [ "$running" -ge "$jobs" ]; then
