@@ -8,8 +8,11 @@
 //! - [`SocketcandBus`] is the client side: a [`CanBus`](crate::CanBus) over TCP for armhil's
 //!   own drivers and recorder.
 //! - [`protocol`]: parsing and formatting of the `< … >` elements.
+//! - [`http_guard`]: the detector that closes connections carrying HTTP (a web page's
+//!   cross-protocol request), used by this server and by the Realman emulator's JSON port.
 
 mod client;
+pub mod http_guard;
 pub mod protocol;
 mod server;
 

@@ -8,6 +8,12 @@
 //! client may only ever send (piper_sdk opens a second connection it never reads), and its
 //! commands must still reach the bus. Nothing a client does can hold up the bus or the other
 //! clients; a client that sends faster than the bus carries frames is slowed through TCP.
+//!
+//! Every byte a client sends passes the [`HttpGuard`] before the framer sees it: a connection
+//! that opens with an HTTP request line or carries `Host:`/`Origin:` lines (a web page's
+//! `fetch` to this port) is closed with nothing in it acted on. At most
+//! [`ServerConfig::max_clients`] clients are served at once; further connections are closed
+//! at once, so a connection storm cannot use up the process's file descriptors.
 
 use std::net::SocketAddr;
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
@@ -21,6 +27,7 @@ use tokio::sync::{mpsc, watch};
 use tokio::task::JoinSet;
 use tokio::time::Instant;
 
+use super::http_guard::HttpGuard;
 use super::protocol::{self, Command, Element, Framer, Reply};
 use crate::virtual_bus::{NodeOptions, VirtualBus, VirtualNode};
 use crate::{BusError, CanBus, CanFrame};
@@ -45,7 +52,14 @@ pub struct ServerConfig {
     /// Kernel send buffer of each connection in bytes (default 64 KiB, some 1400 frames):
     /// bounds how stale the frames a lagging client reads can be before drops begin.
     pub send_buffer: usize,
+    /// Most clients served at once (default 128); a further connection is closed as soon as
+    /// it is accepted. Each client is a node on the bus and costs every other client some of
+    /// its share of the bus's fan-out, and a descriptor of the process's limited supply.
+    pub max_clients: usize,
 }
+
+/// Default of [`ServerConfig::max_clients`].
+pub const DEFAULT_MAX_CLIENTS: usize = 128;
 
 impl Default for ServerConfig {
     fn default() -> Self {
@@ -55,6 +69,7 @@ impl Default for ServerConfig {
             send_wait: Duration::from_secs(1),
             rawmode_grace: Duration::from_millis(100),
             send_buffer: 64 * 1024,
+            max_clients: DEFAULT_MAX_CLIENTS,
         }
     }
 }
@@ -88,6 +103,10 @@ pub struct ServerStats {
     pub frames_dropped: u64,
     /// Elements answered with `< error … >`.
     pub errors: u64,
+    /// Connections closed at once because [`ServerConfig::max_clients`] were connected.
+    pub refused: u64,
+    /// Connections closed because they carried HTTP (see [`HttpGuard`]).
+    pub http_refused: u64,
 }
 
 #[derive(Debug, Default)]
@@ -98,6 +117,8 @@ struct Counters {
     frames_to_clients: AtomicU64,
     frames_dropped: AtomicU64,
     errors: AtomicU64,
+    refused: AtomicU64,
+    http_refused: AtomicU64,
 }
 
 impl Counters {
@@ -109,6 +130,8 @@ impl Counters {
             frames_to_clients: self.frames_to_clients.load(Ordering::Relaxed),
             frames_dropped: self.frames_dropped.load(Ordering::Relaxed),
             errors: self.errors.load(Ordering::Relaxed),
+            refused: self.refused.load(Ordering::Relaxed),
+            http_refused: self.http_refused.load(Ordering::Relaxed),
         }
     }
 }
@@ -223,6 +246,17 @@ async fn accept_loop(listener: TcpListener, shared: Arc<Shared>, mut stop: watch
         tokio::select! {
             accepted = listener.accept() => match accepted {
                 Ok((stream, peer)) => {
+                    // Reap the connections that ended, so the count is of live ones.
+                    while connections.try_join_next().is_some() {}
+                    if connections.len() >= shared.config.max_clients.max(1) {
+                        drop(stream);
+                        let refused = shared.counters.refused.fetch_add(1, Ordering::Relaxed) + 1;
+                        // A storm must not flood the log: the 1st, 2nd, 4th, 8th, … refusal.
+                        if refused.is_power_of_two() {
+                            tracing::warn!(%peer, refused, cap = shared.config.max_clients, "socketcand server full; connection closed");
+                        }
+                        continue;
+                    }
                     connections.spawn(serve(stream, peer, Arc::clone(&shared)));
                 }
                 Err(error) => {
@@ -248,6 +282,7 @@ async fn accept_loop(listener: TcpListener, shared: Arc<Shared>, mut stop: watch
 enum End {
     ClientClosed,
     ReadFailed(std::io::Error),
+    Http(super::http_guard::HttpRefused),
     WriteFailed(std::io::Error),
     BusClosed,
 }
@@ -257,6 +292,7 @@ impl std::fmt::Display for End {
         match self {
             Self::ClientClosed => write!(f, "client closed the connection"),
             Self::ReadFailed(e) => write!(f, "reading from the client failed: {e}"),
+            Self::Http(e) => write!(f, "closed: {e}"),
             Self::WriteFailed(e) => write!(f, "writing to the client failed: {e}"),
             Self::BusClosed => write!(f, "the bus was closed"),
         }
@@ -340,6 +376,7 @@ struct Session<'a> {
 impl Session<'_> {
     async fn read_loop(&mut self, mut read: OwnedReadHalf) -> End {
         let mut framer = Framer::default();
+        let mut guard = HttpGuard::new();
         let mut buf = vec![0u8; 8192];
         loop {
             let n = match read.read(&mut buf).await {
@@ -347,7 +384,18 @@ impl Session<'_> {
                 Ok(n) => n,
                 Err(error) => return End::ReadFailed(error),
             };
-            framer.push(&buf[..n]);
+            // The only way from the socket to the framer: nothing of an HTTP request runs.
+            match guard.admit(&buf[..n]) {
+                Ok(clean) => framer.push(clean),
+                Err(refused) => {
+                    self.shared
+                        .counters
+                        .http_refused
+                        .fetch_add(1, Ordering::Relaxed);
+                    tracing::warn!(peer = %self.peer, %refused, "socketcand server closes a connection that speaks HTTP (a web page's request?)");
+                    return End::Http(refused);
+                }
+            }
             while let Some(element) = framer.next_element() {
                 let text = match element {
                     Element::Complete(text) => text,
@@ -532,4 +580,109 @@ async fn write_loop(mut write: OwnedWriteHalf, mut queue: mpsc::Receiver<String>
     }
     // Every sender is gone: the other parts have ended the connection already.
     End::ClientClosed
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::virtual_bus::VirtualBusConfig;
+    use tokio::io::{AsyncReadExt, AsyncWriteExt};
+    use tokio::time::timeout;
+
+    const WAIT: Duration = Duration::from_secs(5);
+    /// The e-stop a web page would send (Piper 0x150, first byte 1).
+    const ESTOP: &str = "< open can0 >< send 150 8 01 00 00 00 00 00 00 00 >";
+
+    async fn server(config: ServerConfig) -> (SocketcandServer, VirtualNode, String) {
+        let bus = VirtualBus::new(VirtualBusConfig::default());
+        let emulator = bus.attach("emulator");
+        let server = SocketcandServer::bind("127.0.0.1:0", bus, config)
+            .await
+            .unwrap();
+        let addr = server.local_addr().to_string();
+        (server, emulator, addr)
+    }
+
+    /// Everything the server sends until it closes the connection (bounded by [`WAIT`]).
+    /// A reset (the server closed with our request unread) counts as closed.
+    async fn read_to_close(stream: &mut TcpStream) -> Option<String> {
+        let mut seen = Vec::new();
+        let _read = timeout(WAIT, stream.read_to_end(&mut seen)).await.ok()?;
+        Some(String::from_utf8_lossy(&seen).into_owned())
+    }
+
+    #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+    async fn a_browser_post_is_closed_and_puts_nothing_on_the_bus() {
+        let (server, emulator, addr) = server(ServerConfig::default()).await;
+        let request = format!(
+            "POST / HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nOrigin: https://attacker.example\r\n\
+             Content-Type: text/plain;charset=UTF-8\r\nContent-Length: {len}\r\n\r\n{ESTOP}",
+            port = server.local_addr().port(),
+            len = ESTOP.len()
+        );
+        // Whole, and in small pieces (a request line split over TCP segments).
+        for piece in [request.len(), 5] {
+            let mut stream = TcpStream::connect(&addr).await.unwrap();
+            for part in request.as_bytes().chunks(piece) {
+                // The server may already have closed: later writes may fail.
+                if stream.write_all(part).await.is_err() {
+                    break;
+                }
+            }
+            let seen = read_to_close(&mut stream).await;
+            assert!(seen.is_some(), "the connection stayed open");
+        }
+        let frame = timeout(Duration::from_millis(300), emulator.recv()).await;
+        assert!(frame.is_err(), "a frame reached the bus: {frame:?}");
+        assert_eq!(server.stats().http_refused, 2);
+        assert_eq!(server.stats().frames_from_clients, 0);
+
+        // The same body from a socketcand client does reach the bus (the test can fail).
+        let mut stream = TcpStream::connect(&addr).await.unwrap();
+        stream.write_all(ESTOP.as_bytes()).await.unwrap();
+        let frame = timeout(WAIT, emulator.recv()).await.unwrap().unwrap();
+        assert_eq!(frame.frame.id().raw(), 0x150);
+    }
+
+    #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+    async fn connections_over_the_cap_are_closed_at_once() {
+        let config = ServerConfig {
+            max_clients: 3,
+            ..ServerConfig::default()
+        };
+        let (server, _emulator, addr) = server(config).await;
+        let mut kept = Vec::new();
+        for _ in 0..3 {
+            let mut stream = TcpStream::connect(&addr).await.unwrap();
+            let mut hi = [0u8; 6];
+            timeout(WAIT, stream.read_exact(&mut hi))
+                .await
+                .unwrap()
+                .unwrap();
+            assert_eq!(&hi, b"< hi >");
+            kept.push(stream);
+        }
+        for _ in 0..5 {
+            let mut extra = TcpStream::connect(&addr).await.unwrap();
+            let seen = read_to_close(&mut extra).await;
+            assert_eq!(seen.as_deref(), Some(""), "over the cap");
+        }
+        assert_eq!(server.stats().refused, 5);
+        assert_eq!(server.stats().clients, 3);
+        // A client that leaves makes room for the next.
+        drop(kept.pop());
+        let deadline = Instant::now() + WAIT;
+        loop {
+            let mut stream = TcpStream::connect(&addr).await.unwrap();
+            let mut hi = [0u8; 6];
+            if timeout(WAIT, stream.read_exact(&mut hi))
+                .await
+                .is_ok_and(|r| r.is_ok())
+            {
+                break;
+            }
+            assert!(Instant::now() < deadline, "no room after a client left");
+            tokio::time::sleep(Duration::from_millis(20)).await;
+        }
+    }
 }
