@@ -7,7 +7,7 @@
 # targets with cargo-fuzz, runs them one after the other (one process each), and prints the
 # executions and coverage of each. Exits non-zero if any target crashed; the crashing input
 # is copied to fuzz/regressions/<target>/, where `cargo test --workspace` replays it
-# (tests/fuzz_regressions.rs) until it passes.
+# (the `fuzz_regressions` module of tests/integration/) until it passes.
 #
 # Works on a stable toolchain: cargo-fuzz passes nightly-only flags (-Z sanitizer,
 # -C passes=sancov-module), so RUSTC_BOOTSTRAP=1 is set for the build.
@@ -58,7 +58,7 @@ mkdir -p "$work"
 echo "fuzz: ${#targets[@]} target(s), ${secs}s each, sanitizer $sanitizer, scratch $work"
 
 # Seeds: the fixtures and scenarios in each target's input encoding.
-"${cargo[@]}" run --quiet -p armhil-bus --example fuzz_seeds -- "$work/seeds" "${targets[@]}"
+"${cargo[@]}" run --quiet -p armhil-testkit --example fuzz_seeds -- "$work/seeds" "${targets[@]}"
 
 # One build for all targets. Release with debug assertions: integer overflow panics, so a
 # value that would wrap is a crash.

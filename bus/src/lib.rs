@@ -8,14 +8,10 @@
 //! - `vxcan` (Linux only): creating a vxcan pair for a vendor SDK and an emulator.
 //! - [`socketcand`]: CAN over TCP (the socketcand protocol), server and client.
 //! - [`candump`], [`pcap`] and [`recorder`]: logs for can-utils and Wireshark, and a reader.
-//! - [`fixtures`]: the annotated candump test vectors in `fixtures/` that drivers and emulators
-//!   are both checked against.
 //! - [`timing`]: how many bit times a frame occupies.
-//! - [`transcript`]: the reader for JSON test-vector transcripts (Realman fixtures).
 
 pub mod candump;
 mod error;
-pub mod fixtures;
 mod frame;
 mod iface;
 pub mod pcap;
@@ -24,7 +20,6 @@ pub mod recorder;
 pub mod socketcan_bus;
 pub mod socketcand;
 pub mod timing;
-pub mod transcript;
 pub mod virtual_bus;
 #[cfg(target_os = "linux")]
 pub mod vxcan;

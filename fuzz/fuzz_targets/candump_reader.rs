@@ -1,4 +1,4 @@
-//! Fuzz target `candump_reader`: see `armhil_fuzz::candump_reader` (fuzz/harness/) for its input and invariants.
+//! Fuzz target `candump_reader`: see `testkit::fuzz::candump_reader` (testkit/src/fuzz/) for its input and invariants.
 #![no_main]
 
-libfuzzer_sys::fuzz_target!(|data: &[u8]| armhil_fuzz::candump_reader(data));
+libfuzzer_sys::fuzz_target!(|data: &[u8]| testkit::fuzz::candump_reader(data));

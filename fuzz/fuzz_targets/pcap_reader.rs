@@ -1,4 +1,4 @@
-//! Fuzz target `pcap_reader`: see `armhil_fuzz::pcap_reader` (fuzz/harness/) for its input and invariants.
+//! Fuzz target `pcap_reader`: see `testkit::fuzz::pcap_reader` (testkit/src/fuzz/) for its input and invariants.
 #![no_main]
 
-libfuzzer_sys::fuzz_target!(|data: &[u8]| armhil_fuzz::pcap_reader(data));
+libfuzzer_sys::fuzz_target!(|data: &[u8]| testkit::fuzz::pcap_reader(data));

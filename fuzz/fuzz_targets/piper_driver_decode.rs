@@ -1,4 +1,4 @@
-//! Fuzz target `piper_driver_decode`: see `armhil_fuzz::piper_driver_decode` (fuzz/harness/) for its input and invariants.
+//! Fuzz target `piper_driver_decode`: see `testkit::fuzz::piper_driver_decode` (testkit/src/fuzz/) for its input and invariants.
 #![no_main]
 
-libfuzzer_sys::fuzz_target!(|data: &[u8]| armhil_fuzz::piper_driver_decode(data));
+libfuzzer_sys::fuzz_target!(|data: &[u8]| testkit::fuzz::piper_driver_decode(data));

@@ -1,4 +1,4 @@
-//! Fuzz target `piper_emulator`: see `armhil_fuzz::piper_emulator` (fuzz/harness/) for its input and invariants.
+//! Fuzz target `piper_emulator`: see `testkit::fuzz::piper_emulator` (testkit/src/fuzz/) for its input and invariants.
 #![no_main]
 
-libfuzzer_sys::fuzz_target!(|data: &[u8]| armhil_fuzz::piper_emulator(data));
+libfuzzer_sys::fuzz_target!(|data: &[u8]| testkit::fuzz::piper_emulator(data));

@@ -1,4 +1,4 @@
-//! Fuzz target `realman_command`: see `armhil_fuzz::realman_command` (fuzz/harness/) for its input and invariants.
+//! Fuzz target `realman_command`: see `testkit::fuzz::realman_command` (testkit/src/fuzz/) for its input and invariants.
 #![no_main]
 
-libfuzzer_sys::fuzz_target!(|data: &[u8]| armhil_fuzz::realman_command(data));
+libfuzzer_sys::fuzz_target!(|data: &[u8]| testkit::fuzz::realman_command(data));

@@ -1,4 +1,4 @@
-//! Fuzz target `realman_framing`: see `armhil_fuzz::realman_framing` (fuzz/harness/) for its input and invariants.
+//! Fuzz target `realman_framing`: see `testkit::fuzz::realman_framing` (testkit/src/fuzz/) for its input and invariants.
 #![no_main]
 
-libfuzzer_sys::fuzz_target!(|data: &[u8]| armhil_fuzz::realman_framing(data));
+libfuzzer_sys::fuzz_target!(|data: &[u8]| testkit::fuzz::realman_framing(data));

@@ -1,4 +1,4 @@
-//! Fuzz target `realman_reply`: see `armhil_fuzz::realman_reply` (fuzz/harness/) for its input and invariants.
+//! Fuzz target `realman_reply`: see `testkit::fuzz::realman_reply` (testkit/src/fuzz/) for its input and invariants.
 #![no_main]
 
-libfuzzer_sys::fuzz_target!(|data: &[u8]| armhil_fuzz::realman_reply(data));
+libfuzzer_sys::fuzz_target!(|data: &[u8]| testkit::fuzz::realman_reply(data));

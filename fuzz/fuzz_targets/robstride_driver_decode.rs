@@ -1,4 +1,4 @@
-//! Fuzz target `robstride_driver_decode`: see `armhil_fuzz::robstride_driver_decode` (fuzz/harness/) for its input and invariants.
+//! Fuzz target `robstride_driver_decode`: see `testkit::fuzz::robstride_driver_decode` (testkit/src/fuzz/) for its input and invariants.
 #![no_main]
 
-libfuzzer_sys::fuzz_target!(|data: &[u8]| armhil_fuzz::robstride_driver_decode(data));
+libfuzzer_sys::fuzz_target!(|data: &[u8]| testkit::fuzz::robstride_driver_decode(data));

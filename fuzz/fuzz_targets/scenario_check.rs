@@ -1,4 +1,4 @@
-//! Fuzz target `scenario_check`: see `armhil_fuzz::scenario_check` (fuzz/harness/) for its input and invariants.
+//! Fuzz target `scenario_check`: see `testkit::fuzz::scenario_check` (testkit/src/fuzz/) for its input and invariants.
 #![no_main]
 
-libfuzzer_sys::fuzz_target!(|data: &[u8]| armhil_fuzz::scenario_check(data));
+libfuzzer_sys::fuzz_target!(|data: &[u8]| testkit::fuzz::scenario_check(data));

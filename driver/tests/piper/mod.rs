@@ -1,0 +1,4 @@
+//! The Piper driver.
+
+mod client;
+mod fixtures;

@@ -1,0 +1,4 @@
+//! The Realman driver.
+
+mod client;
+mod fixtures;

@@ -1,0 +1,4 @@
+//! The RobStride driver.
+
+mod conformance;
+mod routing;

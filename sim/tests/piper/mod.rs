@@ -1,0 +1,10 @@
+//! The Piper emulator.
+
+mod dynamics;
+mod faults;
+mod fixtures;
+mod motion;
+mod on_bus;
+mod physics;
+mod protocol;
+mod vectors;

@@ -1,0 +1,7 @@
+//! The Realman controller emulator.
+
+mod controller;
+mod fixtures;
+mod kinematics;
+mod plant;
+mod server;

@@ -1,0 +1,5 @@
+//! The RobStride actuator emulator.
+
+mod conformance;
+mod on_bus;
+mod physics;
