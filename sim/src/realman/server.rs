@@ -6,6 +6,19 @@
 //! and a writer that writes each queued message (reply or event) as its own write (compact JSON
 //! and CRLF). Replies and events share the client's queue, so an acknowledgement always
 //! precedes the arrival event of its move and the two never share a write.
+//!
+//! What a hostile or broken client cannot do:
+//! - make a web page's request run: every byte read passes the shared
+//!   [`HttpGuard`](bus::socketcand::http_guard::HttpGuard) before the splitter sees it, so a
+//!   connection that opens with an HTTP request line (a browser's `fetch` to this port) or
+//!   carries `Host:`/`Origin:` lines is closed with nothing in it acted on;
+//! - grow memory by not reading its replies: the queue holds at most [`CLIENT_QUEUE`]
+//!   messages; while it is nearly full the reader stops reading that client (TCP then slows
+//!   the client down), and a client whose queue has no room left for an event is dropped;
+//! - hold a connection slot for ever: a connection on which no byte moved either way for
+//!   [`EmulatorConfig::idle_timeout`] is closed, and when every slot is taken a newcomer
+//!   takes the slot of the client idle longest, if that one has been idle for
+//!   [`EVICT_IDLE_AFTER`].
 
 use std::collections::BTreeMap;
 use std::net::{IpAddr, SocketAddr};
@@ -25,6 +38,7 @@ use super::controller::{
 use super::faults::{FaultError, RealmanFault, RealmanFaultKind};
 use super::framing::{Splitter, Unit, MAX_REQUEST_BYTES};
 use super::push::{Datagram, PushFaults, PushSink, PushStats};
+use bus::socketcand::http_guard::HttpGuard;
 
 /// Default most simultaneous connections.
 pub const DEFAULT_MAX_CONNECTIONS: usize = 64;
@@ -36,6 +50,24 @@ const OVERRUN_SLACK_MS: u64 = 5;
 const READ_CHUNK: usize = 16 * 1024;
 /// Capacity of an in-memory stream's pipe, bytes.
 const DUPLEX_BYTES: usize = 256 * 1024;
+/// Most messages (replies and events) queued for one client. Replies are at most a few KiB,
+/// so a client that never reads costs at most about a MiB here (plus the kernel's buffers).
+pub const CLIENT_QUEUE: usize = 256;
+/// Slots of a client's queue kept for events: the reader takes a request only while more
+/// than this many are free, so the events of the moves a client started still fit when it
+/// is slow to read; a client whose queue has no room for an event is dropped.
+const EVENT_HEADROOM: usize = 64;
+/// Default of [`EmulatorConfig::idle_timeout`]: five minutes. The vendor SDK sends nothing
+/// on its TCP connection while a program waits (for user input, or for the UDP push in its
+/// callback mode), and the controller keeps such a connection, so the limit is long enough
+/// for an interactive session to pause; it frees the slot of a client that vanished without
+/// closing (a killed VM, a pulled cable) or leaked its socket. At the cap, a newcomer does not
+/// wait that long (see [`EVICT_IDLE_AFTER`]).
+pub const DEFAULT_IDLE_TIMEOUT: Duration = Duration::from_secs(300);
+/// When every slot is taken, the client idle the longest gives its slot to a newcomer if it
+/// has been idle at least this long (ten seconds: twenty times the SDK's reply timeout, so a
+/// client in the middle of an exchange is never the one evicted).
+pub const EVICT_IDLE_AFTER: Duration = Duration::from_secs(10);
 
 /// Real TCP/UDP sockets or in-memory streams.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -57,6 +89,9 @@ pub struct EmulatorConfig {
     pub ticks_per_wake: u32,
     /// Seed of the random faults (UDP loss).
     pub seed: u64,
+    /// A connection on which no byte moved either way for this long is closed (`None`:
+    /// never). Default [`DEFAULT_IDLE_TIMEOUT`].
+    pub idle_timeout: Option<Duration>,
 }
 
 impl EmulatorConfig {
@@ -67,6 +102,7 @@ impl EmulatorConfig {
             max_connections: DEFAULT_MAX_CONNECTIONS,
             ticks_per_wake: 1,
             seed: 0,
+            idle_timeout: Some(DEFAULT_IDLE_TIMEOUT),
         }
     }
 }
@@ -110,6 +146,14 @@ pub struct ServerStats {
     pub malformed: u64,
     /// Requests with an unknown command.
     pub unknown: u64,
+    /// Connections closed because they carried HTTP (a web page's request).
+    pub http_refused: u64,
+    /// Connections closed after [`EmulatorConfig::idle_timeout`] without traffic.
+    pub idle_closed: u64,
+    /// Connections that gave their slot to a newcomer at the cap (idle the longest).
+    pub evicted: u64,
+    /// Connections dropped because their queue had no room for an event (not reading).
+    pub slow_dropped: u64,
     /// Wake-ups of the core task that came more than one push period (5 ms) late; the missed
     /// steps still ran, their push datagrams coalesced into one.
     pub overruns: u64,
@@ -125,8 +169,45 @@ struct Outgoing {
 
 struct Client {
     peer: SocketAddr,
-    tx: mpsc::UnboundedSender<Outgoing>,
-    kill: watch::Sender<bool>,
+    tx: mpsc::Sender<Outgoing>,
+    /// Set to the reason when the connection must end now (a fault, eviction, not reading).
+    kill: watch::Sender<Option<&'static str>>,
+    /// Last time a byte moved either way, ms since [`Shared::epoch`].
+    active_ms: Arc<AtomicU64>,
+}
+
+impl Client {
+    fn end(&self, reason: &'static str) {
+        self.kill.send_if_modified(|r| {
+            let first = r.is_none();
+            if first {
+                *r = Some(reason);
+            }
+            first
+        });
+    }
+
+    fn ending(&self) -> bool {
+        self.kill.borrow().is_some()
+    }
+}
+
+/// When a connection was last active, shared by its reader and writer.
+#[derive(Clone)]
+struct Activity {
+    epoch: Instant,
+    ms: Arc<AtomicU64>,
+}
+
+impl Activity {
+    fn touch(&self) {
+        let now = (Instant::now() - self.epoch).as_millis() as u64;
+        self.ms.fetch_max(now, Ordering::Relaxed);
+    }
+
+    fn last(&self) -> Instant {
+        self.epoch + Duration::from_millis(self.ms.load(Ordering::Relaxed))
+    }
 }
 
 /// Faults applied by the transport.
@@ -144,6 +225,9 @@ struct Shared {
     stats: Mutex<ServerStats>,
     next_client: AtomicU64,
     max_connections: usize,
+    idle_timeout: Option<Duration>,
+    /// Origin of the clients' activity times.
+    epoch: Instant,
     stop: watch::Receiver<bool>,
 }
 
@@ -159,7 +243,7 @@ fn inject_fault(shared: &Shared, fault: RealmanFault) -> Result<(), FaultError> 
         RealmanFault::ConnectionDrop { peer_ip } => {
             for client in lock(&shared.clients).values() {
                 if peer_ip.is_none_or(|ip| ip == client.peer.ip()) {
-                    let _ = client.kill.send(true);
+                    client.end("dropped by fault");
                 }
             }
         }
@@ -282,6 +366,8 @@ impl RealmanEmulator {
             stats: Mutex::new(ServerStats::default()),
             next_client: AtomicU64::new(1),
             max_connections: config.max_connections.max(1),
+            idle_timeout: config.idle_timeout,
+            epoch: Instant::now(),
             stop: stop_rx,
         });
         let mut tasks = Vec::new();
@@ -429,30 +515,69 @@ async fn accept_loop(shared: Arc<Shared>, listener: TcpListener) {
     }
 }
 
-/// Admit a client or refuse it (cap reached).
-fn admit(
-    shared: &Shared,
-    peer: SocketAddr,
-) -> Option<(
-    ClientId,
-    mpsc::UnboundedReceiver<Outgoing>,
-    watch::Receiver<bool>,
-)> {
+/// What a connection's tasks get when it is admitted.
+struct Admitted {
+    id: ClientId,
+    tx: mpsc::Sender<Outgoing>,
+    rx: mpsc::Receiver<Outgoing>,
+    kill: watch::Receiver<Option<&'static str>>,
+    activity: Activity,
+}
+
+/// Admit a client, evicting the client idle longest if every slot is taken and it has been
+/// idle for [`EVICT_IDLE_AFTER`], or refuse it.
+fn admit(shared: &Shared, peer: SocketAddr) -> Option<Admitted> {
     let mut clients = lock(&shared.clients);
-    if clients.len() >= shared.max_connections {
-        drop(clients);
-        lock(&shared.stats).refused += 1;
-        tracing::warn!(%peer, cap = shared.max_connections, "Realman emulator refused a connection: too many clients");
-        return None;
+    // Clients being closed (evicted, dropped) no longer hold a slot.
+    let live = clients.values().filter(|c| !c.ending()).count();
+    if live >= shared.max_connections {
+        let idlest = clients
+            .values()
+            .filter(|c| !c.ending())
+            .min_by_key(|c| c.active_ms.load(Ordering::Relaxed));
+        let idle_since = idlest
+            .map(|c| shared.epoch + Duration::from_millis(c.active_ms.load(Ordering::Relaxed)));
+        match (idlest, idle_since) {
+            (Some(client), Some(since)) if since + EVICT_IDLE_AFTER <= Instant::now() => {
+                tracing::info!(evicted = %client.peer, %peer, "Realman emulator full: the client idle longest gives its slot to a new one");
+                client.end("evicted (idle while the emulator was full)");
+                lock(&shared.stats).evicted += 1;
+            }
+            _ => {
+                drop(clients);
+                lock(&shared.stats).refused += 1;
+                tracing::warn!(%peer, cap = shared.max_connections, "Realman emulator refused a connection: too many clients");
+                return None;
+            }
+        }
     }
     let id = shared.next_client.fetch_add(1, Ordering::Relaxed);
-    let (tx, rx) = mpsc::unbounded_channel();
-    let (kill, kill_rx) = watch::channel(false);
-    clients.insert(id, Client { peer, tx, kill });
+    let (tx, rx) = mpsc::channel(CLIENT_QUEUE);
+    let (kill, kill_rx) = watch::channel(None);
+    let activity = Activity {
+        epoch: shared.epoch,
+        ms: Arc::new(AtomicU64::new(0)),
+    };
+    activity.touch();
+    clients.insert(
+        id,
+        Client {
+            peer,
+            tx: tx.clone(),
+            kill,
+            active_ms: Arc::clone(&activity.ms),
+        },
+    );
     drop(clients);
     lock(&shared.stats).accepted += 1;
     tracing::info!(%peer, client = id, "Realman client connected");
-    Some((id, rx, kill_rx))
+    Some(Admitted {
+        id,
+        tx,
+        rx,
+        kill: kill_rx,
+        activity,
+    })
 }
 
 /// Serve one client until it disconnects, is dropped by a fault, or the emulator stops.
@@ -460,64 +585,158 @@ async fn serve_connection<S>(shared: Arc<Shared>, stream: S, peer: SocketAddr)
 where
     S: AsyncRead + AsyncWrite + Send + Unpin + 'static,
 {
-    let Some((id, rx, kill)) = admit(&shared, peer) else {
+    let Some(client) = admit(&shared, peer) else {
         drop(stream);
         return;
     };
+    let id = client.id;
     let (reader, writer) = tokio::io::split(stream);
-    let writer_task = tokio::spawn(write_loop(Arc::clone(&shared), writer, rx, kill.clone()));
-    let reason = read_loop(&shared, id, reader, kill).await;
+    let writer_task = tokio::spawn(write_loop(
+        Arc::clone(&shared),
+        writer,
+        client.rx,
+        client.kill.clone(),
+        client.activity.clone(),
+    ));
+    let connection = Connection {
+        shared: &shared,
+        id,
+        tx: client.tx,
+        kill: client.kill,
+        activity: client.activity,
+    };
+    let reason = connection.read_loop(reader).await;
     lock(&shared.clients).remove(&id);
     lock(&shared.core).disconnect(id);
     let _ = writer_task.await;
     tracing::info!(%peer, client = id, reason, "Realman client disconnected");
 }
 
-async fn read_loop<R: AsyncRead + Unpin>(
-    shared: &Shared,
+/// Why a wait inside the reader ended early.
+enum Interrupted {
+    /// The connection must end, for this reason.
+    End(&'static str),
+}
+
+/// The reading side of one connection.
+struct Connection<'a> {
+    shared: &'a Shared,
     id: ClientId,
-    mut reader: R,
-    mut kill: watch::Receiver<bool>,
-) -> &'static str {
-    let mut stop = shared.stop.clone();
-    let mut splitter = Splitter::new(MAX_REQUEST_BYTES);
-    let mut buf = vec![0u8; READ_CHUNK];
-    let mut units = Vec::new();
-    loop {
-        let n = tokio::select! {
-            r = reader.read(&mut buf) => match r {
-                Ok(0) => return "peer closed",
-                Ok(n) => n,
-                Err(_) => return "read error",
-            },
-            _ = kill.changed() => return "dropped by fault",
-            _ = stop.changed() => return "emulator stopped",
-        };
-        if let Err(e) = splitter.feed(&buf[..n], &mut units) {
-            lock(&shared.stats).oversize += 1;
-            tracing::warn!(client = id, error = %e, "Realman emulator closes a connection");
-            return "request too long";
+    tx: mpsc::Sender<Outgoing>,
+    kill: watch::Receiver<Option<&'static str>>,
+    activity: Activity,
+}
+
+impl Connection<'_> {
+    /// Run `work` unless the connection is killed, the emulator stops or the connection has
+    /// been idle (no byte either way) for the idle timeout.
+    async fn guarded<T>(
+        &mut self,
+        work: impl std::future::Future<Output = T>,
+    ) -> Result<T, Interrupted> {
+        let mut stop = self.shared.stop.clone();
+        tokio::pin!(work);
+        loop {
+            let idle_at = self
+                .shared
+                .idle_timeout
+                .and_then(|t| self.activity.last().checked_add(t));
+            let idle = async {
+                match idle_at {
+                    Some(at) => sleep_until(at).await,
+                    None => std::future::pending().await,
+                }
+            };
+            tokio::select! {
+                out = &mut work => return Ok(out),
+                _ = self.kill.changed() => {
+                    let reason = (*self.kill.borrow()).unwrap_or("dropped");
+                    return Err(Interrupted::End(reason));
+                }
+                _ = stop.changed() => return Err(Interrupted::End("emulator stopped")),
+                _ = idle => {
+                    // The writer may have been active meanwhile: look again.
+                    let idle_until = self
+                        .shared
+                        .idle_timeout
+                        .and_then(|t| self.activity.last().checked_add(t));
+                    if idle_until.is_some_and(|at| at <= Instant::now()) {
+                        lock(&self.shared.stats).idle_closed += 1;
+                        return Err(Interrupted::End("idle timeout"));
+                    }
+                }
+            }
         }
-        for unit in units.drain(..) {
-            handle_unit(shared, id, unit);
+    }
+
+    async fn read_loop<R: AsyncRead + Unpin>(mut self, mut reader: R) -> &'static str {
+        let mut guard = HttpGuard::new();
+        let mut splitter = Splitter::new(MAX_REQUEST_BYTES);
+        let mut buf = vec![0u8; READ_CHUNK];
+        let mut units = Vec::new();
+        let id = self.id;
+        loop {
+            let n = match self.guarded(reader.read(&mut buf)).await {
+                Ok(Ok(0)) => return "peer closed",
+                Ok(Ok(n)) => n,
+                Ok(Err(_)) => return "read error",
+                Err(Interrupted::End(reason)) => return reason,
+            };
+            self.activity.touch();
+            // The only way from the socket to the splitter: nothing of an HTTP request runs.
+            let clean = match guard.admit(&buf[..n]) {
+                Ok(clean) => clean,
+                Err(refused) => {
+                    lock(&self.shared.stats).http_refused += 1;
+                    tracing::warn!(client = id, %refused, "Realman emulator closes a connection that speaks HTTP (a web page's request?)");
+                    return "HTTP request";
+                }
+            };
+            if let Err(e) = splitter.feed(clean, &mut units) {
+                lock(&self.shared.stats).oversize += 1;
+                tracing::warn!(client = id, error = %e, "Realman emulator closes a connection");
+                return "request too long";
+            }
+            for unit in std::mem::take(&mut units) {
+                let Unit::Object(bytes) = unit else {
+                    handle_junk(self.shared, id, &unit);
+                    continue;
+                };
+                // Take the request only while the queue has room for its reply and the
+                // headroom for events; meanwhile this client is not read (D3: a client that
+                // never reads its replies used to grow the process without bound).
+                let tx = self.tx.clone();
+                let permits = match self.guarded(tx.reserve_many(EVENT_HEADROOM + 1)).await {
+                    Ok(Ok(permits)) => permits,
+                    Ok(Err(_)) => return "writer stopped",
+                    Err(Interrupted::End(reason)) => return reason,
+                };
+                let mut permits = permits;
+                let Some(permit) = permits.next() else {
+                    return "writer stopped";
+                };
+                drop(permits);
+                handle_request(self.shared, id, &bytes, permit);
+            }
         }
     }
 }
 
-fn handle_unit(shared: &Shared, id: ClientId, unit: Unit) {
-    let bytes = match unit {
-        Unit::Object(bytes) => bytes,
-        Unit::Junk(bytes) => {
-            lock(&shared.stats).malformed += 1;
-            tracing::debug!(
-                client = id,
-                len = bytes.len(),
-                "Realman emulator ignores bytes outside a JSON object"
-            );
-            return;
-        }
+fn handle_junk(shared: &Shared, id: ClientId, unit: &Unit) {
+    lock(&shared.stats).malformed += 1;
+    let len = match unit {
+        Unit::Object(bytes) | Unit::Junk(bytes) => bytes.len(),
     };
-    let request: serde_json::Value = match serde_json::from_slice(&bytes) {
+    tracing::debug!(
+        client = id,
+        len,
+        "Realman emulator ignores bytes outside a JSON object"
+    );
+}
+
+/// Answer one request; its reply (if any) goes out through `permit`, reserved beforehand.
+fn handle_request(shared: &Shared, id: ClientId, bytes: &[u8], permit: mpsc::Permit<'_, Outgoing>) {
+    let request: serde_json::Value = match serde_json::from_slice(bytes) {
         Ok(v) => v,
         Err(e) => {
             lock(&shared.stats).malformed += 1;
@@ -527,7 +746,7 @@ fn handle_unit(shared: &Shared, id: ClientId, unit: Unit) {
     };
     let answer = lock(&shared.core).handle(id, &request);
     match answer {
-        Answer::Reply(text) => send_to(shared, id, text),
+        Answer::Reply(text) => permit.send(Outgoing { text }),
         Answer::Silent => {}
         Answer::Unknown => {
             lock(&shared.stats).unknown += 1;
@@ -543,12 +762,6 @@ fn handle_unit(shared: &Shared, id: ClientId, unit: Unit) {
     route_events(shared);
 }
 
-fn send_to(shared: &Shared, id: ClientId, text: String) {
-    if let Some(client) = lock(&shared.clients).get(&id) {
-        let _ = client.tx.send(Outgoing { text });
-    }
-}
-
 /// Hand the controller's events to their clients' writers.
 fn route_events(shared: &Shared) {
     let events = lock(&shared.core).take_events();
@@ -557,8 +770,19 @@ fn route_events(shared: &Shared) {
     }
     let clients = lock(&shared.clients);
     for event in events {
-        if let Some(client) = clients.get(&event.to) {
-            let _ = client.tx.send(Outgoing { text: event.text });
+        let Some(client) = clients.get(&event.to) else {
+            continue;
+        };
+        match client.tx.try_send(Outgoing { text: event.text }) {
+            Ok(()) | Err(mpsc::error::TrySendError::Closed(_)) => {}
+            Err(mpsc::error::TrySendError::Full(_)) => {
+                // The reader keeps EVENT_HEADROOM free: this client has not read for a while.
+                if !client.ending() {
+                    lock(&shared.stats).slow_dropped += 1;
+                    tracing::warn!(peer = %client.peer, client = event.to, "Realman client dropped: it does not read (no room for an event)");
+                }
+                client.end("not reading (queue full)");
+            }
         }
     }
 }
@@ -566,8 +790,9 @@ fn route_events(shared: &Shared) {
 async fn write_loop<W: AsyncWrite + Unpin>(
     shared: Arc<Shared>,
     mut writer: W,
-    mut rx: mpsc::UnboundedReceiver<Outgoing>,
-    mut kill: watch::Receiver<bool>,
+    mut rx: mpsc::Receiver<Outgoing>,
+    mut kill: watch::Receiver<Option<&'static str>>,
+    activity: Activity,
 ) {
     loop {
         let msg = tokio::select! {
@@ -601,10 +826,16 @@ async fn write_loop<W: AsyncWrite + Unpin>(
             writer.write_all(text.as_bytes()).await?;
             writer.flush().await
         };
-        if written.await.is_err() {
+        let written = tokio::select! {
+            w = written => w,
+            // A peer that does not read must not keep the writer (and the slot) for ever.
+            _ = kill.changed() => break,
+        };
+        if written.is_err() {
             // The peer went away mid-reply; the reader notices and cleans up.
             break;
         }
+        activity.touch();
     }
     let _ = writer.shutdown().await;
 }
@@ -687,4 +918,174 @@ async fn send_push(shared: &Shared, sink: &PushSink, stats: &mut PushStats) {
         }
     }
     lock(&shared.stats).push = *stats;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::realman::model::ArmModel;
+    use tokio::io::{AsyncReadExt, AsyncWriteExt};
+    use tokio::time::timeout;
+
+    const PEER: IpAddr = IpAddr::V4(std::net::Ipv4Addr::new(192, 168, 1, 10));
+    const POWER_OFF: &str = r#"{"command":"set_arm_power","arm_power":0}"#;
+
+    async fn emulator(tune: impl FnOnce(&mut EmulatorConfig)) -> RealmanHandle {
+        let mut config = EmulatorConfig::new(ControllerConfig::new(ArmModel::rm65b()));
+        tune(&mut config);
+        RealmanEmulator::spawn(config, Transport::InMemory)
+            .await
+            .expect("emulator boots")
+    }
+
+    /// Read until the server closes the stream; `None` if it stays open for `within`.
+    async fn closed_within(stream: &mut DuplexStream, within: Duration) -> Option<Vec<u8>> {
+        let mut seen = Vec::new();
+        timeout(within, stream.read_to_end(&mut seen))
+            .await
+            .ok()?
+            .ok()?;
+        Some(seen)
+    }
+
+    /// One reply line (CRLF-terminated) within `within`.
+    async fn reply(stream: &mut DuplexStream, within: Duration) -> Option<String> {
+        let mut line = Vec::new();
+        let mut byte = [0u8; 1];
+        timeout(within, async {
+            while !line.ends_with(b"\r\n") {
+                match stream.read(&mut byte).await {
+                    Ok(1) => line.push(byte[0]),
+                    _ => return None,
+                }
+            }
+            Some(String::from_utf8_lossy(&line).into_owned())
+        })
+        .await
+        .ok()?
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn a_browser_post_is_closed_and_does_not_power_the_arm_off() {
+        let emu = emulator(|_| {}).await;
+        assert!(emu.snapshot().power_on);
+        let request = format!(
+            "POST / HTTP/1.1\r\nHost: 127.0.0.1:8080\r\nOrigin: https://attacker.example\r\n\
+             Content-Type: text/plain;charset=UTF-8\r\nContent-Length: {}\r\n\r\n{POWER_OFF}",
+            POWER_OFF.len()
+        );
+        for piece in [request.len(), 3] {
+            let mut stream = emu.connect(PEER).unwrap();
+            for part in request.as_bytes().chunks(piece) {
+                if stream.write_all(part).await.is_err() {
+                    break;
+                }
+            }
+            let seen = closed_within(&mut stream, Duration::from_secs(2)).await;
+            assert_eq!(seen.as_deref(), Some(&b""[..]), "closed without a reply");
+        }
+        tokio::time::sleep(Duration::from_millis(100)).await;
+        assert!(emu.snapshot().power_on, "the page powered the arm off");
+        assert_eq!(emu.stats().http_refused, 2);
+
+        // The body alone, from a JSON client, does power it off (so the test can fail).
+        let mut stream = emu.connect(PEER).unwrap();
+        stream.write_all(POWER_OFF.as_bytes()).await.unwrap();
+        assert!(reply(&mut stream, Duration::from_secs(2)).await.is_some());
+        assert!(!emu.snapshot().power_on);
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn a_client_that_does_not_read_is_not_read_either() {
+        let emu = emulator(|c| c.idle_timeout = Some(Duration::from_secs(600))).await;
+        let mut stream = emu.connect(PEER).unwrap();
+        let request = b"{\"command\":\"get_joint_degree\"}\r\n";
+        let total = 8 << 20;
+        let many = request.repeat(total / request.len());
+        // Without the bound the server reads (and queues replies to) all 8 MiB.
+        let wrote = timeout(Duration::from_secs(3), stream.write_all(&many)).await;
+        assert!(
+            wrote.is_err(),
+            "the server kept reading a client that reads nothing"
+        );
+        assert_eq!(
+            emu.connections(),
+            1,
+            "a client that only sends is not dropped"
+        );
+        // Once it reads, it gets its replies and the server reads again.
+        let (mut read, mut write) = tokio::io::split(stream);
+        let drain = tokio::spawn(async move {
+            let mut buf = vec![0u8; 64 * 1024];
+            let mut lines = 0usize;
+            while lines < 1000 {
+                match read.read(&mut buf).await {
+                    Ok(0) | Err(_) => break,
+                    Ok(n) => lines += buf[..n].iter().filter(|&&b| b == b'\n').count(),
+                }
+            }
+            lines
+        });
+        write.write_all(request).await.unwrap();
+        let lines = timeout(Duration::from_secs(10), drain)
+            .await
+            .unwrap()
+            .unwrap();
+        assert!(lines >= 1000, "{lines} replies");
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn an_idle_connection_is_closed_and_a_busy_one_is_not() {
+        let emu = emulator(|c| c.idle_timeout = Some(Duration::from_secs(2))).await;
+        let mut idle = emu.connect(PEER).unwrap();
+        let mut busy = emu.connect(PEER).unwrap();
+        for _ in 0..5 {
+            busy.write_all(b"{\"command\":\"get_arm_power_state\"}")
+                .await
+                .unwrap();
+            assert!(reply(&mut busy, Duration::from_secs(1)).await.is_some());
+            tokio::time::sleep(Duration::from_millis(900)).await;
+        }
+        assert!(closed_within(&mut idle, Duration::from_millis(100))
+            .await
+            .is_some());
+        assert_eq!(emu.connections(), 1);
+        assert_eq!(emu.stats().idle_closed, 1);
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn at_the_cap_a_newcomer_takes_the_slot_of_a_long_idle_client() {
+        let emu = emulator(|c| {
+            c.max_connections = 2;
+            c.idle_timeout = None;
+        })
+        .await;
+        let mut first = emu.connect(PEER).unwrap();
+        tokio::time::sleep(Duration::from_secs(1)).await;
+        let mut second = emu.connect(PEER).unwrap();
+        // Nobody has been idle for EVICT_IDLE_AFTER yet: refused.
+        let mut refused = emu.connect(PEER).unwrap();
+        let seen = closed_within(&mut refused, Duration::from_millis(100)).await;
+        assert_eq!(seen.as_deref(), Some(&b""[..]));
+        assert_eq!(emu.stats().refused, 1);
+
+        tokio::time::sleep(EVICT_IDLE_AFTER).await;
+        second
+            .write_all(b"{\"command\":\"get_arm_power_state\"}")
+            .await
+            .unwrap();
+        assert!(reply(&mut second, Duration::from_secs(1)).await.is_some());
+        let mut newcomer = emu.connect(PEER).unwrap();
+        newcomer
+            .write_all(b"{\"command\":\"get_arm_power_state\"}")
+            .await
+            .unwrap();
+        assert!(reply(&mut newcomer, Duration::from_secs(1)).await.is_some());
+        // The idlest one (the first) made room; the second, just active, stays.
+        assert!(closed_within(&mut first, Duration::from_millis(100))
+            .await
+            .is_some());
+        assert_eq!(emu.stats().evicted, 1);
+        assert_eq!(emu.connections(), 2);
+    }
 }
