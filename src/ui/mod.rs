@@ -10,9 +10,17 @@
 //!   `{"type": "ack", "ok": bool, "message": TEXT}`.
 //!
 //! `GET /state.json` returns one state message, `GET /hello.json` the hello (for scripts).
-//! A WebSocket request from a browser page of another origin is refused ([`same_origin`]).
+//!
+//! Every request passes the access check first (`access.rs`): a `Host` that does not name
+//! this server gets 421 (DNS rebinding), an `Origin` other than the `Host` 403 (another site
+//! in the same browser), and a server bound to a non-loopback address requires the random
+//! token printed at start (`?token=…`) on every request. The listener (`listener.rs`) caps
+//! the open connections and closes those that send their request too slowly or sit idle
+//! ([`Limits`]).
 
+mod access;
 pub mod bus_tap;
+mod listener;
 pub mod piper;
 pub mod realman;
 pub mod robstride;
@@ -30,6 +38,7 @@ use serde::Deserialize;
 use serde_json::{json, Value};
 
 use crate::harness::report::html::{live_page, LIVE_JS};
+pub use listener::Limits;
 
 /// How often the page gets a state message (50 Hz: the page draws at its own frame rate and
 /// interpolates nothing, so this bounds what it can show).
@@ -70,12 +79,31 @@ pub enum UiError {
         /// The OS error.
         source: std::io::Error,
     },
+    /// No random token could be made for a server reachable from other machines.
+    #[error("cannot make an access token for the web view on {addr}: {source}")]
+    Token {
+        /// The address asked for.
+        addr: String,
+        /// The OS error.
+        source: std::io::Error,
+    },
+}
+
+/// How to serve the web view.
+#[derive(Debug, Clone, Default)]
+pub struct UiOptions {
+    /// Connection cap and deadlines.
+    pub limits: Limits,
+    /// Whether every request needs the token: `None` (default) decides by the address, a
+    /// token exactly when it is not loopback.
+    pub require_token: Option<bool>,
 }
 
 /// A running web view; dropping it leaves the server running until the runtime stops.
 #[derive(Debug)]
 pub struct UiServer {
     addr: SocketAddr,
+    token: Option<String>,
     stop: tokio::sync::watch::Sender<bool>,
     task: tokio::task::JoinHandle<()>,
 }
@@ -84,6 +112,29 @@ impl UiServer {
     /// The address it listens on (the bound port when 0 was asked for).
     pub fn local_addr(&self) -> SocketAddr {
         self.addr
+    }
+
+    /// The token every request must carry (`?token=…`), if the server requires one.
+    pub fn token(&self) -> Option<&str> {
+        self.token.as_deref()
+    }
+
+    /// Whether other machines can reach it (bound to a non-loopback address).
+    pub fn is_public(&self) -> bool {
+        !self.addr.ip().is_loopback()
+    }
+
+    /// The URL to open, token included. For a wildcard bind (`0.0.0.0`, `[::]`) the host
+    /// part is `127.0.0.1` (other machines put this machine's address in its place).
+    pub fn url(&self) -> String {
+        let mut shown = self.addr;
+        if shown.ip().is_unspecified() {
+            shown.set_ip(std::net::Ipv4Addr::LOCALHOST.into());
+        }
+        match &self.token {
+            Some(token) => format!("http://{shown}/?token={token}"),
+            None => format!("http://{shown}/"),
+        }
     }
 
     /// Stop accepting connections and end the open ones.
@@ -100,8 +151,18 @@ struct App {
     stop: tokio::sync::watch::Receiver<bool>,
 }
 
-/// Serve the page for `source` on `addr` (`HOST:PORT`; a bare port means 127.0.0.1).
+/// Serve the page for `source` on `addr` (`HOST:PORT`; a bare port means 127.0.0.1) with
+/// the default [`UiOptions`].
 pub async fn serve(addr: &str, source: Arc<dyn LiveSource>) -> Result<UiServer, UiError> {
+    serve_with(addr, source, UiOptions::default()).await
+}
+
+/// Serve the page for `source` on `addr` (`HOST:PORT`; a bare port means 127.0.0.1).
+pub async fn serve_with(
+    addr: &str,
+    source: Arc<dyn LiveSource>,
+    options: UiOptions,
+) -> Result<UiServer, UiError> {
     let addr = match addr.parse::<u16>() {
         Ok(port) => format!("127.0.0.1:{port}"),
         Err(_) => addr.to_owned(),
@@ -116,6 +177,16 @@ pub async fn serve(addr: &str, source: Arc<dyn LiveSource>) -> Result<UiServer, 
         addr: addr.clone(),
         source,
     })?;
+    let needs_token = options.require_token.unwrap_or(!local.ip().is_loopback());
+    let token = if needs_token {
+        Some(access::new_token().map_err(|source| UiError::Token {
+            addr: addr.clone(),
+            source,
+        })?)
+    } else {
+        None
+    };
+    let access = Arc::new(access::Access::new(local, token.clone()));
     let (stop, stopped) = tokio::sync::watch::channel(false);
     let app = App {
         source,
@@ -127,7 +198,10 @@ pub async fn serve(addr: &str, source: Arc<dyn LiveSource>) -> Result<UiServer, 
         .route("/ws", get(ws))
         .route("/state.json", get(state_json))
         .route("/hello.json", get(hello_json))
-        .with_state(app);
+        .with_state(app)
+        // Outermost: no handler (and no 404) answers a request that fails the check.
+        .layer(axum::middleware::from_fn_with_state(access, access::guard));
+    let listener = listener::LimitedListener::new(listener, options.limits);
     let mut stopped = stopped;
     let task = tokio::spawn(async move {
         let shutdown = async move {
@@ -142,6 +216,7 @@ pub async fn serve(addr: &str, source: Arc<dyn LiveSource>) -> Result<UiServer, 
     });
     Ok(UiServer {
         addr: local,
+        token,
         stop,
         task,
     })
@@ -285,6 +360,200 @@ mod tests {
         async fn command(&self, command: &Command) -> Result<String, String> {
             Ok(format!("{} {}", command.action, command.fault))
         }
+    }
+
+    /// A server for [`Echo`] on a free loopback port.
+    async fn server(options: UiOptions) -> UiServer {
+        serve_with("127.0.0.1:0", Arc::new(Echo), options)
+            .await
+            .expect("web view starts")
+    }
+
+    /// Send `request` on a new connection and return what came back until the server closed
+    /// it or `within` passed.
+    async fn exchange(addr: SocketAddr, request: &str, within: Duration) -> String {
+        use tokio::io::{AsyncReadExt, AsyncWriteExt};
+        let mut stream = tokio::net::TcpStream::connect(addr).await.unwrap();
+        stream.write_all(request.as_bytes()).await.unwrap();
+        let mut seen = Vec::new();
+        let mut buf = [0u8; 4096];
+        let _ = tokio::time::timeout(within, async {
+            loop {
+                match stream.read(&mut buf).await {
+                    Ok(0) | Err(_) => break,
+                    Ok(n) => seen.extend_from_slice(&buf[..n]),
+                }
+                // One response is enough (keep-alive would hold the connection open).
+                if seen.windows(4).any(|w| w == b"\r\n\r\n") {
+                    break;
+                }
+            }
+        })
+        .await;
+        String::from_utf8_lossy(&seen).into_owned()
+    }
+
+    fn get(path: &str, host: &str, origin: Option<&str>) -> String {
+        let origin = origin
+            .map(|o| format!("Origin: {o}\r\n"))
+            .unwrap_or_default();
+        format!("GET {path} HTTP/1.1\r\nHost: {host}\r\n{origin}\r\n")
+    }
+
+    fn upgrade(path: &str, host: &str, origin: &str) -> String {
+        format!(
+            "GET {path} HTTP/1.1\r\nHost: {host}\r\nOrigin: {origin}\r\nConnection: Upgrade\r\n\
+             Upgrade: websocket\r\nSec-WebSocket-Version: 13\r\n\
+             Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n\r\n"
+        )
+    }
+
+    const WAIT: Duration = Duration::from_secs(5);
+
+    #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+    async fn a_dns_rebinding_page_gets_421_on_every_path() {
+        let ui = server(UiOptions::default()).await;
+        let addr = ui.local_addr();
+        assert_eq!(ui.token(), None, "loopback stays tokenless");
+        let evil = format!("attacker.example:{}", addr.port());
+        let evil_origin = format!("http://{evil}");
+        for path in ["/", "/state.json", "/hello.json", "/nope"] {
+            let reply = exchange(addr, &get(path, &evil, Some(&evil_origin)), WAIT).await;
+            assert!(reply.starts_with("HTTP/1.1 421"), "{path}: {reply}");
+        }
+        let reply = exchange(addr, &upgrade("/ws", &evil, &evil_origin), WAIT).await;
+        assert!(reply.starts_with("HTTP/1.1 421"), "ws: {reply}");
+        // The same requests naming this server are served (so the test can fail).
+        let host = addr.to_string();
+        let reply = exchange(addr, &get("/state.json", &host, None), WAIT).await;
+        assert!(reply.starts_with("HTTP/1.1 200"), "{reply}");
+        let reply = exchange(
+            addr,
+            &get("/", &format!("localhost:{}", addr.port()), None),
+            WAIT,
+        )
+        .await;
+        assert!(reply.starts_with("HTTP/1.1 200"), "{reply}");
+        let reply = exchange(
+            addr,
+            &upgrade("/ws", &host, &format!("http://{host}")),
+            WAIT,
+        )
+        .await;
+        assert!(reply.starts_with("HTTP/1.1 101"), "{reply}");
+        let reply = exchange(
+            addr,
+            &upgrade("/ws", &host, "http://attacker.example"),
+            WAIT,
+        )
+        .await;
+        assert!(reply.starts_with("HTTP/1.1 403"), "{reply}");
+        ui.shutdown().await;
+    }
+
+    #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+    async fn with_a_token_every_request_needs_it() {
+        let ui = server(UiOptions {
+            require_token: Some(true),
+            ..UiOptions::default()
+        })
+        .await;
+        let addr = ui.local_addr();
+        let host = addr.to_string();
+        let token = ui.token().expect("a token").to_owned();
+        assert!(ui.url().ends_with(&format!("/?token={token}")));
+        for path in ["/", "/state.json", "/hello.json", "/?token=wrong"] {
+            let reply = exchange(addr, &get(path, &host, None), WAIT).await;
+            assert!(reply.starts_with("HTTP/1.1 403"), "{path}: {reply}");
+        }
+        let reply = exchange(
+            addr,
+            &upgrade("/ws", &host, &format!("http://{host}")),
+            WAIT,
+        )
+        .await;
+        assert!(reply.starts_with("HTTP/1.1 403"), "{reply}");
+        for path in ["/", "/state.json", "/hello.json"] {
+            let path = format!("{path}?token={token}");
+            let reply = exchange(addr, &get(&path, &host, None), WAIT).await;
+            assert!(reply.starts_with("HTTP/1.1 200"), "{path}: {reply}");
+        }
+        let ws = format!("/ws?token={token}");
+        let reply = exchange(addr, &upgrade(&ws, &host, &format!("http://{host}")), WAIT).await;
+        assert!(reply.starts_with("HTTP/1.1 101"), "{reply}");
+        // The page's own script puts the token on its WebSocket URL.
+        assert!(
+            LIVE_JS.contains("token"),
+            "live.js does not pass the token on"
+        );
+        ui.shutdown().await;
+    }
+
+    #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+    async fn slow_and_silent_connections_are_closed_and_capped() {
+        use tokio::io::{AsyncReadExt, AsyncWriteExt};
+        let limits = Limits {
+            max_connections: 3,
+            request_timeout: Duration::from_millis(400),
+            idle_timeout: Duration::from_secs(2),
+        };
+        let ui = server(UiOptions {
+            limits,
+            require_token: None,
+        })
+        .await;
+        let addr = ui.local_addr();
+        let host = addr.to_string();
+        // Three connections that never finish a request fill the server.
+        let mut silent = Vec::new();
+        for _ in 0..3 {
+            let mut s = tokio::net::TcpStream::connect(addr).await.unwrap();
+            s.write_all(b"GET / HTTP/1.1\r\nHost: ").await.unwrap();
+            silent.push(s);
+        }
+        let started = tokio::time::Instant::now();
+        // A fourth waits for a slot, then is answered once the slow ones are cut off.
+        let reply = exchange(addr, &get("/hello.json", &host, None), WAIT).await;
+        assert!(reply.starts_with("HTTP/1.1 200"), "{reply}");
+        let waited = started.elapsed();
+        assert!(
+            waited >= Duration::from_millis(300),
+            "no cap: answered after {waited:?}"
+        );
+        assert!(
+            waited < Duration::from_secs(2),
+            "no request timeout: {waited:?}"
+        );
+        for mut s in silent {
+            let mut buf = [0u8; 64];
+            let read = tokio::time::timeout(WAIT, s.read(&mut buf)).await;
+            assert!(
+                matches!(read, Ok(Ok(0)) | Ok(Err(_))),
+                "still open: {read:?}"
+            );
+        }
+        // A slowloris (a byte every 100 ms, never done) is closed as well.
+        let mut slow = tokio::net::TcpStream::connect(addr).await.unwrap();
+        let started = tokio::time::Instant::now();
+        let mut closed = false;
+        for _ in 0..40 {
+            if slow.write_all(b"X").await.is_err() {
+                closed = true;
+                break;
+            }
+            let mut buf = [0u8; 64];
+            if let Ok(r) =
+                tokio::time::timeout(Duration::from_millis(100), slow.read(&mut buf)).await
+            {
+                closed = matches!(r, Ok(0) | Err(_)) || closed;
+                if closed {
+                    break;
+                }
+            }
+        }
+        assert!(closed, "slowloris kept its connection");
+        assert!(started.elapsed() < Duration::from_secs(2));
+        ui.shutdown().await;
     }
 
     #[tokio::test]

@@ -212,7 +212,11 @@
   }
 
   function connect() {
-    const url = (location.protocol === "https:" ? "wss://" : "ws://") + location.host + "/ws";
+    // A server reachable from other machines requires the token of the URL it printed on
+    // every request, its WebSocket included.
+    const token = new URLSearchParams(location.search).get("token");
+    const query = token ? "?token=" + encodeURIComponent(token) : "";
+    const url = (location.protocol === "https:" ? "wss://" : "ws://") + location.host + "/ws" + query;
     ws = new WebSocket(url);
     const conn = document.getElementById("conn");
     ws.onopen = () => { conn.textContent = "connected"; };

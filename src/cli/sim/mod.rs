@@ -1,5 +1,6 @@
 //! `armhil sim <device>`: a firmware emulator in real time on a real interface.
 
+use std::net::SocketAddr;
 use std::process::ExitCode;
 
 use clap::Subcommand;
@@ -44,9 +45,49 @@ pub(crate) async fn socketcand_server(
     use anyhow::Context as _;
 
     let addr = socketcand_addr(addr);
-    bus::socketcand::SocketcandServer::bind_realtime_bus(&addr)
+    let (bus, server) = bus::socketcand::SocketcandServer::bind_realtime_bus(&addr)
         .await
-        .with_context(|| format!("cannot serve socketcand on {addr}"))
+        .with_context(|| format!("cannot serve socketcand on {addr}"))?;
+    if let Some(warning) = public_warning(
+        "the socketcand server",
+        server.local_addr(),
+        "put any frame on the emulator's bus (the protocol has no authentication)",
+    ) {
+        eprintln!("{warning}");
+    }
+    Ok((bus, server))
+}
+
+/// The warning for a server bound to `addr` if other machines can reach it: who can, and
+/// what they can do. `None` on loopback.
+pub(crate) fn public_warning(what: &str, addr: SocketAddr, can: &str) -> Option<String> {
+    if addr.ip().is_loopback() {
+        return None;
+    }
+    let who = if addr.ip().is_unspecified() {
+        "every interface of this machine: anyone who can reach it over any network (LAN, \
+         Wi-Fi, VPN, containers and VMs on it)"
+    } else {
+        "a non-loopback address: anyone who can reach that address over the network"
+    };
+    tracing::warn!(%addr, "{what} is reachable from other machines");
+    Some(format!(
+        "WARNING: {what} listens on {addr}, {who}, can connect and {can}. \
+         Bind 127.0.0.1 unless other machines must connect."
+    ))
+}
+
+/// Print where the web view is, with its token, and warn if other machines can reach it.
+pub(crate) fn announce_ui(device: &str, server: &armhil::ui::UiServer) {
+    if let Some(warning) = public_warning(
+        "the web view",
+        server.local_addr(),
+        "inject faults into the emulator if they have the token in this URL (share it only \
+         with those who should)",
+    ) {
+        eprintln!("{warning}");
+    }
+    eprintln!("armhil sim {device}: web view on {}", server.url());
 }
 
 /// `--create-vxcan PEER`: make sure the vxcan pair `iface` ↔ `peer` exists and is up, and tell
@@ -83,5 +124,22 @@ mod tests {
     fn a_bare_port_means_loopback() {
         assert_eq!(super::socketcand_addr("29536"), "127.0.0.1:29536");
         assert_eq!(super::socketcand_addr("0.0.0.0:1"), "0.0.0.0:1");
+    }
+
+    #[test]
+    fn a_public_bind_is_warned_about_and_loopback_is_not() {
+        let warn = |a: &str| super::public_warning("X", a.parse().unwrap(), "do Y");
+        assert_eq!(warn("127.0.0.1:8080"), None);
+        assert_eq!(warn("[::1]:8080"), None);
+        let all = warn("0.0.0.0:8080").expect("a warning");
+        assert!(
+            all.contains("every interface") && all.contains("do Y"),
+            "{all}"
+        );
+        let lan = warn("192.168.1.5:8080").expect("a warning");
+        assert!(
+            lan.contains("192.168.1.5:8080") && lan.contains("anyone"),
+            "{lan}"
+        );
     }
 }

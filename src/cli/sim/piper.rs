@@ -156,10 +156,7 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
             let title = format!("Piper {} on {place}", args.firmware);
             let live = PiperLive::new(emu.monitor(), tap, &urdf, &title);
             let server = armhil::ui::serve(addr, Arc::new(live)).await?;
-            eprintln!(
-                "armhil sim piper: web view on http://{}/",
-                server.local_addr()
-            );
+            super::announce_ui("piper", &server);
             Some(server)
         }
         None => None,

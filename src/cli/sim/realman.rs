@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use std::sync::Arc;
+use std::time::Duration;
 
 use anyhow::Context;
 use armhil::ui::realman::RealmanLive;
@@ -15,7 +16,8 @@ use sim::realman::{ControllerConfig, EmulatorConfig, FirmwareProfile, RealmanEmu
 /// Arguments of `armhil sim realman`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Address to listen on.
+    /// Address to listen on (TCP commands and the UDP push). Anything but loopback lets other
+    /// machines command the arm (the protocol has no authentication); a warning says so.
     #[arg(long, default_value = "127.0.0.1")]
     pub bind: IpAddr,
     /// TCP port of the JSON command server (the controller's is 8080).
@@ -37,6 +39,10 @@ pub struct Args {
     /// Most simultaneous TCP clients; further connections are closed at once.
     #[arg(long, default_value_t = sim::realman::server::DEFAULT_MAX_CONNECTIONS)]
     pub max_connections: usize,
+    /// Close a TCP client after this many seconds without a byte either way (0: never). When
+    /// every slot is taken, a new client also takes the slot of one idle for 10 s.
+    #[arg(long, value_name = "S", default_value_t = sim::realman::server::DEFAULT_IDLE_TIMEOUT.as_secs())]
+    pub idle_timeout_s: u64,
     /// Physics steps (1 ms each) per wake-up of the emulator (1 = every millisecond).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=10))]
     pub ticks_per_wake: u32,
@@ -75,11 +81,20 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
     let mut config = EmulatorConfig::new(controller);
     config.max_connections = args.max_connections;
     config.ticks_per_wake = args.ticks_per_wake;
+    config.idle_timeout =
+        (args.idle_timeout_s > 0).then(|| Duration::from_secs(args.idle_timeout_s));
     let addr = SocketAddr::new(args.bind, args.port);
     let emu = RealmanEmulator::spawn(config, Transport::Tcp(addr))
         .await
         .with_context(|| format!("cannot start the Realman emulator on {addr}"))?;
     let bound = emu.local_addr().unwrap_or(addr);
+    if let Some(warning) = super::public_warning(
+        "the Realman JSON/TCP port",
+        bound,
+        "command the emulated arm (power, motion, settings; the protocol has no authentication)",
+    ) {
+        eprintln!("{warning}");
+    }
     tracing::info!(%bound, model = %args.model, firmware = %args.firmware, "Realman emulator running; Ctrl-C to stop");
     eprintln!(
         "armhil sim realman: {} ({}) on tcp://{bound} (Ctrl-C to stop)",
@@ -93,10 +108,7 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
             );
             let live = RealmanLive::new(emu.monitor(), urdf, &title);
             let server = armhil::ui::serve(ui_addr, Arc::new(live)).await?;
-            eprintln!(
-                "armhil sim realman: web view on http://{}/",
-                server.local_addr()
-            );
+            super::announce_ui("realman", &server);
             Some(server)
         }
         (Some(_), None) => anyhow::bail!("no URDF to draw {} in the web view", args.model),

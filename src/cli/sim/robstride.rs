@@ -203,10 +203,7 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
             let title = format!("RobStride {} on {place}", motors.join(", "));
             let live = RobstrideLive::new(emulator.monitor(), tap, &ids, &title);
             let server = armhil::ui::serve(addr, Arc::new(live)).await?;
-            eprintln!(
-                "armhil sim robstride: web view on http://{}/",
-                server.local_addr()
-            );
+            super::announce_ui("robstride", &server);
             Some(server)
         }
         None => None,
