@@ -8,6 +8,7 @@
 //!   (`dbc`), broken scenarios (`scenario_errors`) and every kept fuzz input
 //!   (`fuzz_regressions`).
 
+mod abuse;
 mod arm_api;
 mod cli_errors;
 mod codec_cross_props;
