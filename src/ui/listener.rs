@@ -11,9 +11,9 @@
 //! - A connection on which nothing moved either way for [`Limits::idle_timeout`] is closed
 //!   (an idle keep-alive connection; browsers open a new one when they need it).
 
+use std::future::Future as _;
 use std::io;
 use std::net::SocketAddr;
-use std::future::Future as _;
 use std::pin::Pin;
 use std::sync::Arc;
 use std::task::{Context, Poll};
