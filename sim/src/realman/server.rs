@@ -9,7 +9,7 @@
 //!
 //! What a hostile or broken client cannot do:
 //! - make a web page's request run: every byte read passes the shared
-//!   [`HttpGuard`](bus::socketcand::http_guard::HttpGuard) before the splitter sees it, so a
+//!   [`bus::socketcand::http_guard::HttpGuard`] before the splitter sees it, so a
 //!   connection that opens with an HTTP request line (a browser's `fetch` to this port) or
 //!   carries `Host:`/`Origin:` lines is closed with nothing in it acted on;
 //! - grow memory by not reading its replies: the queue holds at most [`CLIENT_QUEUE`]
