@@ -495,6 +495,7 @@ impl Drop for RealmanHandle {
 
 async fn accept_loop(shared: Arc<Shared>, listener: TcpListener) {
     let mut stop = shared.stop.clone();
+    let mut accept_failures: u64 = 0;
     loop {
         let accepted = tokio::select! {
             r = listener.accept() => r,
@@ -507,8 +508,12 @@ async fn accept_loop(shared: Arc<Shared>, listener: TcpListener) {
                 tokio::spawn(serve_connection(Arc::clone(&shared), stream, peer));
             }
             Err(e) => {
-                // Out of descriptors and the like: wait and keep listening.
-                tracing::warn!(error = %e, "Realman emulator accept failed");
+                // Out of descriptors and the like: wait and keep listening. Logged at the 1st,
+                // 2nd, 4th, … failure: at one try every 10 ms a warning each would flood the log.
+                accept_failures += 1;
+                if accept_failures.is_power_of_two() {
+                    tracing::warn!(error = %e, failures = accept_failures, "Realman emulator accept failed");
+                }
                 sleep(Duration::from_millis(10)).await;
             }
         }
