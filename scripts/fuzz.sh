@@ -15,9 +15,6 @@
 # Environment:
 #   FUZZ_TOOLCHAIN   rustup toolchain for the build (default: the active one)
 #   FUZZ_SANITIZER   address (default) or none
-#   FUZZ_BUILD       release (default: optimised, debug assertions, for real runs) or smoke
-#                    (fuzz/Cargo.toml's dev profile: builds from nothing in a few minutes, for
-#                    CI's smoke run; executes far fewer inputs a second)
 #   FUZZ_TARGET_DIR  cargo target dir of the fuzz build (default: target/fuzzing)
 #   FUZZ_WORK_DIR    scratch folder for seeds, corpora, logs (default: a new temp folder;
 #                    name one to keep the corpus between runs)
@@ -58,28 +55,19 @@ sanitizer=${FUZZ_SANITIZER:-address}
 target_dir=${FUZZ_TARGET_DIR:-$root/target/fuzzing}
 work=${FUZZ_WORK_DIR:-$(mktemp -d "${TMPDIR:-/tmp}/armhil-fuzz.XXXXXX")}
 mkdir -p "$work"
-echo "fuzz: ${#targets[@]} target(s), ${secs}s each, ${FUZZ_BUILD:-release} build," \
-    "sanitizer $sanitizer, scratch $work"
+echo "fuzz: ${#targets[@]} target(s), ${secs}s each, sanitizer $sanitizer, scratch $work"
 
 # Seeds: the fixtures and scenarios in each target's input encoding.
 "${cargo[@]}" run --quiet -p armhil-testkit --example fuzz_seeds -- "$work/seeds" "${targets[@]}"
 
-# One build for all targets, with debug assertions: integer overflow panics, so a value that
-# would wrap is a crash.
-case ${FUZZ_BUILD:-release} in
-release) profile_flags=(--release --debug-assertions) ;;
-smoke) profile_flags=(--dev) ;;
-*)
-    echo "FUZZ_BUILD must be release or smoke, not '${FUZZ_BUILD}'" >&2
-    exit 2
-    ;;
-esac
-fuzz_flags=(--fuzz-dir fuzz --target-dir "$target_dir" "${profile_flags[@]}"
+# One build for all targets. Release with debug assertions: integer overflow panics, so a
+# value that would wrap is a crash.
+fuzz_flags=(--fuzz-dir fuzz --target-dir "$target_dir" --release --debug-assertions
     --sanitizer "$sanitizer")
 export RUSTC_BOOTSTRAP=1
 build_start=$(date +%s)
 jobs=${FUZZ_JOBS:-1}
-# Targets run FUZZ_JOBS at a time: this many rounds, plus 20 s for starting them and reports.
+# Targets run FUZZ_JOBS at a time: this many rounds, plus a minute for seeds and reports.
 rounds=$(((${#targets[@]} + jobs - 1) / jobs))
 # build CARGO_FUZZ_BUILD_ARGS...: one cargo-fuzz build, stopped where FUZZ_RUN_UNTIL leaves
 # only the runs' own time.
@@ -88,7 +76,7 @@ build() {
         "${cargo[@]}" fuzz build "${fuzz_flags[@]}" "$@"
         return
     fi
-    local left=$((FUZZ_RUN_UNTIL - rounds * secs - 20 - $(date +%s)))
+    local left=$((FUZZ_RUN_UNTIL - rounds * secs - 60 - $(date +%s)))
     [ $left -gt 0 ] || return 124
     timeout "$left" "${cargo[@]}" fuzz build "${fuzz_flags[@]}" "$@"
 }
@@ -110,7 +98,7 @@ echo "fuzz: build took $(($(date +%s) - build_start)) s"
 # Stretch the runs over the time left before FUZZ_RUN_UNTIL, so a fast build leaves the
 # fuzzers more time, not CI idle.
 if [ -n "${FUZZ_RUN_UNTIL:-}" ]; then
-    stretched=$(((FUZZ_RUN_UNTIL - $(date +%s) - 20) / rounds))
+    stretched=$(((FUZZ_RUN_UNTIL - $(date +%s) - 60) / rounds))
     if [ "$stretched" -gt "$secs" ]; then
         secs=$stretched
         echo "fuzz: the time left allows ${secs}s per target"

@@ -17,6 +17,7 @@ mod piper;
 mod realman;
 mod robstride;
 mod scenario;
+pub mod smoke;
 
 pub use logs::{candump_reader, pcap_reader};
 pub use piper::{piper_driver_decode, piper_emulator};
