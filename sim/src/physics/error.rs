@@ -98,6 +98,17 @@ pub enum PhysicsError {
         /// What is wrong.
         reason: String,
     },
+    /// The simulated state stopped being finite (a torque or force far beyond what the
+    /// model can take): the world's state is NaN from then on and must not be read as a pose.
+    #[error(
+        "the physics diverged: joint {joint} has a non-finite position or velocity since t = {time_s:.3} s (a torque or force far beyond the model's limits)"
+    )]
+    Diverged {
+        /// The first joint found non-finite.
+        joint: String,
+        /// Simulated time of the step that diverged, s.
+        time_s: f64,
+    },
     /// rapier did not create a multibody joint for an actuated URDF joint (for example a joint
     /// that would close a kinematic loop).
     #[error("joint {joint}: not represented in the rapier multibody")]

@@ -34,7 +34,9 @@ mod obstacle;
 mod world;
 
 pub use error::PhysicsError;
-pub use model::{ArmModel, JointInfo, JointKind, LinkInertial, Mimic, DEFAULT_GRAVITY_M_S2};
+pub use model::{
+    ArmModel, JointInfo, JointKind, LinkInertial, Mimic, DEFAULT_GRAVITY_M_S2, MAX_URDF_BYTES,
+};
 pub use obstacle::{Contact, ObstacleId, ObstacleShape};
 pub use world::{ArmWorld, WorldConfig};
 

@@ -180,13 +180,9 @@ impl ArmModel {
         Self::from_robot(&robot)
     }
 
-    /// Reads and parses a URDF file into a model.
+    /// Reads and parses a URDF file into a model (at most [`MAX_URDF_BYTES`]).
     pub fn from_urdf_file(path: &std::path::Path) -> Result<Self, PhysicsError> {
-        let xml = std::fs::read_to_string(path).map_err(|source| PhysicsError::Io {
-            path: path.to_owned(),
-            source,
-        })?;
-        Self::from_urdf_str(&xml)
+        Self::from_urdf_str(&read_urdf(path)?)
     }
 
     /// Builds the model from an already parsed urdf-rs robot.
@@ -544,4 +540,37 @@ impl ArmModel {
     pub fn mass_matrix_diagonal(&self, q: &[f64]) -> Result<Vec<f64>, PhysicsError> {
         Ok(self.mass_matrix(q)?.diagonal().iter().copied().collect())
     }
+}
+
+/// Largest URDF file read, bytes: 16 MiB. The bundled models are under 20 KB and meshes are
+/// never read; the bound stops a mistyped path to a device or a multi-GB file from being read
+/// whole into memory.
+pub const MAX_URDF_BYTES: u64 = 16 * 1024 * 1024;
+
+/// The text of the URDF file `path`: a regular file of at most [`MAX_URDF_BYTES`].
+pub(crate) fn read_urdf(path: &std::path::Path) -> Result<String, PhysicsError> {
+    use std::io::Read as _;
+    let fail = |source| PhysicsError::Io {
+        path: path.to_owned(),
+        source,
+    };
+    let refuse = |why: &str| fail(std::io::Error::new(std::io::ErrorKind::InvalidData, why));
+    let meta = std::fs::metadata(path).map_err(fail)?;
+    if !meta.is_file() {
+        return Err(refuse("not a regular file"));
+    }
+    let limit = "larger than 16 MiB, the limit for a URDF file";
+    if meta.len() > MAX_URDF_BYTES {
+        return Err(refuse(limit));
+    }
+    let mut xml = String::new();
+    std::fs::File::open(path)
+        .map_err(fail)?
+        .take(MAX_URDF_BYTES + 1)
+        .read_to_string(&mut xml)
+        .map_err(fail)?;
+    if xml.len() as u64 > MAX_URDF_BYTES {
+        return Err(refuse(limit));
+    }
+    Ok(xml)
 }

@@ -338,3 +338,66 @@ fn mass_matrix_diagonal_is_m_l_squared_plus_own_inertia() {
         "{energy} vs {from_m}"
     );
 }
+
+#[test]
+fn a_torque_beyond_f32_counts_as_zero_instead_of_poisoning_the_world() {
+    let mut world = ArmWorld::from_urdf_str(PENDULUM, WorldConfig::default()).unwrap();
+    // Finite in f64, infinite in rapier's f32.
+    world.set_external_joint_torques(&[1e308]);
+    assert_eq!(world.external_joint_torques(), &[0.0]);
+    for _ in 0..100 {
+        world.step(&[-1e300]);
+    }
+    assert!(world.check_finite().is_ok());
+    assert!(world.joint_positions()[0].is_finite());
+    assert!(world.joint_velocities()[0].is_finite());
+}
+
+#[test]
+fn a_diverged_world_says_so_from_then_on() {
+    let mut world = ArmWorld::from_urdf_str(PENDULUM, WorldConfig::default()).unwrap();
+    assert!(world.check_finite().is_ok());
+    // Finite in f32, but its acceleration over a step is not.
+    world.set_external_joint_torques(&[3e38]);
+    for _ in 0..10 {
+        world.step(&[3e38]);
+    }
+    let err = world.check_finite().unwrap_err();
+    assert!(
+        matches!(&err, PhysicsError::Diverged { joint, .. } if joint == "hinge"),
+        "{err}"
+    );
+    // Removing the cause does not make a NaN state valid again.
+    world.set_external_joint_torques(&[0.0]);
+    world.step(&[0.0]);
+    assert!(world.check_finite().is_err());
+}
+
+#[cfg(unix)]
+#[test]
+fn a_urdf_path_to_a_device_is_refused_not_read() {
+    let err = ArmWorld::from_urdf_file(std::path::Path::new("/dev/zero"), WorldConfig::default())
+        .unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        "cannot read URDF file /dev/zero: not a regular file"
+    );
+}
+
+#[test]
+fn a_urdf_file_over_the_limit_is_refused_by_its_size() {
+    let dir = std::env::temp_dir().join(format!("armhil-urdf-limit-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("huge.urdf");
+    // Sparse: the size says 16 MiB + 1 without writing it.
+    std::fs::File::create(&path)
+        .unwrap()
+        .set_len(MAX_URDF_BYTES + 1)
+        .unwrap();
+    let err = ArmModel::from_urdf_file(&path).unwrap_err().to_string();
+    let _ = std::fs::remove_dir_all(&dir);
+    assert!(
+        err.ends_with("larger than 16 MiB, the limit for a URDF file"),
+        "{err}"
+    );
+}

@@ -75,6 +75,9 @@ pub struct ArmWorld {
     next_obstacle: u64,
     steps: u64,
     warned_torque_len: bool,
+    /// The first joint whose position or velocity stopped being finite, and the time it
+    /// happened: kept once set (see [`ArmWorld::check_finite`]).
+    diverged: Option<(String, f64)>,
 }
 
 impl std::fmt::Debug for ArmWorld {
@@ -92,14 +95,18 @@ fn vec3(v: [f64; 3]) -> Vector {
     Vector::new(v[0] as Real, v[1] as Real, v[2] as Real)
 }
 
+/// `value` if it stays finite in the physics' own precision: rapier computes in `Real`
+/// (`f32`), where anything beyond ±3.4e38 (a finite 1e308 N·m in `f64`) is infinite and
+/// turns the whole multibody into NaN within a step.
+fn finite_in_physics(value: f64) -> Option<f64> {
+    (value as Real).is_finite().then_some(value)
+}
+
 impl ArmWorld {
-    /// Loads a URDF file. Mesh geometry is ignored (only primitive collision shapes are used).
+    /// Loads a URDF file (at most [`super::MAX_URDF_BYTES`]). Mesh geometry is ignored (only
+    /// primitive collision shapes are used).
     pub fn from_urdf_file(path: &Path, config: WorldConfig) -> Result<Self, PhysicsError> {
-        let xml = std::fs::read_to_string(path).map_err(|source| PhysicsError::Io {
-            path: path.to_owned(),
-            source,
-        })?;
-        Self::from_urdf_str(&xml, config)
+        Self::from_urdf_str(&super::model::read_urdf(path)?, config)
     }
 
     /// Loads URDF text. See [`ArmWorld`] for what is simulated.
@@ -197,6 +204,7 @@ impl ArmWorld {
             next_obstacle: 0,
             steps: 0,
             warned_torque_len: false,
+            diverged: None,
         };
         world.apply_joint_dynamics();
         Ok(world)
@@ -362,7 +370,12 @@ impl ArmWorld {
     /// pure torque about the joint axis; for a prismatic joint, opposite forces on one line
     /// of action), so it contributes exactly that generalized force to its own joint and
     /// nothing to the others. The torque is not clamped to the effort limit. Missing
-    /// entries count as 0, extra entries are ignored, non-finite entries count as 0.
+    /// entries count as 0, extra entries are ignored, non-finite entries (in the physics'
+    /// `f32` precision) count as 0.
+    ///
+    /// After the step every joint position and velocity is checked: the first one that is not
+    /// finite is remembered and reported by [`ArmWorld::check_finite`] from then on (a
+    /// diverged world does not recover; its owner must treat it as an error, not read zeros).
     pub fn step(&mut self, joint_torques: &[f64]) {
         if joint_torques.len() != self.bindings.len() && !self.warned_torque_len {
             // Once per world: a caller at 1 kHz would otherwise flood the log.
@@ -381,7 +394,7 @@ impl ArmWorld {
             }
         }
         for (i, b) in self.bindings.iter().enumerate() {
-            let motor = joint_torques.get(i).copied().filter(|t| t.is_finite());
+            let motor = joint_torques.get(i).copied().and_then(finite_in_physics);
             let total = motor.unwrap_or(0.0) + self.external_torques[i];
             if total == 0.0 {
                 continue;
@@ -417,6 +430,46 @@ impl ArmWorld {
         self.physics.step();
         self.enforce_hard_stops();
         self.steps += 1;
+        if self.diverged.is_none() {
+            self.detect_divergence();
+        }
+    }
+
+    /// Remember the first joint whose position or velocity is no longer finite (logged once:
+    /// at 1 kHz a message per step would flood the log).
+    fn detect_divergence(&mut self) {
+        let positions = self.joint_positions();
+        let velocities = self.joint_velocities();
+        let bad = positions
+            .iter()
+            .zip(&velocities)
+            .position(|(q, v)| !(q.is_finite() && v.is_finite()));
+        if let Some(i) = bad {
+            let joint = self.model.joints()[i].name.clone();
+            let time_s = self.time_s();
+            tracing::error!(
+                %joint,
+                time_s,
+                position = positions[i],
+                velocity = velocities[i],
+                "the physics diverged: a joint state is no longer finite"
+            );
+            self.diverged = Some((joint, time_s));
+        }
+    }
+
+    /// `Ok` while every joint position and velocity has stayed finite; once one has not, the
+    /// [`PhysicsError::Diverged`] naming the first such joint and when it happened, for good.
+    /// A diverged world reads NaN, which a wire codec would send as zeros (an arm "at rest at
+    /// 0°"): callers must report this instead of its state.
+    pub fn check_finite(&self) -> Result<(), PhysicsError> {
+        match &self.diverged {
+            None => Ok(()),
+            Some((joint, time_s)) => Err(PhysicsError::Diverged {
+                joint: joint.clone(),
+                time_s: *time_s,
+            }),
+        }
     }
 
     /// rapier's multibody limit constraint only engages once a joint is already past its limit,
@@ -491,10 +544,14 @@ impl ArmWorld {
 
     /// Sets disturbance torques (N·m) / forces (N) added at every joint on every following
     /// step until changed (e.g. a collision fault). Missing entries count as 0, extra entries
-    /// are ignored, non-finite entries count as 0.
+    /// are ignored, non-finite entries (in the physics' `f32` precision) count as 0.
     pub fn set_external_joint_torques(&mut self, tau: &[f64]) {
         for (i, slot) in self.external_torques.iter_mut().enumerate() {
-            *slot = tau.get(i).copied().filter(|t| t.is_finite()).unwrap_or(0.0);
+            *slot = tau
+                .get(i)
+                .copied()
+                .and_then(finite_in_physics)
+                .unwrap_or(0.0);
         }
     }
 

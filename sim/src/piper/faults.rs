@@ -137,7 +137,49 @@ pub struct FaultParam {
     pub required: bool,
     /// The numeric value when omitted (`None` for required and non-numeric parameters).
     pub default: Option<f64>,
+    /// The smallest and largest value accepted, inclusive (`None` for non-numeric
+    /// parameters). Every way of building a fault (scenario files, the web view, Python, the
+    /// emulator's own `inject`) checks values against this through [`FaultParam::check`], so
+    /// a physically absurd value is refused with a message instead of turning the physics into
+    /// NaN.
+    pub range: Option<(f64, f64)>,
 }
+
+impl FaultParam {
+    /// `value` if it is finite and within [`FaultParam::range`], else why not.
+    pub fn check(&self, value: f64) -> Result<f64, FaultError> {
+        if !value.is_finite() {
+            return Err(FaultError::NotFinite {
+                param: self.name,
+                value,
+            });
+        }
+        match self.range {
+            Some((min, max)) if !(min..=max).contains(&value) => Err(FaultError::OutOfRange {
+                param: self.name,
+                value,
+                min,
+                max,
+            }),
+            _ => Ok(value),
+        }
+    }
+}
+
+/// Largest external torque, N·m: ten times the peak torque of the Piper's largest joint motor
+/// (32 N·m on joints 1–3, `urdf/piper.urdf`). A push well past what the motors can answer
+/// still trips collision protection and stall tests; a bigger one is not a disturbance any
+/// test can mean, and far bigger ones (1e308) overflow the f32 physics into NaN.
+const MAX_EXTERNAL_TORQUE_NM: f64 = 320.0;
+
+/// Forced temperatures, °C: from −40 °C (the coldest rating of industrial electronics) to
+/// 200 °C (past class-H winding insulation, 180 °C, where a motor is destroyed). Every
+/// protection threshold (80 °C driver, 90 °C motor) lies well inside.
+const TEMP_RANGE_C: (f64, f64) = (-40.0, 200.0);
+
+/// Bus voltage of `under_voltage`, V: from 0 (supply gone) to 60 V, a little above the 48 V
+/// supply. The fault models a sag; no supply the arm runs on reads higher.
+const VOLTAGE_RANGE_V: (f64, f64) = (0.0, 60.0);
 
 /// The joint a fault acts on.
 const JOINT: FaultParam = FaultParam {
@@ -145,6 +187,7 @@ const JOINT: FaultParam = FaultParam {
     description: "joint 1–6",
     required: true,
     default: None,
+    range: Some((1.0, 6.0)),
 };
 
 /// Forced temperature of the over-temperature faults, °C (the default is above every
@@ -154,6 +197,7 @@ const TEMP_C: FaultParam = FaultParam {
     description: "forced temperature, °C",
     required: false,
     default: Some(90.0),
+    range: Some(TEMP_RANGE_C),
 };
 
 impl FaultKind {
@@ -212,14 +256,16 @@ impl FaultKind {
                 description: "bus voltage, V (nominal 48 V; drivers trip below 20 V)",
                 required: false,
                 default: Some(18.0),
+                range: Some(VOLTAGE_RANGE_V),
             }],
             FaultKind::ExternalTorque => &[
                 JOINT,
                 FaultParam {
                     name: "torque_nm",
-                    description: "torque, N·m",
+                    description: "torque, N·m (at most 320 N·m either way)",
                     required: true,
                     default: None,
+                    range: Some((-MAX_EXTERNAL_TORQUE_NM, MAX_EXTERNAL_TORQUE_NM)),
                 },
             ],
             FaultKind::NtcOverTemp => &[FaultParam {
@@ -227,9 +273,15 @@ impl FaultKind {
                 description: "`main` (default) or `brake_resistor`",
                 required: false,
                 default: None,
+                range: None,
             }],
             FaultKind::Estop | FaultKind::GripperSensorFault | FaultKind::TeachButton => &[],
         }
+    }
+
+    /// The parameter called `name`, if this kind takes one.
+    pub fn param(self, name: &str) -> Option<&'static FaultParam> {
+        self.params().iter().find(|p| p.name == name)
     }
 
     /// Whether the fault can be written without arguments (no parameter is required).
@@ -315,6 +367,37 @@ impl PiperFault {
         }
     }
 
+    /// Its numeric value with the parameter's name (`temp_c`, `voltage_v`, `torque_nm`), for
+    /// the faults that carry one.
+    pub fn value(&self) -> Option<(&'static str, f64)> {
+        match *self {
+            Self::MotorOverTemp { temp_c, .. } | Self::DriverOverTemp { temp_c, .. } => {
+                Some(("temp_c", temp_c))
+            }
+            Self::UnderVoltage { voltage_v } => Some(("voltage_v", voltage_v)),
+            Self::ExternalTorque { torque_nm, .. } => Some(("torque_nm", torque_nm)),
+            _ => None,
+        }
+    }
+
+    /// Whether the emulator can apply this fault: the joint exists and the value is finite and
+    /// within its parameter's [`FaultParam::range`]. The emulator's `inject` calls it, so no
+    /// caller (scenario, web view, Python) can bypass it; scenario validation also calls
+    /// [`FaultParam::check`] itself, to point at the line of a bad value.
+    pub fn check(&self) -> Result<(), FaultError> {
+        if let Some(joint) = self.joint() {
+            if !(1..=6).contains(&joint) {
+                return Err(FaultError::NoSuchJoint { joint });
+            }
+        }
+        if let Some((name, value)) = self.value() {
+            if let Some(param) = self.kind().param(name) {
+                param.check(value)?;
+            }
+        }
+        Ok(())
+    }
+
     /// Whether `other` is the same fault in the same place (values such as a temperature
     /// aside): clearing one clears the other.
     pub fn same_site(&self, other: &PiperFault) -> bool {
@@ -335,17 +418,33 @@ impl std::fmt::Display for PiperFault {
         }
         match *self {
             Self::MotorOverTemp { temp_c, .. } | Self::DriverOverTemp { temp_c, .. } => {
-                write!(f, " {temp_c} C")
+                write!(f, " {} C", Shown(temp_c))
             }
-            Self::UnderVoltage { voltage_v } => write!(f, " {voltage_v} V"),
-            Self::ExternalTorque { torque_nm, .. } => write!(f, " {torque_nm} Nm"),
+            Self::UnderVoltage { voltage_v } => write!(f, " {} V", Shown(voltage_v)),
+            Self::ExternalTorque { torque_nm, .. } => write!(f, " {} Nm", Shown(torque_nm)),
             Self::NtcOverTemp { board } => write!(f, " {}", board.name()),
             _ => Ok(()),
         }
     }
 }
 
-/// A fault named a joint outside 1–6 or a non-finite value.
+/// A number as `{}` prints it while that is short (24 characters), else in scientific
+/// notation: `f64`'s `Display` writes 1e308 as 309 digits, which a message must not echo.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Shown(pub(crate) f64);
+
+impl std::fmt::Display for Shown {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let plain = self.0.to_string();
+        if plain.len() <= 24 {
+            f.write_str(&plain)
+        } else {
+            write!(f, "{:e}", self.0)
+        }
+    }
+}
+
+/// A fault named a joint outside 1–6, a non-finite value or a value outside its range.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum FaultError {
     /// Joint number outside 1–6.
@@ -355,10 +454,24 @@ pub enum FaultError {
         joint: u8,
     },
     /// A temperature, voltage or torque that is NaN or infinite.
-    #[error("fault value {value} is not finite")]
+    #[error("`{param}` must be a finite number, got {}", Shown(*.value))]
     NotFinite {
+        /// The parameter's name (`temp_c`, `voltage_v`, `torque_nm`).
+        param: &'static str,
         /// The value given.
         value: f64,
+    },
+    /// A value outside its parameter's [`FaultParam::range`].
+    #[error("`{param}` must be between {} and {}, got {}", Shown(*.min), Shown(*.max), Shown(*.value))]
+    OutOfRange {
+        /// The parameter's name (`temp_c`, `voltage_v`, `torque_nm`).
+        param: &'static str,
+        /// The value given.
+        value: f64,
+        /// Smallest value accepted.
+        min: f64,
+        /// Largest value accepted.
+        max: f64,
     },
 }
 
@@ -455,6 +568,97 @@ mod tests {
             board: NtcBoard::BrakeResistor,
         };
         assert!(!main.same_site(&resistor));
+    }
+
+    #[test]
+    fn every_numeric_parameter_has_a_range_holding_its_default() {
+        for kind in FaultKind::ALL {
+            for p in kind.params() {
+                if p.name == "board" {
+                    assert_eq!(p.range, None);
+                    continue;
+                }
+                let (min, max) = p.range.unwrap_or_else(|| panic!("{}: no range", p.name));
+                assert!(
+                    min < max && min.is_finite() && max.is_finite(),
+                    "{}",
+                    p.name
+                );
+                if let Some(d) = p.default {
+                    assert_eq!(p.check(d), Ok(d), "{}: default outside its range", p.name);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn absurd_values_are_refused_with_a_short_message() {
+        let torque = PiperFault::ExternalTorque {
+            joint: 1,
+            torque_nm: 1e308,
+        };
+        let err = torque.check().unwrap_err();
+        assert!(matches!(
+            err,
+            FaultError::OutOfRange {
+                param: "torque_nm",
+                ..
+            }
+        ));
+        let text = err.to_string();
+        assert_eq!(text, "`torque_nm` must be between -320 and 320, got 1e308");
+        for fault in [
+            PiperFault::ExternalTorque {
+                joint: 6,
+                torque_nm: -320.5,
+            },
+            PiperFault::MotorOverTemp {
+                joint: 2,
+                temp_c: 1e308,
+            },
+            PiperFault::DriverOverTemp {
+                joint: 2,
+                temp_c: f64::NAN,
+            },
+            PiperFault::UnderVoltage { voltage_v: -1.0 },
+            PiperFault::UnderVoltage {
+                voltage_v: f64::INFINITY,
+            },
+        ] {
+            let text = fault.check().unwrap_err().to_string();
+            assert!(text.len() < 80, "{text}");
+        }
+        assert_eq!(
+            PiperFault::Stall { joint: 7 }.check(),
+            Err(FaultError::NoSuchJoint { joint: 7 })
+        );
+    }
+
+    #[test]
+    fn plausible_values_pass() {
+        for fault in [
+            PiperFault::ExternalTorque {
+                joint: 1,
+                torque_nm: -320.0,
+            },
+            PiperFault::MotorOverTemp {
+                joint: 6,
+                temp_c: 150.0,
+            },
+            PiperFault::UnderVoltage { voltage_v: 0.0 },
+            PiperFault::Estop,
+        ] {
+            assert_eq!(fault.check(), Ok(()), "{fault}");
+        }
+    }
+
+    #[test]
+    fn display_does_not_echo_hundreds_of_digits() {
+        let f = PiperFault::ExternalTorque {
+            joint: 1,
+            torque_nm: 1e308,
+        };
+        assert_eq!(f.to_string(), "external_torque joint 1 1e308 Nm");
     }
 
     #[test]

@@ -137,7 +137,135 @@ impl RealmanFaultKind {
     }
 }
 
+/// One integer parameter of a fault: its name (as in scenario files, the web view and
+/// Python) and the values the emulator accepts. The one table every way of building a
+/// [`RealmanFault`] checks against ([`RealmanFault::check`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RealmanFaultParam {
+    /// Its name.
+    pub name: &'static str,
+    /// What it sets.
+    pub description: &'static str,
+    /// Smallest value accepted.
+    pub min: u64,
+    /// Largest value accepted.
+    pub max: u64,
+}
+
+impl RealmanFaultParam {
+    /// `value` if it is within `min..=max`, else why not.
+    pub fn check(&self, value: u64) -> Result<u64, FaultError> {
+        if (self.min..=self.max).contains(&value) {
+            Ok(value)
+        } else {
+            Err(FaultError::OutOfRange {
+                param: self.name,
+                value,
+                min: self.min,
+                max: self.max,
+            })
+        }
+    }
+}
+
+/// A reply delay of at most a minute: 120 times the vendor SDK's 500 ms timeout, so every
+/// timeout test fits; a longer one only stalls the run.
+const DELAY_MS: RealmanFaultParam = RealmanFaultParam {
+    name: "delay_ms",
+    description: "reply delay, ms",
+    min: 1,
+    max: 60_000,
+};
+/// Truncated replies: a thousand is more than any recovery test sends.
+const COUNT: RealmanFaultParam = RealmanFaultParam {
+    name: "count",
+    description: "replies truncated",
+    min: 1,
+    max: 1000,
+};
+/// A probability in 1/1000.
+const PERMILLE: RealmanFaultParam = RealmanFaultParam {
+    name: "permille",
+    description: "loss probability, 1/1000",
+    min: 0,
+    max: 1000,
+};
+/// Joints of the largest arm (RM75: 7); the controller checks the arm's own count.
+const JOINT: RealmanFaultParam = RealmanFaultParam {
+    name: "joint",
+    description: "joint, 1-based",
+    min: 1,
+    max: 7,
+};
+/// The 16-bit joint error word; 0 is no error.
+const CODE: RealmanFaultParam = RealmanFaultParam {
+    name: "code",
+    description: "joint error bits (e.g. 8 = over-temperature)",
+    min: 1,
+    max: 0xFFFF,
+};
+/// The gripper's error byte; 0 is no error.
+const BITS: RealmanFaultParam = RealmanFaultParam {
+    name: "bits",
+    description: "gripper error bits",
+    min: 1,
+    max: 0xFF,
+};
+
+impl RealmanFaultKind {
+    /// Its integer parameters, all required, in the order the web view lists them.
+    pub fn params(self) -> &'static [RealmanFaultParam] {
+        match self {
+            Self::ReplyDelay => &[DELAY_MS],
+            Self::MalformedReply => &[COUNT],
+            Self::UdpLoss => &[PERMILLE],
+            Self::JointError => &[JOINT, CODE],
+            Self::GripperFault => &[BITS],
+            Self::ConnectionDrop
+            | Self::UdpReorder
+            | Self::PowerLoss
+            | Self::Collision
+            | Self::EStop => &[],
+        }
+    }
+
+    /// The parameter called `name`, if this kind takes one.
+    pub fn param(self, name: &str) -> Option<&'static RealmanFaultParam> {
+        self.params().iter().find(|p| p.name == name)
+    }
+}
+
 impl RealmanFault {
+    /// Its integer values with their parameters' names.
+    pub fn values(&self) -> Vec<(&'static str, u64)> {
+        match *self {
+            Self::ReplyDelay { delay_ms } => vec![("delay_ms", delay_ms)],
+            Self::MalformedReply { count } => vec![("count", u64::from(count))],
+            Self::UdpLoss { permille } => vec![("permille", u64::from(permille))],
+            Self::JointError { joint, code } => {
+                vec![("joint", u64::from(joint)), ("code", u64::from(code))]
+            }
+            Self::GripperFault { bits } => vec![("bits", u64::from(bits))],
+            Self::ConnectionDrop { .. }
+            | Self::UdpReorder
+            | Self::PowerLoss
+            | Self::Collision
+            | Self::EStop => Vec::new(),
+        }
+    }
+
+    /// Whether every value is within its parameter's range
+    /// ([`RealmanFaultKind::params`]).
+    pub fn check(&self) -> Result<(), FaultError> {
+        let kind = self.kind();
+        for (name, value) in self.values() {
+            if let Some(param) = kind.param(name) {
+                param.check(value)?;
+            }
+        }
+        Ok(())
+    }
+
     /// This fault's kind.
     pub fn kind(&self) -> RealmanFaultKind {
         match self {
@@ -174,6 +302,18 @@ pub enum FaultError {
     /// A joint error with no bit set.
     #[error("joint error code 0 is not an error")]
     ZeroCode,
+    /// A value outside its parameter's range ([`RealmanFaultKind::params`]).
+    #[error("`{param}` must be between {min} and {max}, got {value}")]
+    OutOfRange {
+        /// The parameter's name.
+        param: &'static str,
+        /// The value given.
+        value: u64,
+        /// Smallest value accepted.
+        min: u64,
+        /// Largest value accepted.
+        max: u64,
+    },
     /// A loss probability above 1000 ‰.
     #[error("loss probability {permille}‰ is above 1000‰")]
     BadProbability {
@@ -218,5 +358,35 @@ mod tests {
         names.sort_unstable();
         names.dedup();
         assert_eq!(names.len(), RealmanFaultKind::ALL.len());
+    }
+
+    #[test]
+    fn values_are_checked_against_the_table() {
+        assert_eq!(RealmanFault::ReplyDelay { delay_ms: 600 }.check(), Ok(()));
+        let err = RealmanFault::ReplyDelay { delay_ms: u64::MAX }
+            .check()
+            .unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            format!("`delay_ms` must be between 1 and 60000, got {}", u64::MAX)
+        );
+        assert!(RealmanFault::UdpLoss { permille: 1001 }.check().is_err());
+        assert!(RealmanFault::JointError { joint: 8, code: 1 }
+            .check()
+            .is_err());
+        assert!(RealmanFault::JointError { joint: 3, code: 0 }
+            .check()
+            .is_err());
+        assert!(RealmanFault::GripperFault { bits: 0 }.check().is_err());
+        assert_eq!(RealmanFault::EStop.check(), Ok(()));
+        // Every parameter a fault carries is in the table.
+        for kind in RealmanFaultKind::ALL {
+            for p in kind.params() {
+                assert!(p.min <= p.max, "{}", p.name);
+            }
+        }
+        for (name, _) in (RealmanFault::JointError { joint: 1, code: 1 }).values() {
+            assert!(RealmanFaultKind::JointError.param(name).is_some());
+        }
     }
 }

@@ -3,6 +3,9 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::piper::faults::Shown;
+use crate::robstride::model::Model;
+
 /// A fault the harness can inject (and the models can raise on their own).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 pub enum Fault {
@@ -83,6 +86,84 @@ impl Fault {
     }
 }
 
+/// Forced winding temperature (`set_temperature`), °C: from −40 °C (the coldest rating of
+/// industrial electronics) to 200 °C (past class-H insulation, 180 °C, where a winding is
+/// destroyed). Every model's warning and fault thresholds (93–145 °C) lie well inside.
+pub const TEMPERATURE_RANGE_C: (f64, f64) = (-40.0, 200.0);
+
+/// Supply voltage (`set_bus_voltage`), V: from 0 (supply gone) to 120 V, twice the highest
+/// rated supply of the family (over-voltage trips near 60 V), which leaves every over-voltage
+/// test room.
+pub const BUS_VOLTAGE_RANGE_V: (f64, f64) = (0.0, 120.0);
+
+/// Largest external torque on a motor's load (`external_torque`), as a multiple of that
+/// model's peak torque: a push ten times what the motor can answer still stalls it, trips the
+/// overload and drives the load into anything; a bigger one is not a disturbance a test can
+/// mean, and far bigger ones (1e308 N·m) overflow the physics into NaN.
+pub const EXTERNAL_TORQUE_PEAK_MULTIPLE: f64 = 10.0;
+
+/// A value the harness asked an emulated motor to take that is not finite or out of range.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ValueError {
+    /// NaN or infinite.
+    #[error("`{param}` must be a finite number, got {}", Shown(*.value))]
+    NotFinite {
+        /// The parameter's name (`temp_c`, `voltage_v`, `torque_nm`).
+        param: &'static str,
+        /// The value given.
+        value: f64,
+    },
+    /// Outside its bounds.
+    #[error("`{param}` must be between {} and {}, got {}", Shown(*.min), Shown(*.max), Shown(*.value))]
+    OutOfRange {
+        /// The parameter's name (`temp_c`, `voltage_v`, `torque_nm`).
+        param: &'static str,
+        /// The value given.
+        value: f64,
+        /// Smallest value accepted.
+        min: f64,
+        /// Largest value accepted.
+        max: f64,
+    },
+}
+
+fn within(param: &'static str, value: f64, (min, max): (f64, f64)) -> Result<f64, ValueError> {
+    if !value.is_finite() {
+        Err(ValueError::NotFinite { param, value })
+    } else if !(min..=max).contains(&value) {
+        Err(ValueError::OutOfRange {
+            param,
+            value,
+            min,
+            max,
+        })
+    } else {
+        Ok(value)
+    }
+}
+
+/// A winding temperature `set_temperature` accepts ([`TEMPERATURE_RANGE_C`]).
+pub fn check_temperature_c(temp_c: f64) -> Result<f64, ValueError> {
+    within("temp_c", temp_c, TEMPERATURE_RANGE_C)
+}
+
+/// A supply voltage `set_bus_voltage` accepts ([`BUS_VOLTAGE_RANGE_V`]).
+pub fn check_bus_voltage_v(voltage_v: f64) -> Result<f64, ValueError> {
+    within("voltage_v", voltage_v, BUS_VOLTAGE_RANGE_V)
+}
+
+/// The largest external torque on a `model`'s load, either way, N·m
+/// ([`EXTERNAL_TORQUE_PEAK_MULTIPLE`] × its peak torque).
+pub fn max_external_torque_nm(model: Model) -> f64 {
+    EXTERNAL_TORQUE_PEAK_MULTIPLE * model.spec().peak_torque_nm
+}
+
+/// An external torque `external_torque` accepts on a `model`'s load.
+pub fn check_external_torque_nm(model: Model, torque_nm: f64) -> Result<f64, ValueError> {
+    let max = max_external_torque_nm(model);
+    within("torque_nm", torque_nm, (-max, max))
+}
+
 /// Fault word bit 0 of the warning word: over-temperature warning.
 pub const WARNING_OVER_TEMP: u32 = 1;
 
@@ -128,6 +209,36 @@ mod tests {
             }
         }
         assert_eq!(Fault::from_name("melted"), None);
+    }
+
+    #[test]
+    fn absurd_values_are_refused_with_a_short_message() {
+        let err = check_external_torque_nm(Model::RS03, 1e308).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "`torque_nm` must be between -600 and 600, got 1e308"
+        );
+        assert!(check_temperature_c(1e308).is_err());
+        assert!(check_temperature_c(f64::NAN).is_err());
+        assert!(check_bus_voltage_v(-1.0).is_err());
+        assert!(check_external_torque_nm(Model::RS00, -140.5).is_err());
+    }
+
+    #[test]
+    fn every_models_thresholds_and_peak_torque_are_within_the_bounds() {
+        for model in Model::ALL {
+            let spec = model.spec();
+            for t in [spec.over_temp_fault_c + 5.0, spec.over_temp_warning_c] {
+                assert_eq!(check_temperature_c(t), Ok(t), "{model:?}");
+            }
+            let over = spec.over_voltage_v + 2.0;
+            assert_eq!(check_bus_voltage_v(over), Ok(over), "{model:?}");
+            let peak = spec.peak_torque_nm;
+            assert_eq!(
+                check_external_torque_nm(model, -3.0 * peak),
+                Ok(-3.0 * peak)
+            );
+        }
     }
 
     #[test]

@@ -11,7 +11,9 @@ use tokio::task::JoinHandle;
 use tokio::time::{interval, sleep, MissedTickBehavior};
 
 use crate::robstride::actuator::{Actuator, MotorConfig, MotorSnapshot, DEFAULT_HOST_ID};
-use crate::robstride::faults::Fault;
+use crate::robstride::faults::{
+    check_bus_voltage_v, check_external_torque_nm, check_temperature_c, Fault, ValueError,
+};
 use crate::robstride::state_file::{uid_key, StateFile, StateFileError};
 
 /// Configuration of an emulated RobStride bus.
@@ -64,6 +66,15 @@ pub enum RobstrideError {
     /// The state file could not be read or written.
     #[error(transparent)]
     StateFile(#[from] StateFileError),
+    /// A temperature, voltage or external torque that is not finite or out of range
+    /// (the bounds and why they are what they are: [`crate::robstride::faults`]).
+    #[error("motor {can_id}: {source}")]
+    BadValue {
+        /// The motor.
+        can_id: u8,
+        /// What is wrong with the value.
+        source: ValueError,
+    },
     /// The emulator task has stopped.
     #[error("the RobStride emulator has stopped")]
     Stopped,
@@ -322,22 +333,34 @@ impl Runner {
                     .map(|motor| motor.remove_cause(fault));
                 let _ = reply.send(result);
             }
+            // Every value is range-checked here, where each request reaches its motor: a
+            // physically absurd one (1e308 N·m) is refused instead of turning the physics
+            // into NaN that the wire would carry as zeros.
             Request::SetVoltage(can_id, volts, reply) => {
-                let result = self
-                    .motor_mut(can_id)
-                    .map(|motor| motor.set_bus_voltage(volts));
+                let result = self.motor_mut(can_id).and_then(|motor| {
+                    let volts = check_bus_voltage_v(volts)
+                        .map_err(|source| RobstrideError::BadValue { can_id, source })?;
+                    motor.set_bus_voltage(volts);
+                    Ok(())
+                });
                 let _ = reply.send(result);
             }
             Request::SetTemperature(can_id, celsius, reply) => {
-                let result = self
-                    .motor_mut(can_id)
-                    .map(|motor| motor.set_temperature(celsius));
+                let result = self.motor_mut(can_id).and_then(|motor| {
+                    let celsius = check_temperature_c(celsius)
+                        .map_err(|source| RobstrideError::BadValue { can_id, source })?;
+                    motor.set_temperature(celsius);
+                    Ok(())
+                });
                 let _ = reply.send(result);
             }
             Request::SetExternalTorque(can_id, torque, reply) => {
-                let result = self
-                    .motor_mut(can_id)
-                    .map(|motor| motor.set_external_torque(torque));
+                let result = self.motor_mut(can_id).and_then(|motor| {
+                    let torque = check_external_torque_nm(motor.config().model, torque)
+                        .map_err(|source| RobstrideError::BadValue { can_id, source })?;
+                    motor.set_external_torque(torque);
+                    Ok(())
+                });
                 let _ = reply.send(result);
             }
             Request::Snapshot(reply) => {
@@ -399,5 +422,43 @@ impl Runner {
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::robstride::{Load, Model};
+    use bus::virtual_bus::{VirtualBus, VirtualBusConfig};
+
+    #[tokio::test(start_paused = true)]
+    async fn absurd_values_are_refused_and_the_state_stays_finite() {
+        let bus = VirtualBus::new(VirtualBusConfig::default());
+        let node: Arc<dyn CanBus> = Arc::new(bus.attach("emulator"));
+        let mut motor = MotorConfig::new(1, Model::RS03);
+        motor.load = Load::Pendulum {
+            mass_kg: 1.0,
+            length_m: 0.3,
+        };
+        let emulator = RobstrideBus::spawn(node, RobstrideConfig::new(vec![motor])).unwrap();
+        let torque = emulator.set_external_torque(1, 1e308).await.unwrap_err();
+        assert_eq!(
+            torque.to_string(),
+            "motor 1: `torque_nm` must be between -600 and 600, got 1e308"
+        );
+        assert!(emulator.set_temperature(1, 1e308).await.is_err());
+        assert!(emulator.set_temperature(1, f64::NAN).await.is_err());
+        assert!(emulator.set_bus_voltage(1, -5.0).await.is_err());
+        // In range: accepted.
+        emulator.set_external_torque(1, 30.0).await.unwrap();
+        emulator.set_temperature(1, 60.0).await.unwrap();
+        tokio::time::sleep(Duration::from_millis(200)).await;
+        let snapshot = emulator.snapshot().await.unwrap();
+        let m = &snapshot[0];
+        assert!(
+            m.angle_rad.is_finite() && m.speed_rad_s.is_finite() && m.temperature_c.is_finite(),
+            "{m:?}"
+        );
+        emulator.shutdown().await;
     }
 }

@@ -162,14 +162,6 @@ fn joint_index(joint: u8) -> Result<usize, FaultError> {
     }
 }
 
-fn finite(value: f64) -> Result<f64, FaultError> {
-    if value.is_finite() {
-        Ok(value)
-    } else {
-        Err(FaultError::NotFinite { value })
-    }
-}
-
 /// Collision threshold of a joint at protection `level` (1–8, higher = more sensitive), N·m:
 /// from ⅔ of the motor's torque limit at level 1 down to 1/12 of it at level 8.
 pub fn collision_threshold_nm(torque_limit_nm: f64, level: u8) -> f64 {
@@ -179,22 +171,25 @@ pub fn collision_threshold_nm(torque_limit_nm: f64, level: u8) -> f64 {
 impl Firmware {
     /// Inject a fault.
     pub fn inject(&mut self, fault: PiperFault) -> Result<(), FaultError> {
-        tracing::info!(?fault, t_s = self.time_s(), "Piper fault injected");
+        // Every caller (scenario, web view, Python, tests) comes through here: refuse a
+        // value outside the fault table's range before it reaches the physics.
+        fault.check()?;
+        tracing::info!(%fault, t_s = self.time_s(), "Piper fault injected");
         let f = &mut self.faults;
         match fault {
             PiperFault::CommLoss { joint } => f.comm_loss[joint_index(joint)?] = true,
             PiperFault::MotorOverTemp { joint, temp_c } => {
-                f.forced_motor_temp[joint_index(joint)?] = Some(finite(temp_c)?);
+                f.forced_motor_temp[joint_index(joint)?] = Some(temp_c);
             }
             PiperFault::DriverOverTemp { joint, temp_c } => {
-                f.forced_driver_temp[joint_index(joint)?] = Some(finite(temp_c)?);
+                f.forced_driver_temp[joint_index(joint)?] = Some(temp_c);
             }
             PiperFault::OverCurrent { joint } => f.over_current[joint_index(joint)?] = true,
-            PiperFault::UnderVoltage { voltage_v } => f.forced_voltage_v = Some(finite(voltage_v)?),
+            PiperFault::UnderVoltage { voltage_v } => f.forced_voltage_v = Some(voltage_v),
             PiperFault::DriverError { joint } => f.driver_error[joint_index(joint)?] = true,
             PiperFault::Stall { joint } => f.stall[joint_index(joint)?] = true,
             PiperFault::ExternalTorque { joint, torque_nm } => {
-                f.external_torque_nm[joint_index(joint)?] = finite(torque_nm)?;
+                f.external_torque_nm[joint_index(joint)?] = torque_nm;
                 self.apply_external_torques();
             }
             PiperFault::Collision { joint } => f.collision[joint_index(joint)?] = true,
@@ -318,5 +313,60 @@ impl Firmware {
         if tripped || (self.faults.status_code().is_some() && self.motion.is_some()) {
             self.hold_here();
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::piper::PiperConfig;
+
+    #[test]
+    fn an_absurd_fault_value_is_refused_and_changes_nothing() {
+        let mut fw = Firmware::new(PiperConfig::default()).expect("stock Piper");
+        let err = fw
+            .inject(PiperFault::ExternalTorque {
+                joint: 2,
+                torque_nm: 1e308,
+            })
+            .unwrap_err();
+        assert!(matches!(err, FaultError::OutOfRange { .. }), "{err}");
+        assert!(fw.world.external_joint_torques().iter().all(|t| *t == 0.0));
+        let err = fw
+            .inject(PiperFault::MotorOverTemp {
+                joint: 2,
+                temp_c: 1e308,
+            })
+            .unwrap_err();
+        assert!(matches!(err, FaultError::OutOfRange { .. }), "{err}");
+        assert_eq!(fw.faults.forced_motor_temp, [None; 6]);
+        for _ in 0..100 {
+            fw.tick();
+        }
+        assert!(fw.physical_joints().iter().all(|q| q.is_finite()));
+    }
+
+    #[test]
+    fn the_largest_accepted_torque_keeps_the_physics_finite() {
+        let mut fw = Firmware::new(PiperConfig::default()).expect("stock Piper");
+        for joint in 1..=6 {
+            fw.inject(PiperFault::ExternalTorque {
+                joint,
+                torque_nm: if joint % 2 == 0 { 320.0 } else { -320.0 },
+            })
+            .expect("within range");
+        }
+        for _ in 0..2000 {
+            fw.tick();
+        }
+        let snapshot = fw.snapshot();
+        assert!(
+            snapshot.joint_positions_rad.iter().all(|q| q.is_finite())
+                && snapshot
+                    .joint_velocities_rad_s
+                    .iter()
+                    .all(|v| v.is_finite()),
+            "{snapshot:?}"
+        );
     }
 }
