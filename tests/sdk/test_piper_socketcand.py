@@ -126,6 +126,44 @@ def joints_mdeg(piper):
     return [js.joint_1, js.joint_2, js.joint_3, js.joint_4, js.joint_5, js.joint_6]
 
 
+def firmware_of(piper):
+    """The whole version string once the SDK has it, else None. The SDK clears its buffer
+    when it sends the query and reads "S-V" plus 5 characters."""
+    version = piper.GetPiperFirmwareVersion()
+    return version if isinstance(version, str) and len(version) >= len(FIRMWARE) else None
+
+
+def test_piper_sdk_firmware_version_right_after_connect(server, monkeypatch):
+    """Issue 20 item 4: `ConnectPort()` sends the firmware query and the answer is read
+    without asking again, as over a vxcan pair (the vendor's piper_read_firmware.py waits
+    30 ms). piper_sdk 0.6.2 on Linux reads on one python-can connection and sends on a
+    second one opened right after it: the answer must reach the first, which has sent
+    nothing since its handshake."""
+    host, port = server
+    monkeypatch.setenv("CAN_CONFIG", json.dumps({"host": host, "port": port}))
+    from piper_sdk import C_PiperInterface_V2
+
+    # Not the other test's name: the SDK keeps one instance per CAN name. Any name opens
+    # the server's one bus.
+    piper = C_PiperInterface_V2(can_name="can1", judge_flag=False, can_auto_init=False)
+    piper.CreateCanBus("can1", bustype="socketcand")
+    piper.ConnectPort()
+    try:
+        started = time.monotonic()
+        version = None
+        while version is None and time.monotonic() - started < 3:
+            version = firmware_of(piper)
+            time.sleep(0.005)
+        elapsed = time.monotonic() - started
+        # Before the fix: -0x4AF (-1199) for as long as one waited.
+        assert version == FIRMWARE, (
+            f"GetPiperFirmwareVersion() = {piper.GetPiperFirmwareVersion()!r} "
+            f"{elapsed:.3f} s after ConnectPort(), without a second query"
+        )
+    finally:
+        piper.DisconnectPort()
+
+
 def test_piper_sdk_through_create_can_bus(server, monkeypatch):
     host, port = server
     # python-can's configuration supplies what CreateCanBus cannot pass: host and port.
@@ -138,17 +176,13 @@ def test_piper_sdk_through_create_can_bus(server, monkeypatch):
     try:
         wait_for(lambda: piper.GetArmStatus().time_stamp > 0, 10, "0x2A1 status feedback")
 
-        # Firmware: the SDK clears its buffer when it sends the query and reads "S-V" plus 5.
-        def firmware():
-            version = piper.GetPiperFirmwareVersion()
-            return version if isinstance(version, str) and len(version) >= len(FIRMWARE) else None
-
+        # Firmware asked again (the answer to ConnectPort's own query is the test above).
         version = None
         for _ in range(5):
             piper.SearchPiperFirmwareVersion()
             deadline = time.monotonic() + 3
             while time.monotonic() < deadline and version is None:
-                version = firmware()
+                version = firmware_of(piper)
                 time.sleep(0.02)
             if version:
                 break

@@ -13,6 +13,7 @@
 
 mod client;
 pub mod http_guard;
+mod log_limit;
 pub mod protocol;
 mod server;
 

@@ -8,6 +8,14 @@
 //! client may only ever send (piper_sdk opens a second connection it never reads), and its
 //! commands must still reach the bus. Nothing a client does can hold up the bus or the other
 //! clients; a client that sends faster than the bus carries frames is slowed through TCP.
+//! Drops are logged as one summary a second per connection and kind, never one line per
+//! drop (a client flooding bad input without reading used to turn 3 MB into 58 MB of log).
+//!
+//! Like a raw socket of a real socketcand, a client in raw mode receives every frame that
+//! completes on the bus after its `< rawmode >`: frames of the grace period (see
+//! [`ServerConfig::rawmode_grace`]) are held back, not discarded. And what a client sent
+//! before it closed still reaches the bus (the rest of its input is read and its transmit
+//! queue emptied before its node leaves): a send-and-exit tool loses none of its frames.
 //!
 //! Every byte a client sends passes the [`HttpGuard`] before the framer sees it: a connection
 //! that opens with an HTTP request line or carries `Host:`/`Origin:` lines (a web page's
@@ -15,9 +23,10 @@
 //! [`ServerConfig::max_clients`] clients are served at once; further connections are closed
 //! at once, so a connection storm cannot use up the process's file descriptors.
 
-use std::net::SocketAddr;
+use std::collections::VecDeque;
+use std::net::{IpAddr, SocketAddr};
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex, Weak};
 use std::time::Duration;
 
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
@@ -28,6 +37,7 @@ use tokio::task::JoinSet;
 use tokio::time::Instant;
 
 use super::http_guard::HttpGuard;
+use super::log_limit::DropSummary;
 use super::protocol::{self, Command, Element, Framer, Reply};
 use crate::virtual_bus::{NodeOptions, VirtualBus, VirtualNode};
 use crate::{BusError, CanBus, CanFrame};
@@ -43,11 +53,15 @@ pub struct ServerConfig {
     /// How long a `send` waits for room in that queue before the client gets an error
     /// (default 1 s); meanwhile no further commands of that client are read.
     pub send_wait: Duration,
-    /// Frames are forwarded only this long after `< ok >` answers `< rawmode >` (default
-    /// 100 ms), or from the client's next command on, whichever comes first: python-can
-    /// reads that `< ok >` with one `recv` and compares it whole, so a frame arriving in the
-    /// same read would fail its handshake. A client that sends a command has read its
-    /// `< ok >` (armhil's client sends `< echo >` at once, so it misses nothing).
+    /// Frames are written to a client only this long after `< ok >` answers `< rawmode >`
+    /// (default 100 ms), or from the client's next command on, or from the `< rawmode >` of
+    /// a later connection from the same address, whichever comes first: python-can reads
+    /// that `< ok >` with one `recv` and compares it whole, so a frame arriving in the same
+    /// read would fail its handshake. A client that sends a command, or has opened its next
+    /// connection, has read its `< ok >`. Frames that complete on the bus meanwhile are held
+    /// (up to [`ServerConfig::client_queue`]) and written when the grace ends, so the client
+    /// misses none of them: piper_sdk reads on one connection and asks for the firmware
+    /// version on a second one right after opening it, and the answer must reach the first.
     pub rawmode_grace: Duration,
     /// Kernel send buffer of each connection in bytes (default 64 KiB, some 1400 frames):
     /// bounds how stale the frames a lagging client reads can be before drops begin.
@@ -141,6 +155,32 @@ struct Shared {
     bus: VirtualBus,
     config: ServerConfig,
     counters: Counters,
+    /// Numbers connections in the order they were accepted.
+    next_connection: AtomicU64,
+    /// Every live connection's raw-mode state, for [`Session::end_earlier_graces`].
+    graces: Mutex<Vec<GraceEntry>>,
+}
+
+/// One connection in [`Shared::graces`].
+struct GraceEntry {
+    /// Its number in accept order.
+    id: u64,
+    /// The client's address (without the port: one client opens several connections).
+    ip: IpAddr,
+    /// Its raw-mode state; gone with the connection.
+    raw: Weak<watch::Sender<Option<Instant>>>,
+}
+
+/// Start forwarding on a connection now if its raw mode is still in its grace period.
+fn end_grace(raw: &watch::Sender<Option<Instant>>) {
+    let now = Instant::now();
+    raw.send_if_modified(|raw| match raw {
+        Some(start) if *start > now => {
+            *raw = Some(now);
+            true
+        }
+        _ => false,
+    });
 }
 
 /// A running socketcand server. Dropping it (or [`SocketcandServer::shutdown`]) stops
@@ -186,6 +226,8 @@ impl SocketcandServer {
             bus,
             config,
             counters: Counters::default(),
+            next_connection: AtomicU64::new(0),
+            graces: Mutex::new(Vec::new()),
         });
         let (stop, stopped) = watch::channel(false);
         let task = tokio::spawn(accept_loop(listener, Arc::clone(&shared), stopped));
@@ -308,6 +350,69 @@ impl Drop for ClientGauge<'_> {
     }
 }
 
+/// How long a connection whose client is gone keeps reading what the client sent before it
+/// left (the kernel has it all by then: this bounds only a peer that half-closed and goes on
+/// sending).
+const DRAIN_READ_LIMIT: Duration = Duration::from_secs(2);
+
+/// What one connection dropped, each kind logged as one summary a second (D10).
+#[derive(Debug, Default)]
+struct DropLogs {
+    /// Replies (`< ok >`, `< error … >`) dropped from a full queue.
+    replies: Mutex<DropSummary>,
+    /// Bus frames dropped from a full queue.
+    frames: Mutex<DropSummary>,
+}
+
+impl DropLogs {
+    fn reply_dropped(&self, peer: SocketAddr, reply: &Reply) {
+        let mut summary = lock(&self.replies);
+        if let Some(dropped) = summary.record(Instant::now()) {
+            tracing::warn!(
+                %peer,
+                dropped,
+                total = summary.total(),
+                last = ?reply,
+                "client queue full; replies dropped (one summary a second at most)"
+            );
+        }
+    }
+
+    fn frame_dropped(&self, peer: SocketAddr) {
+        let mut summary = lock(&self.frames);
+        if let Some(dropped) = summary.record(Instant::now()) {
+            tracing::warn!(
+                %peer,
+                dropped,
+                total = summary.total(),
+                "client is not reading; frames for it dropped (one summary a second at most)"
+            );
+        }
+    }
+
+    /// Log what was dropped since the last summaries (the connection is ending).
+    fn finish(&self, peer: SocketAddr) {
+        let mut replies = lock(&self.replies);
+        if let Some(dropped) = replies.take() {
+            let total = replies.total();
+            tracing::warn!(%peer, dropped, total, "client queue full; replies dropped");
+        }
+        let mut frames = lock(&self.frames);
+        if let Some(dropped) = frames.take() {
+            let total = frames.total();
+            tracing::warn!(%peer, dropped, total, "client is not reading; frames for it dropped");
+        }
+    }
+}
+
+/// A poisoned lock only means another part of this connection panicked; the count is still
+/// good for a log line.
+fn lock(summary: &Mutex<DropSummary>) -> std::sync::MutexGuard<'_, DropSummary> {
+    summary
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
 async fn serve(stream: TcpStream, peer: SocketAddr, shared: Arc<Shared>) {
     let counters = &shared.counters;
     counters.connections.fetch_add(1, Ordering::Relaxed);
@@ -326,51 +431,101 @@ async fn serve(stream: TcpStream, peer: SocketAddr, shared: Arc<Shared>) {
     let (out, out_rx) = mpsc::channel(shared.config.client_queue.max(1));
     let (node_tx, node_rx) = watch::channel(None);
     let (raw_tx, raw_rx) = watch::channel(None);
+    let raw_tx = Arc::new(raw_tx);
+    let id = shared.next_connection.fetch_add(1, Ordering::Relaxed);
+    lock_graces(&shared).push(GraceEntry {
+        id,
+        ip: peer.ip(),
+        raw: Arc::downgrade(&raw_tx),
+    });
+    let drops = DropLogs::default();
     let mut session = Session {
+        id,
         peer,
         shared: &shared,
         out: out.clone(),
         node: node_tx,
         raw: raw_tx,
+        drops: &drops,
     };
-    queue(&session.out, Reply::Hi, counters, peer);
+    session.reply(Reply::Hi);
     let forwarder = Forwarder {
         peer,
         shared: &shared,
         out,
-        dropped: 0,
+        drops: &drops,
     };
-    let end = tokio::select! {
-        end = session.read_loop(read) => end,
-        end = write_loop(write, out_rx) => end,
-        end = forwarder.run(node_rx, raw_rx) => end,
+    let end = {
+        let reader = session.read_loop(read);
+        tokio::pin!(reader);
+        let (end, read_all) = tokio::select! {
+            end = &mut reader => (end, true),
+            end = write_loop(write, out_rx) => (end, false),
+            end = forwarder.run(node_rx, raw_rx) => (end, false),
+        };
+        // The client may be gone with elements still unread: a send-and-exit tool closes
+        // right after its last `send`, and one that never reads is reset by its kernel (the
+        // server's writes fail first). What it sent still goes on the bus, as a real
+        // socketcand's kernel socket buffer would deliver it.
+        if !read_all && matches!(end, End::WriteFailed(_) | End::ClientClosed) {
+            match tokio::time::timeout(DRAIN_READ_LIMIT, &mut reader).await {
+                Ok(read_end) => tracing::debug!(%peer, reason = %read_end, "client input drained"),
+                Err(_) => tracing::debug!(%peer, "client input not drained in time"),
+            }
+        }
+        end
     };
     let node = session.node.borrow().clone();
     if let Some(node) = node {
+        // A connection closed for speaking HTTP has nothing of its own to deliver.
+        if !matches!(end, End::Http(_)) {
+            flush_transmit_queue(&node, shared.config.send_wait, peer).await;
+        }
         node.close().await;
     }
+    lock_graces(&shared).retain(|entry| entry.id != id);
+    drops.finish(peer);
     tracing::info!(%peer, reason = %end, "socketcand client disconnected");
 }
 
-/// Queue a reply; a full queue drops it (the client is not reading anyway).
-fn queue(out: &mpsc::Sender<String>, reply: Reply, counters: &Counters, peer: SocketAddr) {
-    if matches!(reply, Reply::Error(_)) {
-        counters.errors.fetch_add(1, Ordering::Relaxed);
-    }
-    if out.try_send(protocol::format_reply(&reply)).is_err() {
-        tracing::warn!(%peer, ?reply, "client queue full; reply dropped");
+/// The list only holds weak handles: a panic elsewhere leaves it usable.
+fn lock_graces(shared: &Shared) -> std::sync::MutexGuard<'_, Vec<GraceEntry>> {
+    shared
+        .graces
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
+/// Wait (at most `limit`) until every frame the client sent has left its node's transmit
+/// queue: closing the node discards what is still queued.
+async fn flush_transmit_queue(node: &VirtualNode, limit: Duration, peer: SocketAddr) {
+    let deadline = Instant::now() + limit;
+    loop {
+        let pending = node.pending_tx();
+        if pending == 0 {
+            return;
+        }
+        if Instant::now() >= deadline {
+            tracing::warn!(%peer, pending, "client's last frames not sent before it closed (bus busy or delayed)");
+            return;
+        }
+        // A frame takes about 130 µs on a 1 Mbit/s wire; the queue holds 64 by default.
+        tokio::time::sleep(Duration::from_millis(1)).await;
     }
 }
 
 /// The command side of a connection.
 struct Session<'a> {
+    /// This connection's number in accept order.
+    id: u64,
     peer: SocketAddr,
     shared: &'a Shared,
     out: mpsc::Sender<String>,
     /// The client's node, once it opened the bus.
     node: watch::Sender<Option<Arc<VirtualNode>>>,
-    /// In raw mode: when forwarding starts.
-    raw: watch::Sender<Option<Instant>>,
+    /// In raw mode: when frames start to be written to the client.
+    raw: Arc<watch::Sender<Option<Instant>>>,
+    drops: &'a DropLogs,
 }
 
 impl Session<'_> {
@@ -412,8 +567,18 @@ impl Session<'_> {
         }
     }
 
+    /// Queue a reply; a full queue drops it (the client is not reading anyway).
     fn reply(&self, reply: Reply) {
-        queue(&self.out, reply, &self.shared.counters, self.peer);
+        let counters = &self.shared.counters;
+        if matches!(reply, Reply::Error(_)) {
+            counters.errors.fetch_add(1, Ordering::Relaxed);
+        }
+        match self.out.try_send(protocol::format_reply(&reply)) {
+            Ok(()) => {}
+            Err(mpsc::error::TrySendError::Full(_)) => self.drops.reply_dropped(self.peer, &reply),
+            // The writer is gone with the client; its last elements are being drained.
+            Err(mpsc::error::TrySendError::Closed(_)) => {}
+        }
     }
 
     async fn handle(&mut self, text: &str) -> Result<(), End> {
@@ -426,7 +591,7 @@ impl Session<'_> {
             }
         };
         if command != Command::RawMode {
-            self.end_grace();
+            end_grace(&self.raw);
         }
         let node = self.node.borrow().clone();
         match (command, node) {
@@ -449,6 +614,7 @@ impl Session<'_> {
             (Command::RawMode, Some(_)) => {
                 let start = Instant::now() + self.shared.config.rawmode_grace;
                 self.raw.send_replace(Some(start));
+                self.end_earlier_graces();
                 self.reply(Reply::Ok);
             }
             (Command::BcmMode, Some(_)) => {
@@ -460,16 +626,22 @@ impl Session<'_> {
         Ok(())
     }
 
-    /// Start forwarding now if raw mode is still in its grace period.
-    fn end_grace(&self) {
-        let now = Instant::now();
-        self.raw.send_if_modified(|raw| match raw {
-            Some(start) if *start > now => {
-                *raw = Some(now);
-                true
+    /// End the grace period of the connections the same client opened before this one.
+    ///
+    /// python-can opens a connection in its constructor, which returns only after it has
+    /// read the `< ok >` to `< rawmode >`; so when a later connection from the same address
+    /// reaches `< rawmode >`, the earlier ones have read theirs. piper_sdk on Linux reads on
+    /// one connection and sends on a second opened right after it, and asks for the firmware
+    /// version at once on the second: without this the reading connection would get the
+    /// answer only when its grace ends, later than the 30 ms the vendor's example waits.
+    fn end_earlier_graces(&self) {
+        let ip = self.peer.ip();
+        let graces = lock_graces(self.shared);
+        for entry in graces.iter().filter(|e| e.ip == ip && e.id < self.id) {
+            if let Some(raw) = entry.raw.upgrade() {
+                end_grace(&raw);
             }
-            _ => false,
-        });
+        }
     }
 
     /// Put a client's frame on the bus, waiting (and so not reading that client) while its
@@ -501,12 +673,33 @@ struct Forwarder<'a> {
     peer: SocketAddr,
     shared: &'a Shared,
     out: mpsc::Sender<String>,
-    dropped: u64,
+    drops: &'a DropLogs,
+}
+
+/// What the forwarder does with a frame from the bus, by the connection's mode.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Forwarding {
+    /// Not in raw mode: nothing is forwarded (socketcand has no raw socket yet).
+    Off,
+    /// In raw mode's grace period: held until it ends.
+    Held { until: Instant },
+    /// In raw mode: written to the client.
+    On,
+}
+
+impl Forwarding {
+    fn of(raw: &watch::Receiver<Option<Instant>>, now: Instant) -> Self {
+        match *raw.borrow() {
+            None => Self::Off,
+            Some(start) if start > now => Self::Held { until: start },
+            Some(_) => Self::On,
+        }
+    }
 }
 
 impl Forwarder<'_> {
     async fn run(
-        mut self,
+        self,
         mut node: watch::Receiver<Option<Arc<VirtualNode>>>,
         raw: watch::Receiver<Option<Instant>>,
     ) -> End {
@@ -519,37 +712,99 @@ impl Forwarder<'_> {
         let Some(node) = opened else {
             return std::future::pending().await;
         };
+        match self.forward(&node, raw).await {
+            Err(end) => end,
+            Ok(never) => match never {},
+        }
+    }
+
+    /// Forward frames from the client's node until the connection ends.
+    async fn forward(
+        &self,
+        node: &VirtualNode,
+        mut raw: watch::Receiver<Option<Instant>>,
+    ) -> Result<std::convert::Infallible, End> {
+        // Frames of the grace period, formatted, oldest first.
+        let mut held: VecDeque<String> = VecDeque::new();
+        let mut raw_open = true;
         loop {
-            let received = match node.recv().await {
-                Ok(received) => received,
-                Err(_) => return End::BusClosed,
+            let mode = Forwarding::of(&raw, Instant::now());
+            let grace_end = match mode {
+                Forwarding::Held { until } if !held.is_empty() => Some(until),
+                _ => None,
             };
-            // The node drains the bus in every mode; only raw mode forwards.
-            let forwarding = matches!(*raw.borrow(), Some(start) if Instant::now() >= start);
-            if !forwarding {
-                continue;
-            }
-            let text = protocol::format_frame(&received.frame, received.timestamp);
-            let counters = &self.shared.counters;
-            match self.out.try_send(text) {
-                Ok(()) => {
-                    counters.frames_to_clients.fetch_add(1, Ordering::Relaxed);
-                }
-                Err(mpsc::error::TrySendError::Full(_)) => {
-                    counters.frames_dropped.fetch_add(1, Ordering::Relaxed);
-                    self.dropped += 1;
-                    // Log the 1st, 16th, 256th, 4096th, … drop, not every frame.
-                    if self.dropped.is_power_of_two() && self.dropped.ilog2().is_multiple_of(4) {
-                        tracing::warn!(
-                            peer = %self.peer,
-                            dropped = self.dropped,
-                            "client is not reading; frames for it are dropped"
-                        );
+            tokio::select! {
+                received = node.recv() => {
+                    let Ok(received) = received else {
+                        return Err(End::BusClosed);
+                    };
+                    // The node drains the bus in every mode; only raw mode forwards.
+                    match Forwarding::of(&raw, Instant::now()) {
+                        Forwarding::Off => {}
+                        Forwarding::Held { .. } => {
+                            let text = protocol::format_frame(&received.frame, received.timestamp);
+                            if held.len() < self.shared.config.client_queue.max(1) {
+                                held.push_back(text);
+                            } else {
+                                self.dropped();
+                            }
+                        }
+                        Forwarding::On => {
+                            self.release(&mut held)?;
+                            let text = protocol::format_frame(&received.frame, received.timestamp);
+                            self.deliver(text)?;
+                        }
                     }
                 }
-                Err(mpsc::error::TrySendError::Closed(_)) => return End::ClientClosed,
+                () = tokio::time::sleep_until(grace_end.unwrap_or_else(Instant::now)), if grace_end.is_some() => {
+                    self.release(&mut held)?;
+                }
+                changed = raw.changed(), if raw_open => {
+                    if changed.is_err() {
+                        raw_open = false;
+                        continue;
+                    }
+                    match Forwarding::of(&raw, Instant::now()) {
+                        // `< bcmmode >`: what the raw socket had not delivered goes with it.
+                        Forwarding::Off => held.clear(),
+                        Forwarding::Held { .. } => {}
+                        // Ended early: by the client's next command or next connection.
+                        Forwarding::On => self.release(&mut held)?,
+                    }
+                }
             }
         }
+    }
+
+    /// Queue the frames held in the grace period, oldest first.
+    fn release(&self, held: &mut VecDeque<String>) -> Result<(), End> {
+        while let Some(text) = held.pop_front() {
+            self.deliver(text)?;
+        }
+        Ok(())
+    }
+
+    /// Queue one frame for the client; a full queue drops it, as a full SocketCAN receive
+    /// queue would.
+    fn deliver(&self, text: String) -> Result<(), End> {
+        match self.out.try_send(text) {
+            Ok(()) => {
+                let counters = &self.shared.counters;
+                counters.frames_to_clients.fetch_add(1, Ordering::Relaxed);
+                Ok(())
+            }
+            Err(mpsc::error::TrySendError::Full(_)) => {
+                self.dropped();
+                Ok(())
+            }
+            Err(mpsc::error::TrySendError::Closed(_)) => Err(End::ClientClosed),
+        }
+    }
+
+    fn dropped(&self) {
+        let counters = &self.shared.counters;
+        counters.frames_dropped.fetch_add(1, Ordering::Relaxed);
+        self.drops.frame_dropped(self.peer);
     }
 }
 
@@ -684,5 +939,217 @@ mod tests {
             assert!(Instant::now() < deadline, "no room after a client left");
             tokio::time::sleep(Duration::from_millis(20)).await;
         }
+    }
+
+    /// The handshake exactly as python-can 4.6.1 does it: each answer read with one `recv`
+    /// and compared whole, so an answer that arrives with anything after it fails.
+    async fn python_can_handshake(addr: &str) -> TcpStream {
+        async fn expect(stream: &mut TcpStream, answer: &str) {
+            let mut buf = [0u8; 256];
+            let n = timeout(WAIT, stream.read(&mut buf)).await.unwrap().unwrap();
+            assert_eq!(
+                String::from_utf8_lossy(&buf[..n]),
+                answer,
+                "one recv, compared whole"
+            );
+        }
+        let mut stream = TcpStream::connect(addr).await.unwrap();
+        expect(&mut stream, "< hi >").await;
+        stream.write_all(b"< open can0 >").await.unwrap();
+        expect(&mut stream, "< ok >").await;
+        stream.write_all(b"< rawmode >").await.unwrap();
+        expect(&mut stream, "< ok >").await;
+        stream
+    }
+
+    /// Send on a node, waiting while its small transmit queue is full.
+    async fn put(node: &VirtualNode, frame: CanFrame) {
+        let deadline = Instant::now() + WAIT;
+        loop {
+            match node.send(frame).await {
+                Ok(()) => return,
+                Err(BusError::TxQueueFull { .. }) if Instant::now() < deadline => {
+                    tokio::time::sleep(Duration::from_micros(200)).await;
+                }
+                Err(error) => panic!("send failed: {error}"),
+            }
+        }
+    }
+
+    /// The Piper's answer to a firmware query: its version string in 0x4AF frames.
+    const FIRMWARE_BURST: [&[u8]; 2] = [b"S-V1.8-2", b"\0\0\0\0\0\0\0\0"];
+
+    /// Issue 20 item 4, the connection sequence of piper_sdk 0.6.2 on Linux through
+    /// python-can: it opens a connection it only reads (R), then one it only sends on (S),
+    /// and sends the firmware query on S at once. R has sent nothing since its
+    /// `< rawmode >`, so the answer comes while R would still be in its grace period (here
+    /// 30 s, so that nothing but the end of the grace by S can deliver it in time). R must
+    /// get the answer, and its `< ok >` must still arrive alone, with the arm's feedback
+    /// running all the while.
+    #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+    async fn the_firmware_answer_reaches_the_connection_the_sdk_reads() {
+        let config = ServerConfig {
+            rawmode_grace: Duration::from_secs(30),
+            ..ServerConfig::default()
+        };
+        let (_server, emulator, addr) = server(config).await;
+        let arm = emulator.clone();
+        // The emulator: each firmware query answered at once, feedback every millisecond.
+        tokio::spawn(async move {
+            while let Ok(received) = emulator.recv().await {
+                if received.frame.raw_id() == 0x4AF {
+                    for chunk in FIRMWARE_BURST {
+                        put(&emulator, CanFrame::standard(0x4AF, chunk).unwrap()).await;
+                    }
+                }
+            }
+        });
+        let feedback = tokio::spawn(async move {
+            loop {
+                put(&arm, CanFrame::standard(0x2A1, &[0x11; 8]).unwrap()).await;
+                tokio::time::sleep(Duration::from_millis(1)).await;
+            }
+        });
+        let mut reader = python_can_handshake(&addr).await;
+        let mut sender = python_can_handshake(&addr).await;
+        sender
+            .write_all(b"< send 4AF 8 1 0 0 0 0 0 0 0 >")
+            .await
+            .unwrap();
+        let mut seen = String::new();
+        let mut buf = [0u8; 1024];
+        let wanted = ["532D56312E382D32", "0000000000000000"];
+        timeout(WAIT, async {
+            while !wanted.iter().all(|w| seen.contains(w)) {
+                let n = reader.read(&mut buf).await.unwrap();
+                assert!(n > 0, "closed; got {seen:?}");
+                seen.push_str(&String::from_utf8_lossy(&buf[..n]));
+            }
+        })
+        .await
+        .unwrap_or_else(|_| {
+            panic!(
+                "the firmware answer never reached the reader; got {} bytes",
+                seen.len()
+            )
+        });
+        feedback.abort();
+        // In order, and as 0x4AF frames.
+        let first = seen.find("< frame 4AF ").unwrap();
+        let version = seen.find("532D56312E382D32").unwrap();
+        let rest = seen.find("0000000000000000").unwrap();
+        assert!(first < version && version < rest, "{seen}");
+    }
+
+    /// Frames on the bus before `< rawmode >` are not delivered (socketcand opens its raw
+    /// socket there), but none after it is lost.
+    #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+    async fn frames_before_rawmode_are_not_delivered_and_none_after_it_is_lost() {
+        let (_server, emulator, addr) = server(ServerConfig::default()).await;
+        let mut stream = TcpStream::connect(&addr).await.unwrap();
+        stream.write_all(b"< open can0 >").await.unwrap();
+        let mut seen = String::new();
+        let mut buf = [0u8; 1024];
+        while seen.matches("< ok >").count() < 1 {
+            let n = timeout(WAIT, stream.read(&mut buf)).await.unwrap().unwrap();
+            seen.push_str(&String::from_utf8_lossy(&buf[..n]));
+        }
+        put(&emulator, CanFrame::standard(0x100, &[1]).unwrap()).await;
+        tokio::time::sleep(Duration::from_millis(50)).await;
+        stream.write_all(b"< rawmode >").await.unwrap();
+        // Right after `< rawmode >` (in its grace), and well after it.
+        tokio::time::sleep(Duration::from_millis(10)).await;
+        for i in 0..20u8 {
+            put(&emulator, CanFrame::standard(0x200, &[i]).unwrap()).await;
+            tokio::time::sleep(Duration::from_millis(10)).await;
+        }
+        timeout(WAIT, async {
+            while !seen.contains("< frame 200 ") || !seen.contains(" 13 >") {
+                let n = stream.read(&mut buf).await.unwrap();
+                assert!(n > 0, "closed; got {seen:?}");
+                seen.push_str(&String::from_utf8_lossy(&buf[..n]));
+            }
+        })
+        .await
+        .unwrap_or_else(|_| panic!("frames after rawmode missing; got {seen:?}"));
+        assert!(
+            !seen.contains("< frame 100 "),
+            "a frame from before rawmode: {seen}"
+        );
+        let payloads: Vec<String> = seen
+            .split("< frame 200 ")
+            .skip(1)
+            .map(|f| f.split(' ').nth(1).unwrap_or_default().to_owned())
+            .collect();
+        let expected: Vec<String> = (0..20u8).map(|i| format!("{i:02X}")).collect();
+        assert_eq!(payloads, expected, "{seen}");
+    }
+
+    /// The frames of a `send` sequence, numbered in their first two bytes.
+    fn numbered_sends(count: u16) -> String {
+        (0..count)
+            .map(|i| format!("< send 123 2 {:X} {:X} >", i & 0xFF, i >> 8))
+            .collect()
+    }
+
+    /// Receive `count` numbered 0x123 frames on `node`, in order, within [`WAIT`].
+    async fn expect_numbered(node: &VirtualNode, count: u16) {
+        for i in 0..count {
+            let frame = timeout(WAIT, async {
+                loop {
+                    let frame = node.recv().await.unwrap().frame;
+                    if frame.raw_id() == 0x123 {
+                        return frame;
+                    }
+                }
+            })
+            .await
+            .unwrap_or_else(|_| panic!("frame {i} of {count} never reached the bus"));
+            assert_eq!(
+                frame.data(),
+                [(i & 0xFF) as u8, (i >> 8) as u8],
+                "frame {i}"
+            );
+        }
+    }
+
+    /// D15: a send-and-exit tool writes its frames and closes at once. Every frame goes on
+    /// the bus, also more than the client's transmit queue holds.
+    #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+    async fn frames_sent_just_before_close_all_reach_the_bus() {
+        let (server, emulator, addr) = server(ServerConfig::default()).await;
+        for count in [5, 300] {
+            let mut stream = TcpStream::connect(&addr).await.unwrap();
+            let script = format!("< open can0 >{}", numbered_sends(count));
+            stream.write_all(script.as_bytes()).await.unwrap();
+            drop(stream);
+            expect_numbered(&emulator, count).await;
+        }
+        assert_eq!(server.stats().frames_from_clients, 305);
+    }
+
+    /// D15 when the client is in raw mode and reads nothing: its close is a reset (unread
+    /// data in its socket), and the server's writes fail before its reads end. What it sent
+    /// still reaches the bus.
+    #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+    async fn frames_sent_before_a_reset_all_reach_the_bus() {
+        let (_server, emulator, addr) = server(ServerConfig::default()).await;
+        let mut stream = python_can_handshake(&addr).await;
+        // Traffic the client never reads, past the grace period.
+        for i in 0..200u8 {
+            put(&emulator, CanFrame::standard(0x2A1, &[i]).unwrap()).await;
+            if i % 8 == 0 {
+                tokio::time::sleep(Duration::from_millis(2)).await;
+            }
+        }
+        tokio::time::sleep(Duration::from_millis(150)).await;
+        let count = 100;
+        stream
+            .write_all(numbered_sends(count).as_bytes())
+            .await
+            .unwrap();
+        // Unread data in its receive buffer: the kernel resets instead of closing cleanly.
+        drop(stream);
+        expect_numbered(&emulator, count).await;
     }
 }
