@@ -199,3 +199,79 @@ fn a_recording_stopped_by_a_signal_is_complete() {
         }
     }
 }
+
+/// Every file under `dir` (recursively) whose name is hidden and looks temporary.
+fn hidden_temporaries(dir: &Path) -> Vec<std::path::PathBuf> {
+    let mut found = Vec::new();
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return found;
+    };
+    for entry in entries.flatten() {
+        let path = entry.path();
+        if path.is_dir() {
+            found.extend(hidden_temporaries(&path));
+        } else if path
+            .file_name()
+            .and_then(|n| n.to_str())
+            .is_some_and(|n| n.starts_with('.') && n.contains(".tmp"))
+        {
+            found.push(path);
+        }
+    }
+    found
+}
+
+/// Wait (at most 60 s) for `child` to end.
+fn wait_for_exit(child: &mut Child, what: &str) -> ExitStatus {
+    for _ in 0..600 {
+        if let Some(status) = child.try_wait().expect("wait works") {
+            return status;
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    let _ = child.kill();
+    panic!("{what}: the process did not end within 60 s");
+}
+
+#[test]
+fn a_second_signal_quits_at_once_and_leaves_no_temporary_file() {
+    // The second signal comes while the first one's outputs are being finished: the spool
+    // files (in TMPDIR) and any output being written exist only under temporary names then.
+    for gap_ms in [2, 30, 150] {
+        let dir = tempfile::tempdir().unwrap();
+        let file = scenario(dir.path());
+        let out = dir.path().join("out");
+        let tmp = dir.path().join("tmp");
+        std::fs::create_dir(&tmp).unwrap();
+        let args: [&OsStr; 4] = [
+            "run".as_ref(),
+            "--out".as_ref(),
+            out.as_os_str(),
+            file.as_os_str(),
+        ];
+        let mut child = Command::new(ARMHIL)
+            .args(args)
+            .env("TMPDIR", &tmp)
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(Duration::from_millis(2000));
+        send(&child, "INT");
+        std::thread::sleep(Duration::from_millis(gap_ms));
+        send(&child, "INT");
+        let what = format!("a second SIGINT {gap_ms} ms after the first");
+        let status = wait_for_exit(&mut child, &what);
+        assert_eq!(status.code(), Some(130), "{what}");
+        let left: Vec<_> = std::fs::read_dir(&tmp)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .collect();
+        assert!(left.is_empty(), "{what}: spool files left behind: {left:?}");
+        let hidden = hidden_temporaries(&out);
+        assert!(
+            hidden.is_empty(),
+            "{what}: temporary outputs left: {hidden:?}"
+        );
+    }
+}

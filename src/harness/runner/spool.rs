@@ -4,15 +4,44 @@
 
 use std::fs::File;
 use std::io::{self, BufWriter};
-use std::sync::Arc;
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
 
 use bus::candump::CandumpWriter;
 use bus::pcap::PcapWriter;
 use bus::ReceivedFrame;
-use tempfile::{NamedTempFile, TempPath};
+use tempfile::TempPath;
 
 /// Interface name written in the candump log (`vcan0` so can-utils replays it as is).
 const LOG_IFACE: &str = "vcan0";
+
+/// Start of every spool file's name, so a file left by a killed process is recognisable.
+const SPOOL_PREFIX: &str = ".armhil-spool-";
+
+/// Every spool file this process created. The files are deleted when their [`TempPath`] is
+/// dropped, but a process that ends with `std::process::exit` (a second Ctrl-C) runs no
+/// destructors: [`Recording::remove_spool_files`] deletes them from this list instead.
+static SPOOL_FILES: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// A new spool file in the temporary folder, remembered in [`SPOOL_FILES`].
+fn spool_file(suffix: &str) -> io::Result<(File, TempPath)> {
+    let (file, path) = tempfile::Builder::new()
+        .prefix(SPOOL_PREFIX)
+        .suffix(suffix)
+        .tempfile()?
+        .into_parts();
+    let mut listed = SPOOL_FILES
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner());
+    // Forget the files already deleted now and then (amortised: at each power of two), so a
+    // process that runs thousands of scenarios keeps a short list.
+    if listed.len() >= 64 && listed.len().is_power_of_two() {
+        listed.retain(|listed| listed.exists());
+    }
+    listed.push(path.to_path_buf());
+    drop(listed);
+    Ok((file, path))
+}
 
 /// The recordings of one run, once finished: temporary files deleted when the last clone of
 /// the result is dropped.
@@ -26,6 +55,26 @@ pub struct Recording {
     pub error: Option<String>,
 }
 
+impl Recording {
+    /// Delete every spool file this process has created and not yet deleted, whichever run
+    /// it belongs to, for a process about to end without running destructors (a second
+    /// Ctrl-C quits with `std::process::exit`, which would leave them in the temporary
+    /// folder). Recordings still held become unreadable: call it only on the way out.
+    /// Returns how many files it deleted.
+    pub fn remove_spool_files() -> usize {
+        remove_listed(&SPOOL_FILES)
+    }
+}
+
+/// Delete the files in `list` and empty it; how many were deleted (some may be gone already).
+fn remove_listed(list: &Mutex<Vec<PathBuf>>) -> usize {
+    let paths = std::mem::take(&mut *list.lock().unwrap_or_else(|poisoned| poisoned.into_inner()));
+    paths
+        .iter()
+        .filter(|path| std::fs::remove_file(path).is_ok())
+        .count()
+}
+
 /// Recordings being written.
 pub(crate) struct Spool {
     candump: Option<(CandumpWriter<BufWriter<File>>, TempPath)>,
@@ -37,13 +86,13 @@ impl Spool {
     /// Open temporary files for the formats asked for.
     pub fn create(candump: bool, pcap: bool) -> io::Result<Self> {
         let candump = if candump {
-            let (file, path) = NamedTempFile::new()?.into_parts();
+            let (file, path) = spool_file(".log")?;
             Some((CandumpWriter::new(BufWriter::new(file), LOG_IFACE), path))
         } else {
             None
         };
         let pcap = if pcap {
-            let (file, path) = NamedTempFile::new()?.into_parts();
+            let (file, path) = spool_file(".pcap")?;
             Some((PcapWriter::new(BufWriter::new(file))?, path))
         } else {
             None
@@ -151,6 +200,32 @@ mod tests {
         drop(copy);
         assert!(!path.exists(), "temporary file left behind");
         assert!(recording_is_empty(&Spool::create(false, false).unwrap()));
+    }
+
+    #[test]
+    fn spool_files_can_be_removed_on_the_way_out() {
+        let mut spool = Spool::create(true, true).unwrap();
+        spool.write(&frame(1));
+        let candump = spool.candump.as_ref().unwrap().1.to_path_buf();
+        let pcap = spool.pcap.as_ref().unwrap().1.to_path_buf();
+        assert!(candump.exists() && pcap.exists());
+        let name = candump.file_name().unwrap().to_string_lossy().into_owned();
+        assert!(name.starts_with(SPOOL_PREFIX), "{name}");
+        let listed = SPOOL_FILES.lock().unwrap().clone();
+        assert!(
+            listed.contains(&candump) && listed.contains(&pcap),
+            "spool files are listed for removal on the way out"
+        );
+        // What a second Ctrl-C does before `process::exit` (no destructor runs then), on a
+        // list of this test's files only: other tests' spools run in this process too.
+        let mine = Mutex::new(vec![candump.clone(), pcap.clone()]);
+        assert_eq!(remove_listed(&mine), 2);
+        assert!(
+            !candump.exists() && !pcap.exists(),
+            "spool files left behind"
+        );
+        assert!(mine.lock().unwrap().is_empty());
+        drop(spool);
     }
 
     fn recording_is_empty(spool: &Spool) -> bool {
