@@ -6,6 +6,9 @@
 //! - [`realman`]: the Realman arm controller (JSON over TCP, realtime push over UDP).
 //! - [`realtime`]: timing figures a real-time emulator keeps (frame periods, overruns).
 //! - [`robstride`]: RobStride quasi-direct-drive actuators (CAN, 29-bit IDs).
+//! - [`state_file`]: what the emulators' state files share (kind and format header, atomic
+//!   write).
+//! - [`supervise`]: an emulator task's panic or failure, made observable ([`supervise::DeathWatch`]).
 
 pub mod cpu_budget;
 pub mod physics;
@@ -13,3 +16,5 @@ pub mod piper;
 pub mod realman;
 pub mod realtime;
 pub mod robstride;
+pub mod state_file;
+pub mod supervise;

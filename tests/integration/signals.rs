@@ -275,3 +275,134 @@ fn a_second_signal_quits_at_once_and_leaves_no_temporary_file() {
         );
     }
 }
+
+/// `armhil sim ARGS` with its stderr in a file; the process and that file.
+fn sim_logging_to(dir: &Path, args: &[&OsStr]) -> (Child, std::path::PathBuf) {
+    let log = dir.join("stderr.txt");
+    let child = Command::new(ARMHIL)
+        .arg("sim")
+        .args(args)
+        .stdout(Stdio::null())
+        .stderr(std::fs::File::create(&log).unwrap())
+        .spawn()
+        .unwrap();
+    (child, log)
+}
+
+/// Connect to `addr` within 20 s (the emulator is up), unless `child` exits first.
+fn connect(addr: &str, child: &mut Child) -> std::net::TcpStream {
+    for _ in 0..400 {
+        if let Ok(stream) = std::net::TcpStream::connect(addr) {
+            return stream;
+        }
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "the emulator exited before listening"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    panic!("nothing listens on {addr}");
+}
+
+#[test]
+fn a_state_file_that_cannot_be_written_makes_the_emulator_exit_non_zero_naming_it() {
+    use std::io::{Read, Write};
+
+    // Piper: the file is written when a parameter changes; its folder does not exist. The
+    // emulator must stop serving and exit non-zero at once, not serve a dead bus.
+    let dir = tempfile::tempdir().unwrap();
+    let state = dir.path().join("removed").join("piper-flash.json");
+    let addr = format!("127.0.0.1:{}", super::support::free_port());
+    let args = [
+        "piper".as_ref(),
+        "--socketcand".as_ref(),
+        addr.as_ref(),
+        "--state-file".as_ref(),
+        state.as_os_str(),
+    ];
+    let (mut child, log) = sim_logging_to(dir.path(), &args);
+    let mut stream = connect(&addr, &mut child);
+    stream
+        .set_read_timeout(Some(Duration::from_secs(5)))
+        .unwrap();
+    let mut hello = [0u8; 6];
+    stream.read_exact(&mut hello).unwrap();
+    assert_eq!(&hello, b"< hi >");
+    // 0x47A: collision levels, kept in flash.
+    stream
+        .write_all(b"< open can0 >< send 47A 8 03 03 03 03 03 03 00 00 >")
+        .unwrap();
+    let status = wait_for_exit(&mut child, "Piper with an unwritable state file");
+    let stderr = std::fs::read_to_string(&log).unwrap();
+    assert_eq!(status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("piper-flash.json"), "{stderr}");
+
+    // Realman: the file is written at exit (D19: this exited 0).
+    let dir = tempfile::tempdir().unwrap();
+    let state = dir.path().join("removed").join("realman-settings.json");
+    let port = super::support::free_port().to_string();
+    let args = [
+        "realman".as_ref(),
+        "--port".as_ref(),
+        port.as_ref(),
+        "--state-file".as_ref(),
+        state.as_os_str(),
+    ];
+    let (mut child, log) = sim_logging_to(dir.path(), &args);
+    drop(connect(&format!("127.0.0.1:{port}"), &mut child));
+    send(&child, "INT");
+    let status = wait_for_exit(&mut child, "Realman with an unwritable state file");
+    let stderr = std::fs::read_to_string(&log).unwrap();
+    assert_eq!(status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("realman-settings.json"), "{stderr}");
+}
+
+#[test]
+fn a_state_file_the_commands_would_refuse_is_refused_at_start_naming_file_and_field() {
+    let dir = tempfile::tempdir().unwrap();
+    // D4: min above max on joint 3 panicked the Piper's core at the first move.
+    let flash = serde_json::json!({
+        "min_angle_ddeg": [-1500, 0, 100, -890, -890, -1800],
+        "max_angle_ddeg": [1500, 1800, 0, 890, 890, 1800],
+    });
+    let piper = dir.path().join("piper.json");
+    std::fs::write(
+        &piper,
+        serde_json::json!({"kind": "piper", "format": 1, "flash": flash}).to_string(),
+    )
+    .unwrap();
+    let addr = format!("127.0.0.1:{}", super::support::free_port());
+    let args = [
+        "piper".as_ref(),
+        "--socketcand".as_ref(),
+        addr.as_ref(),
+        "--state-file".as_ref(),
+        piper.as_os_str(),
+    ];
+    let (mut child, log) = sim_logging_to(dir.path(), &args);
+    let status = wait_for_exit(&mut child, "Piper with min above max");
+    let stderr = std::fs::read_to_string(&log).unwrap();
+    assert_eq!(status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("piper.json") && stderr.contains("flash.min_angle_ddeg[2]"),
+        "{stderr}"
+    );
+
+    // D16: the Piper's file given to the Realman emulator.
+    let port = super::support::free_port().to_string();
+    let args = [
+        "realman".as_ref(),
+        "--port".as_ref(),
+        port.as_ref(),
+        "--state-file".as_ref(),
+        piper.as_os_str(),
+    ];
+    let (mut child, log) = sim_logging_to(dir.path(), &args);
+    let status = wait_for_exit(&mut child, "Realman given a Piper file");
+    let stderr = std::fs::read_to_string(&log).unwrap();
+    assert_eq!(status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("piper.json") && stderr.contains("`kind`"),
+        "{stderr}"
+    );
+}

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use super::flash::{Flash, FlashError};
 use super::profile::FirmwareProfile;
 use crate::physics::PhysicsError;
+use crate::state_file::InvalidField;
 
 /// The project's Piper URDF, compiled in so the emulator works from any working directory.
 pub const BUNDLED_URDF: &str =
@@ -66,9 +67,12 @@ pub enum PiperError {
     /// The URDF could not be loaded or the world not built.
     #[error(transparent)]
     Physics(#[from] PhysicsError),
-    /// The state file could not be read.
+    /// The state file could not be read, or holds a value the firmware's commands refuse.
     #[error(transparent)]
     Flash(#[from] FlashError),
+    /// [`PiperConfig::flash`] holds a value the firmware's commands refuse.
+    #[error("PiperConfig::flash: {0}")]
+    InvalidFlash(InvalidField),
     /// The URDF lacks a joint the Piper needs (`joint1`…`joint8`).
     #[error("URDF has no joint named {name}")]
     MissingJoint {

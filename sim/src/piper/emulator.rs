@@ -29,6 +29,7 @@ use super::state::PiperSimState;
 use crate::cpu_budget::CpuBudget;
 use crate::physics::{ObstacleId, ObstacleShape};
 use crate::realtime::{RealtimeCounters, RealtimeStats};
+use crate::supervise::{DeathWatch, Supervisor};
 
 /// Wait between two attempts to queue a frame on a full transmit queue (about one frame time
 /// at 1 Mbit/s).
@@ -55,6 +56,7 @@ pub struct PiperHandle {
     counters: Arc<Mutex<RealtimeCounters>>,
     stop: watch::Sender<bool>,
     tasks: Vec<JoinHandle<()>>,
+    death: DeathWatch,
 }
 
 impl std::fmt::Debug for Firmware {
@@ -127,10 +129,12 @@ impl PiperEmulator {
         let (in_tx, mut in_rx) = mpsc::unbounded_channel::<CanFrame>();
         let (out_tx, mut out_rx) = mpsc::unbounded_channel::<CanFrame>();
         let (stop, stop_rx) = watch::channel(false);
+        // A task that panics or gives up is reported, not left dead behind an open bus.
+        let (supervisor, death) = Supervisor::new();
 
         let rx_bus = Arc::clone(&bus);
         let mut rx_stop = stop_rx.clone();
-        let receiver = runtime.spawn(async move {
+        let receiver = supervisor.spawn(&runtime, "Piper receiver", async move {
             loop {
                 tokio::select! {
                     biased;
@@ -149,12 +153,13 @@ impl PiperEmulator {
                     _ = rx_stop.changed() => break,
                 }
             }
+            Ok(())
         });
 
         let tick_core = Arc::clone(&core);
         let tick_counters = Arc::clone(&counters);
         let mut tick_stop = stop_rx.clone();
-        let ticker = runtime.spawn(async move {
+        let ticker = supervisor.spawn(&runtime, "Piper core", async move {
             let per_wake = u64::from(ticks_per_wake);
             let mut clock = interval(Duration::from_secs_f64(STEP_S * per_wake as f64));
             // The interval only paces the wake-ups; how many steps run comes from the clock
@@ -194,6 +199,11 @@ impl PiperEmulator {
                         }
                     }
                     fw.drain_output_into(&mut produced);
+                    // Parameters a client changed could not be kept: stop serving rather
+                    // than let the client believe they were stored.
+                    if let Some(e) = fw.take_save_error() {
+                        return Err(e.to_string());
+                    }
                 }
                 budget.observe(plan.run, woke.elapsed());
                 {
@@ -224,16 +234,19 @@ impl PiperEmulator {
                 }
                 for frame in produced.drain(..) {
                     if out_tx.send(frame).is_err() {
-                        return;
+                        // The transmitter ended: on a stop, or because the bus was closed (the
+                        // owner of the bus closing it first is a way to stop, not a failure).
+                        return Ok(());
                     }
                 }
             }
+            Ok(())
         });
 
         let tx_bus = bus;
         let tx_counters = Arc::clone(&counters);
         let mut tx_stop = stop_rx;
-        let transmitter = runtime.spawn(async move {
+        let transmitter = supervisor.spawn(&runtime, "Piper transmitter", async move {
             let mut dropped: u64 = 0;
             loop {
                 let frame = tokio::select! {
@@ -251,7 +264,7 @@ impl PiperEmulator {
                             lock(&tx_counters).record_frame(frame.raw_id(), Instant::now());
                             break;
                         }
-                        Err(BusError::Closed) => return,
+                        Err(BusError::Closed) => return Ok(()),
                         Err(e) => {
                             attempts += 1;
                             if attempts >= TX_RETRIES {
@@ -266,6 +279,7 @@ impl PiperEmulator {
                     }
                 }
             }
+            Ok(())
         });
 
         Ok(PiperHandle {
@@ -273,6 +287,7 @@ impl PiperEmulator {
             counters,
             stop,
             tasks: vec![receiver, ticker, transmitter],
+            death,
         })
     }
 }
@@ -317,6 +332,13 @@ impl PiperHandle {
             core: Arc::clone(&self.core),
             counters: Arc::clone(&self.counters),
         }
+    }
+
+    /// A watch that tells when the emulator stops serving on its own: a task panicked, or the
+    /// state file could not be written. `armhil sim` exits non-zero on it instead of keeping
+    /// a dead bus open.
+    pub fn death_watch(&self) -> DeathWatch {
+        self.death.clone()
     }
 
     /// Stop the emulator and wait for its tasks. It sends nothing afterwards.
@@ -438,5 +460,70 @@ mod catch_up_tests {
         let last_live = live_out.iter().rev().find(|f| f.raw_id() == 0x2A5);
         let last_late = late_out.iter().rev().find(|f| f.raw_id() == 0x2A5);
         assert_eq!(last_live, last_late);
+    }
+}
+
+#[cfg(test)]
+mod death_tests {
+    use bus::virtual_bus::{VirtualBus, VirtualBusConfig};
+
+    use super::super::PiperConfig;
+    use super::*;
+    use crate::supervise::EmulatorDied;
+
+    #[tokio::test(start_paused = true)]
+    async fn a_state_file_that_cannot_be_written_stops_the_emulator_and_names_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        // D19: the folder is gone by the time a parameter changes.
+        let path = dir.path().join("removed").join("piper.json");
+        let bus = VirtualBus::new(VirtualBusConfig::default());
+        let host = bus.attach("host");
+        let config = PiperConfig {
+            state_file: Some(path),
+            ..PiperConfig::default()
+        };
+        let emu = PiperEmulator::spawn(Arc::new(bus.attach("piper")), config).unwrap();
+        let mut watch = emu.death_watch();
+        tokio::time::sleep(Duration::from_millis(20)).await;
+        assert_eq!(watch.now(), None, "a running emulator is not dead");
+        // 0x47A: collision levels, kept in flash, so the file is written.
+        let levels = CanFrame::standard(0x47A, &[3, 3, 3, 3, 3, 3, 0, 0]).unwrap();
+        host.send(levels).await.unwrap();
+        let died = tokio::time::timeout(Duration::from_secs(1), watch.died())
+            .await
+            .expect("the failed write stops the emulator");
+        assert!(
+            matches!(&died, EmulatorDied::Failed { message, .. } if message.contains("piper.json")),
+            "{died:?}"
+        );
+        emu.shutdown().await;
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn a_clean_shutdown_is_not_a_death() {
+        let bus = VirtualBus::new(VirtualBusConfig::default());
+        let emu =
+            PiperEmulator::spawn(Arc::new(bus.attach("piper")), PiperConfig::default()).unwrap();
+        let watch = emu.death_watch();
+        tokio::time::sleep(Duration::from_millis(20)).await;
+        emu.shutdown().await;
+        assert_eq!(watch.now(), None);
+    }
+
+    #[test]
+    fn a_configured_flash_with_min_above_max_is_refused_at_boot() {
+        let mut flash = super::super::Flash::default();
+        flash.min_angle_ddeg[1] = 500;
+        flash.max_angle_ddeg[1] = 400;
+        let config = PiperConfig {
+            flash: Some(flash),
+            ..PiperConfig::default()
+        };
+        match Firmware::new(config) {
+            Err(e @ super::super::PiperError::InvalidFlash(_)) => {
+                assert!(e.to_string().contains("min_angle_ddeg[1]"), "{e}");
+            }
+            other => panic!("expected a refusal, got {:?}", other.map(|_| ())),
+        }
     }
 }

@@ -2,12 +2,12 @@
 //! state file that holds them, written atomically (temporary file in the same directory, then
 //! rename).
 
-use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
 use super::facts::{DhRow, ModelFacts};
+use crate::state_file::{self, InvalidField};
 
 /// Default end-effector limits restored by `set_arm_init` (docs/protocols/realman.md §8).
 pub const INIT_LINE_SPEED_M_S: f64 = 0.25;
@@ -20,6 +20,7 @@ pub const INIT_ANGULAR_ACC_RAD_S2: f64 = 4.0;
 
 /// A named frame (tool or work) with its pose relative to the flange / base.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Frame {
     /// Frame name.
     pub name: String,
@@ -47,6 +48,7 @@ impl Frame {
 
 /// Optional blocks of the UDP push (`custom` of `set_realtime_push`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct PushCustom {
     /// `joint_status.joint_speed`.
     pub joint_speed: bool,
@@ -105,6 +107,7 @@ impl PushCustom {
 
 /// UDP realtime push configuration (docs/protocols/realman.md §11).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct PushConfig {
     /// Period in units of 5 ms.
     pub cycle: u32,
@@ -135,6 +138,7 @@ impl Default for PushConfig {
 
 /// Every setting the controller keeps.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Params {
     /// End-effector max line speed, m/s.
     pub line_speed_m_s: f64,
@@ -201,105 +205,275 @@ impl Params {
             joints_deg: None,
         }
     }
-
-    /// Whether the per-joint vectors match the model (a state file from another model does not).
-    pub fn fits(&self, dof: usize) -> bool {
-        [
-            self.min_deg.len(),
-            self.max_deg.len(),
-            self.max_speed_deg_s.len(),
-            self.max_acc_deg_s2.len(),
-            self.zero_offset_deg.len(),
-            self.dh.len(),
-        ]
-        .iter()
-        .all(|n| *n == dof)
-            && self.current_tool < self.tool_frames.len()
-            && self.current_work < self.work_frames.len()
-    }
 }
 
-/// Why the state file could not be read or written.
-#[derive(Debug, thiserror::Error)]
-pub enum StateFileError {
-    /// Reading or writing failed.
-    #[error("state file {path}: {source}")]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// The I/O error.
-        #[source]
-        source: std::io::Error,
-    },
-    /// The file is not a Realman state file.
-    #[error("state file {path}: line {line}, column {column}: {message}")]
-    Format {
-        /// The file.
-        path: PathBuf,
-        /// 1-based line.
-        line: usize,
-        /// 1-based column.
-        column: usize,
-        /// What is wrong.
-        message: String,
-    },
-    /// The file was saved for an arm with another number of joints.
-    #[error("state file {path} is for another arm model (expected {dof} joints)")]
-    WrongModel {
-        /// The file.
-        path: PathBuf,
-        /// Joints of the running model.
-        dof: usize,
-    },
-}
+/// Why the state file could not be read, checked or written (it names the file and field).
+pub type StateFileError = crate::state_file::StateFileError;
 
-/// Load the settings; a missing file gives `None` (factory settings apply).
-pub fn load(path: &Path, dof: usize) -> Result<Option<Params>, StateFileError> {
-    let text = match std::fs::read_to_string(path) {
-        Ok(text) => text,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-        Err(source) => {
-            return Err(StateFileError::Io {
-                path: path.into(),
-                source,
-            })
+/// The value of `kind` in a Realman state file.
+pub const STATE_FILE_KIND: &str = "realman";
+
+/// What the controller's set commands accept, shared by the commands and the state-file check
+/// so the two can never disagree (a file can only hold what a command could have stored).
+pub mod rules {
+    use std::net::Ipv4Addr;
+    use std::ops::RangeInclusive;
+
+    /// `set_collision_stage` stages.
+    pub const COLLISION_STAGES: RangeInclusive<u8> = 0..=8;
+    /// `set_realtime_push` cycles, units of 5 ms.
+    pub const PUSH_CYCLES: RangeInclusive<u32> = 1..=100;
+    /// Most tool frames the controller stores (`set_manual_tool_frame`).
+    pub const MAX_TOOL_FRAMES: usize = 10;
+
+    /// Why a joint's lower/upper limit pair (degrees) is refused by `set_joint_min_pos` /
+    /// `set_joint_max_pos`, if it is: the lower limit must stay below the upper.
+    pub fn joint_limits(min_deg: f64, max_deg: f64) -> Result<(), String> {
+        if min_deg < max_deg {
+            Ok(())
+        } else {
+            Err(format!(
+                "lower limit {min_deg}° is not below upper limit {max_deg}°"
+            ))
         }
-    };
-    let params: Params = serde_json::from_str(&text).map_err(|e| StateFileError::Format {
-        path: path.into(),
-        line: e.line(),
-        column: e.column(),
-        message: e.to_string(),
-    })?;
-    if !params.fits(dof) {
-        return Err(StateFileError::WrongModel {
-            path: path.into(),
-            dof,
-        });
     }
-    Ok(Some(params))
+
+    /// Whether a speed or acceleration limit is accepted (positive).
+    pub fn positive_limit(value: f64) -> bool {
+        value > 0.0 && value.is_finite()
+    }
+
+    /// Whether a UDP port is accepted as the push's destination (not 0).
+    pub fn push_port(port: u16) -> bool {
+        port > 0
+    }
+
+    /// Whether `ip` is accepted as the push's destination: empty (every connected client) or
+    /// an IPv4 address.
+    pub fn push_ip(ip: &str) -> bool {
+        ip.is_empty() || ip.parse::<Ipv4Addr>().is_ok()
+    }
+
+    /// Whether a frame name is accepted (1 to 10 bytes).
+    pub fn frame_name(name: &str) -> bool {
+        !name.is_empty() && name.len() <= 10
+    }
 }
 
-/// Write the settings atomically: a temporary file beside the target, synced, then renamed
-/// over it, so a crash never leaves a half-written file.
+impl Params {
+    /// Check every setting against what the commands would have stored for an arm with
+    /// `dof` joints ([`rules`]); fields are named as in the state file (`params.min_deg[2]`).
+    pub fn validate(&self, dof: usize) -> Result<(), InvalidField> {
+        let bad = |field: String, problem: String| Err(InvalidField::new(field, problem));
+        for (name, len) in [
+            ("min_deg", self.min_deg.len()),
+            ("max_deg", self.max_deg.len()),
+            ("max_speed_deg_s", self.max_speed_deg_s.len()),
+            ("max_acc_deg_s2", self.max_acc_deg_s2.len()),
+            ("zero_offset_deg", self.zero_offset_deg.len()),
+            ("dh", self.dh.len()),
+        ] {
+            if len != dof {
+                return bad(
+                    format!("params.{name}"),
+                    format!("{len} joints, this arm model has {dof} (a file of another model?)"),
+                );
+            }
+        }
+        if let Some(joints) = &self.joints_deg {
+            if joints.len() != dof {
+                return bad(
+                    "params.joints_deg".into(),
+                    format!("{} joints, this arm model has {dof}", joints.len()),
+                );
+            }
+        }
+        for j in 0..dof {
+            rules::joint_limits(self.min_deg[j], self.max_deg[j])
+                .or_else(|problem| bad(format!("params.min_deg[{j}]"), problem))?;
+            for (name, value) in [
+                ("max_speed_deg_s", self.max_speed_deg_s[j]),
+                ("max_acc_deg_s2", self.max_acc_deg_s2[j]),
+            ] {
+                if !rules::positive_limit(value) {
+                    return bad(
+                        format!("params.{name}[{j}]"),
+                        format!("{value} is not positive"),
+                    );
+                }
+            }
+        }
+        for (name, value) in [
+            ("line_speed_m_s", self.line_speed_m_s),
+            ("line_acc_m_s2", self.line_acc_m_s2),
+            ("angular_speed_rad_s", self.angular_speed_rad_s),
+            ("angular_acc_rad_s2", self.angular_acc_rad_s2),
+        ] {
+            if !rules::positive_limit(value) {
+                return bad(format!("params.{name}"), format!("{value} is not positive"));
+            }
+        }
+        if !rules::COLLISION_STAGES.contains(&self.collision_stage) {
+            return bad(
+                "params.collision_stage".into(),
+                format!("{} is outside 0..=8", self.collision_stage),
+            );
+        }
+        for (name, frames, current, most) in [
+            (
+                "tool_frames",
+                &self.tool_frames,
+                self.current_tool,
+                rules::MAX_TOOL_FRAMES,
+            ),
+            (
+                "work_frames",
+                &self.work_frames,
+                self.current_work,
+                usize::MAX,
+            ),
+        ] {
+            if frames.is_empty() || frames.len() > most {
+                return bad(
+                    format!("params.{name}"),
+                    format!("{} frames (1 to {most})", frames.len()),
+                );
+            }
+            if let Some((i, f)) = frames
+                .iter()
+                .enumerate()
+                .find(|(_, f)| !rules::frame_name(&f.name))
+            {
+                return bad(
+                    format!("params.{name}[{i}].name"),
+                    format!("{:?} is not 1 to 10 bytes", f.name),
+                );
+            }
+            if current >= frames.len() {
+                let which = if name == "tool_frames" {
+                    "current_tool"
+                } else {
+                    "current_work"
+                };
+                return bad(
+                    format!("params.{which}"),
+                    format!("{current} is not one of the {} frames", frames.len()),
+                );
+            }
+        }
+        let push = &self.push;
+        if !rules::PUSH_CYCLES.contains(&push.cycle) {
+            return bad(
+                "params.push.cycle".into(),
+                format!("{} is outside 1..=100", push.cycle),
+            );
+        }
+        if !rules::push_port(push.port) {
+            return bad("params.push.port".into(), "0 is not a port".into());
+        }
+        if !rules::push_ip(&push.ip) {
+            return bad(
+                "params.push.ip".into(),
+                format!("{:?} is neither empty nor an IPv4 address", push.ip),
+            );
+        }
+        Ok(())
+    }
+}
+
+/// The layout on disk: the header, then the settings.
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Document {
+    kind: String,
+    format: u32,
+    params: Params,
+}
+
+/// Load the settings for an arm with `dof` joints, checking the header (`kind` realman,
+/// `format`) and every value ([`Params::validate`]); a missing file gives `None` (factory
+/// settings apply).
+pub fn load(path: &Path, dof: usize) -> Result<Option<Params>, StateFileError> {
+    let Some(document) = state_file::load::<Document>(path, STATE_FILE_KIND)? else {
+        return Ok(None);
+    };
+    document
+        .params
+        .validate(dof)
+        .map_err(|invalid| StateFileError::invalid(path, invalid))?;
+    Ok(Some(document.params))
+}
+
+/// Write the settings so that the file is always complete (see [`state_file::save`]).
 pub fn save(path: &Path, params: &Params) -> Result<(), StateFileError> {
-    let io = |source| StateFileError::Io {
-        path: path.into(),
-        source,
-    };
-    let text = serde_json::to_string_pretty(params).map_err(|e| StateFileError::Format {
-        path: path.into(),
-        line: e.line(),
-        column: e.column(),
-        message: e.to_string(),
-    })?;
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let mut tmp = tempfile::NamedTempFile::new_in(dir).map_err(io)?;
-    tmp.write_all(text.as_bytes()).map_err(io)?;
-    tmp.as_file().sync_all().map_err(io)?;
-    tmp.persist(path).map_err(|e| io(e.error))?;
-    Ok(())
+    state_file::save(
+        path,
+        &Document {
+            kind: STATE_FILE_KIND.to_owned(),
+            format: state_file::FORMAT,
+            params: params.clone(),
+        },
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::realman::model::ArmModel;
+
+    fn factory() -> Params {
+        Params::factory(&ModelFacts::of(&ArmModel::rm65b()))
+    }
+
+    #[test]
+    fn saved_settings_read_back() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("realman.json");
+        let mut params = factory();
+        params.line_speed_m_s = 0.4;
+        save(&path, &params).unwrap();
+        assert_eq!(load(&path, 6).unwrap(), Some(params));
+    }
+
+    #[test]
+    fn settings_no_command_would_store_are_refused_naming_the_file_and_field() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("realman.json");
+        let refused = |tune: &dyn Fn(&mut Params), dof: usize| {
+            let mut params = factory();
+            tune(&mut params);
+            save(&path, &params).unwrap();
+            let err = load(&path, dof).unwrap_err().to_string();
+            assert!(err.contains("realman.json"), "{err}");
+            err
+        };
+        // D4: min above max panicked the core at the first move.
+        let err = refused(&|p| p.min_deg[1] = p.max_deg[1] + 10.0, 6);
+        assert!(err.contains("params.min_deg[1]"), "{err}");
+        let err = refused(&|p| p.max_speed_deg_s[0] = 0.0, 6);
+        assert!(err.contains("params.max_speed_deg_s[0]"), "{err}");
+        let err = refused(&|p| p.collision_stage = 9, 6);
+        assert!(err.contains("params.collision_stage"), "{err}");
+        let err = refused(&|p| p.push.cycle = 0, 6);
+        assert!(err.contains("params.push.cycle"), "{err}");
+        let err = refused(&|p| p.push.ip = "attacker.example".into(), 6);
+        assert!(err.contains("params.push.ip"), "{err}");
+        let err = refused(&|p| p.current_tool = 3, 6);
+        assert!(err.contains("params.current_tool"), "{err}");
+        // A file of a 6-joint arm given to a 7-joint one.
+        let err = refused(&|_| {}, 7);
+        assert!(err.contains("params.min_deg") && err.contains("7"), "{err}");
+    }
+
+    #[test]
+    fn a_piper_file_is_refused_by_its_kind() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("piper.json");
+        crate::piper::Flash::default().save(&path).unwrap();
+        let err = load(&path, 6).unwrap_err().to_string();
+        assert!(
+            err.contains("piper.json") && err.contains("`kind`") && err.contains("\"piper\""),
+            "{err}"
+        );
+    }
 }

@@ -37,7 +37,9 @@ use super::controller::{
 };
 use super::faults::{FaultError, RealmanFault, RealmanFaultKind};
 use super::framing::{Splitter, Unit, MAX_REQUEST_BYTES};
+use super::params::StateFileError;
 use super::push::{Datagram, PushFaults, PushSink, PushStats};
+use crate::supervise::{DeathWatch, Supervisor};
 use bus::socketcand::http_guard::HttpGuard;
 
 /// Default most simultaneous connections.
@@ -337,6 +339,7 @@ pub struct RealmanHandle {
     stop: watch::Sender<bool>,
     tasks: Vec<JoinHandle<()>>,
     state_file: bool,
+    death: DeathWatch,
 }
 
 impl std::fmt::Debug for RealmanHandle {
@@ -395,7 +398,13 @@ impl RealmanEmulator {
             }
         };
         let ticks = u64::from(config.ticks_per_wake.clamp(1, 10));
-        tasks.push(runtime.spawn(core_loop(Arc::clone(&shared), sink, ticks)));
+        // A panic in the core is reported on the death watch, not left behind an open port.
+        let (supervisor, death) = Supervisor::new();
+        let core = core_loop(Arc::clone(&shared), sink, ticks);
+        tasks.push(supervisor.spawn(&runtime, "Realman core", async move {
+            core.await;
+            Ok(())
+        }));
         Ok(RealmanHandle {
             shared,
             local_addr,
@@ -403,6 +412,7 @@ impl RealmanEmulator {
             stop,
             tasks,
             state_file,
+            death,
         })
     }
 }
@@ -472,18 +482,31 @@ impl RealmanHandle {
         *lock(&self.shared.stats)
     }
 
+    /// A watch that tells when the emulator stops serving on its own (its core task
+    /// panicked); `armhil sim` exits non-zero on it.
+    pub fn death_watch(&self) -> DeathWatch {
+        self.death.clone()
+    }
+
     /// Stop serving (closing every connection), save the state file if one is configured,
-    /// and wait for the tasks.
-    pub async fn shutdown(mut self) {
+    /// and wait for the tasks. A state file that cannot be written is logged; see
+    /// [`RealmanHandle::shutdown_and_save`] to get the error.
+    pub async fn shutdown(self) {
+        if let Err(e) = self.shutdown_and_save().await {
+            tracing::warn!(error = %e, "Realman emulator cannot save its state file");
+        }
+    }
+
+    /// [`RealmanHandle::shutdown`], returning why the state file could not be written.
+    pub async fn shutdown_and_save(mut self) -> Result<(), StateFileError> {
         let _ = self.stop.send(true);
         for task in self.tasks.drain(..) {
             let _ = task.await;
         }
         if self.state_file {
-            if let Err(e) = lock(&self.shared.core).save_state() {
-                tracing::warn!(error = %e, "Realman emulator cannot save its state file");
-            }
+            lock(&self.shared.core).save_state()?;
         }
+        Ok(())
     }
 }
 

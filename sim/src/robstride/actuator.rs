@@ -17,6 +17,7 @@ use crate::robstride::faults::{self, Fault, Phase, WARNING_OVER_TEMP};
 use crate::robstride::model::{Model, ModelSpec, RangeTable, Ranges};
 use crate::robstride::params::{self, index, Access, ParamStore};
 use crate::robstride::rig::{Load, Plant, RigPlant, WorldPlant};
+use crate::state_file::InvalidField;
 
 /// Host ID the manuals use and the motor assumes until a host speaks.
 pub const DEFAULT_HOST_ID: u8 = 0xFD;
@@ -148,6 +149,7 @@ impl MotorConfig {
 
 /// What survives an emulator restart (written to the state file).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct PersistedMotor {
     /// CAN ID (type 7 takes effect at once and is kept).
     pub can_id: u8,
@@ -161,6 +163,43 @@ pub struct PersistedMotor {
     pub baud_code: u8,
     /// Protocol for the next power-on (0 private, 1 CANopen, 2 MIT).
     pub protocol: u8,
+}
+
+impl PersistedMotor {
+    /// Check every value with the rules the commands that store it apply (type 7 for the
+    /// CAN ID, 22/23/25 for baud and protocol, any command for the host ID). Saved parameters
+    /// are applied at power-on as a type-18 write would apply them (clamped to their range).
+    /// The error names the field under `prefix` (`motors.<uid>`).
+    pub fn validate(&self, prefix: &str) -> Result<(), InvalidField> {
+        let refuse = |field: &str, problem: String| {
+            Err(InvalidField::new(format!("{prefix}.{field}"), problem))
+        };
+        if !can_id_accepted(self.can_id) {
+            return refuse(
+                "can_id",
+                format!("{} is outside 1..={MAX_CAN_ID}", self.can_id),
+            );
+        }
+        if !host_id_accepted(self.master_id) {
+            return refuse("master_id", "0 is not a host ID".to_owned());
+        }
+        if baud_code_bps(self.baud_code).is_none() {
+            return refuse(
+                "baud_code",
+                format!("{} is not a baud code (1–4)", self.baud_code),
+            );
+        }
+        if !protocol_accepted(self.protocol) {
+            return refuse(
+                "protocol",
+                format!("{} is not a protocol (0–2)", self.protocol),
+            );
+        }
+        if !self.zero_offset_rad.is_finite() {
+            return refuse("zero_offset_rad", "not a finite angle".to_owned());
+        }
+        Ok(())
+    }
 }
 
 /// A point-in-time view of one actuator for the harness.
@@ -229,6 +268,21 @@ fn make_plant(config: &MotorConfig, spec: &ModelSpec) -> Box<dyn Plant> {
             }
         },
     }
+}
+
+/// Whether a type-7 command may give a motor this CAN ID (0 and above 127 are invalid).
+fn can_id_accepted(can_id: u8) -> bool {
+    (1..=MAX_CAN_ID).contains(&can_id)
+}
+
+/// Whether a type-25 command may select this protocol (0 private, 1 CANopen, 2 MIT).
+fn protocol_accepted(protocol: u8) -> bool {
+    protocol <= 2
+}
+
+/// Whether a host ID is one replies can go to (0 would make them unaddressable).
+fn host_id_accepted(host: u8) -> bool {
+    host != 0
 }
 
 /// Baud code → bit rate.
@@ -456,7 +510,7 @@ impl Actuator {
                 self.note_host(host);
                 let new_id = id.high_data2();
                 // Refused while enabled (no reply), as hosts report; 0 and >127 are invalid.
-                if self.mode != ModeState::Run && (1..=MAX_CAN_ID).contains(&new_id) {
+                if self.mode != ModeState::Run && can_id_accepted(new_id) {
                     tracing::info!(old = self.can_id, new = new_id, "robstride: CAN ID changed");
                     self.can_id = new_id;
                     self.persist_requested = true;
@@ -497,7 +551,7 @@ impl Actuator {
             }
             CommType::Protocol => {
                 self.note_host(host);
-                if codec::has_magic_prefix(&data) && data[6] <= 2 {
+                if codec::has_magic_prefix(&data) && protocol_accepted(data[6]) {
                     self.pending_protocol = data[6];
                     self.persist_requested = true;
                     out.extend(self.type0_reply());
@@ -510,7 +564,7 @@ impl Actuator {
 
     fn note_host(&mut self, host: u8) {
         // Host ID 0 would make replies unaddressable; keep the last real one.
-        if host != 0 && host != self.can_id {
+        if host_id_accepted(host) && host != self.can_id {
             self.master_id = host;
         }
     }

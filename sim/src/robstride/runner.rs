@@ -15,6 +15,7 @@ use crate::robstride::faults::{
     check_bus_voltage_v, check_external_torque_nm, check_temperature_c, Fault, ValueError,
 };
 use crate::robstride::state_file::{uid_key, StateFile, StateFileError};
+use crate::supervise::{DeathWatch, Supervisor};
 
 /// Configuration of an emulated RobStride bus.
 #[derive(Debug, Clone, PartialEq)]
@@ -100,6 +101,7 @@ pub struct RobstrideHandle {
     /// The request channel to the runner, shared with the monitors it hands out.
     view: RobstrideMonitor,
     task: Option<JoinHandle<()>>,
+    death: DeathWatch,
 }
 
 impl RobstrideBus {
@@ -142,10 +144,17 @@ impl RobstrideBus {
             state,
             state_path: config.state_file,
         };
-        let task = tokio::spawn(runner.run(inbox));
+        // A panic or a state file that cannot be written ends the runner; the watch says so.
+        let (supervisor, death) = Supervisor::new();
+        let task = supervisor.spawn(
+            &tokio::runtime::Handle::current(),
+            "RobStride runner",
+            runner.run(inbox),
+        );
         Ok(RobstrideHandle {
             view: RobstrideMonitor { requests },
             task: Some(task),
+            death,
         })
     }
 }
@@ -201,6 +210,12 @@ impl RobstrideHandle {
     /// [`RobstrideError::Stopped`] once the emulator is shut down.
     pub fn monitor(&self) -> RobstrideMonitor {
         self.view.clone()
+    }
+
+    /// A watch that tells when the emulator stops serving on its own (its task panicked, or
+    /// its state file could not be written); `armhil sim` exits non-zero on it.
+    pub fn death_watch(&self) -> DeathWatch {
+        self.death.clone()
     }
 
     /// Stop the emulator (the motors "lose power"); persistent state is already on disk.
@@ -264,7 +279,8 @@ struct Runner {
 }
 
 impl Runner {
-    async fn run(mut self, mut inbox: mpsc::UnboundedReceiver<Request>) {
+    /// Serve until shut down; an `Err` (the state file could not be written) ends it early.
+    async fn run(mut self, mut inbox: mpsc::UnboundedReceiver<Request>) -> Result<(), String> {
         // Receiving in its own task keeps `recv` out of `select!` (never cancelled mid-frame).
         let (frames_tx, mut frames) = mpsc::unbounded_channel();
         let receiver_bus = Arc::clone(&self.bus);
@@ -286,25 +302,32 @@ impl Runner {
         });
         let mut tick = interval(Duration::from_millis(1));
         tick.set_missed_tick_behavior(MissedTickBehavior::Burst);
-        loop {
+        let outcome = loop {
             tokio::select! {
                 biased;
                 request = inbox.recv() => match request {
                     Some(Request::Shutdown(done)) => {
                         let _ = done.send(());
-                        break;
+                        break Ok(());
                     }
                     Some(request) => self.serve(request).await,
-                    None => break,
+                    None => break Ok(()),
                 },
                 frame = frames.recv() => match frame {
-                    Some(frame) => self.on_frame(&frame).await,
-                    None => break,
+                    Some(frame) => {
+                        // A motor told to keep something that cannot be kept: stop, rather
+                        // than let the host believe it was saved.
+                        if let Err(error) = self.on_frame(&frame).await {
+                            break Err(error.to_string());
+                        }
+                    }
+                    None => break Ok(()),
                 },
                 _ = tick.tick() => self.on_tick().await,
             }
-        }
+        };
         receiver.abort();
+        outcome
     }
 
     fn motor_mut(&mut self, can_id: u8) -> Result<&mut Actuator, RobstrideError> {
@@ -372,13 +395,14 @@ impl Runner {
         }
     }
 
-    async fn on_frame(&mut self, frame: &CanFrame) {
+    async fn on_frame(&mut self, frame: &CanFrame) -> Result<(), StateFileError> {
         let mut replies = Vec::new();
         for motor in &mut self.motors {
             replies.extend(motor.handle_frame(frame));
         }
-        self.persist_if_requested();
+        self.persist_if_requested()?;
         self.send_all(replies).await;
+        Ok(())
     }
 
     async fn on_tick(&mut self) {
@@ -389,7 +413,7 @@ impl Runner {
         self.send_all(out).await;
     }
 
-    fn persist_if_requested(&mut self) {
+    fn persist_if_requested(&mut self) -> Result<(), StateFileError> {
         let mut changed = false;
         for motor in &mut self.motors {
             if motor.take_persist_request() {
@@ -400,11 +424,9 @@ impl Runner {
             }
         }
         if let (true, Some(path)) = (changed, &self.state_path) {
-            self.state.format = 1;
-            if let Err(error) = self.state.save(path) {
-                tracing::error!(%error, "robstride emulator: state file not written");
-            }
+            self.state.save(path)?;
         }
+        Ok(())
     }
 
     async fn send_all(&self, frames: impl IntoIterator<Item = CanFrame>) {

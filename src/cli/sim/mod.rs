@@ -4,6 +4,9 @@ use std::net::SocketAddr;
 use std::process::ExitCode;
 
 use clap::Subcommand;
+use sim::supervise::{DeathWatch, EmulatorDied};
+
+use super::signals::StopSignals;
 
 pub mod piper;
 pub mod realman;
@@ -106,6 +109,49 @@ fn create_vxcan(iface: &str, peer: &str) -> anyhow::Result<()> {
     #[cfg(not(target_os = "linux"))]
     {
         anyhow::bail!("--create-vxcan {peer}: vxcan pairs exist only on Linux (use --socketcand)")
+    }
+}
+
+/// How `armhil sim` came to stop.
+#[derive(Debug)]
+pub(crate) enum Stopped {
+    /// Ctrl-C or SIGTERM.
+    Signal(&'static str),
+    /// The emulator stopped serving on its own.
+    Died(EmulatorDied),
+}
+
+/// Wait for Ctrl-C / SIGTERM, or for the emulator to die on its own (a task panicked, its
+/// state file could not be written), whichever comes first. Waiting for the signal alone
+/// kept the port open on a dead bus and exited 0 (D4).
+pub(crate) async fn until_stopped(signals: &mut StopSignals, death: &mut DeathWatch) -> Stopped {
+    let stopped = tokio::select! {
+        signal = signals.next() => Stopped::Signal(signal),
+        died = death.died() => Stopped::Died(died),
+    };
+    match &stopped {
+        Stopped::Signal(signal) => tracing::info!(signal, "stopping"),
+        Stopped::Died(died) => tracing::error!(%died, "the emulator died; stopping"),
+    }
+    stopped
+}
+
+/// The outcome of `armhil sim <device>` once everything is shut down: success after a stop
+/// signal, an error saying why if the emulator died (during the run, or while it shut down).
+pub(crate) fn outcome(
+    device: &str,
+    stopped: Stopped,
+    death: &DeathWatch,
+) -> anyhow::Result<ExitCode> {
+    let died = match stopped {
+        Stopped::Died(died) => Some(died),
+        Stopped::Signal(_) => death.now(),
+    };
+    match died {
+        Some(died) => {
+            Err(anyhow::Error::new(died).context(format!("the {device} emulator stopped serving")))
+        }
+        None => Ok(ExitCode::SUCCESS),
     }
 }
 

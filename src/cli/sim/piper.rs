@@ -170,8 +170,8 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
         "armhil sim piper: {} on {place} (Ctrl-C to stop)",
         args.firmware
     );
-    let signal = stop_signals.next().await;
-    tracing::info!(signal, "stopping");
+    let mut death = emu.death_watch();
+    let stopped = super::until_stopped(&mut stop_signals, &mut death).await;
     // Frames per ID per second, feedback periods and overruns: whether the emulator kept up.
     if let Some(ui) = ui {
         ui.shutdown().await;
@@ -185,7 +185,7 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
     if let Some(server) = server {
         server.shutdown().await;
     }
-    Ok(ExitCode::SUCCESS)
+    super::outcome("Piper", stopped, &death)
 }
 
 #[cfg(target_os = "linux")]

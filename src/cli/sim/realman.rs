@@ -84,6 +84,9 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
     config.idle_timeout =
         (args.idle_timeout_s > 0).then(|| Duration::from_secs(args.idle_timeout_s));
     let addr = SocketAddr::new(args.bind, args.port);
+    // Listen before the emulator runs: a signal that arrives earlier would otherwise kill
+    // the process without saving the state file.
+    let mut stop_signals = super::super::signals::StopSignals::listen()?;
     let emu = RealmanEmulator::spawn(config, Transport::Tcp(addr))
         .await
         .with_context(|| format!("cannot start the Realman emulator on {addr}"))?;
@@ -114,12 +117,14 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
         (Some(_), None) => anyhow::bail!("no URDF to draw {} in the web view", args.model),
         (None, _) => None,
     };
-    wait_for_stop().await?;
+    let mut death = emu.death_watch();
+    let stopped = super::until_stopped(&mut stop_signals, &mut death).await;
     if let Some(ui) = ui {
         ui.shutdown().await;
     }
     let stats = emu.stats();
-    emu.shutdown().await;
+    // A state file that cannot be written is an error (D19): the settings would be lost.
+    let saved = emu.shutdown_and_save().await;
     tracing::info!(
         accepted = stats.accepted,
         refused = stats.refused,
@@ -127,12 +132,6 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
         datagrams = stats.push.sent,
         "Realman emulator stopped"
     );
-    Ok(ExitCode::SUCCESS)
-}
-
-/// Ctrl-C, or SIGTERM on Unix (how CI runners and process managers stop a service).
-async fn wait_for_stop() -> anyhow::Result<()> {
-    let signal = super::super::signals::StopSignals::listen()?.next().await;
-    tracing::info!(signal, "stopping");
-    Ok(())
+    saved.context("the Realman emulator could not keep its settings")?;
+    super::outcome("Realman", stopped, &death)
 }

@@ -213,8 +213,8 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
         "armhil sim robstride: {} on {place} (Ctrl-C to stop)",
         motors.join(", "),
     );
-    let signal = stop_signals.next().await;
-    tracing::info!(signal, "stopping");
+    let mut death = emulator.death_watch();
+    let stopped = super::until_stopped(&mut stop_signals, &mut death).await;
     if let Some(ui) = ui {
         ui.shutdown().await;
     }
@@ -223,7 +223,7 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
     if let Some(server) = server {
         server.shutdown().await;
     }
-    Ok(ExitCode::SUCCESS)
+    super::outcome("RobStride", stopped, &death)
 }
 
 #[cfg(target_os = "linux")]

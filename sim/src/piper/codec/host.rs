@@ -4,6 +4,7 @@ use bus::{CanFrame, CanId};
 
 use super::mit::{self, MitCheckError, MitCommand};
 use super::{be_i16, be_i32, be_u16, DecodeError};
+use crate::piper::flash::rules as flash_rules;
 use crate::piper::ids;
 use crate::piper::profile::FirmwareProfile;
 
@@ -456,7 +457,8 @@ pub fn decode(
                 0xFF => None,
                 v => return Err(invalid(id, "mit_mode", v.into())),
             };
-            if d[5] > 3 {
+            // 0 leaves the installation position unchanged.
+            if d[5] != 0 && !flash_rules::INSTALL_POSITIONS.contains(&d[5]) {
                 return Err(invalid(id, "install_position", d[5].into()));
             }
             Ok(HostCommand::ModeCtrl(ModeCtrl {
@@ -577,7 +579,7 @@ pub fn decode(
                 ("control_offset", d[2]),
                 ("target_offset", d[3]),
             ] {
-                if !matches!(v, 0x00 | 0x10 | 0x20) {
+                if !flash_rules::is_id_offset(v) {
                     return Err(invalid(id, field, v.into()));
                 }
             }
@@ -650,7 +652,7 @@ pub fn decode(
             if d[2] > 2 {
                 return Err(invalid(id, "periodic_48x", d[2].into()));
             }
-            let payload = if d[3] == CONFIRM && d[4] < 3 {
+            let payload = if d[3] == CONFIRM && flash_rules::PAYLOADS.contains(&d[4]) {
                 Some(d[4])
             } else {
                 None
@@ -676,8 +678,8 @@ pub fn decode(
             let mut levels = [None; 6];
             for (slot, &v) in levels.iter_mut().zip(&d[..6]) {
                 *slot = match v {
-                    0..=8 => Some(v),
                     0xFF => None,
+                    v if flash_rules::COLLISION_LEVELS.contains(&v) => Some(v),
                     v => return Err(invalid(id, "collision_level", v.into())),
                 };
             }

@@ -11,7 +11,8 @@ use crate::piper::codec::host::{
 };
 use crate::piper::codec::DecodeError;
 use crate::piper::flash::{
-    LinkageRole, DEFAULT_END_VEL_ACC, MAX_ACC_CEILING_CRAD_S2, MAX_SPEED_CEILING_CRAD_S,
+    rules as flash_rules, LinkageRole, DEFAULT_END_VEL_ACC, MAX_ACC_CEILING_CRAD_S2,
+    MAX_SPEED_CEILING_CRAD_S,
 };
 use crate::piper::ids;
 use crate::piper::kin;
@@ -179,8 +180,8 @@ impl Firmware {
             } => {
                 let max = max_angle_ddeg.unwrap_or(self.flash.max_angle_ddeg[joint]);
                 let min = min_angle_ddeg.unwrap_or(self.flash.min_angle_ddeg[joint]);
-                if min > max {
-                    tracing::debug!(joint = joint + 1, min, max, "0x474 min above max ignored");
+                if let Err(problem) = flash_rules::joint_limits(min, max) {
+                    tracing::debug!(joint = joint + 1, %problem, "0x474 ignored");
                     return;
                 }
                 self.flash.max_angle_ddeg[joint] = max;
@@ -294,13 +295,13 @@ impl Firmware {
                 friction,
             } => {
                 // Out-of-range fields are left unchanged (the SDK validates the same ranges).
-                if (100..=200).contains(&travel_pct) {
+                if flash_rules::PENDANT_TRAVEL_PCT.contains(&travel_pct) {
                     self.flash.pendant_travel_pct = travel_pct;
                 }
-                if max_stroke_mm <= 200 {
+                if flash_rules::GRIPPER_MAX_STROKE_MM.contains(&max_stroke_mm) {
                     self.flash.gripper_max_stroke_mm = max_stroke_mm;
                 }
-                if (1..=10).contains(&friction) {
+                if flash_rules::PENDANT_FRICTION.contains(&friction) {
                     self.flash.pendant_friction = friction;
                 }
                 self.mark_flash_dirty();
@@ -419,7 +420,7 @@ impl Firmware {
             }
         }
         self.speed_pct = m.speed_pct;
-        if (1..=3).contains(&m.install_position)
+        if flash_rules::INSTALL_POSITIONS.contains(&m.install_position)
             && self.flash.install_position != m.install_position
         {
             self.flash.install_position = m.install_position;

@@ -18,13 +18,14 @@ use nalgebra::Isometry3;
 use super::codec::host::{CtrlMode, MoveMode};
 use super::codec::mit::MitCommand;
 use super::config::{PiperConfig, PiperError};
-use super::flash::{Flash, LinkageRole};
+use super::flash::{Flash, FlashError, LinkageRole};
 use super::kin;
 use super::motor::{DriveLaw, JointMotor};
 use super::profile::FirmwareProfile;
 use super::state::{ArmStatusSnapshot, PiperSimState};
 use super::trajectory::{JointMove, PathMove};
 use crate::physics::{ArmWorld, ObstacleId, ObstacleShape, WorldConfig};
+use crate::state_file::InvalidField;
 
 pub use faults::FaultState;
 
@@ -119,6 +120,9 @@ pub struct Firmware {
     pub(crate) flash: Flash,
     state_file: Option<PathBuf>,
     flash_dirty: bool,
+    /// The state file could not be written: the emulator must stop (see
+    /// [`Firmware::take_save_error`]) rather than run on with changes that will be lost.
+    save_error: Option<FlashError>,
     pub(crate) ticks: u64,
     pub(crate) config: PiperConfig,
 
@@ -244,10 +248,51 @@ impl Firmware {
             }
         });
         // A state file that exists wins; a new one starts from `config.flash` (or defaults).
-        let flash = match &config.state_file {
-            Some(path) if path.exists() => Flash::load(path)?,
-            _ => config.flash.clone().unwrap_or_default(),
+        // Either is checked with the commands' rules: a value no command could store (min
+        // above max) would otherwise panic the core at the first move.
+        let from_file = config.state_file.as_ref().filter(|path| path.exists());
+        let flash = match from_file {
+            Some(path) => Flash::load(path)?,
+            None => {
+                let flash = config.flash.clone().unwrap_or_default();
+                flash.validate().map_err(PiperError::InvalidFlash)?;
+                flash
+            }
         };
+        // A zero offset is the joint's physical angle when it was zeroed (0x475), so it lies
+        // within the URDF's range; the gripper's, within the fingers' travel.
+        let zero_fields = arm_idx.iter().enumerate().map(|(j, &i)| {
+            let lim = &world.joints()[i];
+            (
+                format!("flash.zero_offset_rad[{j}]"),
+                flash.zero_offset_rad[j],
+                lim.lower,
+                lim.upper,
+            )
+        });
+        let travel: [(f64, f64); 2] = std::array::from_fn(|k| {
+            let lim = &world.joints()[finger_idx[k]];
+            let (a, b) = (finger_sign[k] * lim.lower, finger_sign[k] * lim.upper);
+            (a.min(b), a.max(b))
+        });
+        let gripper_field = (
+            "flash.gripper_zero_offset_m".to_owned(),
+            flash.gripper_zero_offset_m,
+            travel[0].0 + travel[1].0,
+            travel[0].1 + travel[1].1,
+        );
+        for (field, value, lower, upper) in zero_fields.chain(std::iter::once(gripper_field)) {
+            if !(lower - 1e-9..=upper + 1e-9).contains(&value) {
+                let invalid = InvalidField::new(
+                    field,
+                    format!("{value} is outside the URDF's range [{lower}, {upper}]"),
+                );
+                return Err(match from_file {
+                    Some(path) => PiperError::Flash(FlashError::invalid(path, invalid)),
+                    None => PiperError::InvalidFlash(invalid),
+                });
+            }
+        }
         let n = world.joints().len();
         let mut q0 = vec![0.0; n];
         for (j, &i) in arm_idx.iter().enumerate() {
@@ -291,6 +336,7 @@ impl Firmware {
             flash,
             state_file: config.state_file.clone(),
             flash_dirty: false,
+            save_error: None,
             ticks: 0,
             ctrl_mode: if leader_active {
                 CtrlMode::LinkageTeach
@@ -406,6 +452,11 @@ impl Firmware {
     pub(crate) fn gripper_stroke_phys_m(&self) -> f64 {
         self.finger_sign[0] * self.q[self.finger_idx[0]]
             + self.finger_sign[1] * self.q[self.finger_idx[1]]
+    }
+
+    /// Why the state file could not be written, once (the caller stops the emulator).
+    pub(crate) fn take_save_error(&mut self) -> Option<FlashError> {
+        self.save_error.take()
     }
 
     pub(crate) fn mark_flash_dirty(&mut self) {
@@ -526,7 +577,8 @@ impl Firmware {
             self.flash_dirty = false;
             if let Some(path) = &self.state_file {
                 if let Err(e) = self.flash.save(path) {
-                    tracing::warn!(error = %e, "could not write the Piper state file");
+                    tracing::error!(error = %e, "could not write the Piper state file");
+                    self.save_error.get_or_insert(e);
                 }
             }
         }

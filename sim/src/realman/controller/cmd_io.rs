@@ -1,8 +1,6 @@
 //! Gripper, dexterous hand and realtime-push configuration (docs/protocols/realman.md §10, §11).
 
-use std::net::Ipv4Addr;
-
-use super::super::params::PushCustom;
+use super::super::params::{rules, PushCustom};
 use super::super::wire::{ack, Obj, Req};
 use super::{Answer, ClientId, Controller};
 
@@ -149,7 +147,7 @@ fn set_push(c: &mut Controller, req: Req) -> bool {
     let mut push = c.params.push.clone();
     if let Some(cycle) = req.int("cycle") {
         match u32::try_from(cycle) {
-            Ok(v @ 1..=100) => push.cycle = v,
+            Ok(v) if rules::PUSH_CYCLES.contains(&v) => push.cycle = v,
             _ => return false,
         }
     }
@@ -158,7 +156,7 @@ fn set_push(c: &mut Controller, req: Req) -> bool {
     }
     if let Some(port) = req.int("port") {
         match u16::try_from(port) {
-            Ok(p) if p > 0 => push.port = p,
+            Ok(p) if rules::push_port(p) => push.port = p,
             _ => return false,
         }
     }
@@ -166,7 +164,7 @@ fn set_push(c: &mut Controller, req: Req) -> bool {
         push.force_coordinate = fc;
     }
     if let Some(ip) = req.str("ip") {
-        if !ip.is_empty() && ip.parse::<Ipv4Addr>().is_err() {
+        if !rules::push_ip(ip) {
             return false;
         }
         push.ip = ip.to_owned();

@@ -2,7 +2,7 @@
 //! speeds and accelerations, and parameter saving (docs/protocols/realman.md §8, §9).
 
 use super::super::facts::DhRow;
-use super::super::params;
+use super::super::params::{self, rules};
 use super::super::wire::{self, ack, Obj, Req};
 use super::{Answer, Controller};
 
@@ -60,9 +60,9 @@ pub(super) fn handle(c: &mut Controller, name: &str, req: Req) -> Option<Answer>
 
 /// `{"command":<name>,key:ok}` with the value (a positive 0.001-unit integer) stored in SI.
 fn set_milli(name: &str, req: Req, key: &str, slot: &mut f64) -> String {
-    let ok = match req.int(key) {
-        Some(v) if v > 0 => {
-            *slot = v as f64 / 1000.0;
+    let ok = match req.int(key).map(|v| v as f64 / 1000.0) {
+        Some(v) if params::rules::positive_limit(v) => {
+            *slot = v;
             true
         }
         _ => false,
@@ -77,9 +77,12 @@ fn get_milli(tag: &str, key: &str, value: f64) -> String {
 fn handle_more(c: &mut Controller, name: &str, req: Req) -> Option<Answer> {
     let reply = match name {
         "set_collision_stage" => {
-            let ok = match req.int("collision_stage") {
-                Some(s @ 0..=8) => {
-                    c.params.collision_stage = s as u8;
+            let stage = req
+                .int("collision_stage")
+                .and_then(|s| u8::try_from(s).ok());
+            let ok = match stage {
+                Some(s) if params::rules::COLLISION_STAGES.contains(&s) => {
+                    c.params.collision_stage = s;
                     true
                 }
                 _ => false,
@@ -237,10 +240,10 @@ fn write_table(c: &mut Controller, table: Table, joint: i64, value: i64) -> bool
     let p = &mut c.params;
     let v = value as f64 / 1000.0;
     match table {
-        Table::MinPos if v < p.max_deg[j] => p.min_deg[j] = v,
-        Table::MaxPos if v > p.min_deg[j] => p.max_deg[j] = v,
-        Table::Speed if v > 0.0 => p.max_speed_deg_s[j] = v * DEG_S_PER_RPM,
-        Table::Acc if v > 0.0 => p.max_acc_deg_s2[j] = v * DEG_S_PER_RPM,
+        Table::MinPos if rules::joint_limits(v, p.max_deg[j]).is_ok() => p.min_deg[j] = v,
+        Table::MaxPos if rules::joint_limits(p.min_deg[j], v).is_ok() => p.max_deg[j] = v,
+        Table::Speed if rules::positive_limit(v) => p.max_speed_deg_s[j] = v * DEG_S_PER_RPM,
+        Table::Acc if rules::positive_limit(v) => p.max_acc_deg_s2[j] = v * DEG_S_PER_RPM,
         _ => return false,
     }
     true

@@ -2,7 +2,7 @@
 //! (docs/protocols/realman.md §6, §7).
 
 use super::super::faults::codes;
-use super::super::params::Frame;
+use super::super::params::{rules, Frame};
 use super::super::wire::{self, ack, Obj, Req};
 use super::{Answer, Controller};
 
@@ -254,9 +254,6 @@ fn change_frame(c: &mut Controller, req: Req, tool: bool) -> bool {
     true
 }
 
-/// Most tool frames the controller stores.
-const MAX_TOOL_FRAMES: usize = 10;
-
 fn manual_tool_frame(c: &mut Controller, req: Req) -> bool {
     let (Some(name), Some(pose)) = (req.str("tool_name"), req.ints("tool_pose")) else {
         return false;
@@ -279,9 +276,9 @@ fn manual_tool_frame(c: &mut Controller, req: Req) -> bool {
             com[2] as f64 * 1e-6,
         ],
     };
-    let bad_name = name.is_empty() || name.len() > 10;
+    let bad_name = !rules::frame_name(name);
     let exists = c.params.tool_frames.iter().any(|f| f.name == name);
-    if bad_name || exists || c.params.tool_frames.len() >= MAX_TOOL_FRAMES {
+    if bad_name || exists || c.params.tool_frames.len() >= rules::MAX_TOOL_FRAMES {
         return false;
     }
     c.params.tool_frames.push(frame);
