@@ -1,7 +1,7 @@
 //! Where realtime-push datagrams go: a UDP socket in real time, an in-memory channel in virtual
 //! time (no real I/O may run under a paused clock). Loss and reorder faults apply here.
 
-use std::net::SocketAddr;
+use std::net::{IpAddr, SocketAddr};
 
 use rand::rngs::SmallRng;
 use rand::{Rng, SeedableRng};
@@ -96,6 +96,38 @@ impl PushSink {
     }
 }
 
+/// Where one push datagram goes, given the push's `ip` (empty: not set) and `port`, the peer
+/// addresses of the TCP clients connected now, and whether the emulator listens on a
+/// non-loopback address (`public`).
+///
+/// - No client connected: nowhere. Nobody is listening for the push then, and a target stored
+///   by an earlier client (and kept across restarts by the state file) would otherwise get
+///   ~200 datagrams/s for as long as the emulator runs.
+/// - `ip` set, `public`: only if a connected client has that address. `set_realtime_push`
+///   names any address and port, so without this check anyone who can reach the port could
+///   aim the stream at a third machine.
+/// - `ip` set, loopback (or in memory): that address (the UDP socket is bound to loopback, so
+///   nothing leaves the machine).
+/// - `ip` not set: every connected client's address, once per host.
+pub fn targets(ip: &str, port: u16, clients: &[SocketAddr], public: bool) -> Vec<SocketAddr> {
+    if clients.is_empty() {
+        return Vec::new();
+    }
+    let mut hosts: Vec<IpAddr> = clients.iter().map(|c| c.ip().to_canonical()).collect();
+    hosts.sort_unstable();
+    hosts.dedup();
+    match ip.parse::<IpAddr>() {
+        Ok(ip) if !public || hosts.contains(&ip.to_canonical()) => {
+            vec![SocketAddr::new(ip, port)]
+        }
+        Ok(_) => Vec::new(),
+        Err(_) => hosts
+            .into_iter()
+            .map(|ip| SocketAddr::new(ip, port))
+            .collect(),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -105,6 +137,39 @@ mod tests {
             to: SocketAddr::from(([127, 0, 0, 1], n)),
             payload: n.to_string(),
         }
+    }
+
+    #[test]
+    fn the_push_goes_only_to_connected_clients_on_a_public_bind() {
+        let client: SocketAddr = "192.168.1.20:50000".parse().unwrap();
+        let mapped: SocketAddr = "[::ffff:192.168.1.20]:50001".parse().unwrap();
+        let to = |ip: &str| SocketAddr::new(ip.parse().unwrap(), 8089);
+        // D7: a stored or requested third-party address gets nothing on a public bind.
+        assert_eq!(targets("10.0.0.7", 8089, &[client], true), vec![]);
+        assert_eq!(
+            targets("192.168.1.20", 8089, &[client], true),
+            vec![to("192.168.1.20")]
+        );
+        assert_eq!(
+            targets("192.168.1.20", 8089, &[mapped], true),
+            vec![to("192.168.1.20")],
+            "an IPv4 client on a dual-stack socket is the same host"
+        );
+        // No client left: silence, whatever is configured.
+        assert_eq!(targets("192.168.1.20", 8089, &[], true), vec![]);
+        assert_eq!(targets("127.0.0.1", 8089, &[], false), vec![]);
+        assert_eq!(targets("", 8089, &[], false), vec![]);
+        // Loopback: the configured address, while a client is connected.
+        assert_eq!(
+            targets("10.0.0.7", 8089, &[client], false),
+            vec![to("10.0.0.7")]
+        );
+        // No address set: every client host once.
+        let second: SocketAddr = "192.168.1.20:50002".parse().unwrap();
+        assert_eq!(
+            targets("", 9000, &[client, second], true),
+            vec![SocketAddr::new("192.168.1.20".parse().unwrap(), 9000)]
+        );
     }
 
     #[test]

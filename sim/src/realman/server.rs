@@ -38,7 +38,7 @@ use super::controller::{
 use super::faults::{FaultError, RealmanFault, RealmanFaultKind};
 use super::framing::{Splitter, Unit, MAX_REQUEST_BYTES};
 use super::params::StateFileError;
-use super::push::{Datagram, PushFaults, PushSink, PushStats};
+use super::push::{self, Datagram, PushFaults, PushSink, PushStats};
 use crate::supervise::{DeathWatch, Supervisor};
 use bus::socketcand::http_guard::HttpGuard;
 
@@ -231,6 +231,8 @@ struct Shared {
     /// Origin of the clients' activity times.
     epoch: Instant,
     stop: watch::Receiver<bool>,
+    /// Listening on a non-loopback address: the push goes only to connected clients.
+    public: bool,
 }
 
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
@@ -372,6 +374,7 @@ impl RealmanEmulator {
             idle_timeout: config.idle_timeout,
             epoch: Instant::now(),
             stop: stop_rx,
+            public: matches!(transport, Transport::Tcp(addr) if !addr.ip().is_loopback()),
         });
         let mut tasks = Vec::new();
         let (sink, local_addr, datagrams) = match transport {
@@ -921,21 +924,8 @@ async fn send_push(shared: &Shared, sink: &PushSink, stats: &mut PushStats) {
         }
         (core.push_datagram(), push)
     };
-    let targets: Vec<SocketAddr> = match push.ip.parse::<IpAddr>() {
-        Ok(ip) => vec![SocketAddr::new(ip, push.port)],
-        Err(_) => {
-            // No address set: every host holding a TCP connection, once per host.
-            let mut ips: Vec<IpAddr> = lock(&shared.clients)
-                .values()
-                .map(|c| c.peer.ip())
-                .collect();
-            ips.sort_unstable();
-            ips.dedup();
-            ips.into_iter()
-                .map(|ip| SocketAddr::new(ip, push.port))
-                .collect()
-        }
-    };
+    let clients: Vec<SocketAddr> = lock(&shared.clients).values().map(|c| c.peer).collect();
+    let targets = push::targets(&push.ip, push.port, &clients, shared.public);
     for to in targets {
         let out = lock(&shared.push_faults).apply(Datagram {
             to,
@@ -1115,5 +1105,28 @@ mod tests {
             .is_some());
         assert_eq!(emu.stats().evicted, 1);
         assert_eq!(emu.connections(), 2);
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn the_push_stops_when_the_last_client_leaves() {
+        let emu = emulator(|_| {}).await;
+        let mut datagrams = emu.take_datagrams().unwrap();
+        let mut stream = emu.connect(PEER).unwrap();
+        let set = r#"{"command":"set_realtime_push","ip":"10.0.0.7","port":9000}"#;
+        stream.write_all(set.as_bytes()).await.unwrap();
+        assert!(reply(&mut stream, Duration::from_secs(2)).await.is_some());
+        tokio::time::sleep(Duration::from_millis(100)).await;
+        let mut seen = 0;
+        while datagrams.try_recv().is_ok() {
+            seen += 1;
+        }
+        assert!(seen > 10, "{seen} datagrams while a client is connected");
+        // D7: with no client left, the stored target gets nothing.
+        drop(stream);
+        tokio::time::sleep(Duration::from_millis(50)).await;
+        while datagrams.try_recv().is_ok() {}
+        tokio::time::sleep(Duration::from_millis(500)).await;
+        assert!(datagrams.try_recv().is_err(), "pushed with no client connected");
+        assert_eq!(emu.connections(), 0);
     }
 }
