@@ -1126,7 +1126,10 @@ mod tests {
         tokio::time::sleep(Duration::from_millis(50)).await;
         while datagrams.try_recv().is_ok() {}
         tokio::time::sleep(Duration::from_millis(500)).await;
-        assert!(datagrams.try_recv().is_err(), "pushed with no client connected");
+        assert!(
+            datagrams.try_recv().is_err(),
+            "pushed with no client connected"
+        );
         assert_eq!(emu.connections(), 0);
     }
 }
