@@ -153,6 +153,8 @@ fn realman_fault(name: &str, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Rea
         }
     };
     a.finish()?;
+    // The emulator's table bounds every value (a reply delay of years is a typo).
+    fault.check().map_err(value_err)?;
     Ok(fault)
 }
 

@@ -31,6 +31,20 @@ pub mod piper;
 pub mod realman;
 pub mod robstride;
 
+/// `Err` naming the first quantity of an emulator's physical state that is not finite: the
+/// physics diverged (NaN, which the wire carries as zeros, an arm seemingly at rest at 0°).
+/// Each kind's [`Device::emulator_health`] passes its emulator's state through this.
+pub(crate) fn finite_state<'a>(
+    quantities: impl IntoIterator<Item = (String, f64)> + 'a,
+) -> Result<(), String> {
+    match quantities.into_iter().find(|(_, v)| !v.is_finite()) {
+        None => Ok(()),
+        Some((name, value)) => Err(format!(
+            "the emulator's physics diverged ({name} is {value}); its state is no longer valid (a fault value far beyond what the model can take?)"
+        )),
+    }
+}
+
 /// What a kind's `build` gets: the scenario's clock and options, and, for CAN devices, the
 /// in-process virtual bus or the SocketCAN interface to open.
 pub(crate) struct Wiring<'a> {

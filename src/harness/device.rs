@@ -84,6 +84,20 @@ pub trait Device: Send + Sync {
     /// Clear an emulator fault, or every one when `None`.
     async fn clear(&self, fault: Option<&DeviceFault>) -> Result<(), DeviceError>;
 
+    /// Whether the in-process emulator is still sound: `Err` with why when it is not (its
+    /// physics diverged to NaN, which the wire would carry as zeros, so checks on the driver's
+    /// state could pass on garbage). The runner asks after every step and fails the scenario
+    /// with this as an emulator error. Devices without an in-process emulator are always `Ok`.
+    ///
+    /// An emulator that can only be asked through its own task may answer with its state as
+    /// of the previous call (waiting for it between steps would let it run ahead of the next
+    /// step's frames and shift every recorded run); `last` (the run is over) waits for a
+    /// current answer.
+    async fn emulator_health(&self, last: bool) -> Result<(), String> {
+        let _ = last;
+        Ok(())
+    }
+
     /// Stop the driver and the emulator.
     async fn shutdown(&self);
 }

@@ -248,3 +248,64 @@ fn every_ms_is_read_and_range_checked() {
         "broken.yaml:5:56: `every_ms` must be 1..=10000, got 0"
     );
 }
+
+/// The Piper's URDF with every link `factor` times lighter (mass and inertia).
+fn lighter_piper(factor: f64) -> String {
+    let mut out = String::new();
+    for line in sim::piper::BUNDLED_URDF.lines() {
+        let scaled = if line.contains("<mass ") || line.contains("<inertia ") {
+            let mut l = String::new();
+            for (i, part) in line.split('"').enumerate() {
+                if i % 2 == 1 {
+                    match part.parse::<f64>() {
+                        Ok(v) => l.push_str(&format!("{:e}", v / factor)),
+                        Err(_) => l.push_str(part),
+                    }
+                } else {
+                    l.push_str(part);
+                }
+                l.push('"');
+            }
+            l.pop();
+            l
+        } else {
+            line.to_owned()
+        };
+        out.push_str(&scaled);
+        out.push('\n');
+    }
+    out
+}
+
+#[test]
+fn a_diverging_emulator_fails_the_scenario_instead_of_passing() {
+    use super::{run_scenario, Clock};
+    let dir = tempfile::tempdir().unwrap();
+    // Links 1e30 times too light: the motors' torques accelerate them past f32, and the
+    // physics turns NaN (which the wire would carry as zeros: "at rest at 0°").
+    std::fs::write(dir.path().join("feather.urdf"), lighter_piper(1e30)).unwrap();
+    let path = dir.path().join("feather.yaml");
+    let text = "bench:\n  devices:\n    arm: {kind: piper, urdf: feather.urdf}\nsteps:\n  - enable\n  - move_j: {joints_deg: [10, 0, 0, 0, 0, 0], speed_pct: 30}\n  - wait_ms: 300\n  - expect: {joints_max_deg: [1000, 1000, 1000, 1000, 1000, 1000]}\n";
+    let scenario = parse_scenario(&path, text).unwrap_or_else(|e| panic!("{e}"));
+    let result = run_scenario(&scenario, &Clock::Virtual);
+    let Verdict::Error(message) = &result.verdict else {
+        panic!("{:?}: {:#?}", result.verdict, result.steps);
+    };
+    assert!(
+        message.starts_with("emulator error: device `arm`: "),
+        "{message}"
+    );
+    assert!(message.contains("physics diverged"), "{message}");
+    let failed = result.first_failure().expect("a failed step");
+    assert!(
+        matches!(&failed.outcome, Outcome::Failed { expected, .. } if expected == "a sound emulator"),
+        "{failed:?}"
+    );
+    // The same bench with the real masses passes.
+    std::fs::write(dir.path().join("feather.urdf"), lighter_piper(1.0)).unwrap();
+    let scenario = parse_scenario(&path, text).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(
+        run_scenario(&scenario, &Clock::Virtual).verdict,
+        Verdict::Passed
+    );
+}

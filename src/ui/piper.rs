@@ -9,6 +9,7 @@ use sim::piper::{FaultKind, NtcBoard, PiperFault, PiperMonitor};
 
 use super::bus_tap::BusTap;
 use super::{Command, LiveSource};
+use crate::harness::elide_long_tokens;
 use crate::harness::report::html::arm_model;
 
 /// A running Piper emulator as the web view sees it.
@@ -35,7 +36,8 @@ impl PiperLive {
                     .iter()
                     .map(|p| {
                         json!({"name": p.name, "description": p.description,
-                               "required": p.required, "default": p.default})
+                               "required": p.required, "default": p.default,
+                               "min": p.range.map(|r| r.0), "max": p.range.map(|r| r.1)})
                     })
                     .collect();
                 json!({"name": k.name(), "description": k.description(), "params": params})
@@ -58,7 +60,7 @@ fn number(args: &Map<String, Value>, key: &str, kind: FaultKind) -> Result<f64, 
             .as_f64()
             .or_else(|| v.as_str().and_then(|s| s.trim().parse().ok()))
             .filter(|x| x.is_finite())
-            .ok_or_else(|| format!("`{key}` must be a number, got {v}")),
+            .ok_or_else(|| elide_long_tokens(&format!("`{key}` must be a number, got {v}"))),
         None => kind
             .params()
             .iter()
@@ -73,11 +75,13 @@ fn joint(args: &Map<String, Value>, kind: FaultKind) -> Result<u8, String> {
     if (1.0..=6.0).contains(&j) && j.fract() == 0.0 {
         Ok(j as u8)
     } else {
-        Err(format!("`joint` must be 1..6, got {j}"))
+        Err(elide_long_tokens(&format!("`joint` must be 1..6, got {j}")))
     }
 }
 
-/// The fault a page command names, with the table's defaults for omitted parameters.
+/// The fault a page command names, with the table's defaults for omitted parameters. Values
+/// are not range-checked here: injecting checks them against the fault table (the emulator's
+/// `inject`, the one check every caller goes through), and clearing ignores them.
 pub fn piper_fault(name: &str, args: &Map<String, Value>) -> Result<PiperFault, String> {
     let kind = FaultKind::from_name(name).ok_or_else(|| format!("no Piper fault `{name}`"))?;
     let n = |key: &str| number(args, key, kind);
@@ -97,7 +101,7 @@ pub fn piper_fault(name: &str, args: &Map<String, Value>) -> Result<PiperFault, 
             joint: joint(args, kind)?,
         },
         FaultKind::UnderVoltage => PiperFault::UnderVoltage {
-            voltage_v: n("voltage_v")?.max(0.0),
+            voltage_v: n("voltage_v")?,
         },
         FaultKind::DriverError => PiperFault::DriverError {
             joint: joint(args, kind)?,
@@ -241,6 +245,40 @@ mod tests {
         assert!(piper_fault("stall", &Map::new()).is_err());
         assert!(piper_fault("external_torque", &args(json!({"joint": 1}))).is_err());
         assert!(piper_fault("nope", &Map::new()).is_err());
+    }
+
+    #[test]
+    fn page_errors_do_not_echo_huge_values() {
+        let torque = FaultKind::ExternalTorque.param("torque_nm").unwrap();
+        assert_eq!(torque.range, Some((-320.0, 320.0)));
+        let bad = piper_fault(
+            "stall",
+            &args(json!({"joint": format!("1{}", "0".repeat(300))})),
+        )
+        .unwrap_err();
+        assert!(bad.len() < 100, "{bad}");
+        let bad = piper_fault(
+            "external_torque",
+            &args(json!({"joint": 1, "torque_nm": "x".repeat(300)})),
+        )
+        .unwrap_err();
+        assert!(bad.len() < 100, "{bad}");
+    }
+
+    #[test]
+    fn an_absurd_value_from_the_page_is_refused_by_the_emulator_table() {
+        let fault = piper_fault(
+            "external_torque",
+            &args(json!({"joint": 1, "torque_nm": 1e308})),
+        )
+        .unwrap();
+        let err = fault.check().unwrap_err().to_string();
+        assert_eq!(err, "`torque_nm` must be between -320 and 320, got 1e308");
+        let sag = piper_fault("under_voltage", &args(json!({"voltage_v": -5}))).unwrap();
+        assert!(
+            sag.check().is_err(),
+            "a negative voltage is refused, not clamped"
+        );
     }
 
     #[test]

@@ -5,63 +5,38 @@
 use std::sync::{Mutex, PoisonError};
 
 use serde_json::{json, Map, Value};
+use sim::realman::faults::RealmanFaultParam;
 use sim::realman::{RealmanFault, RealmanFaultKind, RealmanMonitor};
 
 use super::{Command, LiveSource};
+use crate::harness::elide_long_tokens;
 use crate::harness::report::html::arm_model;
 
-/// A parameter of a fault kind: name, description, lowest and highest value.
-type Param = (&'static str, &'static str, i64, i64);
-
-/// The parameters of each kind, as in scenario files (all required).
-fn params(kind: RealmanFaultKind) -> &'static [Param] {
-    match kind {
-        RealmanFaultKind::ReplyDelay => &[("delay_ms", "reply delay, ms", 1, 60_000)],
-        RealmanFaultKind::MalformedReply => &[("count", "replies truncated", 1, 1000)],
-        RealmanFaultKind::UdpLoss => &[("permille", "loss probability, 1/1000", 0, 1000)],
-        RealmanFaultKind::JointError => &[
-            ("joint", "joint, 1-based", 1, 7),
-            (
-                "code",
-                "joint error bits (e.g. 8 = over-temperature)",
-                1,
-                0xFFFF,
-            ),
-        ],
-        RealmanFaultKind::GripperFault => &[("bits", "gripper error bits", 1, 0xFF)],
-        RealmanFaultKind::ConnectionDrop
-        | RealmanFaultKind::UdpReorder
-        | RealmanFaultKind::PowerLoss
-        | RealmanFaultKind::Collision
-        | RealmanFaultKind::EStop => &[],
-    }
-}
-
-fn int(args: &Map<String, Value>, p: &Param) -> Result<i64, String> {
-    let (name, _, lo, hi) = *p;
+fn int(args: &Map<String, Value>, p: &RealmanFaultParam) -> Result<u64, String> {
+    let name = p.name;
     let v = args
         .get(name)
         .and_then(|v| v.as_f64().or_else(|| v.as_str()?.trim().parse().ok()))
         .ok_or_else(|| format!("`{name}` is required"))?;
-    if v.fract() != 0.0 || v < lo as f64 || v > hi as f64 {
-        return Err(format!(
-            "`{name}` must be an integer in {lo}..={hi}, got {v}"
-        ));
+    if v.fract() != 0.0 || v < p.min as f64 || v > p.max as f64 {
+        return Err(elide_long_tokens(&format!(
+            "`{name}` must be an integer in {}..={}, got {v}",
+            p.min, p.max
+        )));
     }
-    Ok(v as i64)
+    Ok(v as u64)
 }
 
-/// The fault a page command names.
+/// The fault a page command names, its values checked against the emulator's table
+/// ([`RealmanFaultKind::params`]).
 pub fn realman_fault(name: &str, args: &Map<String, Value>) -> Result<RealmanFault, String> {
-    let kind =
-        RealmanFaultKind::from_name(name).ok_or_else(|| format!("no Realman fault `{name}`"))?;
-    let p = params(kind);
+    let kind = RealmanFaultKind::from_name(name)
+        .ok_or_else(|| elide_long_tokens(&format!("no Realman fault `{name}`")))?;
+    let p = kind.params();
     let n = |i: usize| int(args, &p[i]);
-    Ok(match kind {
+    let fault = match kind {
         RealmanFaultKind::ConnectionDrop => RealmanFault::ConnectionDrop { peer_ip: None },
-        RealmanFaultKind::ReplyDelay => RealmanFault::ReplyDelay {
-            delay_ms: n(0)? as u64,
-        },
+        RealmanFaultKind::ReplyDelay => RealmanFault::ReplyDelay { delay_ms: n(0)? },
         RealmanFaultKind::MalformedReply => RealmanFault::MalformedReply {
             count: n(0)? as u32,
         },
@@ -77,7 +52,9 @@ pub fn realman_fault(name: &str, args: &Map<String, Value>) -> Result<RealmanFau
         RealmanFaultKind::Collision => RealmanFault::Collision,
         RealmanFaultKind::EStop => RealmanFault::EStop,
         RealmanFaultKind::GripperFault => RealmanFault::GripperFault { bits: n(0)? as u8 },
-    })
+    };
+    fault.check().map_err(|e| e.to_string())?;
+    Ok(fault)
 }
 
 /// A running Realman emulator as the web view sees it.
@@ -97,11 +74,13 @@ impl RealmanLive {
         let faults: Vec<Value> = RealmanFaultKind::ALL
             .iter()
             .map(|k| {
-                let params: Vec<Value> = params(*k)
+                let params: Vec<Value> = k
+                    .params()
                     .iter()
-                    .map(|(name, description, _, _)| {
-                        json!({"name": name, "description": description,
-                               "required": true, "default": null})
+                    .map(|p| {
+                        json!({"name": p.name, "description": p.description,
+                               "required": true, "default": null,
+                               "min": p.min, "max": p.max})
                     })
                     .collect();
                 json!({"name": k.name(), "description": k.description(), "params": params})
@@ -271,5 +250,14 @@ mod tests {
                 Ok(kind)
             );
         }
+    }
+
+    #[test]
+    fn page_errors_do_not_echo_huge_values() {
+        let digits = format!("1{}", "0".repeat(300));
+        let err = realman_fault("reply_delay", &args(json!({"delay_ms": digits}))).unwrap_err();
+        assert!(err.len() < 120, "{err}");
+        let err = realman_fault(&"x".repeat(300), &Map::new()).unwrap_err();
+        assert!(err.len() < 120, "{err}");
     }
 }

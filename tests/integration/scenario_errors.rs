@@ -258,3 +258,60 @@ fn a_huge_bad_token_is_not_echoed_whole() {
         &error[..200.min(error.len())]
     );
 }
+
+#[test]
+fn physically_absurd_piper_fault_values_are_refused_at_their_position() {
+    let text = format!(
+        "{BENCH}steps:\n  - inject: {{fault: {{external_torque: {{joint: 1, torque_nm: 1e308}}}}}}\n"
+    );
+    let err = error_of(&text);
+    assert!(err.starts_with("broken.yaml:5:"), "{err}");
+    assert!(
+        err.ends_with("`torque_nm` must be between -320 and 320, got 1e308"),
+        "{err}"
+    );
+    let text = format!(
+        "{BENCH}faults:\n  - {{at_ms: 10, fault: {{motor_over_temp: {{joint: 2, temp_c: 1e308}}}}}}\nsteps:\n  - wait_ms: 20\n"
+    );
+    let err = error_of(&text);
+    assert!(err.starts_with("broken.yaml:5:"), "{err}");
+    assert!(
+        err.ends_with("`temp_c` must be between -40 and 200, got 1e308"),
+        "{err}"
+    );
+    let text =
+        format!("{BENCH}steps:\n  - inject: {{fault: {{under_voltage: {{voltage_v: -1}}}}}}\n");
+    assert!(error_of(&text).ends_with("`voltage_v` must be between 0 and 60, got -1"));
+    // A 300-digit number is not echoed whole.
+    let digits = format!("1{}", "0".repeat(300));
+    let text = format!(
+        "{BENCH}steps:\n  - inject: {{fault: {{external_torque: {{joint: 1, torque_nm: {digits}}}}}}}\n"
+    );
+    let err = error_of(&text);
+    assert!(err.len() < 200, "{err}");
+    // Plausible values are accepted.
+    let text = format!(
+        "{BENCH}steps:\n  - inject: {{fault: {{external_torque: {{joint: 1, torque_nm: -15}}}}}}\n"
+    );
+    assert!(parse_scenario(Path::new("ok.yaml"), &text).is_ok());
+}
+
+#[test]
+fn physically_absurd_robstride_values_are_refused_at_their_position() {
+    let bench = "bench:\n  devices:\n    bus: {kind: robstride, motors: [{id: 1, model: RS00}]}\n";
+    for (args, message) in [
+        (
+            "do: external_torque, torque_nm: 1e308",
+            "`torque_nm` must be between -1200 and 1200, got 1e308",
+        ),
+        (
+            "do: set_temperature, temp_c: 1e308",
+            "`temp_c` must be between -40 and 200, got 1e308",
+        ),
+    ] {
+        let text = format!("{bench}steps:\n  - robstride: {{motor: 1, {args}}}\n");
+        let err = error_of(&text);
+        assert!(err.starts_with("broken.yaml:5:"), "{err}");
+        assert!(err.ends_with(message), "{err}");
+    }
+}

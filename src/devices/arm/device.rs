@@ -315,6 +315,16 @@ impl Device for ArmDevice {
         }
     }
 
+    async fn emulator_health(&self, _last: bool) -> Result<(), String> {
+        match &self.emulator {
+            Emulator::Piper { sim, .. } => sim.health(),
+            Emulator::Realman(handle) => match lock(handle).as_ref() {
+                Some(h) => crate::devices::realman::realman_health(&h.snapshot()),
+                None => Ok(()),
+            },
+        }
+    }
+
     async fn shutdown(&self) {
         self.arm.disconnect().await;
         self.listener.abort();

@@ -19,6 +19,9 @@ pub(crate) trait EmulatorControl: Send + Sync {
     fn inject(&self, fault: &PiperFault) -> Result<(), String>;
     /// Clear one fault, or all.
     fn clear(&self, fault: Option<&PiperFault>) -> Result<(), String>;
+    /// `Err` with why once the emulator's physical state is not finite (see
+    /// [`Device::emulator_health`]).
+    fn health(&self) -> Result<(), String>;
     /// Stop the emulator.
     async fn shutdown(&self);
 }
@@ -109,6 +112,10 @@ impl Device for PiperDevice {
                 "emulator faults need the in-process emulator (not available with --iface)",
             )),
         }
+    }
+
+    async fn emulator_health(&self, _last: bool) -> Result<(), String> {
+        self.emulator.as_ref().map_or(Ok(()), |e| e.health())
     }
 
     async fn shutdown(&self) {

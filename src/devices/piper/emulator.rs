@@ -5,7 +5,9 @@ use std::sync::{Arc, Mutex, PoisonError};
 use async_trait::async_trait;
 use bus::CanBus;
 use sim::physics::ObstacleShape as SimShape;
-use sim::piper::{FirmwareProfile, Flash, PiperConfig, PiperEmulator, PiperFault, PiperHandle};
+use sim::piper::{
+    FirmwareProfile, Flash, PiperConfig, PiperEmulator, PiperFault, PiperHandle, PiperSimState,
+};
 
 use super::device::EmulatorControl;
 use super::model::{ObstacleShape, PiperSettings};
@@ -90,6 +92,10 @@ impl EmulatorControl for PiperSim {
         })
     }
 
+    fn health(&self) -> Result<(), String> {
+        self.with(|h| piper_health(&h.snapshot()))
+    }
+
     async fn shutdown(&self) {
         let handle = self
             .handle
@@ -99,5 +105,46 @@ impl EmulatorControl for PiperSim {
         if let Some(h) = handle {
             h.shutdown().await;
         }
+    }
+}
+
+/// Whether a Piper emulator's physical state is finite: joint positions, velocities and
+/// torques, and the gripper.
+pub(crate) fn piper_health(s: &PiperSimState) -> Result<(), String> {
+    let joints = (0..6).flat_map(|j| {
+        [
+            (
+                format!("joint {} position", j + 1),
+                s.joint_positions_rad[j],
+            ),
+            (
+                format!("joint {} velocity", j + 1),
+                s.joint_velocities_rad_s[j],
+            ),
+            (format!("joint {} torque", j + 1), s.joint_torques_nm[j]),
+        ]
+    });
+    crate::devices::finite_state(joints.chain([
+        ("the gripper stroke".to_owned(), s.gripper_stroke_m),
+        ("the gripper force".to_owned(), s.gripper_force_n),
+    ]))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[tokio::test(start_paused = true)]
+    async fn a_nan_physical_state_is_an_emulator_error() {
+        let bus = bus::virtual_bus::VirtualBus::new(bus::virtual_bus::VirtualBusConfig::default());
+        let node: Arc<dyn CanBus> = Arc::new(bus.attach("piper"));
+        let handle = PiperEmulator::spawn(node, PiperConfig::default()).unwrap();
+        let mut fw_state = handle.snapshot();
+        handle.shutdown().await;
+        assert_eq!(piper_health(&fw_state), Ok(()));
+        fw_state.joint_velocities_rad_s[1] = f64::NAN;
+        let err = piper_health(&fw_state).unwrap_err();
+        assert!(err.contains("joint 2 velocity is NaN"), "{err}");
+        assert!(err.contains("physics diverged"), "{err}");
     }
 }

@@ -275,10 +275,20 @@ impl EmuArgs<'_, '_> {
             .joint_required(&self.args.joint, self.kind.name(), self.at, false)
     }
 
-    /// A numeric parameter: the value written, else the table's default, else an error.
+    /// A numeric parameter: the value written, else the table's default, else an error. A
+    /// written value is checked against the table's range ([`sim::piper::FaultParam::check`],
+    /// the check the emulator applies), so an absurd one is an error at its line.
     fn number(&self, value: &Option<S<f64>>, key: &str) -> Res<f64> {
         match value {
-            Some(v) => self.ctx.finite(v, key),
+            Some(v) => {
+                let x = self.ctx.finite(v, key)?;
+                match self.kind.param(key) {
+                    Some(param) => param
+                        .check(x)
+                        .map_err(|e| self.ctx.err(pos(v), e.to_string())),
+                    None => Ok(x),
+                }
+            }
             None => {
                 let default = self
                     .kind
@@ -319,16 +329,9 @@ pub(crate) fn fault(ctx: &Ctx<'_>, raw: &RawFault, fpos: Pos) -> Res<PiperFault>
             temp_c: e.number(&a.temp_c, "temp_c")?,
         },
         FaultKind::OverCurrent => PiperFault::OverCurrent { joint: e.joint()? },
-        FaultKind::UnderVoltage => {
-            let voltage_v = e.number(&a.voltage_v, "voltage_v")?;
-            if voltage_v < 0.0 {
-                return Err(ctx.err(
-                    a.voltage_v.as_ref().map_or(fpos, pos),
-                    "`voltage_v` must be >= 0",
-                ));
-            }
-            PiperFault::UnderVoltage { voltage_v }
-        }
+        FaultKind::UnderVoltage => PiperFault::UnderVoltage {
+            voltage_v: e.number(&a.voltage_v, "voltage_v")?,
+        },
         FaultKind::DriverError => PiperFault::DriverError { joint: e.joint()? },
         FaultKind::Stall => PiperFault::Stall { joint: e.joint()? },
         FaultKind::ExternalTorque => PiperFault::ExternalTorque {

@@ -18,6 +18,21 @@ use super::Wiring;
 use crate::harness::{Clock, Device};
 use device::RealmanDevice;
 
+/// Whether a Realman emulator's physical state (joint angles and speeds) is finite.
+pub(crate) fn realman_health(s: &sim::realman::controller::ArmSnapshot) -> Result<(), String> {
+    let angles = s
+        .joints_rad
+        .iter()
+        .enumerate()
+        .map(|(j, q)| (format!("joint {} angle", j + 1), *q));
+    let speeds = s
+        .speeds_rad_s
+        .iter()
+        .enumerate()
+        .map(|(j, v)| (format!("joint {} speed", j + 1), *v));
+    crate::devices::finite_state(angles.chain(speeds))
+}
+
 /// Short description of a fault for logs and reports.
 pub fn describe_fault(fault: &Fault) -> String {
     fault.describe()

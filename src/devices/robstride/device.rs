@@ -57,7 +57,15 @@ pub(crate) struct RobstrideDevice {
     handle: tokio::sync::Mutex<Option<RobstrideHandle>>,
     /// The emulator's state folder; dropping it deletes the folder.
     state_dir: Mutex<Option<tempfile::TempDir>>,
+    /// The emulator's state, asked for after the last step and read after the next one (see
+    /// [`Device::emulator_health`]).
+    health_probe: Mutex<Option<HealthProbe>>,
 }
+
+/// A snapshot of every emulated motor, on its way.
+type HealthProbe = tokio::task::JoinHandle<
+    Result<Vec<sim::robstride::MotorSnapshot>, sim::robstride::RobstrideError>,
+>;
 
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
     // A poisoned map of handles is still consistent (inserts and removes are atomic).
@@ -128,6 +136,7 @@ impl RobstrideDevice {
             emulator,
             handle: tokio::sync::Mutex::new(handle),
             state_dir: Mutex::new(state_dir),
+            health_probe: Mutex::new(None),
         })
     }
 
@@ -435,6 +444,41 @@ impl Device for RobstrideDevice {
         Ok(())
     }
 
+    async fn emulator_health(&self, last: bool) -> Result<(), String> {
+        // The emulator answers through its own task: waiting for it between steps would let it
+        // run a tick before the next step's frames and shift every recorded run. So the
+        // question asked after one step is answered (and judged) after the next one.
+        let previous = lock(&self.health_probe).take();
+        let verdict = match previous {
+            Some(probe) if last || probe.is_finished() => match probe.await {
+                Ok(Ok(motors)) => rs_health(&motors),
+                // A stopped emulator answers nothing; the steps that need it report that.
+                _ => Ok(()),
+            },
+            Some(probe) => {
+                *lock(&self.health_probe) = Some(probe);
+                Ok(())
+            }
+            None => Ok(()),
+        };
+        if verdict.is_ok() {
+            if let Ok(guard) = self.handle.try_lock() {
+                if let Some(handle) = guard.as_ref() {
+                    let monitor = handle.monitor();
+                    let probe = tokio::spawn(async move { monitor.snapshot().await });
+                    if last {
+                        return match probe.await {
+                            Ok(Ok(motors)) => rs_health(&motors),
+                            _ => Ok(()),
+                        };
+                    }
+                    *lock(&self.health_probe) = Some(probe);
+                }
+            }
+        }
+        verdict
+    }
+
     async fn shutdown(&self) {
         if let Some(handle) = self.handle.lock().await.take() {
             handle.shutdown().await;
@@ -443,6 +487,19 @@ impl Device for RobstrideDevice {
         // Deletes the state folder (best effort: a leftover temp folder is harmless).
         drop(lock(&self.state_dir).take());
     }
+}
+
+/// Whether every emulated motor's physical state is finite.
+fn rs_health(motors: &[sim::robstride::MotorSnapshot]) -> Result<(), String> {
+    crate::devices::finite_state(motors.iter().flat_map(|m| {
+        let id = m.can_id;
+        [
+            (format!("motor {id} angle"), m.angle_rad),
+            (format!("motor {id} speed"), m.speed_rad_s),
+            (format!("motor {id} torque"), m.torque_nm),
+            (format!("motor {id} temperature"), m.temperature_c),
+        ]
+    }))
 }
 
 /// The RobStride fault inside a device fault (validation routes only RobStride faults here).
@@ -562,5 +619,22 @@ mod tests {
             classify(&RobstrideError::InvalidCanId { id: 0 }),
             ErrorClass::InvalidArgument
         );
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn a_nan_motor_state_is_an_emulator_error() {
+        let bus = VirtualBus::new(bus::virtual_bus::VirtualBusConfig::default());
+        let node: Arc<dyn CanBus> = Arc::new(bus.attach("emulator"));
+        let config = RobstrideConfig::new(vec![sim::robstride::MotorConfig::new(
+            4,
+            sim::robstride::Model::RS00,
+        )]);
+        let handle = RobstrideBus::spawn(node, config).unwrap();
+        let mut motors = handle.snapshot().await.unwrap();
+        handle.shutdown().await;
+        assert_eq!(rs_health(&motors), Ok(()));
+        motors[0].speed_rad_s = f64::INFINITY;
+        let err = rs_health(&motors).unwrap_err();
+        assert!(err.contains("motor 4 speed is inf"), "{err}");
     }
 }

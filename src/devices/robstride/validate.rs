@@ -5,6 +5,10 @@ use std::collections::BTreeMap;
 use std::time::Duration;
 
 use driver::robstride::OpControl;
+use sim::robstride::faults::{
+    check_bus_voltage_v, check_external_torque_nm, check_temperature_c, max_external_torque_nm,
+    ValueError as RsValueError,
+};
 use sim::robstride::{Fault, Load, Model, MotorConfig};
 
 use super::model::{
@@ -205,8 +209,28 @@ fn present_keys(a: &RawRsStep) -> Vec<(&'static str, Pos)> {
     out
 }
 
+/// A number the driver and emulator hold as `f32`: finite in `f32` too (1e308 would become
+/// infinity on the way).
 fn f32_of(ctx: &Ctx<'_>, v: &S<f64>, key: &str) -> Res<f32> {
-    Ok(ctx.finite(v, key)? as f32)
+    let single = ctx.finite(v, key)? as f32;
+    if single.is_finite() {
+        Ok(single)
+    } else {
+        Err(ctx.err(
+            pos(v),
+            format!("`{key}` is too large (beyond ±3.4e38, the range of the motor's numbers)"),
+        ))
+    }
+}
+
+/// A value of an emulator command, checked against the emulator's own bounds
+/// ([`sim::robstride::faults`]) so an absurd one is an error at its line, not NaN physics.
+fn emulator_value(
+    ctx: &Ctx<'_>,
+    v: &S<f64>,
+    check: impl Fn(f64) -> Result<f64, RsValueError>,
+) -> Res<f64> {
+    check(v.value).map_err(|e| ctx.err(pos(v), e.to_string()))
 }
 
 /// A RobStride step.
@@ -338,13 +362,35 @@ fn robstride_step(ctx: &Ctx<'_>, a: &RawRsStep, at: Pos) -> Res<(&'static str, S
         "inject" => RsCommand::Inject(fault(&a.fault)?),
         "remove_cause" => RsCommand::RemoveCause(fault(&a.fault)?),
         "set_temperature" => RsCommand::SetTemperature {
-            temp_c: f64::from(need(&a.temp_c, "temp_c")?),
+            temp_c: emulator_value(
+                ctx,
+                ctx.required(&a.temp_c, "temp_c", name, at)?,
+                check_temperature_c,
+            )?,
         },
         "set_bus_voltage" => RsCommand::SetBusVoltage {
-            voltage_v: f64::from(need(&a.voltage_v, "voltage_v")?),
+            voltage_v: emulator_value(
+                ctx,
+                ctx.required(&a.voltage_v, "voltage_v", name, at)?,
+                check_bus_voltage_v,
+            )?,
         },
+        // The motor's model is not known here: the largest model's bound catches the absurd
+        // values; the emulator checks the motor's own bound when the step runs.
         _ => RsCommand::ExternalTorque {
-            torque_nm: f64::from(need(&a.torque_nm, "torque_nm")?),
+            torque_nm: emulator_value(
+                ctx,
+                ctx.required(&a.torque_nm, "torque_nm", name, at)?,
+                |t| {
+                    let strongest = Model::ALL
+                        .into_iter()
+                        .max_by(|a, b| {
+                            max_external_torque_nm(*a).total_cmp(&max_external_torque_nm(*b))
+                        })
+                        .unwrap_or(Model::RS04);
+                    check_external_torque_nm(strongest, t)
+                },
+            )?,
         },
     };
     let motor = match (&command, &a.motor) {
@@ -581,6 +627,32 @@ mod tests {
             e.contains("`start_angle_rad` must be between -100 and 100"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn absurd_emulator_values_are_refused_at_their_position() {
+        let step = |args: &str| format!("{BENCH}steps:\n  - robstride: {{motor: 1, {args}}}\n");
+        let e = error_of(&step("do: external_torque, torque_nm: 1e308"));
+        assert_eq!(
+            e,
+            "broken.yaml:5:59: `torque_nm` must be between -1200 and 1200, got 1e308"
+        );
+        let e = error_of(&step("do: set_temperature, temp_c: 1e308"));
+        assert!(
+            e.starts_with("broken.yaml:5:56: `temp_c` must be between -40 and 200, got 1e308"),
+            "{e}"
+        );
+        let e = error_of(&step("do: set_bus_voltage, voltage_v: -3"));
+        assert!(
+            e.contains("`voltage_v` must be between 0 and 120, got -3"),
+            "{e}"
+        );
+        // Numbers the motor holds as f32 must fit one.
+        let e = error_of(&step("do: current, iq_a: 1e300"));
+        assert!(e.contains("`iq_a` is too large"), "{e}");
+        // Plausible values pass.
+        let ok = step("do: external_torque, torque_nm: -30.0");
+        assert!(parse_scenario(Path::new("ok.yaml"), &ok).is_ok());
     }
 
     #[test]

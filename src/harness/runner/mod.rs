@@ -102,16 +102,27 @@ impl Default for RunOptions {
 }
 
 impl RunOptions {
-    /// Scale a deadline and add the slack.
+    /// Scale a deadline and add the slack. Never panics: a factor that would overflow
+    /// `Duration` (`Duration::mul_f64` panics there) gives [`MAX_DEADLINE`], and so does
+    /// anything longer; the CLI refuses such factors before a run starts.
     pub(crate) fn deadline(&self, d: Duration) -> Duration {
         let scaled = if self.time_scale.is_finite() && self.time_scale > 0.0 {
-            d.mul_f64(self.time_scale)
+            Duration::try_from_secs_f64(d.as_secs_f64() * self.time_scale).unwrap_or(MAX_DEADLINE)
         } else {
             d
         };
-        scaled.saturating_add(self.deadline_slack)
+        scaled.saturating_add(self.deadline_slack).min(MAX_DEADLINE)
     }
 }
+
+/// Longest deadline a run uses, whatever the scaling: 1000 h, the longest a scenario can ask
+/// for (an hour) times the largest `--time-scale` (1000), and far from the overflow of an
+/// `Instant` plus a `Duration` (a panic) that an unbounded deadline risks.
+pub const MAX_DEADLINE: Duration = Duration::from_secs(1000 * 3600);
+
+/// Largest `--time-scale` factor: a VM under full emulation runs ~100× slower than the host;
+/// ten times that still leaves room, and more only turns typos into runs that never end.
+pub const MAX_TIME_SCALE: f64 = 1000.0;
 
 /// Polling period of `wait_until` and `expect … for_ms`.
 const POLL: Duration = Duration::from_millis(1);
@@ -215,6 +226,7 @@ async fn run_async(scenario: &Scenario, clock: &Clock, options: &RunOptions) -> 
     let mut steps = Vec::new();
     let mut failed = false;
     let mut interrupted: Option<String> = None;
+    let mut emulator_error: Option<String> = None;
     for step in &scenario.steps {
         if interrupted.is_none() {
             interrupted = options.interrupt.reason().map(|reason| {
@@ -240,7 +252,7 @@ async fn run_async(scenario: &Scenario, clock: &Clock, options: &RunOptions) -> 
         }
         let started = t0.elapsed();
         let step_start = Instant::now();
-        let (outcome, reply) = tokio::select! {
+        let (mut outcome, reply) = tokio::select! {
             ran = run_step(step, &devices, &faults, options) => ran,
             reason = options.interrupt.fired() => {
                 interrupted = Some(format!(
@@ -251,6 +263,17 @@ async fn run_async(scenario: &Scenario, clock: &Clock, options: &RunOptions) -> 
                 (Outcome::NotRun, Vec::new())
             }
         };
+        // A step that passed on an unsound emulator (NaN physics reads as an arm at rest at
+        // 0°) did not pass: the emulator's error fails it and ends the scenario.
+        if emulator_error.is_none() && outcome != Outcome::NotRun {
+            emulator_error = emulator_health(&devices, false).await;
+            if let Some(why) = &emulator_error {
+                outcome = Outcome::Failed {
+                    expected: "a sound emulator".to_owned(),
+                    actual: why.clone(),
+                };
+            }
+        }
         failed = !outcome.passed();
         steps.push(StepResult {
             index: step.index,
@@ -269,6 +292,10 @@ async fn run_async(scenario: &Scenario, clock: &Clock, options: &RunOptions) -> 
                 }
             }
         }
+    }
+    if emulator_error.is_none() && interrupted.is_none() {
+        // Scheduled faults may act after the last step.
+        emulator_error = emulator_health(&devices, true).await;
     }
     let duration = t0.elapsed();
     let trace = sampler.finish();
@@ -297,6 +324,9 @@ async fn run_async(scenario: &Scenario, clock: &Clock, options: &RunOptions) -> 
     let verdict = if let Some(why) = interrupted {
         failed = true;
         Verdict::Error(why)
+    } else if let Some(why) = emulator_error {
+        failed = true;
+        Verdict::Error(format!("emulator error: {why}"))
     } else if let Some(err) = fault_errors.first() {
         failed = true;
         Verdict::Error(format!("scheduled fault failed: {err}"))
@@ -502,6 +532,17 @@ async fn run_step(
     }
 }
 
+/// The first device whose emulator is unsound, as `device `name`: why` (`last`: see
+/// [`Device::emulator_health`]).
+async fn emulator_health(devices: &[Arc<dyn Device>], last: bool) -> Option<String> {
+    for dev in devices {
+        if let Err(why) = dev.emulator_health(last).await {
+            return Some(format!("device `{}`: {why}", dev.name()));
+        }
+    }
+    None
+}
+
 fn missing_device(index: usize) -> Outcome {
     Outcome::Failed {
         expected: format!("device #{index}"),
@@ -532,5 +573,22 @@ mod deadline_tests {
             RunOptions::default().deadline(Duration::from_millis(20)),
             Duration::from_millis(20)
         );
+    }
+
+    #[test]
+    fn an_absurd_factor_gives_the_longest_deadline_instead_of_a_panic() {
+        for time_scale in [1e300, f64::MAX, 1e20] {
+            let options = RunOptions {
+                time_scale,
+                deadline_slack: Duration::from_secs(600),
+                ..RunOptions::default()
+            };
+            assert_eq!(options.deadline(Duration::from_secs(3600)), MAX_DEADLINE);
+        }
+        let largest = RunOptions {
+            time_scale: MAX_TIME_SCALE,
+            ..RunOptions::default()
+        };
+        assert_eq!(largest.deadline(Duration::from_secs(3600)), MAX_DEADLINE);
     }
 }

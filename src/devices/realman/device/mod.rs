@@ -468,6 +468,13 @@ impl Device for RealmanDevice {
         Ok(())
     }
 
+    async fn emulator_health(&self, _last: bool) -> Result<(), String> {
+        match lock(&self.emu).as_ref() {
+            Some(emu) => crate::devices::realman::realman_health(&emu.snapshot()),
+            None => Ok(()),
+        }
+    }
+
     async fn shutdown(&self) {
         if let Some(task) = lock(&self.streaming).take() {
             task.abort();

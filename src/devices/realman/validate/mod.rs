@@ -89,30 +89,37 @@ pub(crate) fn step(ctx: &Ctx<'_>, raw: &RawStep, at: Pos) -> Res<(&'static str, 
 pub(crate) fn fault(ctx: &Ctx<'_>, raw: &RawFault, at: Pos) -> Res<RmFault> {
     let a = &raw.args;
     let name = raw.kind.name();
-    let int = |v: &Option<S<i64>>, key: &str, lo: i64, hi: i64| -> Res<i64> {
+    // Bounds from the emulator's table, the one the web view and Python check against too.
+    let int = |v: &Option<S<i64>>, key: &str| -> Res<i64> {
+        let (lo, hi) = raw.kind.param(key).map_or((0, i64::MAX), |p| {
+            (
+                i64::try_from(p.min).unwrap_or(i64::MAX),
+                i64::try_from(p.max).unwrap_or(i64::MAX),
+            )
+        });
         int_in(ctx, ctx.required(v, key, name, at)?, key, lo, hi)
     };
     let f = match raw.kind {
         RealmanFaultKind::ConnectionDrop => RealmanFault::ConnectionDrop { peer_ip: None },
         RealmanFaultKind::ReplyDelay => RealmanFault::ReplyDelay {
-            delay_ms: int(&a.delay_ms, "delay_ms", 1, 60_000)? as u64,
+            delay_ms: int(&a.delay_ms, "delay_ms")? as u64,
         },
         RealmanFaultKind::MalformedReply => RealmanFault::MalformedReply {
-            count: int(&a.count, "count", 1, 1000)? as u32,
+            count: int(&a.count, "count")? as u32,
         },
         RealmanFaultKind::UdpLoss => RealmanFault::UdpLoss {
-            permille: int(&a.permille, "permille", 0, 1000)? as u16,
+            permille: int(&a.permille, "permille")? as u16,
         },
         RealmanFaultKind::UdpReorder => RealmanFault::UdpReorder,
         RealmanFaultKind::JointError => RealmanFault::JointError {
-            joint: int(&a.joint, "joint", 1, 7)? as u8,
-            code: int(&a.code, "code", 1, 0xFFFF)? as u16,
+            joint: int(&a.joint, "joint")? as u8,
+            code: int(&a.code, "code")? as u16,
         },
         RealmanFaultKind::PowerLoss => RealmanFault::PowerLoss,
         RealmanFaultKind::Collision => RealmanFault::Collision,
         RealmanFaultKind::EStop => RealmanFault::EStop,
         RealmanFaultKind::GripperFault => RealmanFault::GripperFault {
-            bits: int(&a.bits, "bits", 1, 0xFF)? as u8,
+            bits: int(&a.bits, "bits")? as u8,
         },
     };
     Ok(RmFault(f))
