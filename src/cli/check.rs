@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use armhil::harness::{discover_suite, load_suite_file};
+use armhil::harness::{discover_suite, SuiteLoader};
 
 /// Arguments of `armhil check`.
 #[derive(Debug, clap::Args)]
@@ -21,8 +21,10 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         anyhow::bail!("no scenario files (*.yaml, *.yml) found");
     }
     let mut invalid = 0usize;
+    // Parses each file once, however many matrix variants it has.
+    let mut loader = SuiteLoader::new();
     for file in &files {
-        match load_suite_file(file) {
+        match loader.load(file) {
             Ok(s) => println!(
                 "ok    {} ({}: {} steps, {} scheduled faults{})",
                 file.path.display(),

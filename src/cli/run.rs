@@ -9,8 +9,8 @@ use armhil::harness::report::{
     index_html, junit_xml, write_atomic, write_outputs, IndexEntry, Written,
 };
 use armhil::harness::{
-    discover_suite, load_suite_file, run_scenario_with, Clock, Interrupt, Link, Outcome,
-    RunOptions, ScenarioResult, SuiteFile, Verdict,
+    discover_suite, run_scenario_with, Clock, Interrupt, Link, Outcome, RunOptions, ScenarioResult,
+    SuiteFile, SuiteLoader, Verdict, MAX_TIME_SCALE,
 };
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -49,15 +49,34 @@ pub struct Args {
     /// (or any socketcand server) at HOST:PORT, for machines without kernel CAN.
     #[arg(long, value_name = "HOST:PORT", conflicts_with = "iface")]
     socketcand: Option<String>,
-    /// Multiply every deadline (wait_until, action and driver timeouts) by this factor in
-    /// real-time runs, for slow machines such as a vcan VM under emulation. Ignored in virtual
-    /// time.
-    #[arg(long, value_name = "FACTOR", default_value_t = 1.0)]
+    /// Multiply every deadline (wait_until, action and driver timeouts) by this factor, 1 to
+    /// 1000, in real-time runs, for slow machines such as a vcan VM under emulation. Ignored
+    /// in virtual time.
+    #[arg(long, value_name = "FACTOR", default_value_t = 1.0, value_parser = parse_time_scale)]
     time_scale: f64,
     /// Add this many milliseconds to every deadline after scaling, in real-time runs: room for
     /// the multi-second stalls of an emulated VM. Ignored in virtual time.
     #[arg(long, value_name = "MS", default_value_t = 0, value_parser = clap::value_parser!(u64).range(0..=600_000))]
     deadline_slack_ms: u64,
+}
+
+/// A `--time-scale` factor: a number from 1 to [`MAX_TIME_SCALE`] (1000). Checked while the
+/// arguments are parsed, so `1e300` is a usage error naming the option, not a panic when the
+/// first deadline is scaled.
+fn parse_time_scale(text: &str) -> Result<f64, String> {
+    let shown = armhil::harness::elide_long_tokens(text);
+    let factor: f64 = text
+        .trim()
+        .parse()
+        .map_err(|_| format!("expected a number from 1 to {MAX_TIME_SCALE}, got `{shown}`"))?;
+    if factor.is_finite() && (1.0..=MAX_TIME_SCALE).contains(&factor) {
+        Ok(factor)
+    } else {
+        Err(format!(
+            "must be from 1 to {MAX_TIME_SCALE} (a factor beyond that makes a one-hour deadline \
+             longer than six weeks), got `{shown}`"
+        ))
+    }
 }
 
 /// `K/N` with 1 <= K <= N.
@@ -110,7 +129,7 @@ struct Ran {
 }
 
 /// Load, run and write one scenario.
-fn run_one(file: &SuiteFile, args: &Args, interrupt: &Interrupt) -> Ran {
+fn run_one(file: &SuiteFile, args: &Args, interrupt: &Interrupt, loader: &mut SuiteLoader) -> Ran {
     let clock_for = |bench_iface: Option<&String>| {
         if let Some(addr) = &args.socketcand {
             return Clock::Iface(Link::Socketcand(addr.clone()));
@@ -122,7 +141,7 @@ fn run_one(file: &SuiteFile, args: &Args, interrupt: &Interrupt) -> Ran {
             (None, false, _) => Clock::Virtual,
         }
     };
-    let scenario = match load_suite_file(file) {
+    let scenario = match loader.load(file) {
         Ok(s) => s,
         Err(e) => {
             let name = file.out_dir.to_string_lossy().into_owned();
@@ -177,17 +196,22 @@ fn run_parallel(
         files.iter().map(|_| std::sync::Mutex::new(None)).collect();
     std::thread::scope(|scope| {
         for _ in 0..jobs.clamp(1, files.len().max(1)) {
-            scope.spawn(|| loop {
-                if interrupt.reason().is_some() {
-                    break;
+            // One loader per worker: a file's matrix variants are parsed once per worker
+            // that runs one of them, not once per variant.
+            scope.spawn(|| {
+                let mut loader = SuiteLoader::new();
+                loop {
+                    if interrupt.reason().is_some() {
+                        break;
+                    }
+                    let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    let Some(file) = files.get(i) else { break };
+                    let ran = run_one(file, args, interrupt, &mut loader);
+                    done(&ran);
+                    *slots[i]
+                        .lock()
+                        .unwrap_or_else(std::sync::PoisonError::into_inner) = Some(ran);
                 }
-                let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                let Some(file) = files.get(i) else { break };
-                let ran = run_one(file, args, interrupt);
-                done(&ran);
-                *slots[i]
-                    .lock()
-                    .unwrap_or_else(std::sync::PoisonError::into_inner) = Some(ran);
             });
         }
     });
@@ -292,11 +316,9 @@ fn write_index(out: &Path, files: &[SuiteFile], ran: &[Ran]) -> Result<(), Strin
 
 /// Run every scenario; exit 0 only when none failed and every output was written.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    if !(args.time_scale.is_finite() && args.time_scale >= 1.0) {
-        anyhow::bail!(
-            "--time-scale must be a number >= 1, got {}",
-            args.time_scale
-        );
+    // Also checked while parsing; kept for `Args` built in code.
+    if parse_time_scale(&args.time_scale.to_string()).is_err() {
+        anyhow::bail!("--time-scale must be a number from 1 to {MAX_TIME_SCALE}");
     }
     let all = discover_suite(&args.paths)?;
     if all.is_empty() {
@@ -434,6 +456,37 @@ mod tests {
         assert!(parse_shard("0/4").is_err());
         assert!(parse_shard("5/4").is_err());
         assert!(parse_shard("x").is_err());
+    }
+
+    #[test]
+    fn time_scale_is_bounded_when_parsed() {
+        assert_eq!(parse_time_scale("1"), Ok(1.0));
+        assert_eq!(parse_time_scale("20"), Ok(20.0));
+        assert_eq!(parse_time_scale("1000"), Ok(1000.0));
+        for bad in ["1e300", "1000.5", "0.5", "0", "-3", "NaN", "inf", "x"] {
+            let err = parse_time_scale(bad).unwrap_err();
+            assert!(err.contains("from 1 to 1000"), "{bad}: {err}");
+        }
+        let digits = "9".repeat(300);
+        let err = parse_time_scale(&digits).unwrap_err();
+        assert!(err.len() < 200, "{err}");
+    }
+
+    #[test]
+    fn an_absurd_time_scale_is_a_usage_error_not_a_panic() {
+        use clap::Parser as _;
+        #[derive(clap::Parser)]
+        struct Cli {
+            #[command(flatten)]
+            args: Args,
+        }
+        let err = Cli::try_parse_from(["armhil", "--realtime", "--time-scale", "1e300", "x.yaml"])
+            .err()
+            .expect("refused");
+        assert_eq!(err.kind(), clap::error::ErrorKind::ValueValidation);
+        assert!(err.to_string().contains("--time-scale"), "{err}");
+        let ok = Cli::try_parse_from(["armhil", "--time-scale", "30", "x.yaml"]).expect("valid");
+        assert_eq!(ok.args.time_scale, 30.0);
     }
 
     #[test]

@@ -133,6 +133,40 @@ pub enum LoadError {
         /// The I/O error.
         source: std::io::Error,
     },
+    /// The file holds more than the limit (a regular file by its size; a device or pipe once
+    /// that much was read from it).
+    #[error(
+        "{}: larger than {} MiB, the limit for a scenario file (is it one?)",
+        path.display(),
+        limit_bytes / (1024 * 1024)
+    )]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// The limit, bytes.
+        limit_bytes: u64,
+    },
+    /// Not a regular file: a device (`/dev/zero` never ends), a pipe or a folder.
+    #[error(
+        "{}: not a regular file (a device, pipe or folder), so not read as a scenario",
+        path.display()
+    )]
+    NotAFile {
+        /// The path.
+        path: PathBuf,
+    },
+    /// Scenario folders lead back into themselves through a symbolic link.
+    #[error(
+        "{}: symbolic link loop: it leads back to {}, which is already being searched",
+        link.display(),
+        target.display()
+    )]
+    SymlinkLoop {
+        /// The link (as found while searching).
+        link: PathBuf,
+        /// The folder it resolves to.
+        target: PathBuf,
+    },
     /// The file was read but is not a valid scenario.
     #[error("{0}")]
     Invalid(#[from] Box<ScenarioError>),
@@ -143,7 +177,10 @@ impl LoadError {
     pub fn scenario_error(&self) -> Option<&ScenarioError> {
         match self {
             Self::Invalid(error) => Some(error),
-            Self::Io { .. } => None,
+            Self::Io { .. }
+            | Self::TooLarge { .. }
+            | Self::NotAFile { .. }
+            | Self::SymlinkLoop { .. } => None,
         }
     }
 }

@@ -16,7 +16,7 @@ pub(crate) mod validate;
 pub use error::{elide_long_tokens, LoadError, Pos, ScenarioError};
 pub use load::{
     discover, discover_suite, load_scenario, load_suite_file, parse_scenario, parse_variant,
-    SuiteFile,
+    SuiteFile, SuiteLoader, MAX_SCENARIO_BYTES,
 };
 pub use model::Scenario;
 pub(crate) mod bench;
@@ -29,7 +29,10 @@ pub use bench::HOST_NODE;
 pub use device::{Device, DeviceError, Reply, TraceColumn};
 pub use interrupt::{Interrupt, InterruptTrigger};
 pub use result::{Outcome, ScenarioResult, StepResult, Verdict};
-pub use runner::{run_scenario, run_scenario_with, Clock, Link, Recording, RunOptions};
+pub use runner::{
+    run_scenario, run_scenario_with, Clock, Link, Recording, RunOptions, MAX_DEADLINE,
+    MAX_TIME_SCALE,
+};
 #[cfg(test)]
 pub(crate) mod test_support;
 #[cfg(test)]

@@ -265,7 +265,15 @@ impl<'a> Ctx<'a> {
 }
 
 /// Validate a raw scenario.
-pub(crate) fn validate(ctx: &mut Ctx<'_>, raw: RawScenario) -> Res<Scenario> {
+///
+/// The file's `matrix:` comes already checked ([`matrix_shape`]): a file of N variants is
+/// parsed and its matrix checked once, then each variant costs what its steps cost, not N
+/// more (which made `armhil check` quadratic in the matrix's size).
+pub(crate) fn validate_with(
+    ctx: &mut Ctx<'_>,
+    raw: &RawScenario,
+    shape: &Res<Option<MatrixShape>>,
+) -> Res<Scenario> {
     let name = match &raw.name {
         Some(name) => {
             let ok = !name.value.is_empty()
@@ -299,7 +307,7 @@ pub(crate) fn validate(ctx: &mut Ctx<'_>, raw: RawScenario) -> Res<Scenario> {
         }
         tags.push(tag.value.clone());
     }
-    ctx.matrix = matrix(ctx, raw.matrix.as_ref())?;
+    ctx.matrix = pick_variant(ctx, shape.as_ref().map_err(Clone::clone)?.as_ref())?;
     let variant = ctx.matrix.as_ref().map(|(_, v)| v.clone());
     let name = match &variant {
         Some(v) => format!("{name}@{v}"),
@@ -366,17 +374,26 @@ pub(crate) fn validate(ctx: &mut Ctx<'_>, raw: RawScenario) -> Res<Scenario> {
     Ok(scenario)
 }
 
-/// `matrix: {key: [values]}`: one parameter, each value a run of its own. Checks the shape and
-/// that the requested variant is one of the values.
-fn matrix(ctx: &Ctx<'_>, raw: Option<&S<RawMatrix>>) -> Res<Option<(String, String)>> {
+/// A file's `matrix:` once its shape is checked: the parameter, its values, and where they
+/// are written (for the errors of a variant that is not among them).
+#[derive(Debug, Clone)]
+pub(crate) struct MatrixShape {
+    key: String,
+    /// The values in file order (for messages).
+    listed: Vec<String>,
+    /// The same values, to look a variant up without a scan.
+    values: std::collections::HashSet<String>,
+    /// Where `matrix:` and its list are written.
+    at: Pos,
+    list_at: Pos,
+}
+
+/// `matrix: {key: [values]}`: one parameter, each value a run of its own. Checks the shape in
+/// one pass over the values (duplicates through a set: the pairwise comparison this replaced
+/// was quadratic in the number of values, per variant).
+pub(crate) fn matrix_shape(ctx: &Ctx<'_>, raw: Option<&S<RawMatrix>>) -> Res<Option<MatrixShape>> {
     let Some(raw) = raw else {
-        return match &ctx.variant {
-            Some(v) => Err(ctx.err(
-                Pos::default(),
-                format!("variant `{v}` requested, but the file has no `matrix:`"),
-            )),
-            None => Ok(None),
-        };
+        return Ok(None);
     };
     let mut entries = raw.value.iter();
     let (key, values) =
@@ -390,7 +407,8 @@ fn matrix(ctx: &Ctx<'_>, raw: Option<&S<RawMatrix>>) -> Res<Option<(String, Stri
     if values.value.is_empty() {
         return Err(ctx.err(pos(values), format!("`matrix.{key}` lists no value")));
     }
-    for (i, v) in values.value.iter().enumerate() {
+    let mut seen = std::collections::HashSet::with_capacity(values.value.len());
+    for v in &values.value {
         let ok = !v.value.is_empty()
             && v.value
                 .chars()
@@ -401,22 +419,43 @@ fn matrix(ctx: &Ctx<'_>, raw: Option<&S<RawMatrix>>) -> Res<Option<(String, Stri
                 "matrix values use letters, digits, '-' and '_' (each names an output folder)",
             ));
         }
-        if values.value[..i].iter().any(|w| w.value == v.value) {
+        if !seen.insert(v.value.clone()) {
             return Err(ctx.err(pos(v), format!("`{}` is listed twice", v.value)));
         }
     }
-    let listed: Vec<&str> = values.value.iter().map(|v| v.value.as_str()).collect();
+    Ok(Some(MatrixShape {
+        key: key.clone(),
+        listed: values.value.iter().map(|v| v.value.clone()).collect(),
+        values: seen,
+        at: pos(raw),
+        list_at: pos(values),
+    }))
+}
+
+/// The variant being loaded as `(parameter, value)`: it must be one of the matrix's values,
+/// and a file with a matrix must be loaded as one of its variants.
+fn pick_variant(ctx: &Ctx<'_>, shape: Option<&MatrixShape>) -> Res<Option<(String, String)>> {
+    let Some(shape) = shape else {
+        return match &ctx.variant {
+            Some(v) => Err(ctx.err(
+                Pos::default(),
+                format!("variant `{v}` requested, but the file has no `matrix:`"),
+            )),
+            None => Ok(None),
+        };
+    };
+    let key = &shape.key;
     match &ctx.variant {
-        Some(v) if listed.contains(&v.as_str()) => Ok(Some((key.clone(), v.clone()))),
+        Some(v) if shape.values.contains(v) => Ok(Some((key.clone(), v.clone()))),
         Some(v) => Err(ctx.err(
-            pos(values),
-            format!("variant `{v}` is not in `matrix.{key}` ({})", listed.join(", ")),
+            shape.list_at,
+            format!("variant `{v}` is not in `matrix.{key}` ({})", shape.listed.join(", ")),
         )),
         None => Err(ctx.err(
-            pos(raw),
+            shape.at,
             format!(
                 "this file runs once per `{key}` ({}); run it as a suite (`armhil run FILE`), which expands the matrix",
-                listed.join(", ")
+                shape.listed.join(", ")
             ),
         )),
     }
