@@ -34,7 +34,7 @@ pub struct Args {
     jobs: Option<usize>,
     /// Run only shard K of N (1-based): the K-th of N interleaved slices of the suite in path
     /// order, so N machines running 1/N .. N/N together run every scenario once.
-    #[arg(long, value_name = "K/N", value_parser = parse_shard)]
+    #[arg(long, value_name = "K/N", value_parser = Short(parse_shard))]
     shard: Option<(usize, usize)>,
     /// Run on the real clock instead of virtual time: on the scenario's `bench.bus.interface`
     /// when it names one, else with the in-process emulator on the virtual bus.
@@ -52,11 +52,11 @@ pub struct Args {
     /// Multiply every deadline (wait_until, action and driver timeouts) by this factor, 1 to
     /// 1000, in real-time runs, for slow machines such as a vcan VM under emulation. Ignored
     /// in virtual time.
-    #[arg(long, value_name = "FACTOR", default_value_t = 1.0, value_parser = parse_time_scale)]
+    #[arg(long, value_name = "FACTOR", default_value_t = 1.0, value_parser = Short(parse_time_scale))]
     time_scale: f64,
     /// Add this many milliseconds to every deadline after scaling, in real-time runs: room for
     /// the multi-second stalls of an emulated VM. Ignored in virtual time.
-    #[arg(long, value_name = "MS", default_value_t = 0, value_parser = clap::value_parser!(u64).range(0..=600_000))]
+    #[arg(long, value_name = "MS", default_value_t = 0, value_parser = Short(parse_slack_ms))]
     deadline_slack_ms: u64,
 }
 
@@ -77,6 +77,43 @@ fn parse_time_scale(text: &str) -> Result<f64, String> {
              longer than six weeks), got `{shown}`"
         ))
     }
+}
+
+/// A value parser whose error says what is wrong without echoing the value whole: clap's own
+/// "invalid value '…'" repeats the raw argument, and a 300-digit number came back in full.
+#[derive(Clone)]
+struct Short<F>(F);
+
+impl<T, F> clap::builder::TypedValueParser for Short<F>
+where
+    T: Clone + Send + Sync + 'static,
+    F: Fn(&str) -> Result<T, String> + Clone + Send + Sync + 'static,
+{
+    type Value = T;
+
+    fn parse_ref(
+        &self,
+        _cmd: &clap::Command,
+        arg: Option<&clap::Arg>,
+        value: &std::ffi::OsStr,
+    ) -> Result<T, clap::Error> {
+        let option = arg.map_or_else(String::new, |a| format!(" for '{a}'"));
+        (self.0)(&value.to_string_lossy()).map_err(|why| {
+            clap::Error::raw(
+                clap::error::ErrorKind::ValueValidation,
+                armhil::harness::elide_long_tokens(&format!("invalid value{option}: {why}\n")),
+            )
+        })
+    }
+}
+
+/// `--deadline-slack-ms`: 0 to 600 000 (ten minutes, longer than any stall a slow VM shows).
+fn parse_slack_ms(text: &str) -> Result<u64, String> {
+    text.trim()
+        .parse::<u64>()
+        .ok()
+        .filter(|ms| *ms <= 600_000)
+        .ok_or_else(|| format!("expected milliseconds from 0 to 600000, got `{text}`"))
 }
 
 /// `K/N` with 1 <= K <= N.
@@ -470,6 +507,27 @@ mod tests {
         let digits = "9".repeat(300);
         let err = parse_time_scale(&digits).unwrap_err();
         assert!(err.len() < 200, "{err}");
+    }
+
+    #[test]
+    fn option_errors_do_not_echo_huge_values() {
+        use clap::Parser as _;
+        #[derive(clap::Parser)]
+        struct Cli {
+            #[command(flatten)]
+            args: Args,
+        }
+        let digits = format!("1{}", "0".repeat(300));
+        for option in ["--time-scale", "--deadline-slack-ms", "--shard"] {
+            let err = Cli::try_parse_from(["armhil", option, &digits, "x.yaml"])
+                .err()
+                .expect("refused")
+                .to_string();
+            assert!(err.contains(option), "{err}");
+            assert!(err.len() < 300, "{option}: {err}");
+        }
+        let ok = Cli::try_parse_from(["armhil", "--deadline-slack-ms", "150", "x.yaml"]).unwrap();
+        assert_eq!(ok.args.deadline_slack_ms, 150);
     }
 
     #[test]
