@@ -13,18 +13,20 @@ pub mod sim;
 /// said once (many errors already print their source in their own text, so anyhow's `{:#}`
 /// would repeat it), with over-long tokens elided.
 pub fn error_text(error: &anyhow::Error) -> String {
-    let mut text = String::new();
+    let mut parts: Vec<String> = Vec::new();
     for cause in error.chain() {
         let part = cause.to_string();
-        if text.contains(&part) {
+        if parts.iter().any(|said| said.contains(&part)) {
             continue;
         }
-        if !text.is_empty() {
-            text.push_str(": ");
+        // A context such as "cannot read x.log" over a cause that already begins with it
+        // ("cannot read x.log: No such file…"): say the fuller one, once.
+        match parts.last_mut() {
+            Some(last) if part.starts_with(last.as_str()) => *last = part,
+            _ => parts.push(part),
         }
-        text.push_str(&part);
     }
-    armhil::harness::elide_long_tokens(&text)
+    armhil::harness::elide_long_tokens(&parts.join(": "))
 }
 
 #[cfg(test)]
@@ -47,6 +49,16 @@ mod tests {
             text.starts_with("replay failed: cannot read x.log: "),
             "{text}"
         );
+    }
+
+    #[test]
+    fn a_context_the_cause_begins_with_is_said_once() {
+        let io = std::io::Error::from_raw_os_error(2);
+        let error = anyhow::Error::new(Echoing { source: io }).context("cannot read x.log");
+        let text = error_text(&error);
+        assert_eq!(text.matches("cannot read x.log").count(), 1, "{text}");
+        assert!(text.starts_with("cannot read x.log: "), "{text}");
+        assert!(text.contains("os error 2"), "{text}");
     }
 
     #[test]
