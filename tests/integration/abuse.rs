@@ -220,8 +220,6 @@ fn a_web_pages_post_to_the_socketcand_port_puts_nothing_on_the_bus() {
         "the page's e-stop reached the bus"
     );
     // The same elements from a socketcand client do reach it (so the test can fail).
-    // (Kept open while the observer looks: a client that closes at once may lose its last
-    // frames, D15.)
     let mut client = connect(port);
     client.write_all(estop.as_bytes()).unwrap();
     assert!(
