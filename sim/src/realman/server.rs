@@ -242,6 +242,9 @@ fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
 
 /// Apply `fault` to the transport or the controller.
 fn inject_fault(shared: &Shared, fault: RealmanFault) -> Result<(), FaultError> {
+    // The fault table's ranges, here too: every front end (scenarios, web view, Python, Rust
+    // callers) reaches the emulator through this function.
+    fault.check()?;
     tracing::info!(fault = fault.name(), "Realman fault injected");
     match fault {
         RealmanFault::ConnectionDrop { peer_ip } => {

@@ -182,6 +182,19 @@ async fn push_cycle_port_and_ip_follow_set_realtime_push() {
 }
 
 #[tokio::test(start_paused = true)]
+async fn a_fault_value_outside_the_table_is_refused_and_changes_nothing() {
+    let emu = emulator().await;
+    let mut c = client(&emu);
+    let refused = emu.inject(RealmanFault::ReplyDelay { delay_ms: u64::MAX });
+    assert!(refused.is_err(), "{refused:?}");
+    c.send("{\"command\":\"get_joint_degree\"}\r\n").await;
+    assert!(
+        c.line(Duration::from_millis(100)).await.is_some(),
+        "replies are not delayed"
+    );
+}
+
+#[tokio::test(start_paused = true)]
 async fn reply_delay_fault_delays_replies_past_the_sdk_timeout() {
     let emu = emulator().await;
     let mut c = client(&emu);
