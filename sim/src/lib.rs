@@ -10,6 +10,7 @@
 //!   write).
 //! - [`supervise`]: an emulator task's panic or failure, made observable ([`supervise::DeathWatch`]).
 
+pub mod bounded_read;
 pub mod cpu_budget;
 pub mod physics;
 pub mod piper;

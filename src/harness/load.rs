@@ -147,34 +147,19 @@ pub const MAX_SCENARIO_BYTES: u64 = 16 * 1024 * 1024;
 /// two reads a suite makes), and one over the limit is refused by its size before reading; the
 /// read itself stops at the limit too, in case the file grows meanwhile.
 fn read_bounded(path: &Path) -> Result<Vec<u8>, LoadError> {
-    use std::io::Read as _;
-    let io = |source| LoadError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    let too_large = || LoadError::TooLarge {
-        path: path.to_path_buf(),
-        limit_bytes: MAX_SCENARIO_BYTES,
-    };
-    // Checked before opening: opening a FIFO without a writer would block.
-    let meta = std::fs::metadata(path).map_err(io)?;
-    if !meta.is_file() {
-        return Err(LoadError::NotAFile {
-            path: path.to_path_buf(),
-        });
-    }
-    if meta.len() > MAX_SCENARIO_BYTES {
-        return Err(too_large());
-    }
-    let file = std::fs::File::open(path).map_err(io)?;
-    let mut bytes = Vec::new();
-    file.take(MAX_SCENARIO_BYTES + 1)
-        .read_to_end(&mut bytes)
-        .map_err(io)?;
-    if bytes.len() as u64 > MAX_SCENARIO_BYTES {
-        return Err(too_large());
-    }
-    Ok(bytes)
+    use sim::bounded_read::{read_regular_file, BoundedReadError};
+    let path_buf = path.to_path_buf();
+    read_regular_file(path, MAX_SCENARIO_BYTES).map_err(|error| match error {
+        BoundedReadError::NotAFile => LoadError::NotAFile { path: path_buf },
+        BoundedReadError::TooLarge { limit_bytes } => LoadError::TooLarge {
+            path: path_buf,
+            limit_bytes,
+        },
+        BoundedReadError::Io(source) => LoadError::Io {
+            path: path_buf,
+            source,
+        },
+    })
 }
 
 /// The `matrix:` of a file alone (every other key ignored).

@@ -549,28 +549,18 @@ pub const MAX_URDF_BYTES: u64 = 16 * 1024 * 1024;
 
 /// The text of the URDF file `path`: a regular file of at most [`MAX_URDF_BYTES`].
 pub(crate) fn read_urdf(path: &std::path::Path) -> Result<String, PhysicsError> {
-    use std::io::Read as _;
+    use crate::bounded_read::{read_regular_file, BoundedReadError};
     let fail = |source| PhysicsError::Io {
         path: path.to_owned(),
         source,
     };
     let refuse = |why: &str| fail(std::io::Error::new(std::io::ErrorKind::InvalidData, why));
-    let meta = std::fs::metadata(path).map_err(fail)?;
-    if !meta.is_file() {
-        return Err(refuse("not a regular file"));
-    }
-    let limit = "larger than 16 MiB, the limit for a URDF file";
-    if meta.len() > MAX_URDF_BYTES {
-        return Err(refuse(limit));
-    }
-    let mut xml = String::new();
-    std::fs::File::open(path)
-        .map_err(fail)?
-        .take(MAX_URDF_BYTES + 1)
-        .read_to_string(&mut xml)
-        .map_err(fail)?;
-    if xml.len() as u64 > MAX_URDF_BYTES {
-        return Err(refuse(limit));
-    }
-    Ok(xml)
+    let bytes = read_regular_file(path, MAX_URDF_BYTES).map_err(|error| match error {
+        BoundedReadError::NotAFile => refuse("not a regular file"),
+        BoundedReadError::TooLarge { .. } => {
+            refuse("larger than 16 MiB, the limit for a URDF file")
+        }
+        BoundedReadError::Io(source) => fail(source),
+    })?;
+    String::from_utf8(bytes).map_err(|_| refuse("stream did not contain valid UTF-8"))
 }
