@@ -14,10 +14,13 @@ use crate::robstride::control::{
     OpCommand, Profile, SpeedEnvelope, SpeedLoop, ZERO_MODE_SPEED_RAD_S,
 };
 use crate::robstride::faults::{self, Fault, Phase, WARNING_OVER_TEMP};
+use crate::robstride::host_params;
 use crate::robstride::model::{Model, ModelSpec, RangeTable, Ranges};
 use crate::robstride::params::{self, index, Access, ParamStore};
 use crate::robstride::rig::{Load, Plant, RigPlant, WorldPlant};
 use crate::state_file::InvalidField;
+
+mod host;
 
 /// Host ID the manuals use and the motor assumes until a host speaks.
 pub const DEFAULT_HOST_ID: u8 = 0xFD;
@@ -652,7 +655,8 @@ impl Actuator {
     }
 
     fn read_param(&self, idx: u16) -> Option<CanFrame> {
-        let Some(spec) = self.params.spec(idx) else {
+        // 0x70xx and the host tables (0x20xx/0x30xx); see `host.rs`.
+        let Some(bytes) = self.param_bytes(idx) else {
             // Failure echo as captured on hardware: status 1, zero payload.
             return codec::frame(
                 CommType::ReadParam,
@@ -661,14 +665,6 @@ impl Actuator {
                 [0; 8],
             );
         };
-        let value = match idx {
-            index::MECH_POS => self.angle_rad(),
-            index::IQF => self.iq_a,
-            index::MECH_VEL => self.plant.velocity_rad_s(),
-            index::VBUS => self.bus_voltage_v,
-            _ => self.params.get(idx),
-        };
-        let bytes = params::encode_value(spec.ty, value);
         let [lo, hi] = idx.to_le_bytes();
         let data = [lo, hi, 0, 0, bytes[0], bytes[1], bytes[2], bytes[3]];
         codec::frame(
@@ -680,17 +676,12 @@ impl Actuator {
     }
 
     fn write_param(&mut self, idx: u16, bytes: [u8; 4]) -> Option<CanFrame> {
+        if let Some(row) = host_params::lookup(self.config.model, idx) {
+            return self.write_host_param(row, bytes);
+        }
         let spec = self.params.spec(idx).copied();
-        let refusal = || {
-            // Not documented for writes: the type-17 failure flag with the index echoed.
-            let [lo, hi] = idx.to_le_bytes();
-            codec::frame(
-                CommType::ReadParam,
-                self.reply_data2(1),
-                self.master_id,
-                [lo, hi, 0, 0, 0, 0, 0, 0],
-            )
-        };
+        // Not documented for writes: the type-17 failure flag with the index echoed.
+        let refusal = || self.write_refusal(idx);
         let Some(spec) = spec.filter(|spec| spec.access == Access::ReadWrite) else {
             return refusal();
         };

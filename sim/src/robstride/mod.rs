@@ -28,6 +28,7 @@ mod actuator;
 pub mod codec;
 pub mod control;
 pub mod faults;
+pub mod host_params;
 pub mod model;
 pub mod params;
 pub mod rig;

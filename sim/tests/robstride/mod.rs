@@ -1,5 +1,6 @@
 //! The RobStride actuator emulator.
 
 mod conformance;
+mod host_params;
 mod on_bus;
 mod physics;
