@@ -21,6 +21,7 @@ use crate::robstride::rig::{Load, Plant, RigPlant, WorldPlant};
 use crate::state_file::InvalidField;
 
 mod host;
+mod mit;
 
 /// Host ID the manuals use and the motor assumes until a host speaks.
 pub const DEFAULT_HOST_ID: u8 = 0xFD;
@@ -367,8 +368,9 @@ impl Actuator {
             }
             None => (config.can_id, DEFAULT_HOST_ID, 0.0, 1, 0),
         };
-        // A node at another bit rate cannot decode the bus; another protocol ignores ours.
-        let listening = baud_code_bps(baud) == Some(bus_bitrate_bps) && protocol == 0;
+        // A node at another bit rate cannot decode the bus.
+        let listening = baud_code_bps(baud) == Some(bus_bitrate_bps)
+            && (protocol == 0 || protocol == mit::PROTOCOL_MIT);
         Self {
             uid: config.effective_uid(),
             temperature_c: config.ambient_c,
@@ -455,6 +457,9 @@ impl Actuator {
     /// React to a frame from the bus; returns the frames the motor sends in reply.
     pub fn handle_frame(&mut self, frame: &CanFrame) -> Vec<CanFrame> {
         let mut out = Vec::new();
+        if self.listening && self.protocol == mit::PROTOCOL_MIT {
+            return self.handle_mit_frame(frame);
+        }
         if !self.listening || !frame.is_extended() {
             return out;
         }
@@ -799,7 +804,12 @@ impl Actuator {
                     ReportType::Type24 => CommType::ActiveReport,
                     ReportType::Type2 => CommType::Status,
                 };
-                out.extend(self.status_frame(comm));
+                if self.protocol == mit::PROTOCOL_MIT {
+                    // MIT command 13: reports are Response 1 frames.
+                    out.extend(self.mit_status());
+                } else {
+                    out.extend(self.status_frame(comm));
+                }
             }
         }
         out
@@ -983,7 +993,8 @@ impl Actuator {
             );
             self.stop();
         }
-        if self.listening {
+        // Type 21 is a private-protocol frame; the MIT variant shows faults in its replies.
+        if self.listening && self.protocol == 0 {
             self.fault_frame()
         } else {
             None

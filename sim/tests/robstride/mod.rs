@@ -2,5 +2,6 @@
 
 mod conformance;
 mod host_params;
+mod mit;
 mod on_bus;
 mod physics;

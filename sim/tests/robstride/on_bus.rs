@@ -127,6 +127,7 @@ async fn baud_and_protocol_switches_take_effect_after_a_restart() {
     assert!(!path.with_extension("json.tmp").exists());
 
     let bus = VirtualBus::new(VirtualBusConfig::default());
+    let config_again = config.clone();
     let emulator = spawn(&bus, config);
     let host = bus.attach("host");
     host.send(ext(0x0000_FD01, [0; 8])).await.unwrap();
@@ -134,7 +135,38 @@ async fn baud_and_protocol_switches_take_effect_after_a_restart() {
     assert!(collect(&host, Duration::from_millis(50)).await.is_empty());
     let snapshot = emulator.snapshot().await.unwrap();
     assert_eq!((snapshot[0].baud_code, snapshot[0].listening), (2, false));
-    assert_eq!((snapshot[1].protocol, snapshot[1].listening), (2, false));
+    // Motor 2 speaks MIT now: deaf to private frames, answers an MIT enable with Response 1.
+    assert_eq!((snapshot[1].protocol, snapshot[1].listening), (2, true));
+    let mit = |data: [u8; 8]| CanFrame::standard(0x002, &data).unwrap();
+    host.send(mit([0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFC]))
+        .await
+        .unwrap();
+    let replies = collect(&host, Duration::from_millis(20)).await;
+    assert_eq!(replies.len(), 1, "{replies:?}");
+    assert_eq!(
+        (replies[0].is_extended(), replies[0].raw_id()),
+        (false, 0xFD)
+    );
+    assert_eq!(replies[0].data()[0], 2, "motor ID in byte 0");
+    assert_eq!(replies[0].data()[6] >> 6, 2, "running");
+    // MIT command 8 back to private: Response 2 (the UID) now, private after the power cycle.
+    host.send(mit([0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0x00, 0xFD]))
+        .await
+        .unwrap();
+    let replies = collect(&host, Duration::from_millis(20)).await;
+    assert_eq!(replies.len(), 1, "{replies:?}");
+    assert_eq!(
+        (replies[0].is_extended(), replies[0].raw_id()),
+        (false, 0x002)
+    );
+    emulator.shutdown().await;
+    let bus = VirtualBus::new(VirtualBusConfig::default());
+    let emulator = spawn(&bus, config_again);
+    let host = bus.attach("host");
+    host.send(ext(0x0000_FD02, [0; 8])).await.unwrap();
+    let replies = collect(&host, Duration::from_millis(20)).await;
+    assert_eq!(replies.len(), 1, "private again: {replies:?}");
+    assert_eq!(replies[0].raw_id(), 0x0000_02FE);
     emulator.shutdown().await;
     let _ = std::fs::remove_file(path);
 }
