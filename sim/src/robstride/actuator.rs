@@ -20,6 +20,7 @@ use crate::robstride::params::{self, index, Access, ParamStore};
 use crate::robstride::rig::{Load, Plant, RigPlant, WorldPlant};
 use crate::state_file::InvalidField;
 
+mod canopen;
 mod host;
 mod mit;
 
@@ -335,6 +336,8 @@ pub struct Actuator {
     listening: bool,
     persist_requested: bool,
     saved_params: BTreeMap<u16, f64>,
+    /// NMT, drive state and targets while speaking CANopen (protocol 1).
+    canopen: canopen::CanopenNode,
 }
 
 impl Actuator {
@@ -370,7 +373,9 @@ impl Actuator {
         };
         // A node at another bit rate cannot decode the bus.
         let listening = baud_code_bps(baud) == Some(bus_bitrate_bps)
-            && (protocol == 0 || protocol == mit::PROTOCOL_MIT);
+            && (protocol == 0
+                || protocol == canopen::PROTOCOL_CANOPEN
+                || protocol == mit::PROTOCOL_MIT);
         Self {
             uid: config.effective_uid(),
             temperature_c: config.ambient_c,
@@ -405,6 +410,7 @@ impl Actuator {
             listening,
             persist_requested: false,
             saved_params,
+            canopen: canopen::CanopenNode::new(),
         }
     }
 
@@ -457,6 +463,9 @@ impl Actuator {
     /// React to a frame from the bus; returns the frames the motor sends in reply.
     pub fn handle_frame(&mut self, frame: &CanFrame) -> Vec<CanFrame> {
         let mut out = Vec::new();
+        if self.listening && self.protocol == canopen::PROTOCOL_CANOPEN {
+            return self.handle_canopen_frame(frame);
+        }
         if self.listening && self.protocol == mit::PROTOCOL_MIT {
             return self.handle_mit_frame(frame);
         }
@@ -812,6 +821,9 @@ impl Actuator {
                 }
             }
         }
+        if self.listening && self.protocol == canopen::PROTOCOL_CANOPEN {
+            out.extend(self.canopen_tick());
+        }
         out
     }
 
@@ -993,7 +1005,8 @@ impl Actuator {
             );
             self.stop();
         }
-        // Type 21 is a private-protocol frame; the MIT variant shows faults in its replies.
+        // Type 21 is a private-protocol frame; the MIT variant shows faults in its replies and
+        // a CANopen node sends EMCY (see `canopen`).
         if self.listening && self.protocol == 0 {
             self.fault_frame()
         } else {

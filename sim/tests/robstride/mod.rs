@@ -1,5 +1,6 @@
 //! The RobStride actuator emulator.
 
+mod canopen;
 mod conformance;
 mod host_params;
 mod mit;
