@@ -21,8 +21,10 @@
 //! - Enabling holds the current position (loc_ref and the PP target are set to it) and is
 //!   refused while a fault is latched. Faults stop the motor; stop + clear (type 4, byte0 = 1)
 //!   clears the bits whose cause is gone.
-//! - Baud and protocol switches take effect at the next spawn: a motor at another bit rate or
-//!   protocol ignores the bus (the MIT and CANopen protocols themselves are not emulated).
+//! - Baud and protocol switches take effect at the next spawn: a motor at another bit rate
+//!   ignores the bus; one switched to MIT or CANopen speaks that protocol instead (the MIT
+//!   variant on 11-bit IDs; CANopen as a CiA-301 node with the CiA-402 drive objects, see
+//!   `docs/protocols/robstride.md` §12 and §13).
 
 mod actuator;
 pub mod codec;
