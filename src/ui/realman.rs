@@ -108,7 +108,9 @@ impl LiveSource for RealmanLive {
 
     async fn state(&self) -> Value {
         let s = self.monitor.snapshot();
-        let push = self.monitor.with_controller(|c| c.params().push.clone());
+        let (push, io) = self
+            .monitor
+            .with_controller(|c| (c.params().push.clone(), c.params().io.summary()));
         let clients = self.monitor.clients();
         let stats = self.monitor.stats();
         // An empty push IP means every host holding a TCP connection.
@@ -152,6 +154,8 @@ impl LiveSource for RealmanLive {
                 }
             ]),
             json!(["queued moves", s.queued_moves.to_string()]),
+            // Each port's mode (i input, o output) and level, analog outputs, supplies.
+            json!(["IO", io]),
             json!([
                 "pose (mm)",
                 format!("{:.1}, {:.1}, {:.1}", p[0] * 1e3, p[1] * 1e3, p[2] * 1e3)

@@ -30,6 +30,7 @@ pub use codec::decode::{
     AllState, ArmSnapshot, ControllerState, CurrentTrajectory, GripperMode, GripperState,
     JointFlags, PushConfig, SoftwareInfo, ToolFrame, WorkFrame,
 };
+pub use codec::io::{IoLevels, IoPortState, PlusBaseInfo, SoftwareVersion, ToolIoState};
 pub use codec::push::{ArmState, JointSpeedUnit};
 pub use codec::request::{CartesianTarget, DhRow, MoveOpts, PushCustom, PushSettings};
 pub use codec::types::{

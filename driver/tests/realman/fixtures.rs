@@ -13,10 +13,11 @@ use driver::realman::codec::{
 };
 use testkit::transcript::{load_dir, realman_fixtures_dir, Channel, Vector};
 
-const FILES: [&str; 8] = [
+const FILES: [&str; 9] = [
     "errors",
     "gripper_hand",
     "handshake",
+    "io",
     "motion",
     "params",
     "peripherals",
@@ -224,6 +225,24 @@ fn request_for(name: &str) -> Option<Request> {
         "write_registers" => rq::write_registers(0, 1, 100, &[0x1234, 0xABCD]).ok()?,
         "write_registers_after_close" => rq::write_registers(0, 1, 100, &[1]).ok()?,
         "set_rm_plus_mode" => rq::set_rm_plus_mode(256_000).ok()?,
+        // IO ports, supplies, version, end-effector identity (io.jsonl).
+        "get_arm_software_version" => rq::get_arm_software_version(),
+        n if n.starts_with("get_IO_state") => rq::get_io_state(1).ok()?,
+        n if n.starts_with("set_DO_state") => rq::set_do_state(1, true).ok()?,
+        "set_IO_mode_output" => rq::set_io_mode(1, 1).ok()?,
+        "set_AO_state" => rq::set_ao_state(2, 5.0).ok()?,
+        "get_IO_output" => rq::get_io_output(),
+        "get_IO_input" => rq::get_io_input(),
+        "set_voltage" => rq::set_voltage(2).ok()?,
+        "get_voltage" => rq::get_voltage(),
+        "set_tool_voltage" => rq::set_tool_voltage(1).ok()?,
+        "get_tool_voltage" => rq::get_tool_voltage(),
+        n if n.starts_with("set_tool_DO_state") => rq::set_tool_do_state(2, true).ok()?,
+        "set_tool_IO_mode" => rq::set_tool_io_mode(2, true).ok()?,
+        "get_tool_IO_state" => rq::get_tool_io_state(),
+        n if n.starts_with("get_rm_plus_base_info") => rq::get_rm_plus_base_info(),
+        "set_rm_plus_mode_on" => rq::set_rm_plus_mode(115_200).ok()?,
+        "set_hand_follow_pos" => rq::set_hand_follow_pos([100, 200, 300, 400, 500, 600], false),
         "get_rm_plus_mode" => rq::get_rm_plus_mode(),
         "set_hand_follow_angle" => rq::set_hand_follow_angle([100, 200, 300, 400, 500, 600], false),
         "set_hand_force" => rq::set_hand_force(500).ok()?,
@@ -272,7 +291,10 @@ fn request_for(name: &str) -> Option<Request> {
 }
 
 /// Vectors the driver never sends as such (it validates locally, or there is no encoder).
-const NOT_ENCODED: [&str; 7] = [
+const NOT_ENCODED: [&str; 10] = [
+    "set_IO_mode_bad_port",
+    "set_AO_state_over_range",
+    "set_tool_voltage_bad",
     "set_arm_max_line_speed_zero",
     "set_modbus_mode_bad_baud",
     "set_collision_stage_out_of_range",
@@ -283,7 +305,9 @@ const NOT_ENCODED: [&str; 7] = [
 ];
 
 /// Encodable vectors the controller answers with `false`.
-const REFUSED: [&str; 5] = [
+const REFUSED: [&str; 7] = [
+    "set_DO_state_input_port",
+    "set_tool_DO_state_input_port",
     "movej_beyond_joint_limit",
     "movel_unreachable",
     "movej_p_unreachable",
@@ -488,6 +512,48 @@ fn check_data(v: &Vector, b: &Body) {
             assert_eq!(b.get("read_state").and_then(|v| v.as_bool()), Some(false))
         }
         "get_rm_plus_mode" => assert_eq!(b["mode"].as_i64().unwrap(), 256_000),
+        "get_arm_software_version" => {
+            let v = driver::realman::codec::io::software_version(b).unwrap();
+            assert_eq!(v.plan_version, 0x6B0170);
+            assert_eq!(
+                driver::realman::SoftwareVersion::version_text(v.ctrl_version),
+                "V1.7.0"
+            );
+            assert_eq!(v.kernel_versions, [0x0203, 0x0203]);
+            assert_eq!(v.product_version, "RM65-B");
+        }
+        n if n.starts_with("get_IO_state") => {
+            let s = driver::realman::codec::io::io_port_state(b).unwrap();
+            let out = n.ends_with("output_high");
+            assert_eq!((s.io_num, s.mode, s.high), (1, u8::from(out), out), "{n}");
+        }
+        "get_IO_output" => {
+            let l = driver::realman::codec::io::io_levels(b, "DO", "AO").unwrap();
+            assert_eq!(l.digital, [true, false, false, false]);
+            assert_all_close(&l.analog_v, &[0.0, 5.0, 0.0, 0.0], 1e-9, n);
+        }
+        "get_IO_input" => {
+            let l = driver::realman::codec::io::io_levels(b, "DI", "AI").unwrap();
+            assert_eq!(l.digital, [false; 4]);
+            assert_all_close(&l.analog_v, &[0.0; 4], 1e-9, n);
+        }
+        "get_voltage" => assert_eq!(driver::realman::codec::io::voltage_type(b).unwrap(), 2),
+        "get_tool_voltage" => assert_eq!(driver::realman::codec::io::voltage_type(b).unwrap(), 1),
+        "get_tool_IO_state" => {
+            let t = driver::realman::codec::io::tool_io_state(b).unwrap();
+            assert_eq!(t.output, [false, true]);
+            assert_eq!(t.high, [false, true]);
+        }
+        "get_rm_plus_base_info_off" => {
+            assert_eq!(driver::realman::codec::io::plus_base_info(b).unwrap(), None)
+        }
+        "get_rm_plus_base_info" => {
+            let i = driver::realman::codec::io::plus_base_info(b)
+                .unwrap()
+                .unwrap();
+            assert_eq!((i.device_type, i.dof), (2, 6), "a five-finger hand");
+            assert_eq!(i.pos_up, [1000; 6]);
+        }
         other => panic!("no data check for vector {other}"),
     }
 }

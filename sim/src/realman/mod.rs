@@ -62,6 +62,7 @@ pub mod controller;
 pub mod facts;
 pub mod faults;
 pub mod framing;
+pub mod ioports;
 pub mod kinematics;
 pub mod model;
 pub mod params;

@@ -7,6 +7,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use super::facts::{DhRow, ModelFacts};
+use super::ioports::IoState;
 use crate::state_file::{self, InvalidField};
 
 /// Default end-effector limits restored by `set_arm_init` (docs/protocols/realman.md §8).
@@ -66,6 +67,10 @@ pub struct PushCustom {
     pub rm_plus_base: bool,
     /// `rm_plus_state`.
     pub rm_plus_state: bool,
+    /// `io_state`: armhil's own block with the IO ports (no Realman key carries them; off
+    /// unless a client asks, so a vendor client sees only documented keys).
+    #[serde(default)]
+    pub io_state: bool,
 }
 
 impl PushCustom {
@@ -74,7 +79,7 @@ impl PushCustom {
 
     /// Wire key and value of every flag, in the controller's order (the documented ones
     /// first, then the SDK's extra keys).
-    pub fn entries(&self) -> [(&'static str, bool); 8] {
+    pub fn entries(&self) -> [(&'static str, bool); 9] {
         [
             ("joint_speed", self.joint_speed),
             ("lift_state", self.lift_state),
@@ -84,6 +89,7 @@ impl PushCustom {
             ("hand", self.hand),
             ("rm_plus_base", self.rm_plus_base),
             ("rm_plus_state", self.rm_plus_state),
+            ("io_state", self.io_state),
         ]
     }
 
@@ -98,6 +104,7 @@ impl PushCustom {
             "hand" => &mut self.hand,
             "rm_plus_base" => &mut self.rm_plus_base,
             "rm_plus_state" => &mut self.rm_plus_state,
+            "io_state" => &mut self.io_state,
             _ => return false,
         };
         *slot = on;
@@ -178,6 +185,10 @@ pub struct Params {
     pub push: PushConfig,
     /// Joint positions when the state was last saved, degrees (the boot pose).
     pub joints_deg: Option<Vec<f64>>,
+    /// IO ports: modes, output levels, analog outputs, supplies (absent in files written
+    /// before the ports were emulated: power-on state).
+    #[serde(default)]
+    pub io: IoState,
 }
 
 impl Params {
@@ -203,6 +214,7 @@ impl Params {
             install_pose_deg: [0.0; 3],
             push: PushConfig::default(),
             joints_deg: None,
+            io: IoState::default(),
         }
     }
 }
@@ -377,7 +389,7 @@ impl Params {
                 format!("{:?} is neither empty nor an IPv4 address", push.ip),
             );
         }
-        Ok(())
+        self.io.validate()
     }
 }
 
@@ -458,6 +470,8 @@ mod tests {
         assert!(err.contains("params.push.cycle"), "{err}");
         let err = refused(&|p| p.push.ip = "attacker.example".into(), 6);
         assert!(err.contains("params.push.ip"), "{err}");
+        let err = refused(&|p| p.io.modes[0] = 99, 6);
+        assert!(err.contains("params.io.modes[0]"), "{err}");
         let err = refused(&|p| p.current_tool = 3, 6);
         assert!(err.contains("params.current_tool"), "{err}");
         // A file of a 6-joint arm given to a 7-joint one.

@@ -388,13 +388,22 @@ impl RealmanEmulator {
                 let bound = listener
                     .local_addr()
                     .map_err(|source| ServerError::Bind { addr, source })?;
-                let udp_addr = SocketAddr::new(bound.ip(), 0);
-                let udp = UdpSocket::bind(udp_addr)
-                    .await
-                    .map_err(|source| ServerError::Bind {
-                        addr: udp_addr,
-                        source,
-                    })?;
+                // Push from the command port's number, so that a client receiving several
+                // controllers on one UDP port can tell them apart by source address (two
+                // emulators on one host share the IP). If that UDP port is taken, any port.
+                let same_port = SocketAddr::new(bound.ip(), bound.port());
+                let udp = match UdpSocket::bind(same_port).await {
+                    Ok(udp) => udp,
+                    Err(_) => {
+                        let udp_addr = SocketAddr::new(bound.ip(), 0);
+                        UdpSocket::bind(udp_addr)
+                            .await
+                            .map_err(|source| ServerError::Bind {
+                                addr: udp_addr,
+                                source,
+                            })?
+                    }
+                };
                 tasks.push(runtime.spawn(accept_loop(Arc::clone(&shared), listener)));
                 (PushSink::Udp(udp), Some(bound), None)
             }

@@ -2,6 +2,7 @@
 //! tag, blocking moves completed by arrival events.
 
 mod commands;
+mod io;
 mod link;
 mod peripherals;
 mod state;

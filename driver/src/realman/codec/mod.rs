@@ -2,6 +2,7 @@
 //! event decoders, the UDP push decoder and the TCP stream splitter. No I/O here.
 
 pub mod decode;
+pub mod io;
 pub mod message;
 pub mod push;
 pub mod request;

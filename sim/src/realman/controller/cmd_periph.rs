@@ -9,6 +9,10 @@ const HAND_FOLLOW_ANGLE: std::ops::RangeInclusive<i64> = -32_768..=32_767;
 const HAND_FOLLOW_POS: std::ops::RangeInclusive<i64> = 0..=65_535;
 /// The emulated hand's full scale (its `set_hand_angle` range).
 const HAND_FULL_SCALE: i64 = 1000;
+/// `type` of a five-finger hand in the end-effector protocol's identity.
+const PLUS_TYPE_HAND: i64 = 2;
+/// `hand` of a right hand.
+const PLUS_RIGHT_HAND: i64 = 2;
 
 /// Answer a peripheral command, or `None` if `name` is not one.
 pub(super) fn handle(c: &mut Controller, name: &str, req: Req) -> Option<Answer> {
@@ -80,12 +84,49 @@ pub(super) fn handle(c: &mut Controller, name: &str, req: Req) -> Option<Answer>
             req.int("mode").is_some_and(|m| p.set_plus_mode(m)),
         ),
         "get_rm_plus_mode" => Obj::command(name).int("mode", p.plus_mode).finish(),
+        "get_rm_plus_base_info" => plus_base_info(p.plus_mode),
         "set_hand_follow_angle" | "set_hand_follow_pos" => {
             ack(name, "set_state", hand_follow(c, name, req))
         }
         _ => return None,
     };
     Some(Answer::Reply(reply))
+}
+
+/// The end-effector's identity over the end-effector protocol: the emulated hand (a right
+/// five-finger hand, 6 DoF, positions 0–1000, no force or touch sensing), or `get_state:
+/// false` while the protocol is off (nothing on the tool port answers).
+fn plus_base_info(plus_mode: i64) -> String {
+    if plus_mode == 0 {
+        return ack("get_rm_plus_base_info", "get_state", false);
+    }
+    let six = |v: i64| [v; 6];
+    let info = Obj::new()
+        .str("manu", "ARMHIL")
+        .int("type", PLUS_TYPE_HAND)
+        .int("hv", 0x0100)
+        .int("sv", 0x0100)
+        .int("bv", 0x0100)
+        .int("id", 1)
+        .int("dof", 6)
+        .int("check", 0)
+        .int("bee", 0)
+        .bool("force", false)
+        .bool("touch", false)
+        .int("touch_num", 0)
+        .int("touch_sw", 0)
+        .int("hand", PLUS_RIGHT_HAND)
+        .ints("pos_up", &six(HAND_FULL_SCALE))
+        .ints("pos_low", &six(0))
+        .ints("angle_up", &six(HAND_FULL_SCALE))
+        .ints("angle_low", &six(0))
+        .ints("speed_up", &six(HAND_FULL_SCALE))
+        .ints("speed_low", &six(0))
+        .ints("force_up", &six(0))
+        .ints("force_low", &six(0));
+    Obj::command("get_rm_plus_base_info")
+        .obj("base_info", info)
+        .finish()
 }
 
 /// Following: the hand chases the latest target at its set speed; values are scaled from the

@@ -8,6 +8,7 @@
 //! released, no error, default tool and work frames, push at cycle 1 to port 8089.
 
 mod cmd_io;
+mod cmd_ioports;
 mod cmd_motion;
 mod cmd_params;
 mod cmd_periph;
@@ -230,6 +231,7 @@ impl Controller {
             .or_else(|| cmd_state::handle(self, name, req))
             .or_else(|| cmd_params::handle(self, name, req))
             .or_else(|| cmd_io::handle(self, client, name, req))
+            .or_else(|| cmd_ioports::handle(self, name, req))
             .or_else(|| cmd_periph::handle(self, name, req));
         answer.unwrap_or(Answer::Unknown)
     }

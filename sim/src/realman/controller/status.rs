@@ -4,6 +4,7 @@
 
 use nalgebra::{Isometry3, Rotation3, Translation3, UnitQuaternion, Vector3};
 
+use super::super::ioports;
 use super::super::kinematics::{self, Pose};
 use super::super::params::Frame;
 use super::super::wire::{self, Obj};
@@ -214,7 +215,32 @@ impl Controller {
         if custom.rm_plus_state {
             obj = obj.int("rm_plus_state", 1);
         }
+        if custom.io_state {
+            obj = obj.obj("io_state", self.io_state_obj());
+        }
         obj.finish()
+    }
+
+    /// armhil's push block of the IO ports: the levels each port shows (`DIO`, 1 high), their
+    /// modes, the analog outputs (mV), the tool ports and both supply settings.
+    fn io_state_obj(&self) -> Obj {
+        let io = &self.params.io;
+        let levels: Vec<i64> = (0..ioports::DIGITAL_PORTS)
+            .map(|i| i64::from(io.level(i)))
+            .collect();
+        let tool: Vec<i64> = (0..ioports::TOOL_PORTS)
+            .map(|i| i64::from(io.tool_level(i)))
+            .collect();
+        let ints = |v: &[u8]| v.iter().map(|x| i64::from(*x)).collect::<Vec<_>>();
+        let mv: Vec<i64> = io.analog_out_mv.iter().map(|x| i64::from(*x)).collect();
+        Obj::new()
+            .ints("DIO", &levels)
+            .ints("IO_Mode", &ints(&io.modes))
+            .ints("AO", &mv)
+            .int("voltage_type", i64::from(io.supply_type))
+            .ints("tool_IO", &tool)
+            .ints("tool_IO_Mode", &ints(&io.tool_modes))
+            .int("tool_voltage_type", i64::from(io.tool_supply_type))
     }
 
     fn hand_state_obj(&self) -> Obj {

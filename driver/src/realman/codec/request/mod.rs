@@ -3,7 +3,9 @@
 //!
 //! Field order follows the protocol document; the fixtures pin the exact bytes.
 
+mod io;
 mod peripherals;
+pub use io::*;
 pub use peripherals::*;
 
 use serde::Serialize;
