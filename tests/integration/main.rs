@@ -19,6 +19,7 @@ mod long_run;
 mod piper_flow;
 mod realman_flow;
 mod robstride_flow;
+mod robstride_mit;
 mod scenario_errors;
 mod signals;
 mod socketcand;

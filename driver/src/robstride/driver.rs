@@ -11,6 +11,8 @@ use tokio::task::JoinHandle;
 
 use crate::robstride::codec::{self, FaultReport, Feedback, Incoming};
 use crate::robstride::error::RobstrideError;
+use crate::robstride::mit::MitMotor;
+use crate::robstride::mit_codec::{self, MitIncoming, MitStatus};
 use crate::robstride::model::{Model, RangeTable, Ranges};
 use crate::robstride::motor::Motor;
 
@@ -49,10 +51,20 @@ pub(crate) struct Route {
     pub(crate) ranges: Ranges,
 }
 
+/// Per-motor routing entry of the MIT variant (11-bit frames).
+pub(crate) struct MitRoute {
+    pub(crate) replies: mpsc::UnboundedSender<MitIncoming>,
+    pub(crate) status: watch::Sender<Option<MitStatus>>,
+    pub(crate) ranges: Ranges,
+}
+
 pub(crate) struct Shared {
     pub(crate) bus: Arc<dyn CanBus>,
     pub(crate) config: DriverConfig,
     routes: Mutex<BTreeMap<u8, Route>>,
+    /// Handles speaking the MIT variant, by motor ID (separate from `routes`: a motor may have
+    /// a private handle and an MIT handle across a protocol switch).
+    mit_routes: Mutex<BTreeMap<u8, MitRoute>>,
     /// Type-0 announcements from IDs without a handle (bus scans).
     unclaimed: Mutex<Option<ScanSender>>,
 }
@@ -62,6 +74,12 @@ impl Shared {
         // A poisoned lock only means another thread panicked mid-update of a map of senders;
         // the map is still usable.
         self.routes
+            .lock()
+            .unwrap_or_else(|poison| poison.into_inner())
+    }
+
+    pub(crate) fn mit_routes(&self) -> MutexGuard<'_, BTreeMap<u8, MitRoute>> {
+        self.mit_routes
             .lock()
             .unwrap_or_else(|poison| poison.into_inner())
     }
@@ -89,6 +107,7 @@ impl RobstrideDriver {
             bus,
             config,
             routes: Mutex::new(BTreeMap::new()),
+            mit_routes: Mutex::new(BTreeMap::new()),
             unclaimed: Mutex::new(None),
         });
         let receiver = tokio::spawn(receive_loop(Arc::clone(&shared)));
@@ -114,6 +133,14 @@ impl RobstrideDriver {
         ranges: Ranges,
     ) -> Result<Motor, RobstrideError> {
         Motor::register(Arc::clone(&self.shared), can_id, model, ranges)
+    }
+
+    /// A handle on motor `can_id` speaking the MIT variant (after a switch with
+    /// [`Motor::set_protocol`] and a power cycle); one MIT handle per ID at a time. The MIT
+    /// ranges are the model's private ones (CN manuals).
+    pub fn mit_motor(&self, can_id: u8, model: Model) -> Result<MitMotor, RobstrideError> {
+        let ranges = model.ranges(self.shared.config.range_table);
+        MitMotor::register(Arc::clone(&self.shared), can_id, model, ranges)
     }
 
     /// Ping each ID and collect `(id, uid)` of the motors that answer within `per_id`.
@@ -166,6 +193,10 @@ async fn receive_loop(shared: Arc<Shared>) {
                 continue;
             }
         };
+        if !received.frame.is_extended() {
+            route_mit(&shared, &received.frame);
+            continue;
+        }
         let decoded = {
             let routes = shared.routes();
             codec::decode(&received.frame, host, received.timestamp, |id| {
@@ -214,4 +245,22 @@ async fn receive_loop(shared: Arc<Shared>) {
             }
         }
     }
+}
+
+/// Route a standard frame of the MIT variant to its motor's MIT handle (if any).
+fn route_mit(shared: &Shared, frame: &bus::CanFrame) {
+    let routes = shared.mit_routes();
+    let decoded = mit_codec::decode(frame, shared.config.host_id, |id| {
+        routes.get(&id).map(|route| route.ranges)
+    });
+    let Some(incoming) = decoded else {
+        return;
+    };
+    let Some(route) = routes.get(&incoming.motor_id()) else {
+        return;
+    };
+    if let MitIncoming::Status(status) = incoming {
+        route.status.send_replace(Some(status));
+    }
+    let _ = route.replies.send(incoming);
 }

@@ -59,6 +59,14 @@ pub enum RobstrideError {
         /// Fault bits of its reply.
         faults: StatusFaults,
     },
+    /// An MIT enable (command 1) answered with a mode other than run.
+    #[error("motor {motor} did not enter run mode (MIT fault flag {fault})")]
+    MitEnableRefused {
+        /// Motor CAN ID.
+        motor: u8,
+        /// The fault flag of its Response 1.
+        fault: bool,
+    },
     /// Reading back run_mode after a switch gave another mode.
     #[error("motor {motor} is in run_mode {actual}, wanted {wanted}")]
     ModeNotApplied {

@@ -1,5 +1,5 @@
-//! RobStride actuator driver for the private 29-bit CAN protocol
-//! (protocol note `docs/protocols/robstride.md`), with its own codec.
+//! RobStride actuator driver for the private 29-bit CAN protocol and its MIT variant
+//! (11-bit, [`MitMotor`]) (protocol note `docs/protocols/robstride.md`), with its own codecs.
 //!
 //! One [`RobstrideDriver`] per bus runs a single receive task and routes each frame to the
 //! [`Motor`] handle of the motor that sent it. Every request waits for its documented reply
@@ -18,6 +18,8 @@
 pub mod codec;
 mod driver;
 mod error;
+mod mit;
+pub mod mit_codec;
 pub mod model;
 mod motor;
 pub mod params;
@@ -25,6 +27,8 @@ pub mod params;
 pub use codec::{FaultReport, Feedback, FeedbackKind, MotorMode, OpControl, StatusFaults};
 pub use driver::{DriverConfig, RobstrideDriver};
 pub use error::RobstrideError;
+pub use mit::{MitMode, MitMotor};
+pub use mit_codec::{MitIncoming, MitStatus};
 pub use model::{Model, RangeTable, Ranges};
 pub use motor::{Baud, Motor, Protocol, RunMode};
 pub use params::{Param, ParamType, ParamValue};

@@ -1,4 +1,5 @@
 //! The RobStride driver.
 
 mod conformance;
+mod mit;
 mod routing;
