@@ -748,3 +748,41 @@ async fn on_the_bus_the_state_file_carries_the_switch_and_11_bit_frames_reach_th
     emulator.shutdown().await;
     let _ = std::fs::remove_dir_all(dir);
 }
+
+#[test]
+fn random_frames_never_panic_and_every_sdo_request_is_answered_once() {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand::rngs::SmallRng::seed_from_u64(20);
+    let mut host = Host::booted();
+    for step in 0..20_000 {
+        let len = rng.random_range(0..=8);
+        let mut data = [0u8; 8];
+        rng.fill(&mut data[..len]);
+        // Mostly this node's SDO channel and NMT, sometimes anything at all.
+        let id: u16 = match rng.random_range(0..10) {
+            0..=6 => 0x605,
+            7 => 0x000,
+            _ => rng.random_range(0..0x800),
+        };
+        if id == 0x000 && len >= 1 && data[0] == 0x02 {
+            // Keep the node talking: no NMT stop in this run.
+            data[0] = 0x01;
+        }
+        let frame = std_frame(id, &data[..len]);
+        let replies = host.motor.handle_frame(&frame);
+        if id == 0x605 {
+            let answers = replies.iter().filter(|f| f.raw_id() == 0x585).count();
+            let client_abort = len == 8 && data[0] >> 5 == 4;
+            assert_eq!(
+                answers,
+                usize::from(!client_abort),
+                "step {step}: {frame} → {replies:?}"
+            );
+        }
+        if step % 7 == 0 {
+            host.run_ms(1);
+        }
+    }
+    let snapshot = host.motor.snapshot();
+    assert!(snapshot.angle_rad.is_finite() && snapshot.speed_rad_s.is_finite());
+}

@@ -447,8 +447,10 @@ impl Actuator {
             DriveState::QuickStopActive => speed.abs() < VELOCITY_WINDOW_RAD_S,
             DriveState::OperationEnabled => match node.mode {
                 Mode::ProfilePosition | Mode::CyclicPosition => {
-                    let error = node.target_position_counts - rad_to_counts(self.angle_rad());
-                    (error.abs() as f64) <= POSITION_WINDOW_COUNTS
+                    let error = node
+                        .target_position_counts
+                        .saturating_sub(rad_to_counts(self.angle_rad()));
+                    (error.unsigned_abs() as f64) <= POSITION_WINDOW_COUNTS
                         && speed.abs() < VELOCITY_WINDOW_RAD_S
                 }
                 Mode::Velocity => {
