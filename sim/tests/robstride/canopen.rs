@@ -245,12 +245,24 @@ fn nmt_commands_move_the_node_and_the_heartbeat_reports_them() {
     host.run_ms(300);
     assert!(host.take_spontaneous().is_empty());
     assert_eq!(host.read_u32(0x1017, 0), 0);
-    // Reset node: boot-up; an enabled drive is switched off.
-    host.mode(3);
+    // Reset node: boot-up; a drive in quick stop is switched off and keeps its mode.
+    host.mode(5);
     host.controlword(15);
+    host.controlword(11);
     assert_eq!(host.motor.snapshot().mode, ModeState::Run);
     assert_eq!(host.nmt(0x81, 0), [std_frame(0x705, &[0x00])]);
     assert_eq!(host.motor.snapshot().mode, ModeState::Reset);
+    assert_eq!(host.statusword() & 0x4F, 0x40);
+    assert_eq!(
+        (host.read_i32(0x6061), host.motor.snapshot().run_mode),
+        (5, 5)
+    );
+    assert_eq!(host.read_u32(0x6040, 0), 0);
+    // NMT stop switches an enabled drive off too.
+    host.controlword(15);
+    host.nmt(0x02, NODE);
+    assert_eq!(host.motor.snapshot().mode, ModeState::Reset);
+    host.nmt(0x01, NODE);
     assert_eq!(host.statusword() & 0x4F, 0x40);
 }
 

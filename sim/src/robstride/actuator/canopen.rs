@@ -230,13 +230,13 @@ impl Actuator {
             }
             NmtCommand::ResetNode => {
                 // The application restarts: torque off, latched faults whose cause is gone
-                // cleared, objects back to their power-on values.
-                if self.mode == ModeState::Run {
-                    self.stop();
-                }
+                // cleared, the node's objects back to their power-on values. The mode lives
+                // in the 0x70xx table (run_mode) and is kept.
+                let mode = self.canopen.mode;
+                self.disable_drive(DriveState::SwitchOnDisabled);
                 self.clear_faults();
                 self.canopen = CanopenNode::new();
-                self.canopen.mode = Mode::from_run_mode(self.run_mode());
+                self.canopen.mode = mode;
                 return self.boot_up();
             }
             NmtCommand::ResetCommunication => {
