@@ -2,3 +2,4 @@
 
 mod client;
 mod fixtures;
+mod shared_push;

@@ -195,16 +195,24 @@ impl RealmanArm {
             .map_err(convert::error)?;
         // Bind the address the push is aimed at; if it is not a local address (a NAT in
         // between), listen on every interface instead.
-        let feed = match StateFeed::bind(
-            &format!("{}:{}", p.udp_ip, p.udp_port),
-            self.options.speed_unit,
+        // Arms of one process aimed at the same local port share its socket; datagrams go to
+        // the arm whose controller sent them (`StateFeed::shared`).
+        let controller = SocketAddr::new(p.ip, p.port);
+        let unit = self.options.speed_unit;
+        let feed = match StateFeed::shared(
+            SocketAddr::new(p.udp_ip.into(), p.udp_port),
+            controller,
+            unit,
         )
         .await
         {
             Ok(f) => f,
-            Err(_) => StateFeed::bind(&format!("0.0.0.0:{}", p.udp_port), self.options.speed_unit)
-                .await
-                .map_err(|e| ArmError::caused_by(AbcErrorCode::ArmDataReceiveFailed, e))?,
+            Err(_) => {
+                let any = SocketAddr::new(std::net::Ipv4Addr::UNSPECIFIED.into(), p.udp_port);
+                StateFeed::shared(any, controller, unit)
+                    .await
+                    .map_err(|e| ArmError::caused_by(AbcErrorCode::ArmDataReceiveFailed, e))?
+            }
         };
         let port = feed.local_addr().map_or(p.udp_port, |a| a.port());
         Ok((
