@@ -127,8 +127,10 @@ impl Drop for RouteGuard {
 }
 
 /// The sockets shared in this process, by the address they were asked to bind.
-fn registry() -> &'static Mutex<Vec<(SocketAddr, Weak<SharedSocket>)>> {
-    static SOCKETS: OnceLock<Mutex<Vec<(SocketAddr, Weak<SharedSocket>)>>> = OnceLock::new();
+type Registry = Mutex<Vec<(SocketAddr, Weak<SharedSocket>)>>;
+
+fn registry() -> &'static Registry {
+    static SOCKETS: OnceLock<Registry> = OnceLock::new();
     SOCKETS.get_or_init(|| Mutex::new(Vec::new()))
 }
 
