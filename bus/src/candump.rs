@@ -128,6 +128,11 @@ impl<W: Write> CandumpWriter<W> {
         self.out.flush()
     }
 
+    /// The sink being written (e.g. to ask a counting writer how much has been written).
+    pub fn get_ref(&self) -> &W {
+        &self.out
+    }
+
     /// Flush and hand back the sink; the log is complete.
     pub fn finish(mut self) -> io::Result<W> {
         self.out.flush()?;

@@ -18,6 +18,11 @@ pub const LINKTYPE_CAN_SOCKETCAN: u32 = 227;
 pub const CAN_EFF_FLAG: u32 = 0x8000_0000;
 /// Size of one SocketCAN packet in the capture.
 pub const PACKET_LEN: usize = 16;
+/// Size of the global header at the start of every capture file: a capture split into
+/// several files is joined by dropping this header from every file but the first.
+pub const GLOBAL_HEADER_LEN: usize = 24;
+/// Size of each packet's record header (seconds, microseconds, two lengths).
+pub const RECORD_HEADER_LEN: usize = 16;
 /// Magic number of microsecond-resolution pcap files.
 const MAGIC_MICROS: u32 = 0xA1B2_C3D4;
 /// Largest packet a reader should expect; comfortably above a CAN frame.
@@ -82,6 +87,11 @@ impl<W: Write> PcapWriter<W> {
         self.out.flush()
     }
 
+    /// The sink being written (e.g. to ask a counting writer how much has been written).
+    pub fn get_ref(&self) -> &W {
+        &self.out
+    }
+
     /// Flush and hand back the sink; the capture is complete.
     pub fn finish(mut self) -> io::Result<W> {
         self.out.flush()?;
@@ -134,12 +144,12 @@ pub fn parse_capture(bytes: &[u8]) -> Result<Vec<ReceivedFrame>, PcapError> {
         return Err(PcapError::WrongLinkType(link_type));
     }
     let mut frames = Vec::new();
-    let mut offset = 24;
+    let mut offset = GLOBAL_HEADER_LEN;
     while offset < bytes.len() {
         let secs = read_u32(bytes, offset)?;
         let micros = read_u32(bytes, offset + 4)?;
         let captured = read_u32(bytes, offset + 8)? as usize;
-        let start = offset + 16;
+        let start = offset + RECORD_HEADER_LEN;
         let packet = bytes
             .get(start..start + captured)
             .ok_or(PcapError::Truncated { offset: start })?;

@@ -58,6 +58,28 @@ pub struct Args {
     /// the multi-second stalls of an emulated VM. Ignored in virtual time.
     #[arg(long, value_name = "MS", default_value_t = 0, value_parser = Short(parse_slack_ms))]
     deadline_slack_ms: u64,
+    /// Size limit of each bus recording (bus.log, bus.pcap) per scenario, in MiB, 1 to
+    /// 16384. A longer recording keeps its first half and its last; the report says which
+    /// stretch of the bus was left out.
+    #[arg(long, value_name = "MIB", default_value_t = DEFAULT_RECORDING_LIMIT_MIB,
+          value_parser = Short(parse_recording_limit_mib))]
+    max_recording_mib: u64,
+}
+
+/// Default of `--max-recording-mib`.
+const DEFAULT_RECORDING_LIMIT_MIB: u64 = armhil::harness::DEFAULT_RECORDING_LIMIT_BYTES >> 20;
+/// Largest `--max-recording-mib`: 16 GiB per file.
+const MAX_RECORDING_LIMIT_MIB: u64 = 16 << 10;
+
+/// A `--max-recording-mib` value: a whole number of MiB from 1 to 16384.
+fn parse_recording_limit_mib(text: &str) -> Result<u64, String> {
+    let shown = armhil::harness::elide_long_tokens(text);
+    match text.trim().parse::<u64>() {
+        Ok(mib) if (1..=MAX_RECORDING_LIMIT_MIB).contains(&mib) => Ok(mib),
+        _ => Err(format!(
+            "expected a whole number of MiB from 1 to {MAX_RECORDING_LIMIT_MIB}, got `{shown}`"
+        )),
+    }
 }
 
 /// A `--time-scale` factor: a number from 1 to [`MAX_TIME_SCALE`] (1000). Checked while the
@@ -198,6 +220,7 @@ fn run_one(file: &SuiteFile, args: &Args, interrupt: &Interrupt, loader: &mut Su
         time_scale: args.time_scale,
         deadline_slack: std::time::Duration::from_millis(args.deadline_slack_ms),
         interrupt: interrupt.clone(),
+        recording_limit_bytes: args.max_recording_mib << 20,
     };
     let result = run_scenario_with(
         &scenario,
@@ -396,6 +419,12 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 ran.result.bus.recorder_missed
             ));
         }
+        if let Some(omitted) = &ran.result.recording.omitted {
+            print(&format!(
+                "      note: {} (--max-recording-mib raises the limit)",
+                omitted.describe()
+            ));
+        }
         if let Some(e) = &ran.write_error {
             print(&format!("      error {e}"));
         }
@@ -493,6 +522,17 @@ mod tests {
         assert!(parse_shard("0/4").is_err());
         assert!(parse_shard("5/4").is_err());
         assert!(parse_shard("x").is_err());
+    }
+
+    #[test]
+    fn recording_limit_is_a_bounded_whole_number_of_mib() {
+        assert_eq!(parse_recording_limit_mib("64"), Ok(64));
+        assert_eq!(parse_recording_limit_mib("1"), Ok(1));
+        assert_eq!(parse_recording_limit_mib("16384"), Ok(16384));
+        for bad in ["0", "16385", "-1", "1.5", "lots", "99999999999999999999999"] {
+            let err = parse_recording_limit_mib(bad).unwrap_err();
+            assert!(err.contains("from 1 to 16384"), "{bad}: {err}");
+        }
     }
 
     #[test]

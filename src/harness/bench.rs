@@ -34,8 +34,12 @@ pub(crate) async fn build(
 ) -> Result<BuiltBench, String> {
     // Frames are written to the candump / pcap spool files only when asked; counts are kept
     // either way.
-    let spool = Spool::create(scenario.record.candump, scenario.record.pcap)
-        .map_err(|e| format!("cannot create a temporary file for the bus recording: {e}"))?;
+    let spool = Spool::create(
+        scenario.record.candump,
+        scenario.record.pcap,
+        options.recording_limit_bytes,
+    )
+    .map_err(|e| format!("cannot create a temporary file for the bus recording: {e}"))?;
     let (bus, recorder) = match clock {
         Clock::Virtual | Clock::Realtime => {
             let bus = VirtualBus::new(VirtualBusConfig {

@@ -30,8 +30,8 @@ pub use device::{Device, DeviceError, Reply, TraceColumn};
 pub use interrupt::{Interrupt, InterruptTrigger};
 pub use result::{Outcome, ScenarioResult, StepResult, Verdict};
 pub use runner::{
-    run_scenario, run_scenario_with, Clock, Link, Recording, RunOptions, MAX_DEADLINE,
-    MAX_TIME_SCALE,
+    run_scenario, run_scenario_with, Clock, Link, Omitted, Recording, RunOptions,
+    DEFAULT_RECORDING_LIMIT_BYTES, MAX_DEADLINE, MAX_TIME_SCALE,
 };
 #[cfg(test)]
 pub(crate) mod test_support;

@@ -123,6 +123,9 @@
     el("b", { text: "CRC errors" }), el("span", { text: String(b.errors) }),
     el("b", { text: "dropped" }), el("span", { text: String(b.dropped) }),
   ]));
+  if (b.recording_omitted) {
+    side.appendChild(el("p", { class: "meta", text: "Recording: " + b.recording_omitted + "." }));
+  }
   if (b.frames_by_id.length) {
     side.appendChild(el("div", { class: "scroll", style: "max-height: 200px" }, [
       table(["ID", "frames"], b.frames_by_id.map((r) => el("tr", {}, [el("td", { text: r[0] }), el("td", { text: String(r[1]) })]))),

@@ -124,6 +124,14 @@ pub fn snapshot_yaml(result: &ScenarioResult) -> String {
     if result.bus.recorder_missed > 0 {
         let _ = writeln!(out, "  recorder_missed: {}", result.bus.recorder_missed);
     }
+    // Likewise only for a recording cut at its size limit.
+    if let Some(omitted) = &result.recording.omitted {
+        out.push_str("  recording_omitted:\n");
+        let _ = writeln!(out, "    frames: {}", omitted.frames);
+        let _ = writeln!(out, "    from_ms: {}", ms(omitted.from));
+        let _ = writeln!(out, "    to_ms: {}", ms(omitted.to));
+        let _ = writeln!(out, "    limit_mib: {}", omitted.limit_bytes >> 20);
+    }
     if result.bus.frames_by_id.is_empty() {
         out.push_str("  frames_by_id: {}\n");
     } else {

@@ -186,16 +186,14 @@ fn panel(
     );
     for (k, c) in cols.iter().enumerate() {
         let color = COLORS[k % COLORS.len()];
-        let mut points = String::new();
-        for (t, row) in &trace.rows {
-            if let Some(v) = value(row, *c) {
-                let _ = write!(points, "{:.1},{:.1} ", x(t.as_secs_f64()), y(v));
-            }
-        }
+        let points = trace
+            .rows
+            .iter()
+            .filter_map(|(t, row)| value(row, *c).map(|v| (x(t.as_secs_f64()), y(v))));
         let _ = writeln!(
             out,
             r##"<polyline fill="none" stroke="{color}" stroke-width="1.5" points="{}"/>"##,
-            points.trim_end()
+            polyline_points(points)
         );
         let ly = top + 14.0 + 16.0 * k as f64;
         let _ = writeln!(
@@ -210,7 +208,33 @@ fn panel(
     }
 }
 
-/// Render the plot of a run.
+/// The `points` attribute of a polyline, at 0.1 px, without the points that draw nothing: a
+/// repeat of the point before, or a point inside a horizontal run (the line through it is
+/// drawn by its neighbours anyway). A long steady trace then costs a few points instead of
+/// one per sample; the drawing is the same.
+fn polyline_points(points: impl Iterator<Item = (f64, f64)>) -> String {
+    let mut shown: Vec<(String, String)> = Vec::new();
+    for (px, py) in points {
+        let point = (format!("{px:.1}"), format!("{py:.1}"));
+        if shown.last() != Some(&point) {
+            shown.push(point);
+        }
+    }
+    let mut out = String::new();
+    for (i, (px, py)) in shown.iter().enumerate() {
+        let level_before = i > 0 && shown[i - 1].1 == *py;
+        let level_after = shown.get(i + 1).is_some_and(|next| next.1 == *py);
+        if !(level_before && level_after) {
+            if !out.is_empty() {
+                out.push(' ');
+            }
+            let _ = write!(out, "{px},{py}");
+        }
+    }
+    out
+}
+
+/// Render the plot of a run: one panel per signal group, fault windows shaded.
 pub fn plot_svg(result: &ScenarioResult) -> String {
     let trace = &result.trace;
     let groups: Vec<(&str, &str)> = GROUPS
@@ -256,4 +280,35 @@ pub fn plot_svg(result: &ScenarioResult) -> String {
     }
     out.push_str("</svg>\n");
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn steady_stretches_cost_their_ends_only() {
+        // Flat, a ramp of three samples, flat again: 1,000 samples.
+        let ys = (0..1000).map(|i| match i {
+            0..=499 => 10.0,
+            500..=502 => 10.0 + f64::from(i - 499),
+            _ => 13.0,
+        });
+        let points = ys.enumerate().map(|(i, y)| (i as f64 * 0.5, y));
+        assert_eq!(
+            polyline_points(points),
+            "0.0,10.0 249.5,10.0 250.0,11.0 250.5,12.0 251.0,13.0 499.5,13.0"
+        );
+    }
+
+    #[test]
+    fn repeats_go_and_every_turn_stays() {
+        let points = [(1.0, 5.0), (1.04, 5.0), (2.0, 6.0), (3.0, 5.0), (3.0, 5.0)];
+        assert_eq!(
+            polyline_points(points.into_iter()),
+            "1.0,5.0 2.0,6.0 3.0,5.0"
+        );
+        assert_eq!(polyline_points(std::iter::empty()), "");
+        assert_eq!(polyline_points([(1.0, 2.0)].into_iter()), "1.0,2.0");
+    }
 }

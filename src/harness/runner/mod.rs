@@ -13,8 +13,8 @@ use tokio::time::Instant;
 use super::interrupt::Interrupt;
 
 pub(crate) use recorder::Recorder;
-pub use spool::Recording;
 pub(crate) use spool::Spool;
+pub use spool::{Omitted, Recording};
 
 use super::bench::{self, BuiltBench};
 use super::device::Device;
@@ -89,7 +89,14 @@ pub struct RunOptions {
     /// Fired to stop the run early (SIGINT, SIGTERM): the step running ends at once, the
     /// rest are not run, and the outputs are still written.
     pub interrupt: Interrupt,
+    /// The size limit of each bus recording file (`bus.log`, `bus.pcap`); past it a recording
+    /// keeps the run's beginning and end (see `report` and [`Omitted`]).
+    pub recording_limit_bytes: u64,
 }
+
+/// Default size limit of each bus recording file: 64 MiB holds ~7 minutes of a Piper's
+/// traffic (~3,000 frames/s), the first half and the last of a longer run.
+pub const DEFAULT_RECORDING_LIMIT_BYTES: u64 = 64 << 20;
 
 impl Default for RunOptions {
     fn default() -> Self {
@@ -97,6 +104,7 @@ impl Default for RunOptions {
             time_scale: 1.0,
             deadline_slack: Duration::ZERO,
             interrupt: Interrupt::default(),
+            recording_limit_bytes: DEFAULT_RECORDING_LIMIT_BYTES,
         }
     }
 }
@@ -145,6 +153,7 @@ pub fn run_scenario_with(
     let options = match clock {
         Clock::Virtual => RunOptions {
             interrupt: options.interrupt.clone(),
+            recording_limit_bytes: options.recording_limit_bytes,
             ..RunOptions::default()
         },
         Clock::Realtime | Clock::Iface(_) => options.clone(),

@@ -136,7 +136,7 @@ mod tests {
 
     async fn capture(keep: bool) -> Capture {
         let (tx, rx) = broadcast::channel(4096);
-        let recorder = Recorder::from_tap(rx, Spool::create(keep, false).unwrap());
+        let recorder = Recorder::from_tap(rx, Spool::create(keep, false, u64::MAX).unwrap());
         for i in 0..1000u16 {
             let frame = CanFrame::standard(0x100 + i % 3, &[]).unwrap();
             tx.send(ReceivedFrame {

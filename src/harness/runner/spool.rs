@@ -3,9 +3,10 @@
 //! into the output folder (see `report::write_outputs`).
 
 use std::fs::File;
-use std::io::{self, BufWriter};
+use std::io::{self, BufWriter, Seek, SeekFrom, Write};
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
+use std::time::Duration;
 
 use bus::candump::CandumpWriter;
 use bus::pcap::PcapWriter;
@@ -53,6 +54,36 @@ pub struct Recording {
     pub pcap: Option<Arc<TempPath>>,
     /// The first write error, if any: the files are then incomplete and the run reports it.
     pub error: Option<String>,
+    /// Frames left out of the files because the recording reached its size limit.
+    pub omitted: Option<Omitted>,
+}
+
+/// A stretch of the bus left out of a recording that reached its size limit: the files hold
+/// every frame before `from` and after `to`, none in between.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Omitted {
+    /// How many frames were left out.
+    pub frames: u64,
+    /// Bus time of the first frame left out.
+    pub from: Duration,
+    /// Bus time of the last frame left out.
+    pub to: Duration,
+    /// The size limit of each recording file that made the cut, in bytes.
+    pub limit_bytes: u64,
+}
+
+impl Omitted {
+    /// One sentence for people: which stretch is missing and why.
+    pub fn describe(&self) -> String {
+        format!(
+            "the recording reached its limit of {} MiB per file: {} frames from {:.3} s to {:.3} s \
+             are left out (the files keep the run's beginning and end)",
+            self.limit_bytes >> 20,
+            self.frames,
+            self.from.as_secs_f64(),
+            self.to.as_secs_f64(),
+        )
+    }
 }
 
 impl Recording {
@@ -75,84 +106,280 @@ fn remove_listed(list: &Mutex<Vec<PathBuf>>) -> usize {
         .count()
 }
 
-/// Recordings being written.
-pub(crate) struct Spool {
-    candump: Option<(CandumpWriter<BufWriter<File>>, TempPath)>,
-    pcap: Option<(PcapWriter<BufWriter<File>>, TempPath)>,
-    error: Option<String>,
+/// A writer that counts the bytes it passes on, so a segment knows its size without asking
+/// the file system (its buffer holds bytes the file does not have yet).
+struct Counted<W> {
+    inner: W,
+    bytes: u64,
 }
 
-impl Spool {
-    /// Open temporary files for the formats asked for.
-    pub fn create(candump: bool, pcap: bool) -> io::Result<Self> {
+impl<W: Write> Write for Counted<W> {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        let n = self.inner.write(buf)?;
+        self.bytes += n as u64;
+        Ok(n)
+    }
+
+    fn flush(&mut self) -> io::Result<()> {
+        self.inner.flush()
+    }
+}
+
+type Sink = Counted<BufWriter<File>>;
+
+fn sink(file: File) -> Sink {
+    Counted {
+        inner: BufWriter::new(file),
+        bytes: 0,
+    }
+}
+
+/// Flush a finished writer's sink: the bytes are then all in the file.
+fn flushed(finished: io::Result<Sink>) -> io::Result<()> {
+    finished.and_then(|sink| {
+        sink.inner
+            .into_inner()
+            .map(drop)
+            .map_err(|e| e.into_error())
+    })
+}
+
+/// One stretch of the recording in every format asked for: the same frames in each file.
+struct Segment {
+    candump: Option<(CandumpWriter<Sink>, TempPath)>,
+    pcap: Option<(PcapWriter<Sink>, TempPath)>,
+    /// Frames written, and the bus time of the first and the last.
+    frames: u64,
+    first: Duration,
+    last: Duration,
+}
+
+/// A segment whose files are complete.
+struct Written {
+    candump: Option<TempPath>,
+    pcap: Option<TempPath>,
+    frames: u64,
+    first: Duration,
+    last: Duration,
+}
+
+impl Segment {
+    fn create(candump: bool, pcap: bool) -> io::Result<Self> {
         let candump = if candump {
             let (file, path) = spool_file(".log")?;
-            Some((CandumpWriter::new(BufWriter::new(file), LOG_IFACE), path))
+            Some((CandumpWriter::new(sink(file), LOG_IFACE), path))
         } else {
             None
         };
         let pcap = if pcap {
             let (file, path) = spool_file(".pcap")?;
-            Some((PcapWriter::new(BufWriter::new(file))?, path))
+            Some((PcapWriter::new(sink(file))?, path))
         } else {
             None
         };
         Ok(Self {
             candump,
             pcap,
+            frames: 0,
+            first: Duration::ZERO,
+            last: Duration::ZERO,
+        })
+    }
+
+    fn write(&mut self, frame: &ReceivedFrame) -> io::Result<()> {
+        if let Some((writer, _)) = &mut self.candump {
+            writer.write(frame)?;
+        }
+        if let Some((writer, _)) = &mut self.pcap {
+            writer.write(frame)?;
+        }
+        if self.frames == 0 {
+            self.first = frame.timestamp;
+        }
+        self.frames += 1;
+        self.last = frame.timestamp;
+        Ok(())
+    }
+
+    /// The size of the larger of its files.
+    fn bytes(&self) -> u64 {
+        let candump = self.candump.as_ref().map_or(0, |(w, _)| w.get_ref().bytes);
+        let pcap = self.pcap.as_ref().map_or(0, |(w, _)| w.get_ref().bytes);
+        candump.max(pcap)
+    }
+
+    fn finish(self) -> io::Result<Written> {
+        let candump = match self.candump {
+            Some((writer, path)) => flushed(writer.finish()).map(|()| Some(path))?,
+            None => None,
+        };
+        let pcap = match self.pcap {
+            Some((writer, path)) => flushed(writer.finish()).map(|()| Some(path))?,
+            None => None,
+        };
+        Ok(Written {
+            candump,
+            pcap,
+            frames: self.frames,
+            first: self.first,
+            last: self.last,
+        })
+    }
+}
+
+/// Recordings being written, each file held to a size limit.
+///
+/// A long run (an hour's wait on a busy bus is ~3,000 frames/s) would otherwise write
+/// hundreds of megabytes per file. Past the limit, the files keep the run's beginning (half
+/// the limit) and its end (the other half: the newest two quarter-limit segments, older ones
+/// deleted as new ones fill), which is where a failure and its cause usually are; the stretch
+/// in between is counted in [`Omitted`] and the report says so. The disk holds at most the
+/// limit per format while the run lasts, and memory stays flat.
+pub(crate) struct Spool {
+    formats: (bool, bool),
+    limit_bytes: u64,
+    /// The run's beginning, until it holds half the limit.
+    head: Option<Segment>,
+    head_written: Option<Written>,
+    /// The end so far: at most one finished quarter-limit segment and the one being written.
+    tail_written: Option<Written>,
+    tail: Option<Segment>,
+    omitted: Option<Omitted>,
+    error: Option<String>,
+}
+
+impl Spool {
+    /// Open temporary files for the formats asked for, each held to `limit_bytes`.
+    pub fn create(candump: bool, pcap: bool, limit_bytes: u64) -> io::Result<Self> {
+        let head = (candump || pcap)
+            .then(|| Segment::create(candump, pcap))
+            .transpose()?;
+        Ok(Self {
+            formats: (candump, pcap),
+            limit_bytes,
+            head,
+            head_written: None,
+            tail_written: None,
+            tail: None,
+            omitted: None,
             error: None,
         })
     }
 
     /// Whether anything is recorded at all.
     pub fn is_recording(&self) -> bool {
-        self.candump.is_some() || self.pcap.is_some()
+        self.formats.0 || self.formats.1
     }
 
     /// Append one frame to every file; after the first error, writing stops and the error is
     /// kept for the report.
     pub fn write(&mut self, frame: &ReceivedFrame) {
-        if self.error.is_some() {
+        if self.error.is_some() || !self.is_recording() {
             return;
         }
-        let result = (|| {
-            if let Some((writer, _)) = &mut self.candump {
-                writer.write(frame)?;
-            }
-            if let Some((writer, _)) = &mut self.pcap {
-                writer.write(frame)?;
-            }
-            io::Result::Ok(())
-        })();
-        if let Err(e) = result {
+        if let Err(e) = self.write_frame(frame) {
             self.error = Some(format!("cannot write the bus recording: {e}"));
         }
     }
 
-    /// Flush the files and hand them over.
+    fn write_frame(&mut self, frame: &ReceivedFrame) -> io::Result<()> {
+        if let Some(head) = &mut self.head {
+            head.write(frame)?;
+            if head.bytes() >= self.limit_bytes / 2 {
+                let head = self.head.take().map(Segment::finish).transpose()?;
+                self.head_written = head;
+            }
+            return Ok(());
+        }
+        let tail = match &mut self.tail {
+            Some(tail) => tail,
+            None => self
+                .tail
+                .insert(Segment::create(self.formats.0, self.formats.1)?),
+        };
+        tail.write(frame)?;
+        if tail.bytes() >= self.limit_bytes / 4 {
+            let full = self.tail.take().map(Segment::finish).transpose()?;
+            // The older of the two finished segments goes (its files are deleted with it).
+            if let Some(dropped) = std::mem::replace(&mut self.tail_written, full) {
+                let omitted = self.omitted.get_or_insert(Omitted {
+                    frames: 0,
+                    from: dropped.first,
+                    to: dropped.last,
+                    limit_bytes: self.limit_bytes,
+                });
+                omitted.frames += dropped.frames;
+                omitted.to = dropped.last;
+            }
+        }
+        Ok(())
+    }
+
+    /// Flush the files and hand them over: one file per format, the kept segments joined.
     pub fn finish(self) -> Recording {
         let mut error = self.error;
-        let mut keep = |finished: io::Result<BufWriter<File>>, path: TempPath| match finished
-            .and_then(|w| w.into_inner().map_err(io::IntoInnerError::into_error))
-        {
-            Ok(_) => Some(Arc::new(path)),
-            Err(e) => {
+        let mut finish = |segment: Option<Segment>| match segment.map(Segment::finish) {
+            Some(Ok(written)) => Some(written),
+            Some(Err(e)) => {
                 error.get_or_insert_with(|| format!("cannot write the bus recording: {e}"));
                 None
             }
+            None => None,
         };
-        let candump = self
-            .candump
-            .and_then(|(writer, path)| keep(writer.finish(), path));
-        let pcap = self
-            .pcap
-            .and_then(|(writer, path)| keep(writer.finish(), path));
+        let head = match self.head_written {
+            Some(written) => Some(written),
+            None => finish(self.head),
+        };
+        let tail = finish(self.tail);
+        // In time order: the beginning, the finished end segment, the one being written.
+        let ordered = [head, self.tail_written, tail];
+        let (mut candumps, mut pcaps) = (Vec::new(), Vec::new());
+        for written in ordered.into_iter().flatten() {
+            candumps.extend(written.candump);
+            pcaps.extend(written.pcap);
+        }
+        let joined = join_files(candumps, ".log", 0).and_then(|candump| {
+            let pcap = join_files(pcaps, ".pcap", bus::pcap::GLOBAL_HEADER_LEN as u64)?;
+            Ok((candump, pcap))
+        });
+        let (candump, pcap) = match joined {
+            Ok(paths) => paths,
+            Err(e) => {
+                error.get_or_insert_with(|| format!("cannot write the bus recording: {e}"));
+                (None, None)
+            }
+        };
         Recording {
-            candump,
-            pcap,
+            candump: candump.map(Arc::new),
+            pcap: pcap.map(Arc::new),
             error,
+            omitted: self.omitted,
         }
     }
+}
+
+/// One file of the segments `parts` (in order), leaving out the first `header_bytes` of every
+/// part but the first (a pcap's global header); a single part is handed over as it is. The
+/// parts are deleted when they go out of scope here.
+fn join_files(
+    mut parts: Vec<TempPath>,
+    suffix: &str,
+    header_bytes: u64,
+) -> io::Result<Option<TempPath>> {
+    if parts.len() <= 1 {
+        return Ok(parts.pop());
+    }
+    let (file, joined) = spool_file(suffix)?;
+    let mut out = BufWriter::new(file);
+    for (i, part) in parts.iter().enumerate() {
+        let mut source = File::open(part)?;
+        if i > 0 {
+            source.seek(SeekFrom::Start(header_bytes))?;
+        }
+        io::copy(&mut source, &mut out)?;
+    }
+    out.into_inner().map_err(io::IntoInnerError::into_error)?;
+    Ok(Some(joined))
 }
 
 #[cfg(test)]
@@ -163,6 +390,8 @@ mod tests {
 
     use super::*;
 
+    const UNLIMITED: u64 = u64::MAX;
+
     fn frame(i: u16) -> ReceivedFrame {
         ReceivedFrame {
             frame: CanFrame::standard(0x2A1 + i % 2, &[i as u8, 0xAB]).unwrap(),
@@ -172,7 +401,7 @@ mod tests {
 
     #[test]
     fn both_formats_hold_every_frame_and_read_back() {
-        let mut spool = Spool::create(true, true).unwrap();
+        let mut spool = Spool::create(true, true, UNLIMITED).unwrap();
         for i in 0..500 {
             spool.write(&frame(i));
         }
@@ -188,9 +417,76 @@ mod tests {
         assert_eq!(pcap[499], frame(499));
     }
 
+    /// Every frame `frame(0..n)` is 1.5 ms after the one before.
+    const FRAME_GAP: Duration = Duration::from_micros(1500);
+
+    #[test]
+    fn a_recording_past_its_limit_keeps_the_beginning_and_the_end() {
+        const LIMIT: u64 = 8 * 1024;
+        let n: u16 = 5000;
+        let mut spool = Spool::create(true, true, LIMIT).unwrap();
+        for i in 0..n {
+            spool.write(&frame(i));
+        }
+        let recording = spool.finish();
+        assert_eq!(recording.error, None);
+        let omitted = recording.omitted.expect("5,000 frames do not fit in 8 KiB");
+        assert_eq!(omitted.limit_bytes, LIMIT);
+
+        let log_path = recording.candump.as_deref().unwrap();
+        let pcap_path = recording.pcap.as_deref().unwrap();
+        // Each file within its limit (plus at most one frame per segment: a segment is
+        // closed after the frame that fills it).
+        let slack = 3 * 64;
+        for path in [log_path, pcap_path] {
+            let size = std::fs::metadata(path).unwrap().len();
+            assert!(size <= LIMIT + slack, "{} bytes", size);
+            assert!(size >= LIMIT * 3 / 4, "{} bytes: too little kept", size);
+        }
+        let log = bus::candump::read_log(log_path).unwrap();
+        let pcap = bus::pcap::parse_capture(&std::fs::read(pcap_path).unwrap()).unwrap();
+        assert_eq!(log.len(), pcap.len(), "both files keep the same frames");
+        assert_eq!(log.len() as u64 + omitted.frames, u64::from(n));
+        assert_eq!(log[0].frame, frame(0).frame, "the beginning is kept");
+        assert_eq!(pcap.last(), Some(&frame(n - 1)), "the end is kept");
+
+        // Exactly one gap, and it is the omitted stretch.
+        let gaps: Vec<usize> = (1..log.len())
+            .filter(|&i| log[i].timestamp - log[i - 1].timestamp != FRAME_GAP)
+            .collect();
+        assert_eq!(gaps.len(), 1, "gaps at {gaps:?}");
+        let after = gaps[0];
+        assert_eq!(log[after - 1].timestamp + FRAME_GAP, omitted.from);
+        assert_eq!(omitted.to + FRAME_GAP, log[after].timestamp);
+        let span = FRAME_GAP * u32::try_from(omitted.frames - 1).unwrap();
+        assert_eq!(omitted.to - omitted.from, span);
+        for (i, entry) in pcap.iter().enumerate() {
+            assert_eq!(entry.timestamp, log[i].timestamp, "frame {i}");
+        }
+    }
+
+    #[test]
+    fn a_recording_within_its_limit_keeps_every_frame_in_one_piece() {
+        // Head full and an end segment started, but nothing dropped yet.
+        let mut spool = Spool::create(true, true, 64 * 1024).unwrap();
+        for i in 0..1200 {
+            spool.write(&frame(i));
+        }
+        let recording = spool.finish();
+        assert_eq!(recording.omitted, None);
+        let log = bus::candump::read_log(recording.candump.as_deref().unwrap()).unwrap();
+        assert_eq!(log.len(), 1200);
+        let bytes = std::fs::read(recording.pcap.as_deref().unwrap()).unwrap();
+        let pcap = bus::pcap::parse_capture(&bytes).unwrap();
+        assert_eq!(pcap.len(), 1200);
+        assert!(pcap
+            .windows(2)
+            .all(|w| w[1].timestamp - w[0].timestamp == FRAME_GAP));
+    }
+
     #[test]
     fn the_files_go_away_with_the_last_result() {
-        let mut spool = Spool::create(true, false).unwrap();
+        let mut spool = Spool::create(true, false, UNLIMITED).unwrap();
         spool.write(&frame(1));
         let recording = spool.finish();
         let path = recording.candump.as_deref().unwrap().to_path_buf();
@@ -199,15 +495,18 @@ mod tests {
         assert!(path.exists(), "a clone still holds the file");
         drop(copy);
         assert!(!path.exists(), "temporary file left behind");
-        assert!(recording_is_empty(&Spool::create(false, false).unwrap()));
+        assert!(recording_is_empty(
+            &Spool::create(false, false, UNLIMITED).unwrap()
+        ));
     }
 
     #[test]
     fn spool_files_can_be_removed_on_the_way_out() {
-        let mut spool = Spool::create(true, true).unwrap();
+        let mut spool = Spool::create(true, true, UNLIMITED).unwrap();
         spool.write(&frame(1));
-        let candump = spool.candump.as_ref().unwrap().1.to_path_buf();
-        let pcap = spool.pcap.as_ref().unwrap().1.to_path_buf();
+        let head = spool.head.as_ref().unwrap();
+        let candump = head.candump.as_ref().unwrap().1.to_path_buf();
+        let pcap = head.pcap.as_ref().unwrap().1.to_path_buf();
         assert!(candump.exists() && pcap.exists());
         let name = candump.file_name().unwrap().to_string_lossy().into_owned();
         assert!(name.starts_with(SPOOL_PREFIX), "{name}");

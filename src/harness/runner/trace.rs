@@ -41,6 +41,24 @@ fn quantise(value: Option<f64>, quantum: f64) -> Option<i64> {
     })
 }
 
+/// Most rows a trace keeps. An hour at the default 50 ms period would be 72,000 rows in the
+/// snapshot, the plot and the report; past this many the sampler halves its rate instead
+/// (see [`thin_out`]), so every run's trace stays a few megabytes at most.
+pub(crate) const MAX_TRACE_ROWS: usize = 20_000;
+
+/// Halve a full trace: keep the rows at multiples of twice the period (the first row is at
+/// time zero) and double the period, which later samples then follow.
+fn thin_out(trace: &mut Trace) {
+    let period = trace.period * 2;
+    trace.rows.retain(|(at, _)| on_period(*at, period));
+    trace.period = period;
+}
+
+/// Whether `at` falls on a multiple of `period`.
+fn on_period(at: Duration, period: Duration) -> bool {
+    at.as_nanos().is_multiple_of(period.as_nanos().max(1))
+}
+
 /// A running sampler; [`Sampler::finish`] returns the trace.
 pub(crate) struct Sampler {
     trace: Arc<Mutex<Trace>>,
@@ -75,11 +93,14 @@ impl Sampler {
                     );
                 }
                 let at = round_to_period(at, record.sample_period);
-                shared
-                    .lock()
-                    .unwrap_or_else(PoisonError::into_inner)
-                    .rows
-                    .push((at, values));
+                let mut trace = shared.lock().unwrap_or_else(PoisonError::into_inner);
+                // After thinning out, only the ticks on the longer period are kept.
+                if on_period(at, trace.period) {
+                    trace.rows.push((at, values));
+                    if trace.rows.len() >= MAX_TRACE_ROWS {
+                        thin_out(&mut trace);
+                    }
+                }
             }
         });
         Self { trace, task }
@@ -111,6 +132,24 @@ mod tests {
         assert_eq!(quantise(Some(1.234), 0.01), Some(123));
         assert_eq!(quantise(None, 0.1), None);
         assert_eq!(quantise(Some(f64::NAN), 0.1), None);
+    }
+
+    #[test]
+    fn a_full_trace_keeps_every_other_row_at_twice_the_period() {
+        let period = Duration::from_millis(50);
+        let mut trace = Trace {
+            period,
+            columns: Vec::new(),
+            rows: (0..MAX_TRACE_ROWS as u32)
+                .map(|i| (period * i, vec![Some(i64::from(i))]))
+                .collect(),
+        };
+        thin_out(&mut trace);
+        assert_eq!(trace.period, Duration::from_millis(100));
+        assert_eq!(trace.rows.len(), MAX_TRACE_ROWS / 2);
+        assert_eq!(trace.rows[1], (Duration::from_millis(100), vec![Some(2)]));
+        assert!(on_period(Duration::from_millis(1_000_100), trace.period));
+        assert!(!on_period(Duration::from_millis(1_000_050), trace.period));
     }
 
     #[test]

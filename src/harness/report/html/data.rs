@@ -201,7 +201,7 @@ pub fn report_json(result: &ScenarioResult, model: Option<Value>) -> Value {
         .map(|w| json!({"from": secs(w.from), "to": secs(w.to), "label": w.label}))
         .collect();
     let bus = &result.bus;
-    json!({
+    let mut document = json!({
         "name": result.name,
         "path": result.path.display().to_string(),
         "verdict": result.verdict.word(),
@@ -225,7 +225,12 @@ pub fn report_json(result: &ScenarioResult, model: Option<Value>) -> Value {
         },
         "frames": frames_json(result),
         "model": model,
-    })
+    });
+    // Only for a recording cut at its size limit, so other reports stay as they were.
+    if let Some(omitted) = &result.recording.omitted {
+        document["bus"]["recording_omitted"] = json!(omitted.describe());
+    }
+    document
 }
 
 #[cfg(test)]
