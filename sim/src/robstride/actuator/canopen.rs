@@ -8,11 +8,11 @@
 //! - [`cia402`]: the drive state machine and statusword patterns.
 //! - [`objects`]: the object dictionary, units, and reads and writes against the core.
 //!
-//! Choices where the documentation is silent (docs/protocols/robstride.md, "CANopen
-//! variant"): no PDOs (every object is reached by SDO; PDO frames are ignored and the PDO
-//! parameter objects answered "object does not exist"); anything not listed is answered with
-//! an SDO abort; a fault or watchdog expiry sends an EMCY frame; quick stop brakes on the
-//! velocity ramp and holds zero speed.
+//! Choices where the documentation is silent (docs/protocols/robstride.md §13): no PDOs
+//! (every object is reached by SDO; PDO frames are ignored and the PDO parameter objects
+//! answered "object does not exist"); anything not listed is answered with an SDO abort; a
+//! fault or watchdog expiry sends an EMCY frame; quick stop brakes on the velocity ramp and
+//! holds zero speed.
 
 mod cia402;
 mod nmt;
