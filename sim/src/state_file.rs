@@ -146,15 +146,37 @@ fn check_header(path: &Path, text: &str, kind: &str) -> Result<(), StateFileErro
     }
 }
 
+/// Largest state file read, bytes: 16 MiB. A state file holds a few kilobytes (a bus of 127
+/// motors ~100 KB); the bound stops a mistyped path to `/dev/zero` or a huge file from being
+/// read whole into memory.
+pub const MAX_STATE_FILE_BYTES: u64 = 16 * 1024 * 1024;
+
 /// Read the state file at `path` as a `T` (the whole document, header fields included) after
 /// checking its header is `kind` / [`FORMAT`]. `Ok(None)` if the file does not exist (the
 /// device's first power-on). The caller then checks the values.
 pub fn load<T: DeserializeOwned>(path: &Path, kind: &str) -> Result<Option<T>, StateFileError> {
-    let text = match std::fs::read_to_string(path) {
-        Ok(text) => text,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-        Err(e) => return Err(StateFileError::io(path, e)),
+    use crate::bounded_read::{read_regular_file, BoundedReadError};
+    let refuse = |why: String| {
+        StateFileError::io(
+            path,
+            std::io::Error::new(std::io::ErrorKind::InvalidData, why),
+        )
     };
+    let bytes = match read_regular_file(path, MAX_STATE_FILE_BYTES) {
+        Ok(bytes) => bytes,
+        Err(BoundedReadError::Io(e)) if e.kind() == std::io::ErrorKind::NotFound => {
+            return Ok(None)
+        }
+        Err(BoundedReadError::Io(e)) => return Err(StateFileError::io(path, e)),
+        Err(BoundedReadError::NotAFile) => return Err(refuse("not a regular file".to_owned())),
+        Err(BoundedReadError::TooLarge { limit_bytes }) => {
+            return Err(refuse(format!(
+                "larger than {} MiB, the limit for a state file (one holds a few kilobytes)",
+                limit_bytes >> 20
+            )))
+        }
+    };
+    let text = String::from_utf8(bytes).map_err(|_| refuse("not UTF-8 text".to_owned()))?;
     check_header(path, &text, kind)?;
     serde_json::from_str(&text)
         .map(Some)
@@ -250,6 +272,28 @@ mod tests {
             Err(StateFileError::Syntax { line: 2, .. }) => {}
             other => panic!("an unknown field must be refused with its line: {other:?}"),
         }
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_device_a_folder_or_a_huge_file_is_refused_without_reading_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let huge = dir.path().join("huge.json");
+        // Sparse: no disk used, and `load` must refuse it by its size without reading.
+        std::fs::File::create(&huge)
+            .unwrap()
+            .set_len(MAX_STATE_FILE_BYTES + 1)
+            .unwrap();
+        let named = |path: &Path, why: &str| {
+            let err = load::<Doc>(path, "test").unwrap_err().to_string();
+            let name = path.display().to_string();
+            assert!(err.contains(&name) && err.contains(why), "{err}");
+        };
+        named(&huge, "larger than 16 MiB, the limit for a state file");
+        named(Path::new("/dev/zero"), "not a regular file");
+        named(dir.path(), "not a regular file");
+        std::fs::write(&huge, [b'{', 0xFF, b'}']).unwrap();
+        named(&huge, "not UTF-8");
     }
 
     #[cfg(unix)]

@@ -141,8 +141,12 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
         _ => None,
     };
     let urdf = match &args.urdf {
-        Some(path) => std::fs::read_to_string(path)
-            .with_context(|| format!("cannot read {}", path.display()))?,
+        // Bounded and type-checked like every file a user names (a FIFO or /dev/zero here
+        // would otherwise hang or fill memory).
+        Some(path) => sim::bounded_read::read_regular_file(path, sim::physics::MAX_URDF_BYTES)
+            .map_err(anyhow::Error::from)
+            .and_then(|bytes| String::from_utf8(bytes).context("not UTF-8 text"))
+            .with_context(|| format!("cannot read URDF {}", path.display()))?,
         None => sim::piper::BUNDLED_URDF.to_owned(),
     };
     // Listen before the emulator runs: a signal that arrives earlier would otherwise kill the
