@@ -242,9 +242,9 @@ fn request_for(name: &str) -> Option<Request> {
         "get_tool_IO_state" => rq::get_tool_io_state(),
         n if n.starts_with("get_rm_plus_base_info") => rq::get_rm_plus_base_info(),
         "set_rm_plus_mode_on" => rq::set_rm_plus_mode(115_200).ok()?,
-        "set_hand_follow_pos" => rq::set_hand_follow_pos([100, 200, 300, 400, 500, 600], false),
+        "hand_follow_pos" => rq::set_hand_follow_pos([100, 200, 300, 400, 500, 600], true),
         "get_rm_plus_mode" => rq::get_rm_plus_mode(),
-        "set_hand_follow_angle" => rq::set_hand_follow_angle([100, 200, 300, 400, 500, 600], false),
+        "hand_follow_angle" => rq::set_hand_follow_angle([100, 200, 300, 400, 500, 600], true),
         "set_hand_force" => rq::set_hand_force(500).ok()?,
         // Push.
         "set_realtime_push" => rq::set_realtime_push(&PushSettings {

@@ -2,6 +2,7 @@
 
 mod controller;
 mod fixtures;
+mod io;
 mod kinematics;
 mod plant;
 mod server;

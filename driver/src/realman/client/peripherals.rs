@@ -73,7 +73,8 @@ impl RealmanClient {
         .await
     }
 
-    /// `set_hand_follow_angle`: stream finger angles (the hand maker's units).
+    /// `hand_follow_angle`: stream finger angles (the hand maker's units); with `block` the
+    /// controller's acknowledgement is awaited (and a `false` is `Rejected`).
     pub async fn hand_follow_angle(
         &self,
         angles: [i16; 6],
@@ -84,7 +85,8 @@ impl RealmanClient {
             .map(drop)
     }
 
-    /// `set_hand_follow_pos`: stream finger positions (the hand maker's units).
+    /// `hand_follow_pos`: stream finger positions (the hand maker's units); `block` as for
+    /// [`RealmanClient::hand_follow_angle`].
     pub async fn hand_follow_pos(
         &self,
         positions: [u16; 6],

@@ -85,17 +85,21 @@ pub(super) fn handle(c: &mut Controller, name: &str, req: Req) -> Option<Answer>
         ),
         "get_rm_plus_mode" => Obj::command(name).int("mode", p.plus_mode).finish(),
         "get_rm_plus_base_info" => plus_base_info(p.plus_mode),
-        "set_hand_follow_angle" | "set_hand_follow_pos" => {
-            ack(name, "set_state", hand_follow(c, name, req))
-        }
+        // The wire names are `hand_follow_*` (what the vendor SDK sends); the `set_` forms
+        // are kept for clients of armhil ≤ this change, which sent those.
+        "hand_follow_angle"
+        | "hand_follow_pos"
+        | "set_hand_follow_angle"
+        | "set_hand_follow_pos" => ack(name, "set_state", hand_follow(c, name, req)),
         _ => return None,
     };
     Some(Answer::Reply(reply))
 }
 
-/// The end-effector's identity over the end-effector protocol: the emulated hand (a right
-/// five-finger hand, 6 DoF, positions 0–1000, no force or touch sensing), or `get_state:
-/// false` while the protocol is off (nothing on the tool port answers).
+/// The end-effector's identity over the end-effector protocol (docs/protocols/realman.md §18):
+/// the emulated hand (a right five-finger hand, 6 DoF, positions 0–1000, no force or touch
+/// sensing), or `get_state: false` while the protocol is off (nothing on the tool port
+/// answers).
 fn plus_base_info(plus_mode: i64) -> String {
     if plus_mode == 0 {
         return ack("get_rm_plus_base_info", "get_state", false);
@@ -104,15 +108,17 @@ fn plus_base_info(plus_mode: i64) -> String {
     let info = Obj::new()
         .str("manu", "ARMHIL")
         .int("type", PLUS_TYPE_HAND)
-        .int("hv", 0x0100)
-        .int("sv", 0x0100)
-        .int("bv", 0x0100)
+        // Versions as strings and the two capabilities as 0/1: what Robotic_Arm 1.1.6 parses
+        // (the document's integer versions crash it; its booleans read back as true).
+        .str("hv", "1.0.0")
+        .str("sv", "1.0.0")
+        .str("bv", "1.0.0")
         .int("id", 1)
         .int("dof", 6)
         .int("check", 0)
         .int("bee", 0)
-        .bool("force", false)
-        .bool("touch", false)
+        .int("force", 0)
+        .int("touch", 0)
         .int("touch_num", 0)
         .int("touch_sw", 0)
         .int("hand", PLUS_RIGHT_HAND)
@@ -132,7 +138,7 @@ fn plus_base_info(plus_mode: i64) -> String {
 /// Following: the hand chases the latest target at its set speed; values are scaled from the
 /// SDK's ranges to the emulated hand's 0–1000.
 fn hand_follow(c: &mut Controller, name: &str, req: Req) -> bool {
-    let (key, range) = if name == "set_hand_follow_angle" {
+    let (key, range) = if name.ends_with("hand_follow_angle") {
         ("hand_angle", HAND_FOLLOW_ANGLE)
     } else {
         ("hand_pos", HAND_FOLLOW_POS)

@@ -98,20 +98,32 @@ pub fn get_rm_plus_mode() -> Request {
     query("get_rm_plus_mode", Tag::Command("get_rm_plus_mode"))
 }
 
-/// `set_hand_follow_angle`: six finger angles in the hand maker's units (−32768..=32767).
-pub fn set_hand_follow_angle(angles: [i16; 6], block: bool) -> Request {
-    Obj::new("set_hand_follow_angle")
-        .field("hand_angle", &angles)
-        .field("block", &block)
-        .echo("set_state")
+/// Hand following's acknowledgement: awaited only when the caller blocks (the controller
+/// answers every frame; a streaming caller does not wait for it, as the vendor SDK does not).
+fn follow(obj: Obj, block: bool) -> Request {
+    if block {
+        obj.echo("set_state")
+    } else {
+        obj.done(super::Expect::Nothing)
+    }
 }
 
-/// `set_hand_follow_pos`: six finger positions in the hand maker's units (0..=65535).
+/// `hand_follow_angle` (the vendor SDK's `rm_set_hand_follow_angle`): six finger angles in the
+/// hand maker's units (−32768..=32767).
+pub fn set_hand_follow_angle(angles: [i16; 6], block: bool) -> Request {
+    follow(
+        Obj::new("hand_follow_angle").field("hand_angle", &angles),
+        block,
+    )
+}
+
+/// `hand_follow_pos` (the vendor SDK's `rm_set_hand_follow_pos`): six finger positions in the
+/// hand maker's units (0..=65535).
 pub fn set_hand_follow_pos(positions: [u16; 6], block: bool) -> Request {
-    Obj::new("set_hand_follow_pos")
-        .field("hand_pos", &positions)
-        .field("block", &block)
-        .echo("set_state")
+    follow(
+        Obj::new("hand_follow_pos").field("hand_pos", &positions),
+        block,
+    )
 }
 
 #[cfg(test)]
