@@ -78,67 +78,14 @@ pub fn interrupt_on_signals(trigger: armhil::harness::InterruptTrigger) -> anyho
 
 /// Delete the temporary files of a run that is being abandoned: the bus-recording spool files
 /// (in the temporary folder) and the outputs being written at this moment, which exist under
-/// a hidden temporary name (`.bus.log.tmp<pid>`) until they are complete and renamed.
+/// a hidden temporary name (`.bus.log.tmp<pid>`) until they are complete and renamed. Both
+/// are listed by the code that creates them, so this works on every platform.
 fn remove_unfinished_files() {
     let spooled = armhil::harness::Recording::remove_spool_files();
-    let unfinished = remove_open_temporaries(std::path::Path::new("/"));
+    let unfinished = armhil::harness::report::remove_unfinished_outputs();
     tracing::debug!(
         spooled,
         unfinished,
         "temporary files removed on the way out"
     );
-}
-
-/// Delete the files this process holds open under an atomic write's temporary name
-/// (`.<name>.tmp<pid>`, see `harness::report::write_atomic`): an output being written when the
-/// process quits. Such a file is open from its creation until it is renamed over its final
-/// name, so the open descriptors name exactly the ones that would be left behind. Linux only
-/// (it reads `/proc/self/fd`); elsewhere nothing is removed. Only files under `under` are
-/// considered. Returns how many were deleted.
-fn remove_open_temporaries(under: &std::path::Path) -> usize {
-    #[cfg(target_os = "linux")]
-    {
-        let suffix = format!(".tmp{}", std::process::id());
-        let Ok(fds) = std::fs::read_dir("/proc/self/fd") else {
-            return 0;
-        };
-        fds.filter_map(|fd| std::fs::read_link(fd.ok()?.path()).ok())
-            .filter(|path| {
-                path.starts_with(under)
-                    && path
-                        .file_name()
-                        .and_then(|name| name.to_str())
-                        .is_some_and(|name| name.starts_with('.') && name.ends_with(&suffix))
-            })
-            .filter(|path| std::fs::remove_file(path).is_ok())
-            .count()
-    }
-    #[cfg(not(target_os = "linux"))]
-    {
-        let _ = under;
-        0
-    }
-}
-
-#[cfg(all(test, target_os = "linux"))]
-mod tests {
-    #[test]
-    fn an_output_being_written_is_removed_and_nothing_else() {
-        let dir = tempfile::tempdir().unwrap();
-        let pid = std::process::id();
-        let writing = dir.path().join(format!(".bus.log.tmp{pid}"));
-        let other_process = dir
-            .path()
-            .join(format!(".bus.log.tmp{}", pid.wrapping_add(1)));
-        let finished = dir.path().join("bus.log");
-        let _open = std::fs::File::create(&writing).unwrap();
-        let _other = std::fs::File::create(&other_process).unwrap();
-        let _finished = std::fs::File::create(&finished).unwrap();
-        // Within this test's folder: other tests of this binary may be writing outputs.
-        let under = dir.path().canonicalize().unwrap();
-        assert_eq!(super::remove_open_temporaries(&under), 1);
-        assert!(!writing.exists(), "the unfinished output is left behind");
-        assert!(other_process.exists(), "another process's file was removed");
-        assert!(finished.exists(), "a finished output was removed");
-    }
 }

@@ -8,6 +8,7 @@ mod svg;
 
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
+use std::sync::{Mutex, PoisonError};
 
 pub use html::{index_html, report_html, IndexEntry};
 pub use junit::junit_xml;
@@ -65,6 +66,7 @@ fn write_atomic_with(
         .file_name()
         .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
     let tmp = path.with_file_name(format!(".{file_name}.tmp{}", std::process::id()));
+    let unfinished = Unfinished::list(tmp.clone());
     let result = (|| {
         let mut file = std::fs::File::create(&tmp)?;
         fill(&mut file)?;
@@ -74,7 +76,56 @@ fn write_atomic_with(
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
+    drop(unfinished);
     result
+}
+
+/// The temporary files of outputs being written at this moment, for
+/// [`remove_unfinished_outputs`].
+static UNFINISHED: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// An entry of [`UNFINISHED`] for as long as it lives.
+struct Unfinished(PathBuf);
+
+impl Unfinished {
+    fn list(path: PathBuf) -> Self {
+        lock_unfinished().push(path.clone());
+        Self(path)
+    }
+}
+
+impl Drop for Unfinished {
+    fn drop(&mut self) {
+        let mut listed = lock_unfinished();
+        if let Some(i) = listed.iter().position(|p| *p == self.0) {
+            listed.swap_remove(i);
+        }
+    }
+}
+
+fn lock_unfinished() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
+    UNFINISHED.lock().unwrap_or_else(PoisonError::into_inner)
+}
+
+/// Delete the temporary files of the outputs being written right now (each exists under a
+/// hidden name, `.bus.log.tmp<pid>`, until it is complete and renamed), for a process about
+/// to quit without finishing them (a second Ctrl-C). Returns how many were deleted.
+pub fn remove_unfinished_outputs() -> usize {
+    remove_unfinished_where(|_| true)
+}
+
+/// [`remove_unfinished_outputs`] for the listed files `pick` chooses (the others stay listed).
+fn remove_unfinished_where(pick: impl Fn(&Path) -> bool) -> usize {
+    let mut listed = lock_unfinished();
+    let (picked, kept): (Vec<PathBuf>, Vec<PathBuf>) = std::mem::take(&mut *listed)
+        .into_iter()
+        .partition(|p| pick(p));
+    *listed = kept;
+    drop(listed);
+    picked
+        .iter()
+        .filter(|path| std::fs::remove_file(path).is_ok())
+        .count()
 }
 
 /// The files written for one run.
@@ -129,4 +180,52 @@ pub fn write_outputs(
     write_atomic(&path, report_html(result).as_bytes())?;
     written.html = Some(path);
     Ok(written)
+}
+
+#[cfg(test)]
+mod unfinished_tests {
+    use super::*;
+
+    #[test]
+    fn an_output_being_written_is_listed_until_it_is_renamed() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("bus.log");
+        let tmp = dir
+            .path()
+            .join(format!(".bus.log.tmp{}", std::process::id()));
+        write_atomic_with(&path, |file| {
+            file.write_all(b"half")?;
+            assert!(tmp.exists());
+            assert!(lock_unfinished().contains(&tmp), "not listed while written");
+            Ok(())
+        })
+        .unwrap();
+        assert!(
+            !lock_unfinished().contains(&tmp),
+            "still listed once renamed"
+        );
+        assert_eq!(std::fs::read(&path).unwrap(), b"half");
+    }
+
+    #[test]
+    fn quitting_midway_removes_the_output_being_written_and_nothing_else() {
+        let dir = tempfile::tempdir().unwrap();
+        let finished = dir.path().join("result.yaml");
+        write_atomic(&finished, b"done").unwrap();
+        let path = dir.path().join("bus.pcap");
+        let tmp = dir
+            .path()
+            .join(format!(".bus.pcap.tmp{}", std::process::id()));
+        let error = write_atomic_with(&path, |file| {
+            file.write_all(b"half")?;
+            // What the second Ctrl-C does from the signal thread, within this test's folder
+            // (other tests of this binary may be writing outputs at this moment).
+            assert_eq!(remove_unfinished_where(|p| p.starts_with(dir.path())), 1);
+            assert!(!tmp.exists(), "the unfinished output is left behind");
+            Err(std::io::Error::other("quit"))
+        });
+        assert!(error.is_err());
+        assert!(!path.exists() && !tmp.exists());
+        assert_eq!(std::fs::read(&finished).unwrap(), b"done");
+    }
 }
