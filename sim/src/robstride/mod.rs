@@ -3,7 +3,8 @@
 //!
 //! - [`Actuator`]: one motor's firmware (pure: frames in, frames out, 1 ms ticks).
 //! - [`model`]: per-model ranges (manual table by default, SDK table selectable, or explicit
-//!   [`Ranges`] per motor) and electrical/thermal facts; [`params`]: the 0x70xx table.
+//!   [`Ranges`] per motor) and electrical/thermal facts; [`params`]: the 0x70xx table;
+//!   [`host_params`]: the per-model host-tool tables 0x20xx/0x30xx that type 17 also serves.
 //! - [`rig`]: the load the motor drives ([`Load`]), its URDF, and two integrators
 //!   ([`RigPlant`], or [`WorldPlant`] on `sim::physics::ArmWorld`, chosen by [`PlantKind`]).
 //! - [`RobstrideBus::spawn`]: many actuators on one [`bus::CanBus`], with a

@@ -1,18 +1,20 @@
 //! RobStride actuators on the bench: the [`Device`] that drives `driver::robstride` against the
 //! in-process `sim::robstride` emulator (or a separate emulator process on a real interface).
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::Duration;
 
 use async_trait::async_trait;
 use bus::virtual_bus::VirtualBus;
 use bus::CanBus;
-use driver::robstride::{Feedback, Motor, ParamValue, RobstrideDriver, RobstrideError};
+use driver::robstride::{
+    Feedback, MitMotor, MitStatus, Motor, MotorMode, ParamValue, RobstrideDriver, RobstrideError,
+};
 use sim::robstride::{RobstrideBus, RobstrideConfig, RobstrideHandle};
 
 use super::model::{MotorCheck, RobstrideAction, RobstrideSettings, RsCommand, RsFault, PARAMS};
-use super::observe::{f2, near_text, observe_motor, Observation};
+use super::observe::{f2, near_text, observe_motor, MotorObservation, Observation};
 use crate::devices::{Action, Check, DeviceFault};
 use crate::harness::model::{ErrorClass, Signal};
 use crate::harness::{Device, DeviceError, Reply, TraceColumn};
@@ -24,6 +26,7 @@ fn classify(error: &RobstrideError) -> ErrorClass {
         RobstrideError::ParamRefused { .. }
         | RobstrideError::ParamReadFailed { .. }
         | RobstrideError::EnableRefused { .. }
+        | RobstrideError::MitEnableRefused { .. }
         | RobstrideError::ModeNotApplied { .. } => ErrorClass::Rejected,
         _ => ErrorClass::InvalidArgument,
     }
@@ -47,8 +50,13 @@ pub(crate) struct RsEmulator {
 pub(crate) struct RobstrideDevice {
     name: String,
     /// Owns the receive task that feeds every motor handle (dropping it stops the task).
-    _driver: RobstrideDriver,
+    driver: RobstrideDriver,
     motors: Mutex<BTreeMap<u8, Arc<Motor>>>,
+    /// MIT-variant handles, made on a motor's first MIT command (by current CAN ID).
+    mit_motors: Mutex<BTreeMap<u8, Arc<MitMotor>>>,
+    /// Motors whose last successful command was an MIT one: conditions and traces read their
+    /// Response 1 instead of the private status.
+    mit_active: Mutex<BTreeSet<u8>>,
     /// The CAN ID each motor had at power-on (it names the trace columns) and has now.
     ids: Mutex<Vec<(u8, u8)>>,
     /// Emulator faults injected and not yet cleared, so `clear_faults` can undo them.
@@ -123,8 +131,10 @@ impl RobstrideDevice {
         }
         Ok(Self {
             name: name.to_owned(),
-            _driver: driver,
+            driver,
             motors: Mutex::new(motors),
+            mit_motors: Mutex::new(BTreeMap::new()),
+            mit_active: Mutex::new(BTreeSet::new()),
             ids: Mutex::new(
                 settings
                     .motors
@@ -149,6 +159,75 @@ impl RobstrideDevice {
                 ids.join(", ")
             ))
         })
+    }
+
+    /// The MIT handle of motor `id` (made on first use, with the private handle's model).
+    fn mit_motor(&self, id: u8) -> Result<Arc<MitMotor>, DeviceError> {
+        if let Some(m) = lock(&self.mit_motors).get(&id) {
+            return Ok(Arc::clone(m));
+        }
+        let model = self.motor(id)?.model();
+        let m = Arc::new(self.driver.mit_motor(id, model).map_err(derr)?);
+        lock(&self.mit_motors).insert(id, Arc::clone(&m));
+        Ok(m)
+    }
+
+    /// An MIT-variant command; the reply carries the angle/speed of Response 1 when there is
+    /// one and the value for `mit_read_param`.
+    async fn mit_act(
+        &self,
+        id: u8,
+        command: &RsCommand,
+        reply: &mut Reply,
+    ) -> Result<(), DeviceError> {
+        let m = self.mit_motor(id)?;
+        let status = match command {
+            RsCommand::MitEnable => Some(m.enable().await.map_err(derr)?),
+            RsCommand::MitStop => Some(m.stop().await.map_err(derr)?),
+            RsCommand::MitControl(cmd) => Some(m.control(*cmd).await.map_err(derr)?),
+            RsCommand::MitMode(mode) => Some(m.set_mode(*mode).await.map_err(derr)?),
+            RsCommand::MitPosition {
+                target_rad,
+                limit_spd_rad_s,
+            } => Some(
+                m.set_position(*target_rad, *limit_spd_rad_s)
+                    .await
+                    .map_err(derr)?,
+            ),
+            RsCommand::MitVelocity {
+                speed_rad_s,
+                limit_cur_a,
+            } => Some(
+                m.set_velocity(*speed_rad_s, *limit_cur_a)
+                    .await
+                    .map_err(derr)?,
+            ),
+            RsCommand::MitZero => Some(m.set_zero().await.map_err(derr)?),
+            RsCommand::MitClear => Some(m.clear_faults().await.map_err(derr)?),
+            RsCommand::MitReadParam { param, expect } => {
+                let raw = m.read_param(*param).await.map_err(derr)?;
+                param_reply(reply, *param, raw, expect.as_ref());
+                None
+            }
+            RsCommand::MitSetProtocol(protocol) => {
+                m.switch_protocol(*protocol).await.map_err(derr)?;
+                None
+            }
+            RsCommand::MitActiveReport { on } => {
+                Some(m.set_active_reporting(*on).await.map_err(derr)?)
+            }
+            _ => None,
+        };
+        if let Some(s) = status {
+            reply
+                .values
+                .push(("angle_rad".to_owned(), f2(f64::from(s.angle_rad))));
+            reply
+                .values
+                .push(("speed_rad_s".to_owned(), f2(f64::from(s.speed_rad_s))));
+        }
+        lock(&self.mit_active).insert(id);
+        Ok(())
     }
 
     async fn emulator_do(
@@ -271,8 +350,12 @@ impl RobstrideDevice {
                 reply.values.push(("can_id".to_owned(), now.to_string()));
                 reply.values.push(("uid".to_owned(), hex));
             }
+            command if command.is_mit() => self.mit_act(id, command, &mut reply).await?,
             command => {
                 let m = self.motor(id)?;
+                // Any private command that gets here addresses the private protocol: the
+                // private status is what conditions and traces read again.
+                lock(&self.mit_active).remove(&id);
                 match command {
                     RsCommand::Enable => fb(&mut reply, &m.enable().await.map_err(derr)?),
                     RsCommand::Disable { clear } => {
@@ -317,24 +400,10 @@ impl RobstrideDevice {
                     RsCommand::ZeroHere => fb(&mut reply, &m.zero_here().await.map_err(derr)?),
                     RsCommand::ReadParam { param, expect } => {
                         let raw = m.read_param(*param).await.map_err(derr)?;
-                        let value = raw.as_f64();
-                        let name = PARAMS
-                            .iter()
-                            .find(|(p, _)| p == param)
-                            .map_or("value", |(_, n)| n);
-                        // Integer parameters as integers, floats to the millesimal.
-                        let shown = match raw {
-                            ParamValue::F32(_) => format!("{value:.3}"),
-                            _ => format!("{value}"),
-                        };
-                        reply.values.push((name.to_owned(), shown.clone()));
-                        if let Some(e) = expect {
-                            if (value - e.value).abs() > e.tolerance + 1e-9 {
-                                reply
-                                    .mismatches
-                                    .push((name.to_owned(), near_text(e), shown));
-                            }
-                        }
+                        param_reply(&mut reply, *param, raw, expect.as_ref());
+                    }
+                    RsCommand::SetProtocol(protocol) => {
+                        m.set_protocol(*protocol).await.map_err(derr)?;
                     }
                     RsCommand::WriteParam { param, value } => {
                         m.write_param(*param, *value).await.map_err(derr)?;
@@ -359,7 +428,18 @@ impl RobstrideDevice {
                     | RsCommand::SetTemperature { .. }
                     | RsCommand::SetBusVoltage { .. }
                     | RsCommand::ExternalTorque { .. }
-                    | RsCommand::SetCanId { .. } => {}
+                    | RsCommand::SetCanId { .. }
+                    | RsCommand::MitEnable
+                    | RsCommand::MitStop
+                    | RsCommand::MitControl(_)
+                    | RsCommand::MitMode(_)
+                    | RsCommand::MitPosition { .. }
+                    | RsCommand::MitVelocity { .. }
+                    | RsCommand::MitZero
+                    | RsCommand::MitClear
+                    | RsCommand::MitReadParam { .. }
+                    | RsCommand::MitSetProtocol(_)
+                    | RsCommand::MitActiveReport { .. } => {}
                 }
             }
         }
@@ -514,16 +594,71 @@ fn rs_fault(fault: &DeviceFault, name: &str) -> Result<RsFault, DeviceError> {
     }
 }
 
+/// A read parameter in a step's reply, and a mismatch when it misses the expectation.
+fn param_reply(
+    reply: &mut Reply,
+    param: driver::robstride::Param,
+    raw: ParamValue,
+    expect: Option<&crate::harness::model::Near>,
+) {
+    let value = raw.as_f64();
+    let name = PARAMS
+        .iter()
+        .find(|(p, _)| *p == param)
+        .map_or("value", |(_, n)| n);
+    // Integer parameters as integers, floats to the millesimal.
+    let shown = match raw {
+        ParamValue::F32(_) => format!("{value:.3}"),
+        _ => format!("{value}"),
+    };
+    reply.values.push((name.to_owned(), shown.clone()));
+    if let Some(e) = expect {
+        if (value - e.value).abs() > e.tolerance + 1e-9 {
+            reply
+                .mismatches
+                .push((name.to_owned(), near_text(e), shown));
+        }
+    }
+}
+
+/// A motor seen through its last MIT Response 1. The variant has no status fault bits and no
+/// type-21 report (only a fault flag), so `faults` and `fault_report` read empty; every frame
+/// is a reply.
+fn observe_mit(s: &MitStatus) -> MotorObservation {
+    MotorObservation {
+        angle_rad: Some(f64::from(s.angle_rad)),
+        speed_rad_s: Some(f64::from(s.speed_rad_s)),
+        torque_nm: Some(f64::from(s.torque_nm)),
+        temperature_c: Some(f64::from(s.temperature_c)),
+        mode_state: Some(match s.mode {
+            MotorMode::Reset => "reset",
+            MotorMode::Calibration => "calibration",
+            MotorMode::Run => "run",
+            MotorMode::Brake => "brake",
+        }),
+        status_faults: Vec::new(),
+        fault_report: Vec::new(),
+        feedback: Some("reply"),
+    }
+}
+
 impl RobstrideDevice {
-    /// Every motor as the driver last saw it.
+    /// Every motor as the driver last saw it (through the protocol it last spoke).
     fn observe(&self) -> Observation {
+        let mit_active = lock(&self.mit_active).clone();
+        let mit = lock(&self.mit_motors);
         lock(&self.motors)
             .iter()
             .map(|(id, motor)| {
-                (
-                    *id,
-                    observe_motor(motor.last_feedback(), motor.last_fault_report()),
-                )
+                let via_mit = mit_active
+                    .contains(id)
+                    .then(|| mit.get(id).and_then(|m| m.last_status()))
+                    .flatten();
+                let seen = match via_mit {
+                    Some(status) => observe_mit(&status),
+                    None => observe_motor(motor.last_feedback(), motor.last_fault_report()),
+                };
+                (*id, seen)
             })
             .collect()
     }

@@ -4,7 +4,7 @@
 
 use std::time::Duration;
 
-use driver::robstride::{OpControl, Param, RunMode};
+use driver::robstride::{MitMode, OpControl, Param, Protocol, RunMode};
 use sim::robstride::{Fault, MotorConfig};
 
 use crate::harness::model::Near;
@@ -113,6 +113,48 @@ pub enum RsCommand {
     },
     /// Ask the motor for its status (type 2 poll).
     Poll,
+    /// Protocol for the next power-on (type 25); `restart` makes it take effect.
+    SetProtocol(Protocol),
+    /// MIT variant: enable (command 1); the motor must report run mode.
+    MitEnable,
+    /// MIT variant: stop (command 2).
+    MitStop,
+    /// MIT variant: the MIT setpoint (command 3).
+    MitControl(OpControl),
+    /// MIT variant: run mode (command 6), read back with command 14.
+    MitMode(MitMode),
+    /// MIT variant: position-mode setpoint (command 10).
+    MitPosition {
+        /// Target angle.
+        target_rad: f32,
+        /// Speed limit.
+        limit_spd_rad_s: f32,
+    },
+    /// MIT variant: velocity-mode setpoint (command 11).
+    MitVelocity {
+        /// Speed.
+        speed_rad_s: f32,
+        /// Current limit.
+        limit_cur_a: f32,
+    },
+    /// MIT variant: set the mechanical zero (command 4).
+    MitZero,
+    /// MIT variant: clear latched faults (command 5, F_CMD 0xFF).
+    MitClear,
+    /// MIT variant: read a parameter (command 14) and compare it with an expectation.
+    MitReadParam {
+        /// Which parameter.
+        param: Param,
+        /// Expected value.
+        expect: Option<Near>,
+    },
+    /// MIT variant: protocol for the next power-on (command 8).
+    MitSetProtocol(Protocol),
+    /// MIT variant: active reporting of Response 1 frames on / off (command 13).
+    MitActiveReport {
+        /// On.
+        on: bool,
+    },
     /// Emulator: inject a fault (its cause is set, or a one-shot event latched).
     Inject(Fault),
     /// Emulator: remove a fault's cause (the latched bit stays until `disable` with clear).
@@ -148,6 +190,24 @@ impl RsCommand {
         )
     }
 
+    /// Whether the command speaks the MIT variant (11-bit frames).
+    pub fn is_mit(&self) -> bool {
+        matches!(
+            self,
+            Self::MitEnable
+                | Self::MitStop
+                | Self::MitControl(_)
+                | Self::MitMode(_)
+                | Self::MitPosition { .. }
+                | Self::MitVelocity { .. }
+                | Self::MitZero
+                | Self::MitClear
+                | Self::MitReadParam { .. }
+                | Self::MitSetProtocol(_)
+                | Self::MitActiveReport { .. }
+        )
+    }
+
     /// The command's name as written after `do:`.
     pub fn name(&self) -> &'static str {
         match self {
@@ -170,6 +230,18 @@ impl RsCommand {
             Self::ReportPeriod { .. } => "report_period",
             Self::CanTimeout { .. } => "can_timeout",
             Self::Poll => "poll",
+            Self::SetProtocol(_) => "set_protocol",
+            Self::MitEnable => "mit_enable",
+            Self::MitStop => "mit_stop",
+            Self::MitControl(_) => "mit_control",
+            Self::MitMode(_) => "mit_mode",
+            Self::MitPosition { .. } => "mit_position",
+            Self::MitVelocity { .. } => "mit_velocity",
+            Self::MitZero => "mit_zero",
+            Self::MitClear => "mit_clear",
+            Self::MitReadParam { .. } => "mit_read_param",
+            Self::MitSetProtocol(_) => "mit_set_protocol",
+            Self::MitActiveReport { .. } => "mit_active_report",
             Self::Inject(_) => "inject",
             Self::RemoveCause(_) => "remove_cause",
             Self::SetTemperature { .. } => "set_temperature",
@@ -187,6 +259,20 @@ pub const RUN_MODES: [(RunMode, &str); 6] = [
     (RunMode::Current, "current"),
     (RunMode::ZeroReturn, "zero_return"),
     (RunMode::CyclicPosition, "csp"),
+];
+
+/// Names of the protocols (`protocol:`).
+pub const PROTOCOLS: [(Protocol, &str); 3] = [
+    (Protocol::Private, "private"),
+    (Protocol::CanOpen, "canopen"),
+    (Protocol::Mit, "mit"),
+];
+
+/// Names of the MIT variant's run modes (`mode:` of `mit_mode`).
+pub const MIT_MODES: [(MitMode, &str); 3] = [
+    (MitMode::Mit, "mit"),
+    (MitMode::Position, "position"),
+    (MitMode::Velocity, "velocity"),
 ];
 
 /// Names of the parameters (`param:`).

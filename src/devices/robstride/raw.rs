@@ -81,6 +81,7 @@ pub(crate) struct RawRsStep {
     pub fault: Option<S<String>>,
     pub temp_c: Option<S<f64>>,
     pub voltage_v: Option<S<f64>>,
+    pub protocol: Option<S<String>>,
 }
 
 /// Conditions on one motor.

@@ -13,7 +13,7 @@ use sim::robstride::{Fault, Load, Model, MotorConfig};
 
 use super::model::{
     MotorCheck, MotorCond, RobstrideAction, RobstrideSettings, RsCommand, RsFault, FEEDBACK_KINDS,
-    MODE_STATES, PARAMS, REPORT_FLAGS, RUN_MODES, STATUS_FAULTS,
+    MIT_MODES, MODE_STATES, PARAMS, PROTOCOLS, REPORT_FLAGS, RUN_MODES, STATUS_FAULTS,
 };
 use super::raw::{RawConds, RawFault, RawMotorConds, RawRsLoad, RawRsStep, RawSettings, RawStep};
 use crate::devices::Action;
@@ -138,7 +138,7 @@ pub(crate) fn settings(ctx: &Ctx<'_>, d: &RawSettings, at: Pos) -> Res<Robstride
 }
 
 /// Which argument keys each command takes (`motor` aside).
-const COMMAND_KEYS: [(&str, &str, &[&str]); 24] = [
+const COMMAND_KEYS: [(&str, &str, &[&str]); 36] = [
     ("enable", "robstride enable", &[]),
     ("disable", "robstride disable", &["clear"]),
     ("mode", "robstride mode", &["mode"]),
@@ -174,6 +174,38 @@ const COMMAND_KEYS: [(&str, &str, &[&str]); 24] = [
     ("report_period", "robstride report_period", &["period_ms"]),
     ("can_timeout", "robstride can_timeout", &["window_ms"]),
     ("poll", "robstride poll", &[]),
+    ("set_protocol", "robstride set_protocol", &["protocol"]),
+    ("mit_enable", "robstride mit_enable", &[]),
+    ("mit_stop", "robstride mit_stop", &[]),
+    (
+        "mit_control",
+        "robstride mit_control",
+        &["angle_rad", "speed_rad_s", "kp", "kd", "torque_nm"],
+    ),
+    ("mit_mode", "robstride mit_mode", &["mode"]),
+    (
+        "mit_position",
+        "robstride mit_position",
+        &["target_rad", "limit_spd_rad_s"],
+    ),
+    (
+        "mit_velocity",
+        "robstride mit_velocity",
+        &["speed_rad_s", "limit_cur_a"],
+    ),
+    ("mit_zero", "robstride mit_zero", &[]),
+    ("mit_clear", "robstride mit_clear", &[]),
+    (
+        "mit_read_param",
+        "robstride mit_read_param",
+        &["param", "expect", "tolerance"],
+    ),
+    (
+        "mit_set_protocol",
+        "robstride mit_set_protocol",
+        &["protocol"],
+    ),
+    ("mit_active_report", "robstride mit_active_report", &["on"]),
     ("inject", "robstride inject", &["fault"]),
     ("remove_cause", "robstride remove_cause", &["fault"]),
     ("set_temperature", "robstride set_temperature", &["temp_c"]),
@@ -204,7 +236,7 @@ fn present_keys(a: &RawRsStep) -> Vec<(&'static str, Pos)> {
         iq_a => "iq_a", limit_spd_rad_s => "limit_spd_rad_s", param => "param", value => "value",
         expect => "expect", tolerance => "tolerance", new_id => "new_id", on => "on",
         period_ms => "period_ms", window_ms => "window_ms", fault => "fault", temp_c => "temp_c",
-        voltage_v => "voltage_v",
+        voltage_v => "voltage_v", protocol => "protocol",
     );
     out
 }
@@ -290,6 +322,24 @@ fn robstride_step(ctx: &Ctx<'_>, a: &RawRsStep, at: Pos) -> Res<(&'static str, S
         let names: Vec<(Fault, &str)> = Fault::ALL.iter().map(|f| (*f, f.name())).collect();
         ctx.choice(v, "fault", &names)
     };
+    let protocol = |v: &Option<S<String>>| {
+        let v = ctx.required(v, "protocol", name, at)?;
+        ctx.choice(v, "protocol", &PROTOCOLS)
+    };
+    let expectation = || -> Res<Option<Near>> {
+        match &a.expect {
+            Some(e) => Ok(Some(Near {
+                value: ctx.finite(e, "expect")?,
+                tolerance: a
+                    .tolerance
+                    .as_ref()
+                    .map_or(Ok(DEFAULT_PARAM_TOLERANCE), |t| {
+                        ctx.non_negative(t, "tolerance")
+                    })?,
+            })),
+            None => Ok(None),
+        }
+    };
     let command = match name {
         "enable" => RsCommand::Enable,
         "disable" => RsCommand::Disable {
@@ -327,18 +377,7 @@ fn robstride_step(ctx: &Ctx<'_>, a: &RawRsStep, at: Pos) -> Res<(&'static str, S
         "zero_here" => RsCommand::ZeroHere,
         "read_param" => RsCommand::ReadParam {
             param: param(&a.param)?,
-            expect: match &a.expect {
-                Some(e) => Some(Near {
-                    value: ctx.finite(e, "expect")?,
-                    tolerance: a
-                        .tolerance
-                        .as_ref()
-                        .map_or(Ok(DEFAULT_PARAM_TOLERANCE), |t| {
-                            ctx.non_negative(t, "tolerance")
-                        })?,
-                }),
-                None => None,
-            },
+            expect: expectation()?,
         },
         "write_param" => RsCommand::WriteParam {
             param: param(&a.param)?,
@@ -359,6 +398,38 @@ fn robstride_step(ctx: &Ctx<'_>, a: &RawRsStep, at: Pos) -> Res<(&'static str, S
             window: need_ms(&a.window_ms, "window_ms")?,
         },
         "poll" => RsCommand::Poll,
+        "set_protocol" => RsCommand::SetProtocol(protocol(&a.protocol)?),
+        "mit_enable" => RsCommand::MitEnable,
+        "mit_stop" => RsCommand::MitStop,
+        "mit_control" => RsCommand::MitControl(OpControl {
+            torque_nm: opt(&a.torque_nm, "torque_nm")?,
+            angle_rad: opt(&a.angle_rad, "angle_rad")?,
+            speed_rad_s: opt(&a.speed_rad_s, "speed_rad_s")?,
+            kp: opt(&a.kp, "kp")?,
+            kd: opt(&a.kd, "kd")?,
+        }),
+        "mit_mode" => {
+            let m = ctx.required(&a.mode, "mode", name, at)?;
+            RsCommand::MitMode(ctx.choice(m, "mode", &MIT_MODES)?)
+        }
+        "mit_position" => RsCommand::MitPosition {
+            target_rad: need(&a.target_rad, "target_rad")?,
+            limit_spd_rad_s: need(&a.limit_spd_rad_s, "limit_spd_rad_s")?,
+        },
+        "mit_velocity" => RsCommand::MitVelocity {
+            speed_rad_s: need(&a.speed_rad_s, "speed_rad_s")?,
+            limit_cur_a: need(&a.limit_cur_a, "limit_cur_a")?,
+        },
+        "mit_zero" => RsCommand::MitZero,
+        "mit_clear" => RsCommand::MitClear,
+        "mit_read_param" => RsCommand::MitReadParam {
+            param: param(&a.param)?,
+            expect: expectation()?,
+        },
+        "mit_set_protocol" => RsCommand::MitSetProtocol(protocol(&a.protocol)?),
+        "mit_active_report" => RsCommand::MitActiveReport {
+            on: ctx.required(&a.on, "on", name, at)?.value,
+        },
         "inject" => RsCommand::Inject(fault(&a.fault)?),
         "remove_cause" => RsCommand::RemoveCause(fault(&a.fault)?),
         "set_temperature" => RsCommand::SetTemperature {
@@ -653,6 +724,51 @@ mod tests {
         // Plausible values pass.
         let ok = step("do: external_torque, torque_nm: -30.0");
         assert!(parse_scenario(Path::new("ok.yaml"), &ok).is_ok());
+    }
+
+    #[test]
+    fn mit_commands_and_protocols_are_typed_and_checked() {
+        let step = |args: &str| format!("{BENCH}steps:\n  - robstride: {{motor: 1, {args}}}\n");
+        let command = |args: &str| {
+            let s = parse_scenario(Path::new("ok.yaml"), &step(args)).expect("valid");
+            let StepKind::Action {
+                action: crate::devices::Action::Robstride(a),
+                ..
+            } = &s.steps[0].kind
+            else {
+                panic!("not a robstride action");
+            };
+            (s.steps[0].label.clone(), a.command.clone())
+        };
+        assert_eq!(
+            command("do: set_protocol, protocol: mit"),
+            (
+                "robstride set_protocol".to_owned(),
+                RsCommand::SetProtocol(driver::robstride::Protocol::Mit)
+            )
+        );
+        assert_eq!(
+            command("do: mit_mode, mode: position").1,
+            RsCommand::MitMode(driver::robstride::MitMode::Position)
+        );
+        assert!(matches!(
+            command("do: mit_velocity, speed_rad_s: 2, limit_cur_a: 5").1,
+            RsCommand::MitVelocity { speed_rad_s, limit_cur_a } if speed_rad_s == 2.0 && limit_cur_a == 5.0
+        ));
+        assert!(command("do: mit_zero").1.is_mit());
+        assert!(!command("do: set_protocol, protocol: private").1.is_mit());
+        // A private run mode is not an MIT one, and a protocol must be named.
+        let e = error_of(&step("do: mit_mode, mode: csp"));
+        assert!(
+            e.contains("`mode`") && e.contains("mit, position, velocity"),
+            "{e}"
+        );
+        let e = error_of(&step("do: set_protocol, protocol: ethercat"));
+        assert!(e.contains("private, canopen, mit"), "{e}");
+        let e = error_of(&step("do: mit_set_protocol"));
+        assert!(e.contains("`protocol`"), "{e}");
+        let e = error_of(&step("do: mit_position, target_rad: 1.0"));
+        assert!(e.contains("`limit_spd_rad_s`"), "{e}");
     }
 
     #[test]
