@@ -147,9 +147,48 @@ def test_modbus_registers_plus_mode_and_hand_follow(arm):
     assert arm.rm_set_rm_plus_mode(256000) == 0
     assert arm.rm_get_rm_plus_mode() == (0, 256000)
     assert arm.rm_set_rm_plus_mode(0) == 0
-    assert arm.rm_set_hand_follow_angle([100, 200, 300, 400, 500, 600], False) == 0
-    # rm_set_hand_follow_pos first reads the end-effector's identity (get_rm_plus_base_info),
-    # whose reply format no document gives: not emulated, so not checked here.
+    # Blocking: the SDK waits for the controller's acknowledgement of hand_follow_angle
+    # (before: the command had another name in the emulator, no answer, -2 after 0.5 s).
+    assert arm.rm_set_hand_follow_angle([100, 200, 300, 400, 500, 600], True) == 0
+
+
+def test_hand_follow_pos_reads_the_end_effector_identity_first(arm):
+    """rm_set_hand_follow_pos asks get_rm_plus_base_info before it sends; the emulator answers
+    with the documented base_info of its hand while the end-effector protocol is on (before:
+    no reply, and the SDK refused to send)."""
+    assert arm.rm_set_rm_plus_mode(115200) == 0
+    code, info = arm.rm_get_rm_plus_base_info()
+    assert code == 0 and (info["type"], info["dof"]) == (2, 6), info
+    assert arm.rm_set_hand_follow_pos([100, 200, 300, 400, 500, 600], True) == 0
+    assert arm.rm_set_rm_plus_mode(0) == 0
+    code, _ = arm.rm_get_rm_plus_base_info()
+    assert code != 0, "protocol off: no device answers"
+
+
+def test_io_ports_and_supplies_round_trip(arm):
+    """The controller's and the tool's IO through the SDK's own parsers (before: no reply, -2)."""
+    assert arm.rm_set_do_state(2, 1) == 1, "port 2 boots as an input"
+    assert arm.rm_set_io_mode(2, 1) == 0
+    assert arm.rm_set_do_state(2, 1) == 0
+    code, state = arm.rm_get_io_state(2)
+    assert code == 0 and state["io_state"] == 1 and state["io_config"]["io_mode"] == 1, state
+    code, outputs = arm.rm_get_io_output()
+    assert code == 0 and outputs[1] == 1, outputs
+    code, inputs = arm.rm_get_io_input()
+    assert code == 0 and inputs == [0, 0, 0, 0], inputs
+    assert arm.rm_set_voltage(2, True) == 0
+    assert arm.rm_get_voltage() == (0, 2)
+    assert arm.rm_set_tool_voltage(1) == 0
+    assert arm.rm_get_tool_voltage() == (0, 1)
+    assert arm.rm_set_tool_IO_mode(1, 1) == 0
+    assert arm.rm_set_tool_do_state(1, 1) == 0
+    tool = arm.rm_get_tool_io_state()
+    assert tool["return_code"] == 0 and tool["IO_state"][0] == 1, tool
+    # Back to power-on so the other tests see a booted controller.
+    assert arm.rm_set_io_mode(2, 0) == 0
+    assert arm.rm_set_tool_IO_mode(1, 0) == 0
+    assert arm.rm_set_tool_voltage(3) == 0
+    assert arm.rm_set_voltage(3, True) == 0
 
 
 def test_motion_parameters_round_trip(arm):
