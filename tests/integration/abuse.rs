@@ -394,3 +394,42 @@ fn idle_realman_connections_do_not_lock_others_out() {
     }
     drop(idle);
 }
+
+/// The soft and hard open-file limits of a live process, from Linux's /proc.
+#[cfg(target_os = "linux")]
+fn open_file_limits(pid: u32) -> Option<(u64, u64)> {
+    let limits = std::fs::read_to_string(format!("/proc/{pid}/limits")).ok()?;
+    let line = limits.lines().find(|l| l.starts_with("Max open files"))?;
+    let mut numbers = line["Max open files".len()..].split_whitespace();
+    let mut next = || -> Option<u64> {
+        match numbers.next()? {
+            "unlimited" => Some(u64::MAX),
+            n => n.parse().ok(),
+        }
+    };
+    Some((next()?, next()?))
+}
+
+#[cfg(target_os = "linux")]
+#[test]
+fn the_servers_raise_a_low_open_file_limit() {
+    // Started the way a login shell with `ulimit -n 256` would start it.
+    let port = free_port();
+    let child = Command::new("sh")
+        .args(["-c", r#"ulimit -Sn 256 && exec "$0" "$@""#, ARMHIL])
+        .args(["sim", "realman", "--port", &port.to_string()])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("sh starts armhil");
+    let sim = Sim(child);
+    let deadline = Instant::now() + Duration::from_secs(20);
+    while TcpStream::connect(("127.0.0.1", port)).is_err() {
+        assert!(Instant::now() < deadline, "nothing listens on {port}");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let (soft, hard) = open_file_limits(sim.0.id()).expect("/proc/PID/limits");
+    println!("open-file limit after start: soft {soft}, hard {hard} (started at 256)");
+    assert!(soft >= 8192.min(hard), "soft limit {soft} (hard {hard})");
+    assert!(soft > 256 || hard <= 256, "the limit was not raised");
+}

@@ -155,8 +155,30 @@ pub(crate) fn outcome(
     }
 }
 
+/// Open files the servers ask for: every connection cap together (Realman 64, socketcand
+/// 128, web view 64) plus the recordings and state files, with room to spare. Many systems
+/// start processes at a soft limit of 1,024, which a storm of unfinished connections used up
+/// before the caps existed; the hard limit is left alone.
+const WANTED_OPEN_FILES: u64 = 8192;
+
+/// Raise the soft open-file limit towards [`WANTED_OPEN_FILES`] (never above the hard limit);
+/// the limit in force afterwards. A failure only costs headroom, so it is logged, not fatal.
+fn raise_open_file_limit() -> Option<u64> {
+    match rlimit::increase_nofile_limit(WANTED_OPEN_FILES) {
+        Ok(limit) => {
+            tracing::debug!(limit, "open-file soft limit");
+            Some(limit)
+        }
+        Err(e) => {
+            tracing::warn!("cannot raise the open-file limit: {e}");
+            None
+        }
+    }
+}
+
 /// Run the chosen emulator until Ctrl-C.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    raise_open_file_limit();
     match args.device {
         Device::Piper(args) => piper::run(args),
         Device::Realman(args) => realman::run(args),
