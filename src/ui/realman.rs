@@ -256,6 +256,41 @@ mod tests {
         }
     }
 
+    #[tokio::test(start_paused = true)]
+    async fn the_panel_shows_the_io_ports() {
+        use sim::realman::model::ArmModel;
+        use sim::realman::{ControllerConfig, EmulatorConfig, RealmanEmulator, Transport};
+        let emu = RealmanEmulator::spawn(
+            EmulatorConfig::new(ControllerConfig::new(ArmModel::rm65b())),
+            Transport::InMemory,
+        )
+        .await
+        .expect("emulator");
+        let monitor = emu.monitor();
+        monitor.with_controller(|c| {
+            for r in [
+                json!({"command": "set_IO_mode", "IO_Num": 2, "IO_mode": 1}),
+                json!({"command": "set_DO_state", "IO_Num": 2, "state": 1}),
+                json!({"command": "set_AO_state", "IO_Num": 1, "voltage": 1500}),
+            ] {
+                c.handle(1, &r);
+            }
+        });
+        let live = RealmanLive::new(monitor, "", "test");
+        let state = live.state().await;
+        let io = state["panel"]
+            .as_array()
+            .and_then(|rows| rows.iter().find(|r| r[0] == "IO"))
+            .map(|r| r[1].clone());
+        assert_eq!(
+            io,
+            Some(json!(
+                "DIO 1:i0 2:o1 3:i0 4:i0 | AO 1.500 0.000 0.000 0.000 V | 24 V · tool 1:i0 2:i0 24 V"
+            ))
+        );
+        emu.shutdown().await;
+    }
+
     #[test]
     fn page_errors_do_not_echo_huge_values() {
         let digits = format!("1{}", "0".repeat(300));
