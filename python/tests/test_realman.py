@@ -178,3 +178,74 @@ def test_calls_before_connect_are_not_initialized(realman_emulator):
     arm = ArmFactory.create_arm("realman", "a", realman_emulator.params)
     assert arm.get_joint_degree()[0] == AbcErrorCode.NOT_INITIALIZED
     assert arm.move_joint_position(TARGET_DEG, 50, 0, 0, 1) == AbcErrorCode.NOT_INITIALIZED
+
+
+def free_udp_port() -> int:
+    import socket
+
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def latest_state(arm, timeout_s: float = 3.0):
+    """The first realtime state `arm` delivers within `timeout_s` (None if none)."""
+    states = []
+    arm.realtime_arm_state_call_back(states.append)
+    wait_until(lambda: len(states) > 0, timeout_s)
+    arm.realtime_arm_state_call_back(None)
+    return states[-1] if states else None
+
+
+def test_two_controllers_on_one_push_port_each_arm_sees_its_own():
+    """A bimanual setup: two controllers aimed at one local UDP port in one process. Before,
+    the second create_arm/connect failed with ARM_DATA_RECEIVE_FAILED (the first arm held the
+    port); now they share it and each arm gets its own controller's state."""
+    import armhil.sim
+
+    udp_port = str(free_udp_port())
+    with armhil.sim.realman(initial_joints_deg=[10, 0, 0, 0, 0, 0]) as left_emu, \
+            armhil.sim.realman(initial_joints_deg=[-20, 0, 0, 0, 0, 0]) as right_emu:
+        arms = []
+        for name, emu in (("left_arm", left_emu), ("right_arm", right_emu)):
+            params = dict(emu.params)
+            params["udp_port"] = udp_port
+            arm = ArmFactory.create_arm("realman", name, params)
+            assert arm is not None, ArmFactory.last_error()
+            assert arm.connect() == AbcErrorCode.SUCCESS, arm.last_error
+            arms.append(arm)
+        try:
+            for arm, j1 in zip(arms, (10.0, -20.0)):
+                s = latest_state(arm)
+                assert s is not None, f"{arm.name}: no realtime state"
+                assert abs(s.joint_status.joint_position[0] - j1) < 0.1, (arm.name, s)
+            # A move of one arm shows in its own state only.
+            assert arms[1].move_joint_position([-20, 30, 0, 0, 0, 0], 50, 0, 0, 1) == AbcErrorCode.SUCCESS
+            assert abs(latest_state(arms[1]).joint_status.joint_position[1] - 30) < 0.1
+            assert abs(latest_state(arms[0]).joint_status.joint_position[1]) < 0.1
+        finally:
+            for arm in arms:
+                arm.disconnect()
+
+
+def test_two_arms_of_one_controller_share_the_push_port():
+    """Two arm objects on one controller and one local UDP port: both connect and both get the
+    controller's push (the same datagrams)."""
+    import armhil.sim
+
+    udp_port = str(free_udp_port())
+    with armhil.sim.realman(initial_joints_deg=[0, 15, 0, 0, 0, 0]) as emu:
+        params = dict(emu.params)
+        params["udp_port"] = udp_port
+        arms = [ArmFactory.create_arm("realman", n, params) for n in ("left_arm", "right_arm")]
+        try:
+            for arm in arms:
+                assert arm is not None, ArmFactory.last_error()
+                assert arm.connect() == AbcErrorCode.SUCCESS, arm.last_error
+            for arm in arms:
+                s = latest_state(arm)
+                assert s is not None and abs(s.joint_status.joint_position[1] - 15) < 0.1
+        finally:
+            for arm in arms:
+                if arm is not None:
+                    arm.disconnect()
