@@ -1,5 +1,6 @@
 //! One module per subcommand; each exposes clap `Args` and a `run` that builds its own runtime.
 
+pub mod bus_args;
 pub mod check;
 pub mod decode;
 pub mod logging;

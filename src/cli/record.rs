@@ -4,16 +4,14 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+use super::bus_args::BusArgs;
+
 /// Arguments of `armhil record`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// CAN interface to record, e.g. `vcan0`.
-    #[arg(long, required_unless_present = "socketcand")]
-    pub iface: Option<String>,
-    /// Record a socketcand server's bus instead (HOST:PORT, e.g. one served by
-    /// `armhil sim piper --socketcand`); works without kernel CAN.
-    #[arg(long, value_name = "HOST:PORT", conflicts_with = "iface")]
-    pub socketcand: Option<String>,
+    /// The bus to record (one of `--iface`, `--socketcand`).
+    #[command(flatten)]
+    pub bus: BusArgs,
     /// Output file: `.pcap` writes pcap (Wireshark), anything else a candump `-L` log.
     #[arg(short = 'o', long)]
     pub output: PathBuf,
@@ -45,27 +43,12 @@ pub fn parse_duration(secs: f64) -> anyhow::Result<std::time::Duration> {
         })
 }
 
-/// Open the SocketCAN interface to record.
-#[cfg(target_os = "linux")]
-fn open_iface(iface: &str) -> anyhow::Result<std::sync::Arc<dyn bus::CanBus>> {
-    use anyhow::Context as _;
-    let bus = bus::socketcan_bus::SocketCanBus::open(iface)
-        .with_context(|| format!("cannot open CAN interface {iface}"))?;
-    Ok(std::sync::Arc::new(bus))
-}
-
-#[cfg(not(target_os = "linux"))]
-fn open_iface(_iface: &str) -> anyhow::Result<std::sync::Arc<dyn bus::CanBus>> {
-    anyhow::bail!("SocketCAN only exists on Linux; record a socketcand server with --socketcand")
-}
-
 mod imp {
     use std::time::Duration;
 
     use anyhow::Context as _;
     use bus::recorder::Recorder;
-    use bus::socketcand::SocketcandBus;
-    use bus::{BusError, CanBus};
+    use bus::BusError;
 
     use super::*;
 
@@ -78,24 +61,13 @@ mod imp {
     }
 
     async fn record(args: Args, duration: Option<Duration>) -> anyhow::Result<ExitCode> {
-        // The log's interface column: the interface, or one word for a socketcand bus.
-        let channel = match (&args.socketcand, &args.iface) {
-            (Some(_), _) => "socketcand".to_owned(),
-            (None, Some(iface)) => iface.clone(),
-            (None, None) => anyhow::bail!("give --iface IF or --socketcand HOST:PORT"),
+        let Some(link) = args.bus.link() else {
+            anyhow::bail!("give the bus to record: --iface IF or --socketcand HOST:PORT");
         };
         // The output first: a bad path is reported before any bus is touched.
-        let mut recorder = Recorder::create(&args.output, &channel)
+        let mut recorder = Recorder::create(&args.output, link.channel())
             .with_context(|| format!("cannot create {}", args.output.display()))?;
-        let bus: std::sync::Arc<dyn CanBus> = match (&args.socketcand, &args.iface) {
-            (Some(addr), _) => std::sync::Arc::new(
-                SocketcandBus::connect(addr, "can0")
-                    .await
-                    .context("cannot record the socketcand bus")?,
-            ),
-            (None, Some(iface)) => open_iface(iface)?,
-            (None, None) => anyhow::bail!("give --iface IF or --socketcand HOST:PORT"),
-        };
+        let bus = link.open("recorder").await.map_err(anyhow::Error::msg)?;
         tracing::info!(on = %bus.name(), output = %args.output.display(), "recording; Ctrl-C stops");
         let stop_after = async {
             match duration {

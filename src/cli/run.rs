@@ -14,6 +14,7 @@ use armhil::harness::{
 };
 use indicatif::{ProgressBar, ProgressStyle};
 
+use super::bus_args::BusArgs;
 use super::signals::interrupt_on_signals;
 
 /// Arguments of `armhil run`.
@@ -40,15 +41,13 @@ pub struct Args {
     /// when it names one, else with the in-process emulator on the virtual bus.
     #[arg(long)]
     realtime: bool,
-    /// Run in real time against a separate emulator process (`armhil sim piper --iface IF`)
-    /// on this SocketCAN interface. Scenarios that need the in-process emulator (emulator or
-    /// bus faults, obstacles, initial joints) are skipped with the reason.
-    #[arg(long, value_name = "IF")]
-    iface: Option<String>,
-    /// Like --iface, but over TCP: against `armhil sim piper|robstride --socketcand ADDR`
-    /// (or any socketcand server) at HOST:PORT, for machines without kernel CAN.
-    #[arg(long, value_name = "HOST:PORT", conflicts_with = "iface")]
-    socketcand: Option<String>,
+    /// Run in real time against a separate emulator process on this bus (`--iface IF`, e.g.
+    /// `armhil sim piper --iface IF`; or `--socketcand HOST:PORT`, e.g. `armhil sim
+    /// piper|robstride --socketcand ADDR`, for machines without kernel CAN). Scenarios that
+    /// need the in-process emulator (emulator or bus faults, obstacles, initial joints) are
+    /// skipped with the reason.
+    #[command(flatten)]
+    bus: BusArgs,
     /// Multiply every deadline (wait_until, action and driver timeouts) by this factor, 1 to
     /// 1000, in real-time runs, for slow machines such as a vcan VM under emulation. Ignored
     /// in virtual time.
@@ -189,17 +188,13 @@ struct Ran {
 
 /// Load, run and write one scenario.
 fn run_one(file: &SuiteFile, args: &Args, interrupt: &Interrupt, loader: &mut SuiteLoader) -> Ran {
-    let clock_for = |bench_iface: Option<&String>| {
-        if let Some(addr) = &args.socketcand {
-            return Clock::Iface(Link::Socketcand(addr.clone()));
-        }
-        match (&args.iface, args.realtime, bench_iface) {
-            (Some(iface), _, _) => Clock::Iface(Link::SocketCan(iface.clone())),
+    let clock_for =
+        |bench_iface: Option<&String>| match (args.bus.link(), args.realtime, bench_iface) {
+            (Some(link), _, _) => Clock::Iface(link),
             (None, true, Some(iface)) => Clock::Iface(Link::SocketCan(iface.clone())),
             (None, true, None) => Clock::Realtime,
             (None, false, _) => Clock::Virtual,
-        }
-    };
+        };
     let scenario = match loader.load(file) {
         Ok(s) => s,
         Err(e) => {
@@ -400,11 +395,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         Some(bar) => bar.println(text),
         None => println!("{text}"),
     };
-    let link = match (&args.socketcand, &args.iface) {
-        (Some(addr), _) => Some(format!("socketcand {addr}")),
-        (None, Some(iface)) => Some(iface.clone()),
-        (None, None) => None,
-    };
+    let link = args.bus.link();
     if let Some(iface) = &link {
         print(&format!(
             "running on {iface} in real time against a separate emulator process: bus faults and emulator faults are unavailable; scenarios that use them are skipped"

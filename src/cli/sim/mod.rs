@@ -11,6 +11,7 @@ use super::signals::StopSignals;
 pub mod piper;
 pub mod realman;
 pub mod robstride;
+pub mod served_bus;
 
 /// Arguments of `armhil sim`.
 #[derive(Debug, clap::Args)]

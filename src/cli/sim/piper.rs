@@ -11,24 +11,17 @@ use armhil::ui::piper::PiperLive;
 use bus::CanBus;
 use sim::piper::{FirmwareProfile, PiperConfig, PiperEmulator};
 
+use super::served_bus::{ServeArgs, ServedBus};
+
 /// The Piper's CAN bit rate (for the web view's bus load).
 const PIPER_BITRATE_BPS: u32 = 1_000_000;
 
 /// Arguments of `armhil sim piper`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// SocketCAN interface to answer on.
-    #[arg(long, default_value = "vcan0")]
-    pub iface: String,
-    /// Serve the emulator over socketcand (CAN over TCP) on HOST:PORT instead of a SocketCAN
-    /// interface, e.g. `127.0.0.1:29536` (a bare port means 127.0.0.1). Any bus name a client
-    /// opens reaches the emulator; several clients may connect at once.
-    #[arg(long, value_name = "HOST:PORT", conflicts_with = "iface")]
-    pub socketcand: Option<String>,
-    /// Create the vxcan pair `--iface` ↔ PEER first (needs root; kept after exit), so a client
-    /// on PEER, such as a vendor SDK, reaches the emulator whatever its socket options.
-    #[arg(long, value_name = "PEER", conflicts_with = "socketcand")]
-    pub create_vxcan: Option<String>,
+    /// Where the emulator answers.
+    #[command(flatten)]
+    pub bus: ServeArgs,
     /// Firmware to impersonate: S-V1.5-8, S-V1.6-3, S-V1.8-2 or S-V1.8-8.
     #[arg(long, default_value = "S-V1.8-2")]
     pub firmware: FirmwareProfile,
@@ -92,52 +85,17 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
         max_catch_up_steps: args.max_catch_up_ms,
         ..PiperConfig::default()
     };
-    let (bus, tap, ui_tap, server, place) = match &args.socketcand {
-        Some(addr) => {
-            let (virtual_bus, server) = super::socketcand_server(addr).await?;
-            let node: Arc<dyn CanBus> = Arc::new(virtual_bus.attach("piper"));
-            let ui_tap: Option<Arc<dyn CanBus>> = args
-                .ui
-                .as_ref()
-                .map(|_| Arc::new(virtual_bus.attach("ui")) as Arc<dyn CanBus>);
-            // A node that never sends receives every frame on the bus.
-            let tap: Option<Arc<dyn CanBus>> = args
-                .record
-                .as_ref()
-                .map(|_| Arc::new(virtual_bus.attach("recorder")) as Arc<dyn CanBus>);
-            let place = format!("socketcand {}", server.local_addr());
-            (node, tap, ui_tap, Some(server), place)
-        }
-        None => {
-            if let Some(peer) = &args.create_vxcan {
-                super::create_vxcan(&args.iface, peer)?;
-            }
-            let tap = match &args.record {
-                Some(_) => Some(open_bus(&args.iface)?),
-                None => None,
-            };
-            let ui_tap = match &args.ui {
-                Some(_) => Some(open_bus(&args.iface)?),
-                None => None,
-            };
-            (
-                open_bus(&args.iface)?,
-                tap,
-                ui_tap,
-                None,
-                args.iface.clone(),
-            )
-        }
-    };
+    let served = ServedBus::open(&args.bus).await?;
+    let place = served.place().to_owned();
+    let bus = served.node("piper")?;
+    let tap = args
+        .record
+        .as_ref()
+        .map(|_| served.node("recorder"))
+        .transpose()?;
+    let ui_tap = args.ui.as_ref().map(|_| served.node("ui")).transpose()?;
     let recorder = match (&args.record, tap) {
-        (Some(path), Some(tap)) => {
-            // The log's interface column takes one word.
-            let channel = match args.socketcand {
-                Some(_) => "socketcand",
-                None => args.iface.as_str(),
-            };
-            Some(start_recorder(tap, channel, path)?)
-        }
+        (Some(path), Some(tap)) => Some(start_recorder(tap, served.channel(), path)?),
         _ => None,
     };
     let urdf = match &args.urdf {
@@ -186,36 +144,8 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
     if let Some(rec) = recorder {
         rec.stop().await?;
     }
-    if let Some(server) = server {
-        server.shutdown().await;
-    }
+    served.shutdown().await;
     super::outcome("Piper", stopped, &death)
-}
-
-#[cfg(target_os = "linux")]
-fn open_bus(iface: &str) -> anyhow::Result<Arc<dyn CanBus>> {
-    socket::open(iface)
-}
-
-#[cfg(not(target_os = "linux"))]
-fn open_bus(_iface: &str) -> anyhow::Result<Arc<dyn CanBus>> {
-    anyhow::bail!("SocketCAN is only available on Linux")
-}
-
-#[cfg(target_os = "linux")]
-mod socket {
-    use std::sync::Arc;
-
-    use anyhow::Context;
-    use bus::socketcan_bus::SocketCanBus;
-    use bus::CanBus;
-
-    pub fn open(iface: &str) -> anyhow::Result<Arc<dyn CanBus>> {
-        let socket = SocketCanBus::open(iface).with_context(|| {
-            format!("cannot open SocketCAN interface {iface} (is it up? `ip link set up {iface}`)")
-        })?;
-        Ok(Arc::new(socket))
-    }
 }
 
 /// A task that writes every frame seen on the interface to a candump log or a pcap (by the

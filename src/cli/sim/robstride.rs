@@ -9,26 +9,18 @@ use std::sync::Arc;
 use anyhow::Context;
 use armhil::ui::bus_tap::BusTap;
 use armhil::ui::robstride::RobstrideLive;
-use bus::CanBus;
 use sim::robstride::{
     Load, Model, MotorConfig, PlantKind, RangeTable, RobstrideBus, RobstrideConfig,
 };
 
+use super::served_bus::{ServeArgs, ServedBus};
+
 /// Arguments of `armhil sim robstride`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// SocketCAN interface to answer on.
-    #[arg(long, default_value = "vcan0")]
-    pub iface: String,
-    /// Serve the motors over socketcand (CAN over TCP) on HOST:PORT instead of a SocketCAN
-    /// interface, e.g. `127.0.0.1:29536` (a bare port means 127.0.0.1). Any bus name a client
-    /// opens reaches the motors; several clients may connect at once.
-    #[arg(long, value_name = "HOST:PORT", conflicts_with = "iface")]
-    pub socketcand: Option<String>,
-    /// Create the vxcan pair `--iface` ↔ PEER first (needs root; kept after exit), so a client
-    /// on PEER, such as a vendor SDK, reaches the emulator whatever its socket options.
-    #[arg(long, value_name = "PEER", conflicts_with = "socketcand")]
-    pub create_vxcan: Option<String>,
+    /// Where the motors answer.
+    #[command(flatten)]
+    pub bus: ServeArgs,
     /// A motor as ID:MODEL, e.g. `1:RS03` (repeat for more motors; default `127:RS03`).
     #[arg(long = "motor", value_name = "ID:MODEL")]
     pub motors: Vec<MotorSpec>,
@@ -164,29 +156,10 @@ fn config(args: &Args) -> anyhow::Result<RobstrideConfig> {
 
 async fn serve(args: Args) -> anyhow::Result<ExitCode> {
     let config = config(&args)?;
-    let (bus, ui_tap, server, place) = match &args.socketcand {
-        Some(addr) => {
-            let (virtual_bus, server) = super::socketcand_server(addr).await?;
-            let node: Arc<dyn CanBus> = Arc::new(virtual_bus.attach("robstride"));
-            // A node that never sends sees every frame on the bus.
-            let ui_tap: Option<Arc<dyn CanBus>> = args
-                .ui
-                .as_ref()
-                .map(|_| Arc::new(virtual_bus.attach("ui")) as Arc<dyn CanBus>);
-            let place = format!("socketcand {}", server.local_addr());
-            (node, ui_tap, Some(server), place)
-        }
-        None => {
-            if let Some(peer) = &args.create_vxcan {
-                super::create_vxcan(&args.iface, peer)?;
-            }
-            let ui_tap = match &args.ui {
-                Some(_) => Some(open_bus(&args.iface)?),
-                None => None,
-            };
-            (open_bus(&args.iface)?, ui_tap, None, args.iface.clone())
-        }
-    };
+    let served = ServedBus::open(&args.bus).await?;
+    let place = served.place().to_owned();
+    let bus = served.node("robstride")?;
+    let ui_tap = args.ui.as_ref().map(|_| served.node("ui")).transpose()?;
     let ids: Vec<u8> = config.motors.iter().map(|m| m.can_id).collect();
     let bitrate_bps = config.bus_bitrate_bps;
     let motors: Vec<String> = config
@@ -220,22 +193,8 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
     }
     emulator.shutdown().await;
     bus.close().await;
-    if let Some(server) = server {
-        server.shutdown().await;
-    }
+    served.shutdown().await;
     super::outcome("RobStride", stopped, &death)
-}
-
-#[cfg(target_os = "linux")]
-fn open_bus(iface: &str) -> anyhow::Result<Arc<dyn CanBus>> {
-    let socket = bus::socketcan_bus::SocketCanBus::open(iface)
-        .with_context(|| format!("cannot open SocketCAN interface {iface}"))?;
-    Ok(Arc::new(socket))
-}
-
-#[cfg(not(target_os = "linux"))]
-fn open_bus(_iface: &str) -> anyhow::Result<Arc<dyn CanBus>> {
-    anyhow::bail!("SocketCAN is only available on Linux")
 }
 
 #[cfg(test)]

@@ -53,6 +53,19 @@ impl Link {
             Self::Socketcand(addr) => format!("--socketcand {addr}"),
         }
     }
+
+    /// Connect to the bus as a node; `what` names the node in errors ("the recorder").
+    pub async fn open(&self, what: &str) -> Result<Arc<dyn bus::CanBus>, String> {
+        bench::open_link(self, what).await
+    }
+
+    /// One word for a candump log's interface column: the interface, or `socketcand`.
+    pub fn channel(&self) -> &str {
+        match self {
+            Self::SocketCan(iface) => iface,
+            Self::Socketcand(_) => "socketcand",
+        }
+    }
 }
 
 impl std::fmt::Display for Link {

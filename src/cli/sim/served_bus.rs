@@ -1,0 +1,114 @@
+//! Where a CAN emulator answers: one set of options (`--iface`, `--socketcand`,
+//! `--create-vxcan`) for every CAN device of `armhil sim`, and the bus they open. A new CAN
+//! device flattens [`ServeArgs`] into its arguments and asks [`ServedBus`] for its nodes.
+
+use std::sync::Arc;
+
+use bus::socketcand::SocketcandServer;
+use bus::virtual_bus::VirtualBus;
+use bus::CanBus;
+
+/// Where the emulator answers (flattened into each CAN device's arguments).
+#[derive(Debug, Clone, clap::Args)]
+pub struct ServeArgs {
+    /// SocketCAN interface to answer on.
+    #[arg(long, default_value = "vcan0")]
+    pub iface: String,
+    /// Serve over socketcand (CAN over TCP) on HOST:PORT instead of a SocketCAN interface,
+    /// e.g. `127.0.0.1:29536` (a bare port means 127.0.0.1). Any bus name a client opens
+    /// reaches the emulator; several clients may connect at once.
+    #[arg(long, value_name = "HOST:PORT", conflicts_with = "iface")]
+    pub socketcand: Option<String>,
+    /// Create the vxcan pair `--iface` ↔ PEER first (needs root; kept after exit), so a client
+    /// on PEER, such as a vendor SDK, reaches the emulator whatever its socket options.
+    #[arg(long, value_name = "PEER", conflicts_with = "socketcand")]
+    pub create_vxcan: Option<String>,
+}
+
+/// The bus an emulator serves, opened from [`ServeArgs`].
+pub(crate) struct ServedBus {
+    medium: Medium,
+    place: String,
+}
+
+enum Medium {
+    /// A real-time virtual bus behind a socketcand server: every node attaches to it.
+    Socketcand {
+        bus: VirtualBus,
+        server: SocketcandServer,
+    },
+    /// A SocketCAN interface: every node is a socket of its own on it.
+    SocketCan { iface: String },
+}
+
+impl ServedBus {
+    /// Open the bus `args` names: start the socketcand server (warning if other machines can
+    /// reach it), or create the vxcan pair when asked and take the interface.
+    pub async fn open(args: &ServeArgs) -> anyhow::Result<Self> {
+        match &args.socketcand {
+            Some(addr) => {
+                let (bus, server) = super::socketcand_server(addr).await?;
+                let place = format!("socketcand {}", server.local_addr());
+                Ok(Self {
+                    medium: Medium::Socketcand { bus, server },
+                    place,
+                })
+            }
+            None => {
+                if let Some(peer) = &args.create_vxcan {
+                    super::create_vxcan(&args.iface, peer)?;
+                }
+                Ok(Self {
+                    medium: Medium::SocketCan {
+                        iface: args.iface.clone(),
+                    },
+                    place: args.iface.clone(),
+                })
+            }
+        }
+    }
+
+    /// A node on the bus called `name` (the emulator, a recorder, the web view's tap). A node
+    /// that never sends receives every frame, the emulator's and the clients'.
+    pub fn node(&self, name: &str) -> anyhow::Result<Arc<dyn CanBus>> {
+        match &self.medium {
+            Medium::Socketcand { bus, .. } => Ok(Arc::new(bus.attach(name))),
+            Medium::SocketCan { iface } => open_socketcan(iface),
+        }
+    }
+
+    /// Where the emulator answers, for people: `vcan0` or `socketcand 127.0.0.1:29536`.
+    pub fn place(&self) -> &str {
+        &self.place
+    }
+
+    /// One word for a candump log's interface column: the interface, or `socketcand`.
+    pub fn channel(&self) -> &str {
+        match &self.medium {
+            Medium::Socketcand { .. } => "socketcand",
+            Medium::SocketCan { iface } => iface,
+        }
+    }
+
+    /// Stop serving: the socketcand server's clients are disconnected (nothing to do on a
+    /// SocketCAN interface, whose sockets close with their nodes).
+    pub async fn shutdown(self) {
+        if let Medium::Socketcand { server, .. } = self.medium {
+            server.shutdown().await;
+        }
+    }
+}
+
+#[cfg(target_os = "linux")]
+fn open_socketcan(iface: &str) -> anyhow::Result<Arc<dyn CanBus>> {
+    use anyhow::Context as _;
+    let socket = bus::socketcan_bus::SocketCanBus::open(iface).with_context(|| {
+        format!("cannot open SocketCAN interface {iface} (is it up? `ip link set up {iface}`)")
+    })?;
+    Ok(Arc::new(socket))
+}
+
+#[cfg(not(target_os = "linux"))]
+fn open_socketcan(iface: &str) -> anyhow::Result<Arc<dyn CanBus>> {
+    anyhow::bail!("SocketCAN interface {iface}: SocketCAN exists only on Linux (use --socketcand)")
+}
