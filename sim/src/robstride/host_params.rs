@@ -21,15 +21,15 @@ use crate::robstride::params::index;
 /// Wire type of a host-table value (bytes 4..7 of the type-17 reply, little-endian).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum HostType {
-    /// One byte at data[4].
+    /// One byte at `data[4]`.
     U8,
-    /// u16 at data[4..6].
+    /// u16 at `data[4..6]`.
     U16,
-    /// i16 at data[4..6] (temperatures ×10, turn count).
+    /// i16 at `data[4..6]` (temperatures ×10, turn count).
     I16,
-    /// u32 at data[4..8].
+    /// u32 at `data[4..8]`.
     U32,
-    /// IEEE-754 f32 at data[4..8].
+    /// IEEE-754 f32 at `data[4..8]`.
     F32,
 }
 

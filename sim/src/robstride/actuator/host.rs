@@ -13,7 +13,7 @@ use crate::robstride::host_params::{self, HostParam, Live, Source};
 use crate::robstride::params::{self, index};
 
 impl Actuator {
-    /// The value bytes (data[4..8]) of a readable index: a 0x70xx parameter or a host-table
+    /// The value bytes (`data[4..8]`) of a readable index: a 0x70xx parameter or a host-table
     /// row; `None` for an index the motor does not serve (strings 0x0000/0x1000.., gaps).
     pub(super) fn param_bytes(&self, idx: u16) -> Option<[u8; 4]> {
         if let Some(spec) = self.params.spec(idx) {
