@@ -564,6 +564,7 @@ impl Device for RobstrideDevice {
             handle.shutdown().await;
         }
         lock(&self.motors).clear();
+        lock(&self.mit_motors).clear();
         // Deletes the state folder (best effort: a leftover temp folder is harmless).
         drop(lock(&self.state_dir).take());
     }
@@ -753,6 +754,13 @@ mod tests {
         assert_eq!(
             classify(&RobstrideError::InvalidCanId { id: 0 }),
             ErrorClass::InvalidArgument
+        );
+        assert_eq!(
+            classify(&RobstrideError::MitEnableRefused {
+                motor: 1,
+                fault: true
+            }),
+            ErrorClass::Rejected
         );
     }
 
