@@ -113,15 +113,13 @@ impl LiveSource for RealmanLive {
             .with_controller(|c| (c.params().push.clone(), c.params().io.summary()));
         let clients = self.monitor.clients();
         let stats = self.monitor.stats();
-        // An empty push IP means every host holding a TCP connection.
-        let targets: Vec<String> = match (push.enable, push.ip.is_empty()) {
-            (false, _) => Vec::new(),
-            (true, false) => vec![format!("{}:{}", push.ip, push.port)],
-            (true, true) => clients
-                .iter()
-                .map(|c| format!("{}:{}", c.ip(), push.port))
-                .collect(),
-        };
+        // Where the push goes now, as the emulator's push task decides it.
+        let targets: Vec<String> = self
+            .monitor
+            .push_targets()
+            .iter()
+            .map(ToString::to_string)
+            .collect();
         let deg = |v: &[f64]| v.iter().map(|x| round3(x.to_degrees())).collect::<Vec<_>>();
         let errors: Vec<String> = s.errors.iter().map(|e| format!("0x{e:04X}")).collect();
         let active: Vec<&str> = self
@@ -174,8 +172,13 @@ impl LiveSource for RealmanLive {
             ]),
             json!([
                 "UDP push",
-                if targets.is_empty() {
+                if !push.enable {
                     "off".to_owned()
+                } else if targets.is_empty() {
+                    format!(
+                        "on, every {} ms, but no connected client to send it to",
+                        push.cycle * 5
+                    )
                 } else {
                     format!(
                         "{} every {} ms ({} sent)",
@@ -286,6 +289,40 @@ mod tests {
             io,
             Some(json!(
                 "DIO 1:i0 2:o1 3:i0 4:i0 | AO 1.500 0.000 0.000 0.000 V | 24 V · tool 1:i0 2:i0 24 V"
+            ))
+        );
+        emu.shutdown().await;
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn the_panel_lists_only_where_the_push_really_goes() {
+        use sim::realman::model::ArmModel;
+        use sim::realman::{ControllerConfig, EmulatorConfig, RealmanEmulator, Transport};
+        let emu = RealmanEmulator::spawn(
+            EmulatorConfig::new(ControllerConfig::new(ArmModel::rm65b())),
+            Transport::InMemory,
+        )
+        .await
+        .expect("emulator");
+        let monitor = emu.monitor();
+        // A target stored by an earlier client; nobody is connected now, so the emulator
+        // pushes nowhere (the view used to list 192.0.2.7:8089 all the same).
+        monitor.with_controller(|c| {
+            let set = json!({"command": "set_realtime_push", "cycle": 1, "enable": true,
+                             "port": 8089, "ip": "192.0.2.7"});
+            c.handle(1, &set);
+        });
+        let live = RealmanLive::new(monitor, "", "test");
+        let state = live.state().await;
+        assert_eq!(state["push_targets"], json!([]));
+        let row = state["panel"]
+            .as_array()
+            .and_then(|rows| rows.iter().find(|r| r[0] == "UDP push"))
+            .map(|r| r[1].clone());
+        assert_eq!(
+            row,
+            Some(json!(
+                "on, every 5 ms, but no connected client to send it to"
             ))
         );
         emu.shutdown().await;

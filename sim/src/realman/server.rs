@@ -37,7 +37,7 @@ use super::controller::{
 };
 use super::faults::{FaultError, RealmanFault, RealmanFaultKind};
 use super::framing::{Splitter, Unit, MAX_REQUEST_BYTES};
-use super::params::StateFileError;
+use super::params::{PushConfig, StateFileError};
 use super::push::{self, Datagram, PushFaults, PushSink, PushStats};
 use crate::supervise::{DeathWatch, Supervisor};
 use bus::socketcand::http_guard::HttpGuard;
@@ -316,6 +316,13 @@ impl RealmanMonitor {
     /// See [`RealmanHandle::with_controller`].
     pub fn with_controller<R>(&self, f: impl FnOnce(&mut Controller) -> R) -> R {
         f(&mut lock(&self.shared.core))
+    }
+
+    /// Where the UDP push goes now: none while it is off or no client is connected, on a
+    /// public bind only a connected client's address (the push task asks the same question).
+    pub fn push_targets(&self) -> Vec<SocketAddr> {
+        let push = lock(&self.shared.core).params().push.clone();
+        push_targets(&self.shared, &push)
     }
 
     /// Peer addresses of the TCP clients connected now.
@@ -927,6 +934,17 @@ async fn core_loop(shared: Arc<Shared>, sink: PushSink, ticks_per_wake: u64) {
     }
 }
 
+/// Where the push goes now (see [`push::targets`]): the one answer the push task and the
+/// monitor (the web view) share, so a view never lists an address the push has stopped
+/// going to.
+fn push_targets(shared: &Shared, push: &PushConfig) -> Vec<SocketAddr> {
+    if !push.enable {
+        return Vec::new();
+    }
+    let clients: Vec<SocketAddr> = lock(&shared.clients).values().map(|c| c.peer).collect();
+    push::targets(&push.ip, push.port, &clients, shared.public)
+}
+
 async fn send_push(shared: &Shared, sink: &PushSink, stats: &mut PushStats) {
     let (payload, push) = {
         let core = lock(&shared.core);
@@ -936,9 +954,7 @@ async fn send_push(shared: &Shared, sink: &PushSink, stats: &mut PushStats) {
         }
         (core.push_datagram(), push)
     };
-    let clients: Vec<SocketAddr> = lock(&shared.clients).values().map(|c| c.peer).collect();
-    let targets = push::targets(&push.ip, push.port, &clients, shared.public);
-    for to in targets {
+    for to in push_targets(shared, &push) {
         let out = lock(&shared.push_faults).apply(Datagram {
             to,
             payload: payload.clone(),
