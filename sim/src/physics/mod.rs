@@ -7,6 +7,8 @@
 //! - [`ArmWorld`]: a fixed-base articulated world (rapier3d multibody, gravity −Z, fixed step,
 //!   enhanced determinism) loaded from a URDF: motor torques in, joint positions and
 //!   velocities out, persistent disturbance torques, static obstacles and contacts.
+//! - [`KineticFriction`]: an opt-in split of a joint's dry friction into breakaway (static)
+//!   and sliding (kinetic) values, switched by the joint's speed.
 //!
 //! Joint vectors everywhere have one entry per actuated joint (revolute, continuous,
 //! prismatic) in URDF document order, as listed by [`ArmWorld::joints`]; rad / rad/s / N·m
@@ -29,11 +31,13 @@
 //! ```
 
 mod error;
+mod friction;
 mod model;
 mod obstacle;
 mod world;
 
 pub use error::PhysicsError;
+pub use friction::KineticFriction;
 pub use model::{
     ArmModel, JointInfo, JointKind, LinkInertial, Mimic, DEFAULT_GRAVITY_M_S2, MAX_URDF_BYTES,
 };

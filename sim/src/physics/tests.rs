@@ -401,3 +401,97 @@ fn a_urdf_file_over_the_limit_is_refused_by_its_size() {
         "{err}"
     );
 }
+
+/// A turntable about the vertical axis (gravity does not load it): 0.5 kg·m² about Z,
+/// 1.0 N·m of dry friction.
+const TURNTABLE: &str = r#"<?xml version="1.0"?>
+<robot name="turntable">
+  <link name="base"/>
+  <link name="plate">
+    <inertial>
+      <origin xyz="0 0 0" rpy="0 0 0"/>
+      <mass value="5.0"/>
+      <inertia ixx="0.5" ixy="0" ixz="0" iyy="0.5" iyz="0" izz="0.5"/>
+    </inertial>
+  </link>
+  <joint name="spin" type="revolute">
+    <parent link="base"/>
+    <child link="plate"/>
+    <origin xyz="0 0 0.1" rpy="0 0 0"/>
+    <axis xyz="0 0 1"/>
+    <limit lower="-3.0" upper="3.0" effort="20" velocity="3"/>
+    <dynamics damping="0" friction="1.0"/>
+  </joint>
+</robot>"#;
+
+/// rapier keeps the friction in `f32`: compare to that precision.
+fn assert_friction(world: &ArmWorld, joint: usize, expected: f64) {
+    let got = world.friction_in_effect(joint).expect("a known joint");
+    assert!(
+        (got - expected).abs() < 1e-6,
+        "friction {got}, expected {expected}"
+    );
+}
+
+fn turntable(kinetic: Option<f64>) -> ArmWorld {
+    let mut world = ArmWorld::from_urdf_str(TURNTABLE, WorldConfig::default()).expect("loads");
+    world.set_kinetic_friction(
+        0,
+        kinetic.map(|k| KineticFriction {
+            kinetic: k,
+            stick_speed: 0.001,
+        }),
+    );
+    world
+}
+
+#[test]
+fn a_joint_with_a_kinetic_figure_sticks_at_breakaway_and_slides_at_the_kinetic_value() {
+    let mut world = turntable(Some(0.1));
+    assert_friction(&world, 0, 1.0);
+    // 0.9 N·m is below breakaway: the plate does not move.
+    run(&mut world, 500, &[0.9]);
+    assert!(
+        world.joint_positions()[0].abs() < 1e-6,
+        "{:?}",
+        world.joint_positions()
+    );
+    // 1.1 N·m breaks it away; once it slides, only 0.1 N·m of friction is left.
+    run(&mut world, 100, &[1.1]);
+    assert_friction(&world, 0, 0.1);
+    let v0 = world.joint_velocities()[0];
+    assert!(v0 > 0.1, "{v0}");
+    // 0.5 N·m no longer breaks away from rest, but keeps a sliding plate accelerating at
+    // (0.5 − 0.1) / 0.5 = 0.8 rad/s² (a single constant-friction model would brake it).
+    run(&mut world, 500, &[0.5]);
+    let dv = world.joint_velocities()[0] - v0;
+    assert!((dv - 0.4).abs() < 0.02, "Δv {dv} rad/s, expected 0.4");
+    // Without torque the kinetic friction stops it, and then the breakaway value holds it.
+    run(&mut world, 6000, &[0.0]);
+    assert!(world.joint_velocities()[0].abs() < 1e-3);
+    assert_friction(&world, 0, 1.0);
+    let parked = world.joint_positions()[0];
+    run(&mut world, 500, &[0.9]);
+    assert!((world.joint_positions()[0] - parked).abs() < 1e-6);
+}
+
+#[test]
+fn a_joint_without_a_kinetic_figure_keeps_its_urdf_friction_at_every_speed() {
+    let mut world = turntable(None);
+    assert_eq!(world.kinetic_friction(0), None);
+    run(&mut world, 100, &[2.0]);
+    assert!(world.joint_velocities()[0] > 0.1);
+    assert_friction(&world, 0, 1.0);
+    // Sliding at 0.5 N·m it brakes at (1.0 − 0.5) / 0.5 = 1 rad/s².
+    let v0 = world.joint_velocities()[0];
+    run(&mut world, 100, &[0.5]);
+    let dv = world.joint_velocities()[0] - v0;
+    assert!((dv + 0.1).abs() < 0.01, "Δv {dv} rad/s, expected −0.1");
+    // Clearing a split restores the URDF value; an unknown joint index is ignored.
+    let mut split = turntable(Some(0.2));
+    split.set_kinetic_friction(0, None);
+    split.set_kinetic_friction(7, Some(KineticFriction::new(1.0, 0.1, 0.001)));
+    run(&mut split, 100, &[2.0]);
+    assert_friction(&split, 0, 1.0);
+    assert_eq!(split.friction_in_effect(7), None);
+}

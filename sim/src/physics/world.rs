@@ -12,6 +12,7 @@ use rapier3d::prelude::{
 use rapier3d_urdf::{UrdfLoaderOptions, UrdfMultibodyOptions, UrdfRobot};
 
 use super::error::PhysicsError;
+use super::friction::KineticFriction;
 use super::model::{ArmModel, JointInfo, JointKind, DEFAULT_GRAVITY_M_S2};
 use super::obstacle::{Contact, ObstacleId, ObstacleShape};
 
@@ -62,7 +63,9 @@ struct JointBinding {
 ///   *not* enforced here: the caller's motor model clamps its torque to
 ///   [`JointInfo::effort_limit`]. `<dynamics>` damping and friction and `<mimic>` couplings
 ///   from the URDF are applied, and so is each joint's armature (reflected rotor inertia, set
-///   with [`ArmWorld::set_armature`]: URDF has no element for it).
+///   with [`ArmWorld::set_armature`]: URDF has no element for it). A joint's friction can be
+///   split into its breakaway and kinetic values ([`ArmWorld::set_kinetic_friction`]);
+///   joints never given a split keep the URDF value at every speed.
 pub struct ArmWorld {
     model: ArmModel,
     config: WorldConfig,
@@ -71,6 +74,12 @@ pub struct ArmWorld {
     /// Every rigid body of the arm with its URDF link name, for contact reports.
     link_bodies: Vec<(RigidBodyHandle, String)>,
     external_torques: Vec<f64>,
+    /// Per joint: the sliding friction and stick band, for joints that have one (see
+    /// [`ArmWorld::set_kinetic_friction`]); `None` keeps the URDF friction at every speed.
+    kinetic_friction: Vec<Option<KineticFriction>>,
+    /// Per joint: consecutive steps its speed has stayed inside its stick band (saturating;
+    /// a joint placed or built at rest starts stuck).
+    still_steps: Vec<u32>,
     obstacles: BTreeMap<ObstacleId, (RigidBodyHandle, ColliderHandle)>,
     next_obstacle: u64,
     steps: u64,
@@ -195,6 +204,8 @@ impl ArmWorld {
 
         let mut world = Self {
             external_torques: vec![0.0; model.joints().len()],
+            kinetic_friction: vec![None; model.joints().len()],
+            still_steps: vec![u32::MAX; model.joints().len()],
             model,
             config,
             physics,
@@ -271,6 +282,75 @@ impl ArmWorld {
             if let Some(dof) = mb.link(link_id).map(|l| l.assembly_id()) {
                 mb.armature_mut()[dof] = info.armature as Real;
             }
+        }
+    }
+
+    /// Splits actuated joint `joint`'s dry friction: its URDF `<dynamics friction>` becomes
+    /// the breakaway (static) value it sees while its speed stays within
+    /// `kinetic.stick_speed`, and `kinetic.kinetic` the value it sees while sliding faster
+    /// (see [`KineticFriction`]). `None` restores the URDF value at every speed. Joints never
+    /// given one keep their URDF friction; an unknown index is ignored.
+    pub fn set_kinetic_friction(&mut self, joint: usize, kinetic: Option<KineticFriction>) {
+        let Some(info) = self.model.joints().get(joint) else {
+            return;
+        };
+        let breakaway = info.friction;
+        if let Some(slot) = self.kinetic_friction.get_mut(joint) {
+            *slot = kinetic.map(|k| KineticFriction::new(breakaway, k.kinetic, k.stick_speed));
+        }
+        self.apply_friction_regime(joint);
+    }
+
+    /// The static/kinetic split of actuated joint `joint`, if it has one.
+    pub fn kinetic_friction(&self, joint: usize) -> Option<KineticFriction> {
+        self.kinetic_friction.get(joint).copied().flatten()
+    }
+
+    /// The dry friction actuated joint `joint` sees in the next step (N·m or N): its
+    /// breakaway value while stuck, its kinetic value while sliding. `None` for an unknown
+    /// index.
+    pub fn friction_in_effect(&self, joint: usize) -> Option<f64> {
+        let b = self.bindings.get(joint)?;
+        let (mb, link_id) = self.physics.multibody_joints.get(b.handle)?;
+        let dof = mb.link(link_id)?.assembly_id();
+        mb.frictions().get(dof).map(|f| f64::from(*f))
+    }
+
+    /// Sets the friction constraint of `joint` for its current stick count.
+    fn apply_friction_regime(&mut self, joint: usize) {
+        let (Some(info), Some(b)) = (self.model.joints().get(joint), self.bindings.get(joint))
+        else {
+            return;
+        };
+        let still = self.still_steps.get(joint).copied().unwrap_or(u32::MAX);
+        let value = match self.kinetic_friction.get(joint).copied().flatten() {
+            Some(k) => k.in_effect(info.friction, still),
+            None => info.friction,
+        };
+        if let Some((mb, link_id)) = self.physics.multibody_joints.get_mut(b.handle) {
+            if let Some(dof) = mb.link(link_id).map(|l| l.assembly_id()) {
+                mb.frictions_mut()[dof] = value as Real;
+            }
+        }
+    }
+
+    /// Chooses static or kinetic friction for every joint with a split, from its speed at
+    /// the start of the step (the speed rapier's friction constraint acts on).
+    fn update_friction_regimes(&mut self) {
+        if self.kinetic_friction.iter().all(Option::is_none) {
+            return;
+        }
+        let velocities = self.joint_velocities();
+        for (joint, velocity) in velocities.into_iter().enumerate() {
+            let Some(k) = self.kinetic_friction.get(joint).copied().flatten() else {
+                continue;
+            };
+            self.still_steps[joint] = if k.within_band(velocity) {
+                self.still_steps[joint].saturating_add(1)
+            } else {
+                0
+            };
+            self.apply_friction_regime(joint);
         }
     }
 
@@ -359,6 +439,11 @@ impl ArmWorld {
                 rb.set_angvel(Vector::ZERO, true);
             }
         }
+        // Placed at rest: every joint starts stuck, as a real one would be.
+        self.still_steps.fill(u32::MAX);
+        for joint in 0..self.kinetic_friction.len() {
+            self.apply_friction_regime(joint);
+        }
         Ok(())
     }
 
@@ -427,6 +512,7 @@ impl ArmWorld {
                 }
             }
         }
+        self.update_friction_regimes();
         self.physics.step();
         self.enforce_hard_stops();
         self.steps += 1;

@@ -18,6 +18,23 @@ pub const TORQUE_CONSTANT_NM_PER_A: [f64; 6] =
 /// body that a host's MIT damping gain drives past the step's stability limit.
 pub const ARMATURE_KG_M2: [f64; 6] = [0.1; 6];
 
+/// Kinetic (sliding) dry friction of each joint, N·m: what a joint that is already moving
+/// loses. The URDF's `<dynamics friction>` (1.0 N·m on J1–J3, 0.25 N·m on J4–J6) is the
+/// breakaway value a joint at rest must overcome. No kinetic figure for the Piper is
+/// published: 0.1 N·m is MuJoCo Menagerie's `frictionloss` for every joint of this arm (a
+/// sliding friction, the model's only one), and it agrees with what field reports bound: a
+/// J1 under the community controller's kp 5 settles within 0.05 rad only if kinetic friction
+/// plus the 0.125 N·m the zero code of the 8-bit MIT torque field executes on J1–J3 (up to
+/// S-V1.8-2) stays under 5 × 0.05 = 0.25 N·m. See `urdf/README.md`, "Dynamics".
+pub const KINETIC_FRICTION_NM: [f64; 6] = [0.1; 6];
+
+/// A joint whose speed stays at or below this for two steps is stuck and sees its breakaway
+/// friction, rad/s: the resolution of the 0x251–0x256 speed field (0.001 rad/s), so a stuck
+/// joint is one the arm reports as not moving. A joint that friction has stopped sits far
+/// below it (rapier leaves ~1e-6 rad/s); any commanded motion (≥ 0.03 rad/s at the
+/// planner's 1 %) is far above it.
+pub const STICK_SPEED_RAD_S: f64 = 0.0001;
+
 /// No-load speed of every joint motor (at the joint), rad/s: the motor cannot drive the joint
 /// faster whatever it is commanded. AgileX publish no motor speed; this is an assumption:
 /// above the 3 rad/s planner limit (docs/protocols/piper.md §9.2) with room for MIT moves and
@@ -32,7 +49,10 @@ pub const LOOP_BANDWIDTH_RAD_S: [f64; 6] = [100.0, 100.0, 100.0, 150.0, 150.0, 1
 /// Damping ratio of the MOVE-mode position loop.
 pub const LOOP_DAMPING_RATIO: f64 = 0.7;
 /// Damping of the quick-stop "damping mode" (0x150 = 0x01), N·m·s/rad: the arm sinks slowly.
-pub const ESTOP_DAMPING: [f64; 6] = [6.0, 6.0, 4.0, 0.6, 0.6, 0.2];
+/// An assumption (AgileX publish no figure), sized so that the wrist holding the gripper
+/// (≈ 0.47 N·m of gravity on J5) sinks at ≈ 15°/s and J2/J3 no faster than they did while a
+/// sliding joint still lost its full breakaway friction.
+pub const ESTOP_DAMPING: [f64; 6] = [6.0, 7.0, 5.0, 1.1, 1.1, 0.2];
 
 /// Winding resistance used by the thermal model, Ω (phase-to-phase order of magnitude of small
 /// BLDC joint motors; only the heating rate depends on it).

@@ -137,7 +137,7 @@ fn vendor_mit_gains_hold_the_zero_pose_without_chatter() {
         "J4/J6 ran up to {peak_wrist_speed} rad/s"
     );
     assert_eq!(saturated_steps, 0, "J4/J6 torque hit the 8 N·m limit");
-    // Settled within the dry-friction dead band (0.25 N·m / kp 10 = 0.025 rad) plus margin.
+    // Settled within the kinetic-friction dead band (0.1 N·m / kp 10 = 0.01 rad) plus margin.
     for j in [3, 5] {
         assert!(
             snap.joint_positions_rad[j].abs() < 0.05,

@@ -3,6 +3,7 @@
 mod dynamics;
 mod faults;
 mod fixtures;
+mod mit_friction;
 mod motion;
 mod on_bus;
 mod physics;

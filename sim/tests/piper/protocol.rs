@@ -218,12 +218,13 @@ async fn each_profile_reports_its_mit_code_and_runs_the_mit_law() {
         .await;
         let frames = collect(&host, Duration::from_millis(20)).await;
         assert_eq!(last(&frames, 0x2A1).unwrap()[2], code, "{profile}");
-        // J6 (no gravity load) to 0.5 rad with kp 5, kd 0.2.
+        // J6 (no gravity load) to 0.5 rad with kp 5 and the vendor's kd 0.8 (kd 0.2 leaves
+        // it ringing for seconds against its 0.025 N·m kinetic friction: ζ ≈ 0.14).
         let cmd = MitCommand {
             p_des_rad: 0.5,
             v_des_rad_s: 0.0,
             kp: 5.0,
-            kd: 0.2,
+            kd: 0.8,
             t_ff_nm: 0.0,
         };
         let packing = profile.mit_packing();

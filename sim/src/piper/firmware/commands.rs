@@ -486,6 +486,10 @@ impl Firmware {
             if enable {
                 if !self.enabled[j] && !self.faults.joint_unpowered(j) {
                     self.enabled[j] = true;
+                    // The loop first has to catch a joint that may still be moving (a
+                    // wrist falling since it was disabled): not a collision.
+                    self.collision_residual[j] = 0.0;
+                    self.collision_blank_ticks[j] = super::faults::ENABLE_COLLISION_BLANK_MS;
                     if self.motion.is_none() {
                         self.hold_ref[j] = self.q_phys(j);
                         self.ref_vel[j] = 0.0;

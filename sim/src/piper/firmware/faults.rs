@@ -11,6 +11,16 @@ pub const STALL_TIME_MS: u32 = 2000;
 /// "Not moving" for the stall protection, rad/s.
 const STALL_SPEED_RAD_S: f64 = 0.05;
 
+/// After a joint is enabled, its collision protection waits this long (ms, one tick each)
+/// before it judges the residual: the position loop starts from wherever the joint is and
+/// first has to catch it. A joint that fell while disabled (the wrist sinks at up to
+/// ~2 rad/s) is stopped by its motor's full torque within ~25 ms and back on its reference
+/// within ~100 ms; until then the loop's damping term, kd × the joint's own speed (≈ 40 N·m
+/// on J5), is not an external disturbance. Without the wait, re-enabling an arm whose
+/// wrist is still sinking latched status 0x07 (collision) at any protection level, and the
+/// latched fault then refused every motion command, MIT included (issue 20, item 1).
+pub const ENABLE_COLLISION_BLANK_MS: u32 = 200;
+
 /// Bus voltage below which the drivers flag under-voltage, V.
 pub const UNDER_VOLTAGE_V: f64 = 20.0;
 
@@ -273,7 +283,8 @@ impl Firmware {
                 f.driver_over_temp[j] = false;
             }
             let level = self.flash.collision_levels[j];
-            if level > 0 && self.enabled[j] && !self.faults.collision[j] {
+            let armed = self.collision_blank_ticks[j] == 0;
+            if level > 0 && armed && self.enabled[j] && !self.faults.collision[j] {
                 let threshold = collision_threshold_nm(self.motors[j].torque_limit_nm(), level);
                 if self.collision_residual[j].abs() > threshold {
                     tracing::info!(

@@ -24,7 +24,7 @@ use super::motor::{DriveLaw, JointMotor};
 use super::profile::FirmwareProfile;
 use super::state::{ArmStatusSnapshot, PiperSimState};
 use super::trajectory::{JointMove, PathMove};
-use crate::physics::{ArmWorld, ObstacleId, ObstacleShape, WorldConfig};
+use crate::physics::{ArmWorld, KineticFriction, ObstacleId, ObstacleShape, WorldConfig};
 use crate::state_file::InvalidField;
 
 pub use faults::FaultState;
@@ -166,6 +166,9 @@ pub struct Firmware {
 
     pub(crate) faults: FaultState,
     pub(crate) collision_residual: [f64; 6],
+    /// Ticks left before a just-enabled joint's collision protection judges its residual
+    /// (see `faults::ENABLE_COLLISION_BLANK_MS`).
+    pub(crate) collision_blank_ticks: [u32; 6],
     pub(crate) q: Vec<f64>,
     pub(crate) v: Vec<f64>,
     pub(crate) torques: Vec<f64>,
@@ -189,6 +192,18 @@ fn load_world(config: &PiperConfig) -> Result<ArmWorld, PiperError> {
     for (j, armature) in super::motor::ARMATURE_KG_M2.iter().enumerate() {
         if let Some(i) = world.joint_index(&format!("joint{}", j + 1)) {
             world.set_armature(i, *armature);
+        }
+    }
+    // The URDF friction is the joints' breakaway value; a sliding joint loses less.
+    for (j, kinetic) in super::motor::KINETIC_FRICTION_NM.iter().enumerate() {
+        if let Some(i) = world.joint_index(&format!("joint{}", j + 1)) {
+            world.set_kinetic_friction(
+                i,
+                Some(KineticFriction {
+                    kinetic: *kinetic,
+                    stick_speed: super::motor::STICK_SPEED_RAD_S,
+                }),
+            );
         }
     }
     Ok(world)
@@ -379,6 +394,7 @@ impl Firmware {
             trajectory_crc: 0,
             faults: FaultState::new(config.bus_voltage_v),
             collision_residual: [0.0; 6],
+            collision_blank_ticks: [0; 6],
             q: q0,
             v: v0,
             torques: vec![0.0; n],
@@ -544,6 +560,9 @@ impl Firmware {
         }
         self.q = self.world.joint_positions();
         self.v = self.world.joint_velocities();
+        for blank in &mut self.collision_blank_ticks {
+            *blank = blank.saturating_sub(1);
+        }
         self.check_protections();
         self.update_settling();
         let periodic_from = self.out.len();
