@@ -9,7 +9,9 @@
 //! - J1 with the vendor's kp 10, kd 0.8 reaches a 17° target within 0.05 rad in ≤ 3 s;
 //! - a step whose kp·error stays below the breakaway friction does not start the joint;
 //! - holding the home pose (J2 and J3 on their stops) at the most sensitive collision
-//!   level never raises a collision.
+//!   level never raises a collision, also when the arm is enabled while its wrist still
+//!   sinks from power-on or from a disable;
+//! - a real collision right after enabling still trips, once the enable wait is over.
 
 use bus::CanFrame;
 use sim::piper::codec::mit::{pack, MitCommand, MitRaw};
@@ -290,9 +292,14 @@ fn a_step_whose_pull_stays_below_the_breakaway_friction_does_not_start_the_joint
 fn holding_the_home_pose_on_the_stops_never_raises_a_collision() {
     let mut c = Client::boot();
     c.collision_level(8);
+    // Powered off at home, the wrist sinks (0.47 N·m of gravity on J5 against 0.25 N·m of
+    // breakaway friction); the client enables while it still falls.
+    c.run_ms(500);
+    let v5 = c.fw.snapshot().joint_velocities_rad_s[4];
+    assert!(v5.abs() > 0.5, "J5 is falling ({v5} rad/s)");
     c.enable_all();
-    // Hold home as booted, move away and back (J2 and J3 come down onto their stops), then
-    // hold it for 10 s.
+    // Hold home, move away and back (J2 and J3 come down onto their stops), then hold it for
+    // 10 s.
     c.move_j([0.0; 6], 2000);
     c.move_j([0.3, 0.4, -0.4, 0.2, 0.3, 0.2], 3000);
     c.move_j([0.0; 6], 10_000);
@@ -316,4 +323,29 @@ fn holding_the_home_pose_on_the_stops_never_raises_a_collision() {
         c.first_collision_ms()
     );
     assert_eq!(c.last_status(), 0x00);
+}
+
+#[test]
+fn a_real_collision_right_after_enabling_still_trips_once_the_loop_has_caught_the_joint() {
+    use sim::piper::PiperFault;
+    let mut c = Client::boot();
+    c.collision_level(4);
+    c.enable_all();
+    c.run_ms(20);
+    // 15 N·m on J1 (level 4: 32 × 5/12 = 13.3 N·m) while the enable wait still runs.
+    c.fw.inject(PiperFault::ExternalTorque {
+        joint: 1,
+        torque_nm: 15.0,
+    })
+    .expect("in range");
+    let tripped_ms = (1..=1000).find(|_| {
+        c.run_ms(1);
+        c.fw.snapshot().status.arm_status == STATUS_COLLISION
+    });
+    let after_enable_ms = tripped_ms.map(|ms| ms + 20);
+    // The protection judges from 200 ms after the enable, and then trips at once.
+    assert!(
+        after_enable_ms.is_some_and(|ms| (200..=230).contains(&ms)),
+        "collision {after_enable_ms:?} ms after enabling"
+    );
 }
