@@ -2,7 +2,8 @@
 //! over any [`bus::CanBus`] (SocketCAN or the virtual bus).
 //!
 //! - [`piper`]: AgileX Piper arm (CAN, 11-bit IDs).
-//! - [`robstride`]: RobStride actuators (CAN, 29-bit IDs).
+//! - [`robstride`]: RobStride actuators (CAN: the private 29-bit protocol, and the
+//!   11-bit MIT variant through `robstride::MitMotor`).
 //! - [`realman`]: Realman arm controllers (JSON over TCP, state over UDP).
 //! - [`arm`]: the vendor-neutral Arm API over the Realman and Piper drivers.
 

@@ -5,7 +5,8 @@
 //! - [`piper`]: the AgileX Piper arm's firmware (CAN, 11-bit IDs).
 //! - [`realman`]: the Realman arm controller (JSON over TCP, realtime push over UDP).
 //! - [`realtime`]: timing figures a real-time emulator keeps (frame periods, overruns).
-//! - [`robstride`]: RobStride quasi-direct-drive actuators (CAN, 29-bit IDs).
+//! - [`robstride`]: RobStride quasi-direct-drive actuators (CAN: the private 29-bit
+//!   protocol and the 11-bit MIT and CANopen variants).
 //! - [`state_file`]: what the emulators' state files share (kind and format header, atomic
 //!   write).
 //! - [`supervise`]: an emulator task's panic or failure, made observable ([`supervise::DeathWatch`]).
