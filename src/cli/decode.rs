@@ -6,7 +6,7 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use anyhow::Context;
-use armhil::interop::{decode_piper, decode_robstride, DecodedFrame};
+use armhil::interop::{decode_piper, decode_robstride, decode_robstride_mit, DecodedFrame};
 use bus::{CanFrame, CanId};
 
 /// Which protocol the capture carries.
@@ -16,6 +16,8 @@ pub enum Device {
     Piper,
     /// RobStride actuators (29-bit ids, private protocol).
     Robstride,
+    /// RobStride actuators switched to the MIT variant (11-bit ids).
+    RobstrideMit,
 }
 
 /// Arguments of `armhil decode`.
@@ -109,6 +111,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
                 Err(e) => (None, Some(e.to_string())),
             },
             Device::Robstride => (decode_robstride(&frame, args.host_id, model), None),
+            Device::RobstrideMit => (decode_robstride_mit(&frame, args.host_id, model), None),
         };
         use std::io::Write as _;
         if let Err(e) = writeln!(out, "{}", line(t_s, &frame, decoded, error)) {

@@ -5,6 +5,7 @@ use std::time::Duration;
 use bus::{CanFrame, CanId};
 use driver::piper::codec;
 use driver::robstride::codec as rs_codec;
+use driver::robstride::mit_codec;
 use driver::robstride::{Model, RangeTable};
 use serde_json::Value;
 
@@ -253,9 +254,125 @@ pub fn decode_robstride(frame: &CanFrame, host_id: u8, model: Model) -> Option<D
     })
 }
 
+/// Decodes a frame of the RobStride MIT variant (11-bit) sent to or from a motor of `model`
+/// talking to `host_id`, with the driver's MIT codec and the model's ranges (the manual's
+/// table, as the driver uses). `None` for frames the driver ignores.
+///
+/// Host commands and the motor's Response 2 (its UID) share the motor's identifier. The
+/// commands of the form `FF FF FF FF FF FF F_CMD MARKER` are shown as `MitCommand` with their
+/// two bytes; any other frame there is shown as the UID reply, which an MIT setpoint
+/// (command 3, packed fields) cannot be told apart from in a capture.
+pub fn decode_robstride_mit(frame: &CanFrame, host_id: u8, model: Model) -> Option<DecodedFrame> {
+    let data = frame.data();
+    let on_motor_id = !frame.is_extended() && frame.raw_id() >> 8 == 0;
+    if on_motor_id
+        && frame.raw_id() != u32::from(host_id)
+        && data.len() == 8
+        && data[..6] == [0xFF; 6]
+    {
+        let byte = |name: &str, value: u8| Field {
+            name: name.to_owned(),
+            value: format!("0x{value:02X}"),
+            unit: "",
+        };
+        return Some(DecodedFrame {
+            name: "MitCommand".to_owned(),
+            fields: vec![
+                num("motor", f64::from(frame.raw_id()), 0, ""),
+                byte("f_cmd", data[6]),
+                byte("marker", data[7]),
+            ],
+        });
+    }
+    let ranges = model.ranges(RangeTable::Manual);
+    let incoming = mit_codec::decode(frame, host_id, |_| Some(ranges))?;
+    let motor = num("motor", f64::from(incoming.motor_id()), 0, "");
+    let text = |name: &str, value: String| Field {
+        name: name.to_owned(),
+        value,
+        unit: "",
+    };
+    let (name, fields) = match incoming {
+        mit_codec::MitIncoming::Status(s) => (
+            "MitStatus",
+            vec![
+                motor,
+                text("mode", format!("{:?}", s.mode)),
+                text("fault", s.fault.to_string()),
+                text("warning", s.warning.to_string()),
+                num("angle", f64::from(s.angle_rad), 4, "rad"),
+                num("speed", f64::from(s.speed_rad_s), 4, "rad/s"),
+                num("torque", f64::from(s.torque_nm), 4, "N.m"),
+                num("temperature", f64::from(s.temperature_c), 1, "degC"),
+            ],
+        ),
+        mit_codec::MitIncoming::FaultWord { word, .. } => (
+            "MitFaultWord",
+            vec![motor, text("fault_word", format!("0x{word:08X}"))],
+        ),
+        mit_codec::MitIncoming::Uid { uid, .. } => (
+            "MitUid",
+            vec![
+                motor,
+                text("uid", uid.iter().map(|b| format!("{b:02X}")).collect()),
+            ],
+        ),
+        mit_codec::MitIncoming::Param {
+            write,
+            index,
+            value,
+            ..
+        } => (
+            if write {
+                "MitWriteParam"
+            } else {
+                "MitReadParam"
+            },
+            vec![
+                motor,
+                text("index", format!("0x{index:04X}")),
+                text("value_f32", format!("{}", f32::from_le_bytes(value))),
+            ],
+        ),
+    };
+    Some(DecodedFrame {
+        name: name.to_owned(),
+        fields,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn mit_status_prints_scaled_fields_and_host_commands_are_not_decoded() {
+        // Response 1 from motor 127 (RS03: ±4π rad, ±20 rad/s, ±60 N·m): angle code 0xC000,
+        // three quarters up the 16-bit range (2π + 8π·(49152/65535 − 3/4) = 6.28347 rad),
+        // speed and torque mid-range, run mode, 25.0 °C.
+        let frame =
+            CanFrame::standard(0xFD, &[0x7F, 0xC0, 0x00, 0x80, 0x08, 0x00, 0x80, 0xFA]).unwrap();
+        let decoded = decode_robstride_mit(&frame, 0xFD, Model::RS03).unwrap();
+        assert_eq!(decoded.name, "MitStatus");
+        let value = |name: &str| {
+            let field = decoded.fields.iter().find(|f| f.name == name).unwrap();
+            format!("{} {}", field.value, field.unit)
+        };
+        assert_eq!(value("motor"), "127 ");
+        assert_eq!(value("mode"), "Run ");
+        assert_eq!(value("angle"), "6.2835 rad");
+        assert_eq!(value("temperature"), "25.0 degC");
+        // The host's enable command (marker FC) on the motor's identifier.
+        let mut enable = [0xFF; 8];
+        enable[7] = 0xFC;
+        let command = CanFrame::standard(0x7F, &enable).unwrap();
+        let decoded = decode_robstride_mit(&command, 0xFD, Model::RS03).unwrap();
+        assert_eq!(decoded.name, "MitCommand");
+        assert_eq!(decoded.fields[2].value, "0xFC");
+        // A 29-bit frame of the private protocol is not an MIT frame.
+        let ext = CanFrame::extended(0x0200_7FFD, &[0; 8]).unwrap();
+        assert!(decode_robstride_mit(&ext, 0xFD, Model::RS03).is_none());
+    }
 
     #[test]
     fn joint_feedback_prints_degrees_with_dbc_names() {

@@ -10,6 +10,6 @@ mod decode;
 mod piper;
 mod units;
 
-pub use decode::{decode_piper, decode_robstride, DecodedFrame, Field};
+pub use decode::{decode_piper, decode_robstride, decode_robstride_mit, DecodedFrame, Field};
 pub use piper::{piper_dbc, piper_messages, probe_field, MessageSpec, SignalSpec};
 pub use units::{unit_of, UnitSpec};
