@@ -259,16 +259,29 @@ mod tests {
         }
     }
 
-    #[tokio::test(start_paused = true)]
-    async fn the_panel_shows_the_io_ports() {
+    /// An RM65-B emulator without sockets, for the view's state.
+    async fn rm65b_in_memory() -> sim::realman::RealmanHandle {
         use sim::realman::model::ArmModel;
         use sim::realman::{ControllerConfig, EmulatorConfig, RealmanEmulator, Transport};
-        let emu = RealmanEmulator::spawn(
+        RealmanEmulator::spawn(
             EmulatorConfig::new(ControllerConfig::new(ArmModel::rm65b())),
             Transport::InMemory,
         )
         .await
-        .expect("emulator");
+        .expect("emulator")
+    }
+
+    /// The value of the panel row called `name` in a state message.
+    fn panel_row(state: &Value, name: &str) -> Option<Value> {
+        state["panel"]
+            .as_array()
+            .and_then(|rows| rows.iter().find(|r| r[0] == name))
+            .map(|r| r[1].clone())
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn the_panel_shows_the_io_ports() {
+        let emu = rm65b_in_memory().await;
         let monitor = emu.monitor();
         monitor.with_controller(|c| {
             for r in [
@@ -281,10 +294,7 @@ mod tests {
         });
         let live = RealmanLive::new(monitor, "", "test");
         let state = live.state().await;
-        let io = state["panel"]
-            .as_array()
-            .and_then(|rows| rows.iter().find(|r| r[0] == "IO"))
-            .map(|r| r[1].clone());
+        let io = panel_row(&state, "IO");
         assert_eq!(
             io,
             Some(json!(
@@ -296,14 +306,7 @@ mod tests {
 
     #[tokio::test(start_paused = true)]
     async fn the_panel_lists_only_where_the_push_really_goes() {
-        use sim::realman::model::ArmModel;
-        use sim::realman::{ControllerConfig, EmulatorConfig, RealmanEmulator, Transport};
-        let emu = RealmanEmulator::spawn(
-            EmulatorConfig::new(ControllerConfig::new(ArmModel::rm65b())),
-            Transport::InMemory,
-        )
-        .await
-        .expect("emulator");
+        let emu = rm65b_in_memory().await;
         let monitor = emu.monitor();
         // A target stored by an earlier client; nobody is connected now, so the emulator
         // pushes nowhere (the view used to list 192.0.2.7:8089 all the same).
@@ -315,10 +318,7 @@ mod tests {
         let live = RealmanLive::new(monitor, "", "test");
         let state = live.state().await;
         assert_eq!(state["push_targets"], json!([]));
-        let row = state["panel"]
-            .as_array()
-            .and_then(|rows| rows.iter().find(|r| r[0] == "UDP push"))
-            .map(|r| r[1].clone());
+        let row = panel_row(&state, "UDP push");
         assert_eq!(
             row,
             Some(json!(

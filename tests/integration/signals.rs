@@ -276,6 +276,15 @@ fn a_second_signal_quits_at_once_and_leaves_no_temporary_file() {
     }
 }
 
+/// Start `armhil sim ARGS`, which must refuse to start: it exits 1 on its own. Its stderr.
+fn refused_at_start(dir: &Path, args: &[&OsStr], what: &str) -> String {
+    let (mut child, log) = sim_logging_to(dir, args);
+    let status = wait_for_exit(&mut child, what);
+    let stderr = std::fs::read_to_string(&log).unwrap();
+    assert_eq!(status.code(), Some(1), "{stderr}");
+    stderr
+}
+
 /// `armhil sim ARGS` with its stderr in a file; the process and that file.
 fn sim_logging_to(dir: &Path, args: &[&OsStr]) -> (Child, std::path::PathBuf) {
     let log = dir.join("stderr.txt");
@@ -379,10 +388,7 @@ fn a_state_file_the_commands_would_refuse_is_refused_at_start_naming_file_and_fi
         "--state-file".as_ref(),
         piper.as_os_str(),
     ];
-    let (mut child, log) = sim_logging_to(dir.path(), &args);
-    let status = wait_for_exit(&mut child, "Piper with min above max");
-    let stderr = std::fs::read_to_string(&log).unwrap();
-    assert_eq!(status.code(), Some(1), "{stderr}");
+    let stderr = refused_at_start(dir.path(), &args, "Piper with min above max");
     assert!(
         stderr.contains("piper.json") && stderr.contains("flash.min_angle_ddeg[2]"),
         "{stderr}"
@@ -397,10 +403,7 @@ fn a_state_file_the_commands_would_refuse_is_refused_at_start_naming_file_and_fi
         "--state-file".as_ref(),
         piper.as_os_str(),
     ];
-    let (mut child, log) = sim_logging_to(dir.path(), &args);
-    let status = wait_for_exit(&mut child, "Realman given a Piper file");
-    let stderr = std::fs::read_to_string(&log).unwrap();
-    assert_eq!(status.code(), Some(1), "{stderr}");
+    let stderr = refused_at_start(dir.path(), &args, "Realman given a Piper file");
     assert!(
         stderr.contains("piper.json") && stderr.contains("`kind`"),
         "{stderr}"
