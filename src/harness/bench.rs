@@ -8,7 +8,7 @@ use tokio::time::Instant;
 
 use super::device::Device;
 use super::model::Scenario;
-use super::runner::{Clock, Link, Recorder, RunOptions, Spool};
+use super::runner::{Clock, Recorder, RunOptions, Spool};
 use crate::devices::Wiring;
 
 /// Node name of the drivers on the virtual bus (bus faults can target it as `host`).
@@ -51,7 +51,7 @@ pub(crate) async fn build(
         }
         Clock::Iface(link) => (
             None,
-            Recorder::from_bus(open_link(link, "recorder").await?, spool),
+            Recorder::from_bus(link.open("recorder").await?, spool),
         ),
     };
     let t0 = Instant::now();
@@ -73,22 +73,9 @@ pub(crate) async fn build(
     })
 }
 
-/// Open `link` for `what` (the recorder, or the driver of a CAN device kind). On a SocketCAN
-/// interface a second socket sees every frame, the driver's and the emulator's; on a socketcand
-/// server so does a second connection.
-pub(crate) async fn open_link(link: &Link, what: &str) -> Result<Arc<dyn bus::CanBus>, String> {
-    match link {
-        Link::SocketCan(iface) => open_iface(iface, what),
-        Link::Socketcand(addr) => bus::socketcand::SocketcandBus::connect(addr, "can0")
-            .await
-            .map(|b| Arc::new(b) as Arc<dyn bus::CanBus>)
-            .map_err(|e| format!("cannot reach the socketcand server for the {what}: {e}")),
-    }
-}
-
 /// Open a SocketCAN socket on `iface` for `what`.
 #[cfg(target_os = "linux")]
-fn open_iface(iface: &str, what: &str) -> Result<Arc<dyn bus::CanBus>, String> {
+pub(crate) fn open_iface(iface: &str, what: &str) -> Result<Arc<dyn bus::CanBus>, String> {
     bus::socketcan_bus::SocketCanBus::open(iface)
         .map(|b| Arc::new(b) as Arc<dyn bus::CanBus>)
         .map_err(|e| format!("cannot open {iface} for the {what}: {e}"))
@@ -96,6 +83,6 @@ fn open_iface(iface: &str, what: &str) -> Result<Arc<dyn bus::CanBus>, String> {
 
 /// Open a SocketCAN socket on `iface` for `what`.
 #[cfg(not(target_os = "linux"))]
-fn open_iface(iface: &str, _what: &str) -> Result<Arc<dyn bus::CanBus>, String> {
+pub(crate) fn open_iface(iface: &str, _what: &str) -> Result<Arc<dyn bus::CanBus>, String> {
     Err(format!("SocketCAN interface `{iface}` needs Linux"))
 }

@@ -351,24 +351,12 @@ impl MitMotor {
     /// Read any index (0x70xx, 0x20xx, 0x30xx) with a given wire type (command 14).
     pub async fn read_raw(&self, index: u16, ty: ParamType) -> Result<ParamValue, RobstrideError> {
         let frame = mit_codec::read_param(self.can_id, index)?;
-        let motor = self.can_id;
-        let answer = self
-            .exchange("MIT read parameter", frame, |incoming| match incoming {
-                MitIncoming::Param {
-                    write: false,
-                    index: echo,
-                    value,
-                    ..
-                } if *echo == index => Some(ParamValue::from_bytes(ty, *value)),
-                _ => None,
-            })
-            .await;
-        match answer {
-            Err(RobstrideError::Timeout { .. }) => {
-                Err(RobstrideError::ParamReadFailed { motor, index })
-            }
-            other => other,
-        }
+        let refused = RobstrideError::ParamReadFailed {
+            motor: self.can_id,
+            index,
+        };
+        self.param_exchange("MIT read parameter", frame, false, index, ty, refused)
+            .await
     }
 
     /// Write a parameter (command 15); returns the value the motor stored (after its
@@ -401,23 +389,48 @@ impl MitMotor {
             check("parameter value", v, f32::MIN, f32::MAX)?;
         }
         let frame = mit_codec::write_param(self.can_id, index, value)?;
-        let motor = self.can_id;
-        let ty = value.ty();
+        let refused = RobstrideError::ParamRefused {
+            motor: self.can_id,
+            index,
+        };
+        self.param_exchange(
+            "MIT write parameter",
+            frame,
+            true,
+            index,
+            value.ty(),
+            refused,
+        )
+        .await
+    }
+
+    /// Send a command 14/15 `frame` and wait for its reply (same direction `write`, index
+    /// echoed), the value read as `ty`. The variant has no failure frame: a motor refuses by
+    /// not answering, so a timeout is the `refused` error.
+    async fn param_exchange(
+        &self,
+        what: &'static str,
+        frame: CanFrame,
+        write: bool,
+        index: u16,
+        ty: ParamType,
+        refused: RobstrideError,
+    ) -> Result<ParamValue, RobstrideError> {
         let answer = self
-            .exchange("MIT write parameter", frame, |incoming| match incoming {
+            .exchange(what, frame, |incoming| match incoming {
                 MitIncoming::Param {
-                    write: true,
+                    write: answered_write,
                     index: echo,
                     value,
                     ..
-                } if *echo == index => Some(ParamValue::from_bytes(ty, *value)),
+                } if *answered_write == write && *echo == index => {
+                    Some(ParamValue::from_bytes(ty, *value))
+                }
                 _ => None,
             })
             .await;
         match answer {
-            Err(RobstrideError::Timeout { .. }) => {
-                Err(RobstrideError::ParamRefused { motor, index })
-            }
+            Err(RobstrideError::Timeout { .. }) => Err(refused),
             other => other,
         }
     }

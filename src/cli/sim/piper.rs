@@ -86,7 +86,7 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
         ..PiperConfig::default()
     };
     let served = ServedBus::open(&args.bus).await?;
-    let place = served.place().to_owned();
+    let place = served.place();
     let bus = served.node("piper")?;
     let tap = args
         .record

@@ -157,7 +157,7 @@ fn config(args: &Args) -> anyhow::Result<RobstrideConfig> {
 async fn serve(args: Args) -> anyhow::Result<ExitCode> {
     let config = config(&args)?;
     let served = ServedBus::open(&args.bus).await?;
-    let place = served.place().to_owned();
+    let place = served.place();
     let bus = served.node("robstride")?;
     let ui_tap = args.ui.as_ref().map(|_| served.node("ui")).transpose()?;
     let ids: Vec<u8> = config.motors.iter().map(|m| m.can_id).collect();

@@ -28,7 +28,6 @@ pub struct ServeArgs {
 /// The bus an emulator serves, opened from [`ServeArgs`].
 pub(crate) struct ServedBus {
     medium: Medium,
-    place: String,
 }
 
 enum Medium {
@@ -48,10 +47,8 @@ impl ServedBus {
         match &args.socketcand {
             Some(addr) => {
                 let (bus, server) = super::socketcand_server(addr).await?;
-                let place = format!("socketcand {}", server.local_addr());
                 Ok(Self {
                     medium: Medium::Socketcand { bus, server },
-                    place,
                 })
             }
             None => {
@@ -62,7 +59,6 @@ impl ServedBus {
                     medium: Medium::SocketCan {
                         iface: args.iface.clone(),
                     },
-                    place: args.iface.clone(),
                 })
             }
         }
@@ -78,8 +74,11 @@ impl ServedBus {
     }
 
     /// Where the emulator answers, for people: `vcan0` or `socketcand 127.0.0.1:29536`.
-    pub fn place(&self) -> &str {
-        &self.place
+    pub fn place(&self) -> String {
+        match &self.medium {
+            Medium::Socketcand { server, .. } => format!("socketcand {}", server.local_addr()),
+            Medium::SocketCan { iface } => iface.clone(),
+        }
     }
 
     /// One word for a candump log's interface column: the interface, or `socketcand`.

@@ -129,7 +129,7 @@ pub(crate) async fn build(
             )))
         }
         (None, Clock::Iface(link)) => {
-            let host = crate::harness::bench::open_link(link, "driver").await?;
+            let host = link.open("driver").await?;
             let driver = PiperBuilder::new(host)
                 .timeouts(driver_timeouts(wiring.options))
                 .connect()

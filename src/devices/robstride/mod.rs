@@ -56,7 +56,7 @@ pub(crate) async fn build(
 ) -> Result<Arc<dyn Device>, String> {
     let host: Arc<dyn CanBus> = match (wiring.bus, wiring.clock) {
         (Some(bus), _) => Arc::new(bus.attach(HOST_NODE)),
-        (None, Clock::Iface(link)) => crate::harness::bench::open_link(link, "driver").await?,
+        (None, Clock::Iface(link)) => link.open("driver").await?,
         (None, _) => return Err(format!("device `{name}`: no bus to attach to")),
     };
     Ok(Arc::new(RobstrideDevice::start(

@@ -54,9 +54,17 @@ impl Link {
         }
     }
 
-    /// Connect to the bus as a node; `what` names the node in errors ("the recorder").
+    /// Connect to the bus as a node; `what` names it in errors (the recorder, or the driver
+    /// of a CAN device kind). On a SocketCAN interface a second socket sees every frame, the
+    /// driver's and the emulator's; on a socketcand server so does a second connection.
     pub async fn open(&self, what: &str) -> Result<Arc<dyn bus::CanBus>, String> {
-        bench::open_link(self, what).await
+        match self {
+            Self::SocketCan(iface) => bench::open_iface(iface, what),
+            Self::Socketcand(addr) => bus::socketcand::SocketcandBus::connect(addr, "can0")
+                .await
+                .map(|b| Arc::new(b) as Arc<dyn bus::CanBus>)
+                .map_err(|e| format!("cannot reach the socketcand server for the {what}: {e}")),
+        }
     }
 
     /// One word for a candump log's interface column: the interface, or `socketcand`.
