@@ -1,5 +1,7 @@
 //! Firmware emulators of robot arms and actuators on a rapier3d physics world.
 //!
+//! - [`fault_args`]: a named fault's arguments as a front end read them (scenario, web view,
+//!   Python), for each emulator's one fault builder.
 //! - [`cpu_budget`]: how much a late real-time wake-up may catch up, bounded by CPU.
 //! - [`physics`]: URDF loading into rapier3d, fixed-step stepping, torque-driven joints.
 //! - [`piper`]: the AgileX Piper arm's firmware (CAN, 11-bit IDs).
@@ -13,6 +15,7 @@
 
 pub mod bounded_read;
 pub mod cpu_budget;
+pub mod fault_args;
 pub mod physics;
 pub mod piper;
 pub mod realman;
