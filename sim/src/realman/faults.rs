@@ -13,13 +13,17 @@
 //! | `estop` | emergency stop: brakes on, joints disabled, error 0x1010, motion aborts; moves refused | `clear` then `clear_system_err` |
 //! | `gripper_fault` | gripper `error` bit (default stall), error 0x2001, gripper commands answer `state:false` | `clear` |
 
+use std::net::IpAddr;
+
+use crate::fault_args::{FaultArgError, FaultArgValue, FaultArgs};
+
 /// A fault injected into a running emulator. Joints are numbered from 1 as on the wire.
 #[derive(Debug, Clone, PartialEq)]
 pub enum RealmanFault {
     /// The controller closes TCP connections (all of them, or those from `peer_ip`).
     ConnectionDrop {
         /// Only connections from this IP; `None` = all.
-        peer_ip: Option<std::net::IpAddr>,
+        peer_ip: Option<IpAddr>,
     },
     /// Replies and events are written this late.
     ReplyDelay {
@@ -59,8 +63,22 @@ pub enum RealmanFault {
     },
 }
 
-/// Which fault to clear: [`RealmanFault`] without its values.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+/// Which fault to clear: [`RealmanFault`] without its values. Its name (scenario files,
+/// traces, the web view, Python) is its variant's in snake_case.
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    PartialOrd,
+    Ord,
+    Hash,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::EnumIter,
+)]
+#[strum(serialize_all = "snake_case")]
 pub enum RealmanFaultKind {
     /// See [`RealmanFault::ConnectionDrop`].
     ConnectionDrop,
@@ -79,6 +97,7 @@ pub enum RealmanFaultKind {
     /// See [`RealmanFault::Collision`].
     Collision,
     /// See [`RealmanFault::EStop`].
+    #[strum(serialize = "estop")]
     EStop,
     /// See [`RealmanFault::GripperFault`].
     GripperFault,
@@ -101,18 +120,7 @@ impl RealmanFaultKind {
 
     /// Stable snake_case name (scenario files, traces).
     pub fn name(self) -> &'static str {
-        match self {
-            Self::ConnectionDrop => "connection_drop",
-            Self::ReplyDelay => "reply_delay",
-            Self::MalformedReply => "malformed_reply",
-            Self::UdpLoss => "udp_loss",
-            Self::UdpReorder => "udp_reorder",
-            Self::JointError => "joint_error",
-            Self::PowerLoss => "power_loss",
-            Self::Collision => "collision",
-            Self::EStop => "estop",
-            Self::GripperFault => "gripper_fault",
-        }
+        self.into()
     }
 
     /// One-line description of the wire effect.
@@ -133,7 +141,7 @@ impl RealmanFaultKind {
 
     /// The kind with this name.
     pub fn from_name(name: &str) -> Option<Self> {
-        Self::ALL.into_iter().find(|k| k.name() == name)
+        name.parse().ok()
     }
 }
 
@@ -288,6 +296,121 @@ impl RealmanFault {
     }
 }
 
+/// The optional argument of `connection_drop`: only connections from this IP are closed.
+const PEER_IP: &str = "peer_ip";
+
+impl RealmanFaultParam {
+    /// Its value in `args`, a whole number within `min..=max`, or why not (in the words a
+    /// scenario file has always shown).
+    fn read(&self, fault: &str, args: &FaultArgs) -> Result<u64, FaultArgError> {
+        let name = self.name;
+        let value = match args.get(name) {
+            None => return Err(FaultArgError::whole(format!("`{fault}` needs `{name}`"))),
+            Some(FaultArgValue::Text(text)) => {
+                return Err(FaultArgError::at(
+                    name,
+                    format!("`{name}`: expected a whole number, got `{text}`"),
+                ))
+            }
+            Some(FaultArgValue::Number(value)) => *value,
+        };
+        if value.fract() != 0.0 || !value.is_finite() {
+            return Err(FaultArgError::at(
+                name,
+                format!("`{name}`: expected a whole number, got {value}"),
+            ));
+        }
+        // Both bounds are far below 2^53, so the comparison in f64 is exact.
+        if value < self.min as f64 || value > self.max as f64 {
+            return Err(FaultArgError::at(
+                name,
+                format!(
+                    "`{name}`: {value} out of range, expected {}..={}",
+                    self.min, self.max
+                ),
+            ));
+        }
+        Ok(value as u64)
+    }
+}
+
+impl RealmanFaultKind {
+    /// The names of every argument it takes: its table parameters, plus `peer_ip` for
+    /// `connection_drop`.
+    pub fn arg_names(self) -> Vec<&'static str> {
+        let mut names: Vec<&'static str> = self.params().iter().map(|p| p.name).collect();
+        if self == Self::ConnectionDrop {
+            names.push(PEER_IP);
+        }
+        names
+    }
+
+    /// The one builder of a [`RealmanFault`] from named arguments: the scenario files, the
+    /// web view and the Python emulator only convert what they read into [`FaultArgs`] and
+    /// show this error. Every parameter of the table is required and must be a whole number
+    /// within its range; an argument the fault does not take is refused by name.
+    pub fn build(self, args: &FaultArgs) -> Result<RealmanFault, FaultArgError> {
+        let fault = self.name();
+        args.only(fault, &self.arg_names())?;
+        let params = self.params();
+        let int = |i: usize| params[i].read(fault, args);
+        Ok(match self {
+            Self::ConnectionDrop => RealmanFault::ConnectionDrop {
+                peer_ip: peer_ip(args)?,
+            },
+            Self::ReplyDelay => RealmanFault::ReplyDelay { delay_ms: int(0)? },
+            // The table's ranges fit each field, so the narrowing casts are lossless.
+            Self::MalformedReply => RealmanFault::MalformedReply {
+                count: int(0)? as u32,
+            },
+            Self::UdpLoss => RealmanFault::UdpLoss {
+                permille: int(0)? as u16,
+            },
+            Self::UdpReorder => RealmanFault::UdpReorder,
+            Self::JointError => RealmanFault::JointError {
+                joint: int(0)? as u8,
+                code: int(1)? as u16,
+            },
+            Self::PowerLoss => RealmanFault::PowerLoss,
+            Self::Collision => RealmanFault::Collision,
+            Self::EStop => RealmanFault::EStop,
+            Self::GripperFault => RealmanFault::GripperFault {
+                bits: int(0)? as u8,
+            },
+        })
+    }
+}
+
+/// `peer_ip` of `connection_drop`, if given: an IPv4 or IPv6 address.
+fn peer_ip(args: &FaultArgs) -> Result<Option<IpAddr>, FaultArgError> {
+    match args.get(PEER_IP) {
+        None => Ok(None),
+        Some(FaultArgValue::Text(text)) => text.trim().parse().map(Some).map_err(|_| {
+            FaultArgError::at(
+                PEER_IP,
+                format!("`{PEER_IP}`: `{text}` is not an IP address"),
+            )
+        }),
+        Some(other) => Err(FaultArgError::at(
+            PEER_IP,
+            format!("`{PEER_IP}`: {other} is not an IP address"),
+        )),
+    }
+}
+
+/// The Realman fault called `name` built from `args` ([`RealmanFaultKind::build`]); an
+/// unknown name is refused with the list of known ones.
+pub fn build_fault(name: &str, args: &FaultArgs) -> Result<RealmanFault, FaultArgError> {
+    let kind = RealmanFaultKind::from_name(name).ok_or_else(|| {
+        let known: Vec<&str> = RealmanFaultKind::ALL.iter().map(|k| k.name()).collect();
+        FaultArgError::whole(format!(
+            "no Realman fault `{name}`; known: {}",
+            known.join(", ")
+        ))
+    })?;
+    kind.build(args)
+}
+
 /// A fault with values the emulator cannot apply.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum FaultError {
@@ -358,6 +481,88 @@ mod tests {
         names.sort_unstable();
         names.dedup();
         assert_eq!(names.len(), RealmanFaultKind::ALL.len());
+    }
+
+    #[test]
+    fn all_lists_every_kind_once_in_declaration_order() {
+        use strum::IntoEnumIterator;
+        assert!(RealmanFaultKind::iter().eq(RealmanFaultKind::ALL));
+        assert_eq!(RealmanFaultKind::EStop.name(), "estop");
+        assert_eq!(RealmanFaultKind::from_name("e_stop"), None);
+    }
+
+    fn num(name: &str, value: f64) -> FaultArgs {
+        FaultArgs::new().with(name, FaultArgValue::Number(value))
+    }
+
+    #[test]
+    fn the_builder_reads_every_fault_from_its_table() {
+        let every = ["delay_ms", "count", "permille", "joint", "code", "bits"];
+        for kind in RealmanFaultKind::ALL {
+            let mut args = FaultArgs::new();
+            for name in every.iter().filter(|n| kind.param(n).is_some()) {
+                args.push(*name, FaultArgValue::Number(1.0));
+            }
+            assert_eq!(build_fault(kind.name(), &args).map(|f| f.kind()), Ok(kind));
+        }
+        let joint = num("joint", 3.0).with("code", FaultArgValue::Number(8.0));
+        assert_eq!(
+            RealmanFaultKind::JointError.build(&joint),
+            Ok(RealmanFault::JointError { joint: 3, code: 8 })
+        );
+        let ip = FaultArgs::new().with("peer_ip", FaultArgValue::Text("10.0.0.2".into()));
+        assert_eq!(
+            RealmanFaultKind::ConnectionDrop.build(&ip),
+            Ok(RealmanFault::ConnectionDrop {
+                peer_ip: Some([10, 0, 0, 2].into())
+            })
+        );
+    }
+
+    #[test]
+    fn the_builder_refuses_with_the_scenario_wording() {
+        let err = |kind: RealmanFaultKind, args: FaultArgs| kind.build(&args).unwrap_err();
+        let e = err(RealmanFaultKind::ReplyDelay, num("delay_ms", -5.0));
+        assert_eq!(e.arg.as_deref(), Some("delay_ms"));
+        assert_eq!(e.message, "`delay_ms`: -5 out of range, expected 1..=60000");
+        let e = err(RealmanFaultKind::UdpLoss, num("permille", 1001.0));
+        assert_eq!(
+            e.message,
+            "`permille`: 1001 out of range, expected 0..=1000"
+        );
+        let e = err(RealmanFaultKind::JointError, num("joint", 3.0));
+        assert_eq!(
+            (e.arg, e.message.as_str()),
+            (None, "`joint_error` needs `code`")
+        );
+        let e = err(RealmanFaultKind::MalformedReply, num("count", 1.5));
+        assert_eq!(e.message, "`count`: expected a whole number, got 1.5");
+        let e = err(
+            RealmanFaultKind::GripperFault,
+            FaultArgs::new().with("bits", FaultArgValue::Text("stall".into())),
+        );
+        assert_eq!(e.message, "`bits`: expected a whole number, got `stall`");
+        let e = err(
+            RealmanFaultKind::ReplyDelay,
+            num("delay_ms", 10.0).with("dleay_ms", FaultArgValue::Number(3.0)),
+        );
+        assert_eq!(e.arg.as_deref(), Some("dleay_ms"));
+        assert!(e.message.contains("it takes: delay_ms"), "{}", e.message);
+        let e = err(RealmanFaultKind::EStop, num("joint", 1.0));
+        assert!(e.message.contains("takes no arguments"), "{}", e.message);
+        let e = err(
+            RealmanFaultKind::ConnectionDrop,
+            FaultArgs::new().with("peer_ip", FaultArgValue::Text("host".into())),
+        );
+        assert_eq!(e.message, "`peer_ip`: `host` is not an IP address");
+        let e = build_fault("comm_loss", &FaultArgs::new()).unwrap_err();
+        assert_eq!(e.arg, None);
+        assert!(
+            e.message
+                .starts_with("no Realman fault `comm_loss`; known: connection_drop, reply_delay"),
+            "{}",
+            e.message
+        );
     }
 
     #[test]

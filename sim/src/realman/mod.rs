@@ -75,7 +75,7 @@ pub mod server;
 pub mod wire;
 
 pub use controller::{Answer, ClientId, Controller, ControllerConfig, ControllerError, Event};
-pub use faults::{FaultError, RealmanFault, RealmanFaultKind};
+pub use faults::{build_fault, FaultError, RealmanFault, RealmanFaultKind};
 pub use profile::FirmwareProfile;
 pub use server::{
     EmulatorConfig, RealmanEmulator, RealmanHandle, RealmanMonitor, ServerError, ServerStats,
