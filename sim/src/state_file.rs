@@ -42,10 +42,13 @@ impl InvalidField {
 #[derive(Debug, thiserror::Error)]
 pub enum StateFileError {
     /// Reading or writing failed.
-    #[error("state file {path}: {source}")]
+    #[error("state file {path}: {action}: {source}")]
     Io {
         /// The file.
         path: PathBuf,
+        /// The step that failed ("reading", "writing the temporary file", "renaming the
+        /// temporary file over it", ...).
+        action: &'static str,
         /// The I/O error.
         #[source]
         source: std::io::Error,
@@ -82,9 +85,10 @@ impl StateFileError {
         }
     }
 
-    fn io(path: &Path, source: std::io::Error) -> Self {
+    fn io(path: &Path, action: &'static str, source: std::io::Error) -> Self {
         Self::Io {
             path: path.to_owned(),
+            action,
             source,
         }
     }
@@ -159,6 +163,7 @@ pub fn load<T: DeserializeOwned>(path: &Path, kind: &str) -> Result<Option<T>, S
     let refuse = |why: String| {
         StateFileError::io(
             path,
+            "reading",
             std::io::Error::new(std::io::ErrorKind::InvalidData, why),
         )
     };
@@ -167,7 +172,7 @@ pub fn load<T: DeserializeOwned>(path: &Path, kind: &str) -> Result<Option<T>, S
         Err(BoundedReadError::Io(e)) if e.kind() == std::io::ErrorKind::NotFound => {
             return Ok(None)
         }
-        Err(BoundedReadError::Io(e)) => return Err(StateFileError::io(path, e)),
+        Err(BoundedReadError::Io(e)) => return Err(StateFileError::io(path, "reading", e)),
         Err(BoundedReadError::NotAFile) => return Err(refuse("not a regular file".to_owned())),
         Err(BoundedReadError::TooLarge { limit_bytes }) => {
             return Err(refuse(format!(
@@ -186,22 +191,34 @@ pub fn load<T: DeserializeOwned>(path: &Path, kind: &str) -> Result<Option<T>, S
 /// Write `document` to `path` so that the file is always complete: a temporary file beside it,
 /// written and synced, renamed over `path`, then the folder synced (the rename itself reaches
 /// the disk). On an error the temporary file is removed and `path` is left as it was.
+///
+/// This is the one way every emulator saves its state file; the bytes are the document as
+/// pretty JSON and a final newline.
 pub fn save<T: Serialize>(path: &Path, document: &T) -> Result<(), StateFileError> {
     let text = serde_json::to_string_pretty(document)
-        .map_err(|e| StateFileError::io(path, std::io::Error::other(e)))?;
+        .map_err(|e| StateFileError::io(path, "encoding", std::io::Error::other(e)))?;
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
-    let io = |e| StateFileError::io(path, e);
-    let mut tmp = tempfile::Builder::new()
-        .prefix(".armhil-state-")
+    let failed = |action| move |e| StateFileError::io(path, action, e);
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".armhil-state-");
+    // A temporary file is private (0600) by default; a state file is an ordinary file whose
+    // mode the umask decides, as `File::create` would make it.
+    #[cfg(unix)]
+    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
+    let mut tmp = builder
         .tempfile_in(dir)
-        .map_err(io)?;
-    tmp.write_all(text.as_bytes()).map_err(io)?;
-    tmp.write_all(b"\n").map_err(io)?;
-    tmp.as_file().sync_all().map_err(io)?;
-    tmp.persist(path).map_err(|e| io(e.error))?;
+        .map_err(failed("creating a temporary file beside it"))?;
+    tmp.write_all(text.as_bytes())
+        .and_then(|()| tmp.write_all(b"\n"))
+        .map_err(failed("writing the temporary file"))?;
+    tmp.as_file()
+        .sync_all()
+        .map_err(failed("syncing the temporary file"))?;
+    tmp.persist(path)
+        .map_err(|e| failed("renaming the temporary file over it")(e.error))?;
     // Best effort: some file systems refuse to open or sync a folder.
     #[cfg(unix)]
     if let Ok(folder) = std::fs::File::open(dir) {
@@ -306,5 +323,66 @@ mod tests {
             matches!(err, StateFileError::Io { .. }) && err.to_string().contains("gone"),
             "{err}"
         );
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_save_refused_at_the_rename_leaves_no_temporary_file_and_names_the_step() {
+        let dir = tempfile::tempdir().unwrap();
+        // The target is a folder: the temporary file is written, the rename over it fails.
+        let path = dir.path().join("taken");
+        std::fs::create_dir(&path).unwrap();
+        let err = save(&path, &doc(1)).unwrap_err();
+        let message = err.to_string();
+        assert!(
+            matches!(err, StateFileError::Io { action, .. } if action.starts_with("renaming"))
+                && message.contains(&path.display().to_string()),
+            "{message}"
+        );
+        assert!(path.is_dir(), "the folder must be left as it was");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_save_into_a_read_only_folder_leaves_the_old_file_whole() {
+        use std::os::unix::fs::PermissionsExt as _;
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("s.json");
+        save(&path, &doc(1)).unwrap();
+        let before = std::fs::read(&path).unwrap();
+        std::fs::set_permissions(dir.path(), std::fs::Permissions::from_mode(0o555)).unwrap();
+        let result = save(&path, &doc(2));
+        std::fs::set_permissions(dir.path(), std::fs::Permissions::from_mode(0o755)).unwrap();
+        if result.is_ok() {
+            // Running as root, which ignores the folder's mode: nothing to check here.
+            return;
+        }
+        let err = result.unwrap_err();
+        assert!(
+            matches!(err, StateFileError::Io { action, .. } if action.starts_with("creating"))
+                && err.to_string().contains(&path.display().to_string()),
+            "{err}"
+        );
+        assert_eq!(std::fs::read(&path).unwrap(), before);
+        assert_eq!(load::<Doc>(&path, "test").unwrap(), Some(doc(1)));
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_saved_file_is_pretty_json_with_a_final_newline_and_the_umask_mode() {
+        use std::os::unix::fs::PermissionsExt as _;
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("s.json");
+        save(&path, &doc(3)).unwrap();
+        assert_eq!(
+            std::fs::read_to_string(&path).unwrap(),
+            "{\n  \"kind\": \"test\",\n  \"format\": 1,\n  \"value\": 3\n}\n"
+        );
+        // Compared with a file made the ordinary way, so the test holds under any umask.
+        let plain = dir.path().join("plain");
+        std::fs::write(&plain, b"").unwrap();
+        let mode = |p: &Path| std::fs::metadata(p).unwrap().permissions().mode() & 0o777;
+        assert_eq!(mode(&path), mode(&plain));
     }
 }
