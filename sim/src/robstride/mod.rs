@@ -27,7 +27,7 @@
 //!   variant on 11-bit IDs; CANopen as a CiA-301 node with the CiA-402 drive objects, see
 //!   `docs/protocols/robstride.md` §12 and §13).
 
-mod actuator;
+mod firmware;
 pub mod codec;
 pub mod control;
 pub mod faults;
@@ -38,7 +38,7 @@ pub mod rig;
 mod runner;
 pub mod state_file;
 
-pub use actuator::{
+pub use firmware::{
     baud_code_bps, Actuator, ModeState, MotorConfig, MotorSnapshot, PersistedMotor, PlantKind,
     ReportType, DEFAULT_HOST_ID,
 };

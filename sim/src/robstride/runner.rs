@@ -10,7 +10,7 @@ use tokio::sync::{mpsc, oneshot};
 use tokio::task::JoinHandle;
 use tokio::time::{interval, sleep, MissedTickBehavior};
 
-use crate::robstride::actuator::{Actuator, MotorConfig, MotorSnapshot, DEFAULT_HOST_ID};
+use crate::robstride::firmware::{Actuator, MotorConfig, MotorSnapshot, DEFAULT_HOST_ID};
 use crate::robstride::faults::{
     check_bus_voltage_v, check_external_torque_nm, check_temperature_c, Fault, ValueError,
 };

@@ -11,7 +11,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use crate::robstride::actuator::PersistedMotor;
+use crate::robstride::firmware::PersistedMotor;
 use crate::state_file::{self, InvalidField};
 
 /// Why the state file could not be read, checked or written (it names the file and field).

@@ -216,7 +216,7 @@ impl Actuator {
     pub(super) fn mit_status(&self) -> Option<CanFrame> {
         let r = &self.ranges;
         let p = f64::from(r.angle_rad);
-        let angle = to_uint(super::wrap_angle(self.angle_rad(), p), -p, p, 16);
+        let angle = to_uint(super::frames::wrap_angle(self.angle_rad(), p), -p, p, 16);
         let v = f64::from(r.speed_rad_s);
         let speed = to_uint(self.plant.velocity_rad_s(), -v, v, 12);
         let t = f64::from(r.torque_nm);

@@ -7,7 +7,7 @@ use std::f64::consts::TAU;
 use super::cia402::{self, DriveState};
 use super::sdo::{Abort, Address};
 use super::Mode;
-use crate::robstride::actuator::Actuator;
+use crate::robstride::firmware::Actuator;
 use crate::robstride::model::Model;
 use crate::robstride::params::index;
 
