@@ -358,6 +358,8 @@ pub fn magic_payload(f_cmd: u8) -> [u8; 8] {
 mod tests {
     use super::*;
     use crate::robstride::model::{Model, RangeTable};
+    /// The host the replies under test go to.
+    const HOST: u8 = crate::robstride::DEFAULT_HOST_ID;
 
     fn rs03() -> Ranges {
         Model::RS03.ranges(RangeTable::Manual)
@@ -381,20 +383,20 @@ mod tests {
         let ranges = |_| Some(rs03());
         // Another host's reply, a short frame and a standard frame decode to nothing.
         assert_eq!(
-            decode(&status(0x0280_7FFC), 0xFD, Duration::ZERO, ranges),
+            decode(&status(0x0280_7FFC), HOST, Duration::ZERO, ranges),
             None
         );
         let short = CanFrame::extended(0x0280_7FFD, &[0; 4]).unwrap();
-        assert_eq!(decode(&short, 0xFD, Duration::ZERO, ranges), None);
+        assert_eq!(decode(&short, HOST, Duration::ZERO, ranges), None);
         let standard = CanFrame::standard(0x7F, &[0; 8]).unwrap();
-        assert_eq!(decode(&standard, 0xFD, Duration::ZERO, ranges), None);
+        assert_eq!(decode(&standard, HOST, Duration::ZERO, ranges), None);
         // Unknown motor (no ranges): status frames cannot be scaled.
         assert_eq!(
-            decode(&status(0x0280_7FFD), 0xFD, Duration::ZERO, |_| None),
+            decode(&status(0x0280_7FFD), HOST, Duration::ZERO, |_| None),
             None
         );
         let Some(Incoming::Feedback(fb)) =
-            decode(&status(0x1880_7FFD), 0xFD, Duration::ZERO, ranges)
+            decode(&status(0x1880_7FFD), HOST, Duration::ZERO, ranges)
         else {
             panic!("type 24 decodes");
         };
@@ -402,7 +404,7 @@ mod tests {
             (fb.kind, fb.mode, fb.temperature_c),
             (FeedbackKind::ActiveReport, MotorMode::Run, 25.0)
         );
-        let brake = decode(&status(0x02C0_7FFD), 0xFD, Duration::ZERO, ranges);
+        let brake = decode(&status(0x02C0_7FFD), HOST, Duration::ZERO, ranges);
         assert!(matches!(
             brake,
             Some(Incoming::Feedback(Feedback {

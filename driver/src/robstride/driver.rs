@@ -16,10 +16,14 @@ use crate::robstride::mit_codec::{self, MitIncoming, MitStatus};
 use crate::robstride::model::{Model, RangeTable, Ranges};
 use crate::robstride::motor::Motor;
 
+/// The host ID the manuals use, and the driver's unless [`DriverConfig::host_id`] says
+/// otherwise (motors answer it until another host speaks).
+pub const DEFAULT_HOST_ID: u8 = 0xFD;
+
 /// Driver settings.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DriverConfig {
-    /// Our host ID (0xFD in the manuals).
+    /// Our host ID ([`DEFAULT_HOST_ID`] unless set).
     pub host_id: u8,
     /// How long a request waits for its reply.
     pub timeout: Duration,
@@ -32,7 +36,7 @@ pub struct DriverConfig {
 impl Default for DriverConfig {
     fn default() -> Self {
         Self {
-            host_id: 0xFD,
+            host_id: DEFAULT_HOST_ID,
             timeout: Duration::from_millis(20),
             range_table: RangeTable::Manual,
             can_timeout_ticks_per_s: 20_000,

@@ -251,6 +251,8 @@ pub fn decode(
 mod tests {
     use super::*;
     use crate::robstride::model::{Model, RangeTable};
+    /// The host the replies under test go to.
+    const HOST: u8 = crate::robstride::DEFAULT_HOST_ID;
 
     #[test]
     fn twelve_bit_fields_pack_across_nibbles() {
@@ -275,7 +277,7 @@ mod tests {
         let r = Model::RS03.ranges(RangeTable::Manual);
         let status =
             CanFrame::standard(0x0FD, &[0x7F, 0x7F, 0xFF, 0x7F, 0xF7, 0xFF, 0x80, 0xFA]).unwrap();
-        let Some(MitIncoming::Status(s)) = decode(&status, 0xFD, |_| Some(r)) else {
+        let Some(MitIncoming::Status(s)) = decode(&status, HOST, |_| Some(r)) else {
             panic!("status");
         };
         assert_eq!(
@@ -285,7 +287,7 @@ mod tests {
         assert!(s.angle_rad.abs() < 2e-4 && s.speed_rad_s.abs() < 0.01);
         let fault = CanFrame::standard(0x0FD, &[0x7F, 1, 0, 1, 0, 0, 0, 0]).unwrap();
         assert_eq!(
-            decode(&fault, 0xFD, |_| Some(r)),
+            decode(&fault, HOST, |_| Some(r)),
             Some(MitIncoming::FaultWord {
                 motor_id: 0x7F,
                 word: 0x0001_0001
@@ -295,7 +297,7 @@ mod tests {
         // driver never receives its own frames).
         let enable = command(0x05, NO_ARG, marker::ENABLE_OR_MODE).unwrap();
         assert!(matches!(
-            decode(&enable, 0xFD, |_| Some(r)),
+            decode(&enable, HOST, |_| Some(r)),
             Some(MitIncoming::Uid { motor_id: 5, .. })
         ));
     }

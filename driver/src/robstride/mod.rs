@@ -25,7 +25,7 @@ mod motor;
 pub mod params;
 
 pub use codec::{FaultReport, Feedback, FeedbackKind, MotorMode, OpControl, StatusFaults};
-pub use driver::{DriverConfig, RobstrideDriver};
+pub use driver::{DriverConfig, RobstrideDriver, DEFAULT_HOST_ID};
 pub use error::RobstrideError;
 pub use mit::{MitMode, MitMotor};
 pub use mit_codec::{MitIncoming, MitStatus};

@@ -3,8 +3,9 @@
 //! The manual table (spec §6.1) is the default; the official SDK's table is selectable because
 //! some firmware/clients use it.
 
-/// A RobStride actuator model.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+/// A RobStride actuator model; its name is the variant's (`RS03`, any case).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, strum::EnumString)]
+#[strum(ascii_case_insensitive)]
 pub enum Model {
     /// RS00 (14 N·m).
     RS00,
@@ -54,18 +55,7 @@ pub struct Ranges {
 impl Model {
     /// Parse `RS03` / `rs03` / `EL05`.
     pub fn parse(name: &str) -> Option<Self> {
-        let all = [
-            Self::RS00,
-            Self::RS01,
-            Self::RS02,
-            Self::RS03,
-            Self::RS04,
-            Self::RS05,
-            Self::RS06,
-            Self::EL05,
-        ];
-        all.into_iter()
-            .find(|model| format!("{model:?}").eq_ignore_ascii_case(name.trim()))
+        name.trim().parse().ok()
     }
 
     /// The model's ranges in `table`.
@@ -93,5 +83,18 @@ impl Model {
             kd_max: kd,
             current_a: i,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn models_parse_by_name_in_any_case() {
+        assert_eq!(Model::parse("RS03"), Some(Model::RS03));
+        assert_eq!(Model::parse(" el05 "), Some(Model::EL05));
+        assert_eq!(Model::parse("rs00"), Some(Model::RS00));
+        assert_eq!(Model::parse("RS07"), None);
     }
 }
