@@ -47,7 +47,7 @@ impl Firmware {
 
     fn gripper_status(&self) -> u8 {
         let mut b = 0;
-        if self.faults.voltage_v() < super::faults::UNDER_VOLTAGE_V {
+        if self.faults.voltage_v() < super::protections::UNDER_VOLTAGE_V {
             b |= gripper_bits::UNDER_VOLTAGE;
         }
         if self.faults.gripper_sensor_fault {

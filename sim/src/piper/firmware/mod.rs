@@ -5,8 +5,8 @@
 //! [`super::emulator`] only feeds it frames and time.
 
 mod commands;
-mod faults;
 mod feedback;
+mod protections;
 #[cfg(test)]
 mod streaming_tests;
 
@@ -27,7 +27,7 @@ use super::trajectory::{JointMove, PathMove};
 use crate::physics::{ArmWorld, KineticFriction, ObstacleId, ObstacleShape, WorldConfig};
 use crate::state_file::InvalidField;
 
-pub use faults::FaultState;
+pub use protections::FaultState;
 
 /// Physics and control period, s (1 kHz).
 pub const STEP_S: f64 = 0.001;
@@ -167,7 +167,7 @@ pub struct Firmware {
     pub(crate) faults: FaultState,
     pub(crate) collision_residual: [f64; 6],
     /// Ticks left before a just-enabled joint's collision protection judges its residual
-    /// (see `faults::ENABLE_COLLISION_BLANK_MS`).
+    /// (see `protections::ENABLE_COLLISION_BLANK_MS`).
     pub(crate) collision_blank_ticks: [u32; 6],
     pub(crate) q: Vec<f64>,
     pub(crate) v: Vec<f64>,

@@ -1,4 +1,6 @@
-//! Fault state, protections (thermal, collision) and the harness's fault API.
+//! Fault behaviour: the active faults and protection latches (thermal, collision, stall) and
+//! how injecting or clearing one changes the firmware. The fault table (names, parameters,
+//! ranges) and its builder are `crate::piper::faults`.
 
 use super::Firmware;
 use crate::piper::codec::host::CtrlMode;

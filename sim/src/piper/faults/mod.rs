@@ -1,7 +1,14 @@
 //! Faults the harness can trigger at run time: [`PiperFault`] with its values, [`FaultKind`] the
 //! table of kinds. This is the one description of the Piper's faults: [`FaultKind::name`] is a
 //! fault's name in scenario files, [`FaultKind::params`] its parameters and
-//! [`FaultKind::description`] what it does on the wire and what clears it.
+//! [`FaultKind::description`] what it does on the wire and what clears it; [`FaultKind::build`]
+//! (and [`build_fault`] by name) is the one way a front end (scenario files, the web view,
+//! Python) turns a name and [`FaultArgs`](crate::fault_args::FaultArgs) into a [`PiperFault`].
+//! What a fault does to the firmware is `firmware::protections`.
+
+mod build;
+
+pub use build::build_fault;
 
 /// A fault the harness injects into a running emulator. Joints are numbered 1–6 as on the wire.
 ///
@@ -73,8 +80,22 @@ pub enum PiperFault {
     TeachButton,
 }
 
-/// Boards with an NTC temperature sensor.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+/// Boards with an NTC temperature sensor. Its name (scenario files, reports, the web view,
+/// Python) is its variant's in snake_case.
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    PartialOrd,
+    Ord,
+    Hash,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::EnumIter,
+)]
+#[strum(serialize_all = "snake_case")]
 pub enum NtcBoard {
     /// Main-control board (arm status 0x0E).
     Main,
@@ -88,15 +109,32 @@ impl NtcBoard {
 
     /// The board's name in scenario files and reports.
     pub fn name(self) -> &'static str {
-        match self {
-            NtcBoard::Main => "main",
-            NtcBoard::BrakeResistor => "brake_resistor",
-        }
+        self.into()
+    }
+
+    /// The board with this [`name`](NtcBoard::name).
+    pub fn from_name(name: &str) -> Option<NtcBoard> {
+        name.parse().ok()
     }
 }
 
 /// The kinds of [`PiperFault`], without their values: one row per fault of the table above.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+/// Its name (scenario files, logs, reports, the web view, Python) is its variant's in
+/// snake_case.
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    PartialOrd,
+    Ord,
+    Hash,
+    strum::EnumString,
+    strum::IntoStaticStr,
+    strum::EnumIter,
+)]
+#[strum(serialize_all = "snake_case")]
 pub enum FaultKind {
     /// The master loses contact with one joint driver.
     CommLoss,
@@ -143,6 +181,9 @@ pub struct FaultParam {
     /// a physically absurd value is refused with a message instead of turning the physics into
     /// NaN.
     pub range: Option<(f64, f64)>,
+    /// The words a word parameter accepts (empty for numeric parameters); when it is omitted
+    /// the fault takes the first.
+    pub words: &'static [&'static str],
 }
 
 impl FaultParam {
@@ -188,6 +229,7 @@ const JOINT: FaultParam = FaultParam {
     required: true,
     default: None,
     range: Some((1.0, 6.0)),
+    words: &[],
 };
 
 /// Forced temperature of the over-temperature faults, °C (the default is above every
@@ -198,6 +240,38 @@ const TEMP_C: FaultParam = FaultParam {
     required: false,
     default: Some(90.0),
     range: Some(TEMP_RANGE_C),
+    words: &[],
+};
+
+/// Bus voltage of `under_voltage`, V (the default is below the drivers' 20 V threshold).
+const VOLTAGE_V: FaultParam = FaultParam {
+    name: "voltage_v",
+    description: "bus voltage, V (nominal 48 V; drivers trip below 20 V)",
+    required: false,
+    default: Some(18.0),
+    range: Some(VOLTAGE_RANGE_V),
+    words: &[],
+};
+
+/// Torque of `external_torque`, N·m.
+const TORQUE_NM: FaultParam = FaultParam {
+    name: "torque_nm",
+    description: "torque, N·m (at most 320 N·m either way)",
+    required: true,
+    default: None,
+    range: Some((-MAX_EXTERNAL_TORQUE_NM, MAX_EXTERNAL_TORQUE_NM)),
+    words: &[],
+};
+
+/// The board of `ntc_over_temp`: the names of [`NtcBoard`], the main board first (the
+/// default).
+const BOARD: FaultParam = FaultParam {
+    name: "board",
+    description: "`main` (default) or `brake_resistor`",
+    required: false,
+    default: None,
+    range: None,
+    words: &["main", "brake_resistor"],
 };
 
 impl FaultKind {
@@ -220,26 +294,12 @@ impl FaultKind {
 
     /// The fault's name in scenario files, logs and reports.
     pub fn name(self) -> &'static str {
-        match self {
-            FaultKind::CommLoss => "comm_loss",
-            FaultKind::MotorOverTemp => "motor_over_temp",
-            FaultKind::DriverOverTemp => "driver_over_temp",
-            FaultKind::OverCurrent => "over_current",
-            FaultKind::UnderVoltage => "under_voltage",
-            FaultKind::DriverError => "driver_error",
-            FaultKind::Stall => "stall",
-            FaultKind::ExternalTorque => "external_torque",
-            FaultKind::Collision => "collision",
-            FaultKind::Estop => "estop",
-            FaultKind::NtcOverTemp => "ntc_over_temp",
-            FaultKind::GripperSensorFault => "gripper_sensor_fault",
-            FaultKind::TeachButton => "teach_button",
-        }
+        self.into()
     }
 
     /// The kind with this [`name`](FaultKind::name).
     pub fn from_name(name: &str) -> Option<FaultKind> {
-        FaultKind::ALL.into_iter().find(|k| k.name() == name)
+        name.parse().ok()
     }
 
     /// Its parameters, in the order `Display` prints them.
@@ -251,30 +311,9 @@ impl FaultKind {
             | FaultKind::Stall
             | FaultKind::Collision => &[JOINT],
             FaultKind::MotorOverTemp | FaultKind::DriverOverTemp => &[JOINT, TEMP_C],
-            FaultKind::UnderVoltage => &[FaultParam {
-                name: "voltage_v",
-                description: "bus voltage, V (nominal 48 V; drivers trip below 20 V)",
-                required: false,
-                default: Some(18.0),
-                range: Some(VOLTAGE_RANGE_V),
-            }],
-            FaultKind::ExternalTorque => &[
-                JOINT,
-                FaultParam {
-                    name: "torque_nm",
-                    description: "torque, N·m (at most 320 N·m either way)",
-                    required: true,
-                    default: None,
-                    range: Some((-MAX_EXTERNAL_TORQUE_NM, MAX_EXTERNAL_TORQUE_NM)),
-                },
-            ],
-            FaultKind::NtcOverTemp => &[FaultParam {
-                name: "board",
-                description: "`main` (default) or `brake_resistor`",
-                required: false,
-                default: None,
-                range: None,
-            }],
+            FaultKind::UnderVoltage => &[VOLTAGE_V],
+            FaultKind::ExternalTorque => &[JOINT, TORQUE_NM],
+            FaultKind::NtcOverTemp => &[BOARD],
             FaultKind::Estop | FaultKind::GripperSensorFault | FaultKind::TeachButton => &[],
         }
     }
@@ -508,165 +547,4 @@ pub mod gripper_bits {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn every_kind_has_its_own_name_and_a_description() {
-        for (i, a) in FaultKind::ALL.iter().enumerate() {
-            assert_eq!(FaultKind::from_name(a.name()), Some(*a));
-            assert!(!a.description().is_empty());
-            for b in &FaultKind::ALL[i + 1..] {
-                assert_ne!(a.name(), b.name());
-            }
-        }
-        assert_eq!(FaultKind::from_name("comm_los"), None);
-    }
-
-    #[test]
-    fn display_starts_with_the_kind_name_and_lists_the_values() {
-        let f = PiperFault::MotorOverTemp {
-            joint: 2,
-            temp_c: 90.0,
-        };
-        assert_eq!(f.to_string(), "motor_over_temp joint 2 90 C");
-        let ntc = PiperFault::NtcOverTemp {
-            board: NtcBoard::BrakeResistor,
-        };
-        assert_eq!(ntc.to_string(), "ntc_over_temp brake_resistor");
-        assert_eq!(PiperFault::Estop.to_string(), "estop");
-        assert_eq!(
-            PiperFault::UnderVoltage { voltage_v: 18.5 }.to_string(),
-            "under_voltage 18.5 V"
-        );
-    }
-
-    #[test]
-    fn same_site_ignores_values_but_not_joints_or_boards() {
-        let hot = PiperFault::DriverOverTemp {
-            joint: 3,
-            temp_c: 95.0,
-        };
-        let any = PiperFault::DriverOverTemp {
-            joint: 3,
-            temp_c: 0.0,
-        };
-        let other_joint = PiperFault::DriverOverTemp {
-            joint: 4,
-            temp_c: 95.0,
-        };
-        assert!(hot.same_site(&any));
-        assert!(!hot.same_site(&other_joint));
-        assert!(!hot.same_site(&PiperFault::MotorOverTemp {
-            joint: 3,
-            temp_c: 95.0
-        }));
-        let main = PiperFault::NtcOverTemp {
-            board: NtcBoard::Main,
-        };
-        let resistor = PiperFault::NtcOverTemp {
-            board: NtcBoard::BrakeResistor,
-        };
-        assert!(!main.same_site(&resistor));
-    }
-
-    #[test]
-    fn every_numeric_parameter_has_a_range_holding_its_default() {
-        for kind in FaultKind::ALL {
-            for p in kind.params() {
-                if p.name == "board" {
-                    assert_eq!(p.range, None);
-                    continue;
-                }
-                let (min, max) = p.range.unwrap_or_else(|| panic!("{}: no range", p.name));
-                assert!(
-                    min < max && min.is_finite() && max.is_finite(),
-                    "{}",
-                    p.name
-                );
-                if let Some(d) = p.default {
-                    assert_eq!(p.check(d), Ok(d), "{}: default outside its range", p.name);
-                }
-            }
-        }
-    }
-
-    #[test]
-    fn absurd_values_are_refused_with_a_short_message() {
-        let torque = PiperFault::ExternalTorque {
-            joint: 1,
-            torque_nm: 1e308,
-        };
-        let err = torque.check().unwrap_err();
-        assert!(matches!(
-            err,
-            FaultError::OutOfRange {
-                param: "torque_nm",
-                ..
-            }
-        ));
-        let text = err.to_string();
-        assert_eq!(text, "`torque_nm` must be between -320 and 320, got 1e308");
-        for fault in [
-            PiperFault::ExternalTorque {
-                joint: 6,
-                torque_nm: -320.5,
-            },
-            PiperFault::MotorOverTemp {
-                joint: 2,
-                temp_c: 1e308,
-            },
-            PiperFault::DriverOverTemp {
-                joint: 2,
-                temp_c: f64::NAN,
-            },
-            PiperFault::UnderVoltage { voltage_v: -1.0 },
-            PiperFault::UnderVoltage {
-                voltage_v: f64::INFINITY,
-            },
-        ] {
-            let text = fault.check().unwrap_err().to_string();
-            assert!(text.len() < 80, "{text}");
-        }
-        assert_eq!(
-            PiperFault::Stall { joint: 7 }.check(),
-            Err(FaultError::NoSuchJoint { joint: 7 })
-        );
-    }
-
-    #[test]
-    fn plausible_values_pass() {
-        for fault in [
-            PiperFault::ExternalTorque {
-                joint: 1,
-                torque_nm: -320.0,
-            },
-            PiperFault::MotorOverTemp {
-                joint: 6,
-                temp_c: 150.0,
-            },
-            PiperFault::UnderVoltage { voltage_v: 0.0 },
-            PiperFault::Estop,
-        ] {
-            assert_eq!(fault.check(), Ok(()), "{fault}");
-        }
-    }
-
-    #[test]
-    fn display_does_not_echo_hundreds_of_digits() {
-        let f = PiperFault::ExternalTorque {
-            joint: 1,
-            torque_nm: 1e308,
-        };
-        assert_eq!(f.to_string(), "external_torque joint 1 1e308 Nm");
-    }
-
-    #[test]
-    fn only_faults_without_required_parameters_may_be_written_bare() {
-        assert!(FaultKind::Estop.bare_ok());
-        assert!(FaultKind::UnderVoltage.bare_ok());
-        assert!(FaultKind::NtcOverTemp.bare_ok());
-        assert!(!FaultKind::CommLoss.bare_ok());
-        assert!(!FaultKind::ExternalTorque.bare_ok());
-    }
-}
+mod tests;
