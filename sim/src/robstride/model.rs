@@ -6,8 +6,22 @@
 
 use serde::{Deserialize, Serialize};
 
-/// A RobStride actuator model.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+/// A RobStride actuator model; its name is the variant's, as printed on the actuator.
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    PartialOrd,
+    Ord,
+    Hash,
+    Serialize,
+    Deserialize,
+    strum::EnumString,
+    strum::IntoStaticStr,
+)]
+#[strum(ascii_case_insensitive)]
 pub enum Model {
     /// RS00: 14 N·m peak.
     RS00,
@@ -42,23 +56,12 @@ impl Model {
 
     /// Parse a model name such as `RS03` or `rs03` (CLI and configs).
     pub fn from_name(name: &str) -> Option<Self> {
-        Self::ALL
-            .into_iter()
-            .find(|model| model.name().eq_ignore_ascii_case(name.trim()))
+        name.trim().parse().ok()
     }
 
     /// The model's name as printed on the actuator.
     pub fn name(self) -> &'static str {
-        match self {
-            Model::RS00 => "RS00",
-            Model::RS01 => "RS01",
-            Model::RS02 => "RS02",
-            Model::RS03 => "RS03",
-            Model::RS04 => "RS04",
-            Model::RS05 => "RS05",
-            Model::RS06 => "RS06",
-            Model::EL05 => "EL05",
-        }
+        self.into()
     }
 
     /// The scaling ranges of operation-control commands and status frames.
@@ -212,4 +215,23 @@ pub struct ModelSpec {
     pub has_damper_param: bool,
     /// Whether parameter 0x702B `add_offset` exists on this model.
     pub has_add_offset_param: bool,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_model_is_found_by_its_name_in_any_case() {
+        for model in Model::ALL {
+            let name = model.name();
+            assert_eq!(name, format!("{model:?}"));
+            assert_eq!(Model::from_name(name), Some(model));
+            assert_eq!(
+                Model::from_name(&format!(" {} ", name.to_lowercase())),
+                Some(model)
+            );
+        }
+        assert_eq!(Model::from_name("RS07"), None);
+    }
 }

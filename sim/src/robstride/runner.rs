@@ -10,10 +10,10 @@ use tokio::sync::{mpsc, oneshot};
 use tokio::task::JoinHandle;
 use tokio::time::{interval, sleep, MissedTickBehavior};
 
-use crate::robstride::firmware::{Actuator, MotorConfig, MotorSnapshot, DEFAULT_HOST_ID};
 use crate::robstride::faults::{
     check_bus_voltage_v, check_external_torque_nm, check_temperature_c, Fault, ValueError,
 };
+use crate::robstride::firmware::{Actuator, MotorConfig, MotorSnapshot, DEFAULT_HOST_ID};
 use crate::robstride::state_file::{uid_key, StateFile, StateFileError};
 use crate::supervise::{DeathWatch, Supervisor};
 
@@ -22,7 +22,7 @@ use crate::supervise::{DeathWatch, Supervisor};
 pub struct RobstrideConfig {
     /// The motors, one per CAN ID.
     pub motors: Vec<MotorConfig>,
-    /// Host ID the motors answer to until a host speaks (default 0xFD).
+    /// Host ID the motors answer to until a host speaks (default [`DEFAULT_HOST_ID`]).
     pub host_id: u8,
     /// Where saved parameters, CAN IDs, zeros and pending baud/protocol switches live across
     /// restarts; `None` keeps nothing.
@@ -32,7 +32,7 @@ pub struct RobstrideConfig {
 }
 
 impl RobstrideConfig {
-    /// Motors on a 1 Mbit/s bus, host 0xFD, no state file.
+    /// Motors on a 1 Mbit/s bus, host [`DEFAULT_HOST_ID`], no state file.
     pub fn new(motors: Vec<MotorConfig>) -> Self {
         Self {
             motors,

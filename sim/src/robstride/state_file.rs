@@ -94,7 +94,7 @@ mod tests {
     fn motor() -> PersistedMotor {
         PersistedMotor {
             can_id: 9,
-            master_id: 0xFD,
+            master_id: crate::robstride::DEFAULT_HOST_ID,
             zero_offset_rad: 0.25,
             params: BTreeMap::from([(0x7017, 3.5)]),
             baud_code: 1,

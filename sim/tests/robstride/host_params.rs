@@ -5,9 +5,9 @@
 //! Before this, all of them answered the failure flag with zeros.
 
 use bus::CanFrame;
-use sim::robstride::{Actuator, Load, Model, MotorConfig};
+use sim::robstride::{Actuator, Load, Model, MotorConfig, DEFAULT_HOST_ID};
 
-const HOST: u8 = 0xFD;
+const HOST: u8 = DEFAULT_HOST_ID;
 
 fn motor(can_id: u8, model: Model) -> Actuator {
     let mut config = MotorConfig::new(can_id, model).with_load(Load::Pendulum {

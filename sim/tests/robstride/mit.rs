@@ -8,7 +8,9 @@ use std::collections::BTreeMap;
 use std::collections::BTreeSet;
 
 use bus::CanFrame;
-use sim::robstride::{Actuator, Fault, Load, ModeState, Model, MotorConfig, PersistedMotor};
+use sim::robstride::{
+    Actuator, Fault, Load, ModeState, Model, MotorConfig, PersistedMotor, DEFAULT_HOST_ID,
+};
 use testkit::fixtures::Vector;
 
 const UID: [u8; 8] = [1, 2, 3, 4, 5, 6, 7, 8];
@@ -36,7 +38,7 @@ fn mit_motor(model: Model, load: Load) -> Actuator {
     config.uid = Some(UID);
     let saved = PersistedMotor {
         can_id: 0x7F,
-        master_id: 0xFD,
+        master_id: DEFAULT_HOST_ID,
         zero_offset_rad: 0.0,
         params: BTreeMap::new(),
         baud_code: 1,

@@ -8,6 +8,7 @@ use bus::virtual_bus::{VirtualBus, VirtualBusConfig, VirtualNode};
 use bus::{CanBus, CanFrame};
 use sim::robstride::{
     Fault, Model, MotorConfig, RobstrideBus, RobstrideConfig, RobstrideError, RobstrideHandle,
+    DEFAULT_HOST_ID,
 };
 
 fn spawn(bus: &VirtualBus, config: RobstrideConfig) -> RobstrideHandle {
@@ -56,7 +57,7 @@ async fn each_motor_answers_only_its_own_frames() {
     assert_eq!(from, [1, 2, 3]);
     assert!(replies
         .iter()
-        .all(|f| f.raw_id() >> 24 == 2 && f.raw_id() & 0xFF == 0xFD));
+        .all(|f| f.raw_id() >> 24 == 2 && f.raw_id() & 0xFF == u32::from(DEFAULT_HOST_ID)));
     // Nobody answers ID 4.
     host.send(ext(0x0000_FD04, [0; 8])).await.unwrap();
     assert!(collect(&host, Duration::from_millis(20)).await.is_empty());
@@ -145,7 +146,7 @@ async fn baud_and_protocol_switches_take_effect_after_a_restart() {
     assert_eq!(replies.len(), 1, "{replies:?}");
     assert_eq!(
         (replies[0].is_extended(), replies[0].raw_id()),
-        (false, 0xFD)
+        (false, u32::from(DEFAULT_HOST_ID))
     );
     assert_eq!(replies[0].data()[0], 2, "motor ID in byte 0");
     assert_eq!(replies[0].data()[6] >> 6, 2, "running");
