@@ -16,6 +16,7 @@
 pub mod bounded_read;
 pub mod cpu_budget;
 pub mod fault_args;
+pub mod kinematics;
 pub mod physics;
 pub mod piper;
 pub mod realman;

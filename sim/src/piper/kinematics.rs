@@ -15,6 +15,8 @@ use nalgebra::{
     Isometry3, Matrix6, Point3, Rotation3, Translation3, UnitQuaternion, Vector3, Vector6,
 };
 
+use crate::kinematics::{jacobian_column, joint_frames_m, pose_error, zyx_euler_rad, MdhRow};
+
 /// The Piper URDF (authored by the project, see `urdf/README.md`), for
 /// [`crate::physics::ArmWorld::from_urdf_str`].
 pub const PIPER_URDF: &str = include_str!("../../../urdf/piper.urdf");
@@ -41,54 +43,25 @@ impl DhVariant {
         }
     }
 
-    /// The DH table of this variant.
-    pub fn table(self) -> [DhRow; JOINTS] {
+    /// The modified-DH table of this variant (spec §12: a and d in mm there, twists exactly
+    /// ±π/2).
+    pub fn table(self) -> [MdhRow; JOINTS] {
         let (theta2_deg, theta3_deg): (f64, f64) = match self {
             Self::Offset => (-172.22, -102.78),
             Self::NoOffset => (-174.22, -100.78),
         };
         let half_pi = std::f64::consts::FRAC_PI_2;
+        let row = |a_mm: f64, alpha_rad, offset_rad, d_mm: f64| {
+            MdhRow::new(a_mm / 1000.0, alpha_rad, d_mm / 1000.0, offset_rad)
+        };
         [
-            DhRow::new(0.0, 0.0, 0.0, 123.0),
-            DhRow::new(0.0, -half_pi, theta2_deg.to_radians(), 0.0),
-            DhRow::new(285.03, 0.0, theta3_deg.to_radians(), 0.0),
-            DhRow::new(-21.98, half_pi, 0.0, 250.75),
-            DhRow::new(0.0, -half_pi, 0.0, 0.0),
-            DhRow::new(0.0, half_pi, 0.0, 91.0),
+            row(0.0, 0.0, 0.0, 123.0),
+            row(0.0, -half_pi, theta2_deg.to_radians(), 0.0),
+            row(285.03, 0.0, theta3_deg.to_radians(), 0.0),
+            row(-21.98, half_pi, 0.0, 250.75),
+            row(0.0, -half_pi, 0.0, 0.0),
+            row(0.0, half_pi, 0.0, 91.0),
         ]
-    }
-}
-
-/// One row of a modified-DH table: `T = RotX(α)·TransX(a)·RotZ(θ_offset + q)·TransZ(d)`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct DhRow {
-    /// Link length a, mm.
-    pub a_mm: f64,
-    /// Link twist α, rad.
-    pub alpha_rad: f64,
-    /// Joint angle offset added to q, rad.
-    pub theta_offset_rad: f64,
-    /// Link offset d, mm.
-    pub d_mm: f64,
-}
-
-impl DhRow {
-    const fn new(a_mm: f64, alpha_rad: f64, theta_offset_rad: f64, d_mm: f64) -> Self {
-        Self {
-            a_mm,
-            alpha_rad,
-            theta_offset_rad,
-            d_mm,
-        }
-    }
-
-    /// The transform of this row at joint angle `q_rad`, in metres.
-    pub fn transform_m(&self, q_rad: f64) -> Isometry3<f64> {
-        let twist = Isometry3::rotation(Vector3::x() * self.alpha_rad);
-        let length = Isometry3::translation(self.a_mm / 1000.0, 0.0, 0.0);
-        let turn = Isometry3::rotation(Vector3::z() * (self.theta_offset_rad + q_rad));
-        let offset = Isometry3::translation(0.0, 0.0, self.d_mm / 1000.0);
-        twist * length * turn * offset
     }
 }
 
@@ -121,16 +94,15 @@ impl FlangePose {
     /// The pose of an isometry in metres, with the SDK's Euler extraction:
     /// RX = atan2(R21, R22), RY = atan2(−R20, √(R00² + R10²)), RZ = atan2(R10, R00).
     pub fn from_isometry_m(pose: &Isometry3<f64>) -> Self {
-        let r = pose.rotation.to_rotation_matrix();
-        let m = r.matrix();
+        let [rx_rad, ry_rad, rz_rad] = zyx_euler_rad(&pose.rotation);
         let t = pose.translation.vector * 1000.0;
         Self {
             x_mm: t.x,
             y_mm: t.y,
             z_mm: t.z,
-            rx_rad: m[(2, 1)].atan2(m[(2, 2)]),
-            ry_rad: (-m[(2, 0)]).atan2(m[(0, 0)].hypot(m[(1, 0)])),
-            rz_rad: m[(1, 0)].atan2(m[(0, 0)]),
+            rx_rad,
+            ry_rad,
+            rz_rad,
         }
     }
 
@@ -162,10 +134,8 @@ impl FlangePose {
 pub fn link_frames_m(variant: DhVariant, q_rad: &[f64; JOINTS]) -> [Isometry3<f64>; JOINTS] {
     let table = variant.table();
     let mut frames = [Isometry3::identity(); JOINTS];
-    let mut acc = Isometry3::identity();
-    for (i, row) in table.iter().enumerate() {
-        acc *= row.transform_m(q_rad[i]);
-        frames[i] = acc;
+    for (frame, chained) in frames.iter_mut().zip(joint_frames_m(&table, q_rad)) {
+        *frame = chained;
     }
     frames
 }
@@ -267,21 +237,12 @@ pub enum IkError {
     },
 }
 
-/// Position (m) and orientation (rad, world axis-angle) error from `current` to `target`.
-fn pose_error(target: &Isometry3<f64>, current: &Isometry3<f64>) -> (Vector3<f64>, Vector3<f64>) {
-    let dp = target.translation.vector - current.translation.vector;
-    let dr = (target.rotation * current.rotation.inverse()).scaled_axis();
-    (dp, dr)
-}
-
 /// Geometric Jacobian of the flange (rows: linear m/rad, then angular), world frame.
 fn jacobian(frames: &[Isometry3<f64>; JOINTS]) -> Matrix6<f64> {
     let flange = frames[JOINTS - 1].translation.vector;
     let mut j = Matrix6::zeros();
     for (i, f) in frames.iter().enumerate() {
-        // Modified DH: joint i turns about z of frame i, through the frame's origin.
-        let z = f.rotation * Vector3::z();
-        let lin = z.cross(&(flange - f.translation.vector));
+        let (lin, z) = jacobian_column(f, &flange);
         j.fixed_view_mut::<3, 1>(0, i).copy_from(&lin);
         j.fixed_view_mut::<3, 1>(3, i).copy_from(&z);
     }

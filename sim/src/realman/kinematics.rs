@@ -10,7 +10,8 @@
 
 use nalgebra::{DMatrix, DVector, Isometry3, Translation3, UnitQuaternion, Vector3};
 
-use super::model::ArmModel;
+use super::model::{ArmModel, MdhRow};
+use crate::kinematics;
 
 /// A flange (or any) pose: position in m, orientation as intrinsic Z-Y-X Euler angles in rad
 /// (`R = Rz(rz)·Ry(ry)·Rx(rx)`; `euler_rad = [rx, ry, rz]`).
@@ -72,7 +73,7 @@ impl Pose {
     /// ry = atan2(−R20, √(R00² + R10²)), rz = atan2(R10, R00); an angle that comes out as
     /// −π (within 1e-12) is reported as +π, as the vendor's SDK does at the zero pose.
     pub fn from_isometry(iso: &Isometry3<f64>) -> Self {
-        let m = iso.rotation.to_rotation_matrix().into_inner();
+        let [rx, ry, rz] = kinematics::zyx_euler_rad(&iso.rotation);
         let fold = |a: f64| {
             if a < -std::f64::consts::PI + 1e-12 {
                 std::f64::consts::PI
@@ -83,11 +84,7 @@ impl Pose {
         let t = iso.translation.vector;
         Self {
             position_m: [t.x, t.y, t.z],
-            euler_rad: [
-                fold(m[(2, 1)].atan2(m[(2, 2)])),
-                (-m[(2, 0)]).atan2(m[(0, 0)].hypot(m[(1, 0)])),
-                fold(m[(1, 0)].atan2(m[(0, 0)])),
-            ],
+            euler_rad: [fold(rx), ry, fold(rz)],
         }
     }
 
@@ -129,19 +126,18 @@ pub enum IkError {
 /// flange frame, in the base frame. `joints_rad` must have `model.dof` entries (missing ones
 /// count as 0, extra ones are ignored).
 pub fn joint_frames(model: &ArmModel, joints_rad: &[f64]) -> Vec<Isometry3<f64>> {
+    let rows: Vec<kinematics::MdhRow> = model.mdh.iter().map(shared_row).collect();
     let mut frames = Vec::with_capacity(model.dof + 1);
-    let mut acc = Isometry3::identity();
-    for (i, row) in model.mdh.iter().enumerate() {
-        let q = joints_rad.get(i).copied().unwrap_or(0.0);
-        acc = acc
-            * Isometry3::rotation(Vector3::x() * row.alpha_rad)
-            * Isometry3::translation(row.a_m, 0.0, 0.0)
-            * Isometry3::rotation(Vector3::z() * (q + row.offset_rad))
-            * Isometry3::translation(0.0, 0.0, row.d_m);
-        frames.push(acc);
-    }
-    frames.push(acc * Isometry3::translation(0.0, 0.0, model.flange_d_m));
+    frames.extend(kinematics::joint_frames_m(&rows, joints_rad));
+    let last = frames.last().copied().unwrap_or_else(Isometry3::identity);
+    frames.push(last * Isometry3::translation(0.0, 0.0, model.flange_d_m));
     frames
+}
+
+/// The shared row of a row of the model's table (the same four values; until
+/// `model::MdhRow` is a re-export of [`kinematics::MdhRow`]).
+fn shared_row(row: &MdhRow) -> kinematics::MdhRow {
+    kinematics::MdhRow::new(row.a_m, row.alpha_rad, row.d_m, row.offset_rad)
 }
 
 /// The flange frame in the base frame as an isometry (m).
@@ -163,8 +159,7 @@ pub fn jacobian(model: &ArmModel, joints_rad: &[f64]) -> DMatrix<f64> {
     let tip = frames[model.dof].translation.vector;
     let mut j = DMatrix::zeros(6, model.dof);
     for (i, f) in frames[..model.dof].iter().enumerate() {
-        let z = f.rotation * Vector3::z();
-        let lin = z.cross(&(tip - f.translation.vector));
+        let (lin, z) = kinematics::jacobian_column(f, &tip);
         for k in 0..3 {
             j[(k, i)] = lin[k];
             j[(k + 3, i)] = z[k];
@@ -186,8 +181,7 @@ const MAX_STEP_RAD: f64 = 0.4;
 
 /// Weighted 6-vector error (position then rotation, base frame) from `current` to `target`.
 fn pose_error(target: &Isometry3<f64>, current: &Isometry3<f64>) -> (DVector<f64>, f64, f64) {
-    let dp = target.translation.vector - current.translation.vector;
-    let dr = (target.rotation * current.rotation.inverse()).scaled_axis();
+    let (dp, dr) = kinematics::pose_error(target, current);
     let e = DVector::from_vec(vec![
         dp.x * POSITION_WEIGHT_PER_M,
         dp.y * POSITION_WEIGHT_PER_M,
