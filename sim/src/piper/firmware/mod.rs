@@ -8,7 +8,7 @@ mod commands;
 mod feedback;
 mod protections;
 #[cfg(test)]
-mod streaming_tests;
+mod tests;
 
 use std::path::PathBuf;
 
