@@ -1,9 +1,12 @@
-//! Faults and warnings: the type-21 fault word, the status-frame fault bits, and the typed
-//! faults the harness injects (spec §9).
+//! Faults and warnings: the type-21 fault word, the status-frame fault bits, the typed
+//! faults the harness injects (spec §9), and the one builder ([`build_fault`],
+//! [`Fault::build`]) that makes a [`MotorFault`] from a front end's [`FaultArgs`].
 
 use serde::{Deserialize, Serialize};
 
+use crate::fault_args::{FaultArgError, FaultArgValue, FaultArgs};
 use crate::piper::faults::Shown;
+use crate::robstride::firmware::MAX_CAN_ID;
 use crate::robstride::model::Model;
 
 /// A fault the harness can inject (and the models can raise on their own).
@@ -70,6 +73,34 @@ impl Fault {
         Fault::ALL.into_iter().find(|f| f.name() == name)
     }
 
+    /// The fault called `name`, or an error listing the known names.
+    pub fn named(name: &str) -> Result<Fault, FaultArgError> {
+        Fault::from_name(name).ok_or_else(|| {
+            let known: Vec<&str> = Fault::ALL.iter().map(|f| f.name()).collect();
+            FaultArgError::whole(format!(
+                "no RobStride fault `{name}`; known: {}",
+                known.join(", ")
+            ))
+        })
+    }
+
+    /// Its arguments ([`MOTOR`] alone: what a fault does, and on which phase, is in its name).
+    pub fn params(self) -> &'static [FaultParam] {
+        &[MOTOR]
+    }
+
+    /// This fault on the motor `args` name: an argument the fault does not take is refused,
+    /// and `motor` must be a CAN ID ([`MOTOR`]). The one builder behind the scenario files, the
+    /// web view and the Python emulator, so all three accept the same and say the same.
+    pub fn build(self, args: &FaultArgs) -> Result<MotorFault, FaultArgError> {
+        let names: Vec<&str> = self.params().iter().map(|p| p.name).collect();
+        args.only(self.name(), &names)?;
+        Ok(MotorFault {
+            motor: MOTOR.read(self, args)?,
+            fault: self,
+        })
+    }
+
     /// The bit of the type-21 fault word (spec §9.1).
     pub fn word_bit(self) -> u32 {
         match self {
@@ -84,6 +115,82 @@ impl Fault {
             Fault::PhaseOverCurrent(Phase::A) => 1 << 16,
         }
     }
+}
+
+/// A fault on one motor, as [`Fault::build`] makes it from a front end's arguments.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct MotorFault {
+    /// The CAN ID of the motor the fault is on.
+    pub motor: u8,
+    /// The fault.
+    pub fault: Fault,
+}
+
+/// One argument of a fault: its name (as in scenario files, the web view's JSON and Python's
+/// keyword arguments), what it is, and the whole numbers it accepts. Every argument is
+/// required: no fault has a default to fall back on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FaultParam {
+    /// The argument's name.
+    pub name: &'static str,
+    /// What the number is, in the refusal message (`CAN ID`).
+    pub what: &'static str,
+    /// Smallest value accepted.
+    pub min: u8,
+    /// Largest value accepted.
+    pub max: u8,
+}
+
+/// `motor`: the CAN ID of the motor the fault is on, 1..=127 (the IDs a type-7 command may
+/// give a motor).
+pub const MOTOR: FaultParam = FaultParam {
+    name: "motor",
+    what: "CAN ID",
+    min: 1,
+    max: MAX_CAN_ID,
+};
+
+impl FaultParam {
+    /// The value of this argument in `args` for `fault`: given, a whole number, within range.
+    fn read(&self, fault: Fault, args: &FaultArgs) -> Result<u8, FaultArgError> {
+        let name = self.name;
+        let Some(given) = args.get(name) else {
+            return Err(FaultArgError::whole(format!(
+                "`{}` needs `{name}`",
+                fault.name()
+            )));
+        };
+        let value = match given {
+            FaultArgValue::Number(v) if v.is_finite() && v.fract() == 0.0 => *v,
+            other => {
+                return Err(FaultArgError::at(
+                    name,
+                    format!("`{name}` must be a whole number, got {other}"),
+                ))
+            }
+        };
+        if (f64::from(self.min)..=f64::from(self.max)).contains(&value) {
+            // Whole and within a u8 range: the cast is exact.
+            Ok(value as u8)
+        } else {
+            Err(FaultArgError::at(
+                name,
+                format!(
+                    "`{name}`: {} {} out of range, expected {}..={}",
+                    self.what,
+                    Shown(value),
+                    self.min,
+                    self.max
+                ),
+            ))
+        }
+    }
+}
+
+/// The fault called `name` on the motor `args` name ([`Fault::build`]); an unknown name is
+/// refused with the list of known ones.
+pub fn build_fault(name: &str, args: &FaultArgs) -> Result<MotorFault, FaultArgError> {
+    Fault::named(name)?.build(args)
 }
 
 /// Forced winding temperature (`set_temperature`), °C: from −40 °C (the coldest rating of
@@ -209,6 +316,67 @@ mod tests {
             }
         }
         assert_eq!(Fault::from_name("melted"), None);
+    }
+
+    fn motor(value: FaultArgValue) -> FaultArgs {
+        FaultArgs::new().with("motor", value)
+    }
+
+    #[test]
+    fn every_fault_builds_on_a_motor_by_name() {
+        for fault in Fault::ALL {
+            assert_eq!(
+                build_fault(fault.name(), &motor(FaultArgValue::Number(127.0))),
+                Ok(MotorFault { motor: 127, fault })
+            );
+        }
+    }
+
+    #[test]
+    fn the_builder_refuses_with_the_argument_it_is_about() {
+        let refused = |name: &str, args: FaultArgs| build_fault(name, &args).unwrap_err();
+        let unknown = refused("melted", motor(FaultArgValue::Number(1.0)));
+        assert_eq!(unknown.arg, None);
+        assert!(
+            unknown
+                .message
+                .starts_with("no RobStride fault `melted`; known: over_temperature, "),
+            "{}",
+            unknown.message
+        );
+        let missing = refused("gate_driver", FaultArgs::new());
+        assert_eq!(
+            (missing.arg, missing.message.as_str()),
+            (None, "`gate_driver` needs `motor`")
+        );
+        for (bad, message) in [
+            (0.0, "`motor`: CAN ID 0 out of range, expected 1..=127"),
+            (128.0, "`motor`: CAN ID 128 out of range, expected 1..=127"),
+            (
+                1e308,
+                "`motor`: CAN ID 1e308 out of range, expected 1..=127",
+            ),
+            (2.5, "`motor` must be a whole number, got 2.5"),
+            (f64::NAN, "`motor` must be a whole number, got NaN"),
+        ] {
+            let err = refused("over_voltage", motor(FaultArgValue::Number(bad)));
+            assert_eq!(
+                (err.arg.as_deref(), err.message.as_str()),
+                (Some("motor"), message)
+            );
+        }
+        let word = refused("over_voltage", motor(FaultArgValue::Text("one".into())));
+        assert_eq!(word.message, "`motor` must be a whole number, got `one`");
+        let extra = refused(
+            "under_voltage",
+            motor(FaultArgValue::Number(1.0)).with("voltage_v", FaultArgValue::Number(9.0)),
+        );
+        assert_eq!(extra.arg.as_deref(), Some("voltage_v"));
+        assert!(
+            extra.message.contains("it takes: motor"),
+            "{}",
+            extra.message
+        );
     }
 
     #[test]

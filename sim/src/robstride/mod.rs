@@ -27,10 +27,10 @@
 //!   variant on 11-bit IDs; CANopen as a CiA-301 node with the CiA-402 drive objects, see
 //!   `docs/protocols/robstride.md` §12 and §13).
 
-mod firmware;
 pub mod codec;
 pub mod control;
 pub mod faults;
+mod firmware;
 pub mod host_params;
 pub mod model;
 pub mod params;
@@ -38,11 +38,11 @@ pub mod rig;
 mod runner;
 pub mod state_file;
 
+pub use faults::{build_fault, Fault, FaultParam, MotorFault, Phase};
 pub use firmware::{
     baud_code_bps, Actuator, ModeState, MotorConfig, MotorSnapshot, PersistedMotor, PlantKind,
     ReportType, DEFAULT_HOST_ID,
 };
-pub use faults::{Fault, Phase};
 pub use model::{Model, ModelSpec, RangeTable, Ranges};
 pub use rig::{Load, Plant, RigPlant, WorldPlant};
 pub use runner::{

@@ -31,7 +31,7 @@ const TYPE0_DST: u8 = 0xFE;
 /// the host's 1 kHz).
 const SUBSTEPS: u32 = 10;
 /// The highest CAN ID the parameter table allows (0x200a max 127).
-const MAX_CAN_ID: u8 = 0x7F;
+pub(crate) const MAX_CAN_ID: u8 = 0x7F;
 
 fn make_plant(config: &MotorConfig, spec: &ModelSpec) -> Box<dyn Plant> {
     let analytic = || {
