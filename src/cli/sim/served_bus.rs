@@ -8,6 +8,8 @@ use bus::socketcand::SocketcandServer;
 use bus::virtual_bus::VirtualBus;
 use bus::CanBus;
 
+use armhil::harness::Link;
+
 /// Where the emulator answers (flattened into each CAN device's arguments).
 #[derive(Debug, Clone, clap::Args)]
 pub struct ServeArgs {
@@ -23,6 +25,17 @@ pub struct ServeArgs {
     /// on PEER, such as a vendor SDK, reaches the emulator whatever its socket options.
     #[arg(long, value_name = "PEER", conflicts_with = "socketcand")]
     pub create_vxcan: Option<String>,
+}
+
+impl ServeArgs {
+    /// The link these options name, the type `armhil run` and `armhil record` connect with:
+    /// here the socketcand address is where the server listens.
+    pub fn link(&self) -> Link {
+        match &self.socketcand {
+            Some(addr) => Link::Socketcand(addr.clone()),
+            None => Link::SocketCan(self.iface.clone()),
+        }
+    }
 }
 
 /// The bus an emulator serves, opened from [`ServeArgs`].
@@ -44,21 +57,19 @@ impl ServedBus {
     /// Open the bus `args` names: start the socketcand server (warning if other machines can
     /// reach it), or create the vxcan pair when asked and take the interface.
     pub async fn open(args: &ServeArgs) -> anyhow::Result<Self> {
-        match &args.socketcand {
-            Some(addr) => {
-                let (bus, server) = super::socketcand_server(addr).await?;
+        match args.link() {
+            Link::Socketcand(addr) => {
+                let (bus, server) = super::socketcand_server(&addr).await?;
                 Ok(Self {
                     medium: Medium::Socketcand { bus, server },
                 })
             }
-            None => {
+            Link::SocketCan(iface) => {
                 if let Some(peer) = &args.create_vxcan {
-                    super::create_vxcan(&args.iface, peer)?;
+                    super::create_vxcan(&iface, peer)?;
                 }
                 Ok(Self {
-                    medium: Medium::SocketCan {
-                        iface: args.iface.clone(),
-                    },
+                    medium: Medium::SocketCan { iface },
                 })
             }
         }
@@ -110,4 +121,33 @@ fn open_socketcan(iface: &str) -> anyhow::Result<Arc<dyn CanBus>> {
 #[cfg(not(target_os = "linux"))]
 fn open_socketcan(iface: &str) -> anyhow::Result<Arc<dyn CanBus>> {
     anyhow::bail!("SocketCAN interface {iface}: SocketCAN exists only on Linux (use --socketcand)")
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::Parser;
+
+    use super::*;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        bus: ServeArgs,
+    }
+
+    fn link(args: &[&str]) -> Link {
+        let all = std::iter::once("x").chain(args.iter().copied());
+        Cli::try_parse_from(all).expect("valid options").bus.link()
+    }
+
+    #[test]
+    fn the_served_link_is_the_one_a_client_names_with_the_same_option() {
+        let vcan0 = link(&[]);
+        assert_eq!(vcan0, Link::SocketCan("vcan0".into()));
+        let served = link(&["--socketcand", "127.0.0.1:29536"]);
+        assert_eq!(served, Link::Socketcand("127.0.0.1:29536".into()));
+        // The option a client passes to reach it is the one the emulator was given.
+        assert_eq!(served.sim_option(), "--socketcand 127.0.0.1:29536");
+        assert_eq!(link(&["--iface", "can1"]).sim_option(), "--iface can1");
+    }
 }

@@ -46,11 +46,19 @@ pub enum Link {
 }
 
 impl Link {
+    /// The command-line option that names this kind of link, the same for every command
+    /// (`armhil run`, `armhil record`, `armhil sim`): `--iface` or `--socketcand`.
+    pub fn flag(&self) -> &'static str {
+        match self {
+            Self::SocketCan(_) => "--iface",
+            Self::Socketcand(_) => "--socketcand",
+        }
+    }
+
     /// The `armhil sim` option that serves an emulator on this link.
     pub fn sim_option(&self) -> String {
         match self {
-            Self::SocketCan(iface) => format!("--iface {iface}"),
-            Self::Socketcand(addr) => format!("--socketcand {addr}"),
+            Self::SocketCan(iface) | Self::Socketcand(iface) => format!("{} {iface}", self.flag()),
         }
     }
 
@@ -183,12 +191,9 @@ pub fn run_scenario_with(
     if let Clock::Iface(link) = clock {
         let needs = scenario.in_process_requirements();
         if !needs.is_empty() {
-            let option = match link {
-                Link::SocketCan(_) => "--iface",
-                Link::Socketcand(_) => "--socketcand",
-            };
             let reason = format!(
-                "needs the in-process emulator (not available with {option}): {}",
+                "needs the in-process emulator (not available with {}): {}",
+                link.flag(),
                 needs.join(", ")
             );
             return ScenarioResult::not_run(
