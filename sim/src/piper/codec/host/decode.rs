@@ -95,8 +95,8 @@ fn control_command(
                 trajectory: d[1],
                 drag_teach: d[2],
                 point_index: d[3],
-                name_index: be_u16(&d, 4),
-                crc16: be_u16(&d, 6),
+                name_index: be_u16(d, 4),
+                crc16: be_u16(d, 6),
             }))
         }
         ids::MODE_CTRL => {
@@ -142,16 +142,16 @@ fn control_command(
             };
             Ok(HostCommand::EndPose {
                 part,
-                first: be_i32(&d, 0),
-                second: be_i32(&d, 4),
+                first: be_i32(d, 0),
+                second: be_i32(d, 4),
             })
         }
         ids::JOINT_12 | ids::JOINT_34 | ids::JOINT_56 => {
             need(frame, id, 8)?;
             Ok(HostCommand::Joint {
                 pair: usize::from(id - ids::JOINT_12),
-                first_mdeg: be_i32(&d, 0),
-                second_mdeg: be_i32(&d, 4),
+                first_mdeg: be_i32(d, 0),
+                second_mdeg: be_i32(d, 4),
             })
         }
         ids::MOVE_C_POINT => {
@@ -173,8 +173,8 @@ fn control_command(
                 return Err(invalid(id, "set_zero", d[7].into()));
             }
             Ok(HostCommand::Gripper(GripperCtrl {
-                stroke_um: be_i32(&d, 0),
-                effort_mnm: be_u16(&d, 4),
+                stroke_um: be_i32(d, 0),
+                effort_mnm: be_u16(d, 4),
                 enable: d[6] & 1 != 0,
                 clear_error: d[6] & 2 != 0,
                 set_zero: d[7] == CONFIRM,
@@ -184,7 +184,7 @@ fn control_command(
             need(frame, id, 8)?;
             let packing = profile.mit_packing();
             let raw =
-                mit::unpack(&d, packing).map_err(|e: MitCheckError| DecodeError::BadCheck {
+                mit::unpack(d, packing).map_err(|e: MitCheckError| DecodeError::BadCheck {
                     id,
                     expected: e.expected,
                     got: e.got,
@@ -207,7 +207,7 @@ fn control_command(
                 motor: (id - 0x180) as u8,
                 mode: d[0],
                 param: [d[1], d[2]],
-                value: be_i32(&d, 3),
+                value: be_i32(d, 3),
             })
         }
         ids::LEADER_HOME => {
@@ -292,9 +292,9 @@ fn config_command(frame: &CanFrame, id: u16, d: &[u8; 8]) -> Result<HostCommand,
             need(frame, id, 8)?;
             Ok(HostCommand::SetJointLimits {
                 joint: joint_index(id, d[0])?,
-                max_angle_ddeg: opt_i16(be_i16(&d, 1)),
-                min_angle_ddeg: opt_i16(be_i16(&d, 3)),
-                max_speed_crad_s: opt16(be_u16(&d, 5)),
+                max_angle_ddeg: opt_i16(be_i16(d, 1)),
+                min_angle_ddeg: opt_i16(be_i16(d, 3)),
+                max_speed_crad_s: opt16(be_u16(d, 5)),
             })
         }
         ids::JOINT_CONFIG => {
@@ -303,7 +303,7 @@ fn config_command(frame: &CanFrame, id: u16, d: &[u8; 8]) -> Result<HostCommand,
                 7 => None,
                 n => Some(joint_index(id, n)?),
             };
-            let acc = be_u16(&d, 3);
+            let acc = be_u16(d, 3);
             Ok(HostCommand::JointConfig {
                 joint,
                 set_zero: d[1] == CONFIRM,
@@ -337,10 +337,10 @@ fn config_command(frame: &CanFrame, id: u16, d: &[u8; 8]) -> Result<HostCommand,
         ids::SET_END_VEL_ACC => {
             need(frame, id, 8)?;
             Ok(HostCommand::SetEndVelAcc(EndVelAcc {
-                linear_vel_mm_s: opt16(be_u16(&d, 0)),
-                angular_vel_mrad_s: opt16(be_u16(&d, 2)),
-                linear_acc_mm_s2: opt16(be_u16(&d, 4)),
-                angular_acc_mrad_s2: opt16(be_u16(&d, 6)),
+                linear_vel_mm_s: opt16(be_u16(d, 0)),
+                angular_vel_mrad_s: opt16(be_u16(d, 2)),
+                linear_acc_mm_s2: opt16(be_u16(d, 4)),
+                angular_acc_mrad_s2: opt16(be_u16(d, 6)),
             }))
         }
         ids::SET_COLLISION => {
