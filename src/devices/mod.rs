@@ -1,30 +1,21 @@
 //! Device kinds: one folder per kind, registered once, in [`device_kinds!`] below.
 //!
-//! The harness (`crate::harness`) knows no device kind. Each kind's module owns its scenario
-//! vocabulary (raw and validated), its bench wiring (emulator and driver, on whatever transport
-//! the device speaks), its observations and trace columns, its faults and their mapping to the
-//! emulator, and its [`Device`](crate::harness::Device) implementation. A kind module provides:
-//!
-//! - types `Settings`, `Action`, `Check`, `Fault` (validated vocabulary, `Debug + Clone +
-//!   PartialEq`), with `describe_fault(&Fault) -> String` and `describe_check(&Check) -> String`;
-//! - `raw::{RawSettings, RawStep, RawConds, RawFault, CONDITION_KEYS}`: the file shapes, where
-//!   `RawStep` and `RawFault` are one-key enums (`OneKey`) and `RawStep::id()` gives a step id;
-//! - `validate::{settings, step, checks, fault}`: layer 2, with file:line:col errors;
-//! - `action_needs_emulator(&Action) -> Option<String>` and
-//!   `in_process_requirements(&Settings, name) -> Vec<String>` (what `--iface` runs cannot do);
-//! - `build(name, &Settings, &Wiring) -> Result<Arc<dyn Device>, String>` (async): start the
-//!   emulator (in-process runs) and the driver.
+//! What a kind provides is the [`KindSpec`] trait in [`contract`] (its scenario vocabulary,
+//! how it is built on a bench, its URDF and frame decoder for the views) and the [`Device`] it
+//! builds; the registry generates the enums the harness holds (`DeviceKind`, `Action`,
+//! `Check`, `DeviceFault`) and dispatches every call through the trait. The folder layout of a
+//! kind is in `docs/architecture.md`.
 
 use std::sync::Arc;
 
 use serde::de::{Deserialize, Deserializer, Error as _, MapAccess, Visitor};
 
-use crate::harness::device::Device;
-use crate::harness::error::Pos;
-use crate::harness::onekey::OneKey;
-use crate::harness::raw::S;
-use crate::harness::validate::{Ctx, Res};
-use crate::harness::{Clock, RunOptions};
+use crate::scenario::onekey::OneKey;
+use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
+
+pub mod contract;
+pub(crate) use contract::{KindSpec, RawKindStep, Wiring};
+pub use contract::{Device, DeviceError, FrameDecoder, Reply, TraceColumn};
 
 pub mod arm;
 pub mod piper;
@@ -45,23 +36,16 @@ pub(crate) fn finite_state<'a>(
     }
 }
 
-/// What a kind's `build` gets: the scenario's clock and options, and, for CAN devices, the
-/// in-process virtual bus or the SocketCAN interface to open.
-pub(crate) struct Wiring<'a> {
-    /// The in-process virtual bus (virtual and real-time clocks).
-    pub bus: Option<&'a bus::virtual_bus::VirtualBus>,
-    /// Clock of the run.
-    pub clock: &'a Clock,
-    /// Run options (deadline scaling).
-    pub options: &'a RunOptions,
-    /// Bit rate of the bench's CAN bus.
-    pub bitrate_bps: u32,
-}
-
 /// Register device kinds: `"name" => Variant(module)`. Everything below is generated from this
 /// list; nothing else in the crate lists device kinds.
 macro_rules! device_kinds {
     ($( $name:literal => $variant:ident($module:ident) ),* $(,)?) => {
+        // Each registration line's name is its kind's `KindSpec::NAME`.
+        $( const _: () = assert!(
+            same_text($name, <$module::Kind as KindSpec>::NAME),
+            concat!("`", $name, "` is registered under another name than its KindSpec::NAME")
+        ); )*
+
         /// The scenario names of every device kind.
         pub const KIND_NAMES: &[&str] = &[$($name),*];
 
@@ -97,7 +81,17 @@ macro_rules! device_kinds {
 
             /// What this device's settings need from the in-process emulator.
             pub fn in_process_requirements(&self, device: &str) -> Vec<String> {
-                match self { $( Self::$variant(s) => $module::in_process_requirements(s, device), )* }
+                match self { $( Self::$variant(s) => <$module::Kind as KindSpec>::in_process_requirements(s, device), )* }
+            }
+
+            /// The URDF the 3D views draw this device with, if it is a robot or arm.
+            pub fn urdf(&self) -> Option<&'static str> {
+                match self { $( Self::$variant(s) => <$module::Kind as KindSpec>::urdf(s), )* }
+            }
+
+            /// A decoder of this device's CAN frames for reports, if it speaks CAN.
+            pub fn frame_decoder(&self) -> Option<Arc<dyn FrameDecoder>> {
+                match self { $( Self::$variant(s) => <$module::Kind as KindSpec>::frame_decoder(s), )* }
             }
 
             /// Start the device (emulator when in-process, and driver).
@@ -106,7 +100,7 @@ macro_rules! device_kinds {
                 device: &str,
                 wiring: &Wiring<'_>,
             ) -> Result<Arc<dyn Device>, String> {
-                match self { $( Self::$variant(s) => $module::build(device, s, wiring).await, )* }
+                match self { $( Self::$variant(s) => <$module::Kind as KindSpec>::build(device, s, wiring).await, )* }
             }
         }
 
@@ -118,7 +112,7 @@ macro_rules! device_kinds {
 
             /// Why this action needs the in-process emulator, if it does.
             pub fn needs_emulator(&self) -> Option<String> {
-                match self { $( Self::$variant(a) => $module::action_needs_emulator(a), )* }
+                match self { $( Self::$variant(a) => <$module::Kind as KindSpec>::action_needs_emulator(a), )* }
             }
         }
 
@@ -130,7 +124,7 @@ macro_rules! device_kinds {
 
             /// What the condition wants, for reports.
             pub fn describe(&self) -> String {
-                match self { $( Self::$variant(c) => $module::describe_check(c), )* }
+                match self { $( Self::$variant(c) => <$module::Kind as KindSpec>::describe_check(c), )* }
             }
         }
 
@@ -142,14 +136,14 @@ macro_rules! device_kinds {
 
             /// Short description for logs and reports.
             pub fn describe(&self) -> String {
-                match self { $( Self::$variant(f) => $module::describe_fault(f), )* }
+                match self { $( Self::$variant(f) => <$module::Kind as KindSpec>::describe_fault(f), )* }
             }
         }
 
         /// A device entry of the bench as written: `kind:` first, then the kind's settings.
         #[derive(Debug)]
         pub(crate) enum RawDevice {
-            $( $variant(Box<$module::raw::RawSettings>), )*
+            $( $variant(Box<<$module::Kind as KindSpec>::RawSettings>), )*
         }
 
         impl RawDevice {
@@ -163,25 +157,25 @@ macro_rules! device_kinds {
             let rest = serde::de::value::MapAccessDeserializer::new(map);
             match kind {
                 $( $name => Ok(RawDevice::$variant(Box::new(Deserialize::deserialize(rest)?))), )*
-                other => Err(crate::harness::onekey::unknown("device kind", other, KIND_NAMES)),
+                other => Err(crate::scenario::onekey::unknown("device kind", other, KIND_NAMES)),
             }
         }
 
         /// A step of some device kind (the key decides which: the first kind that knows it).
         #[derive(Debug)]
         pub(crate) enum RawDeviceStep {
-            $( $variant(Box<$module::raw::RawStep>), )*
+            $( $variant(Box<<$module::Kind as KindSpec>::RawStep>), )*
         }
 
         impl OneKey for RawDeviceStep {
             fn keys() -> Vec<&'static str> {
                 let mut keys = Vec::new();
-                $( if on_bench($name) { keys.extend(<$module::raw::RawStep as OneKey>::keys()); } )*
+                $( if on_bench($name) { keys.extend(<<$module::Kind as KindSpec>::RawStep as OneKey>::keys()); } )*
                 keys
             }
             fn bare<E: serde::de::Error>(key: &str) -> Option<Result<Self, E>> {
                 $( if let Some(key) = for_kind($name, key) {
-                    if let Some(r) = <$module::raw::RawStep as OneKey>::bare(key) {
+                    if let Some(r) = <<$module::Kind as KindSpec>::RawStep as OneKey>::bare(key) {
                         return Some(r.map(|v| Self::$variant(Box::new(v))));
                     }
                 } )*
@@ -189,7 +183,7 @@ macro_rules! device_kinds {
             }
             fn entry<'de, A: MapAccess<'de>>(key: &str, map: &mut A) -> Option<Result<Self, A::Error>> {
                 $( if let Some(key) = for_kind($name, key) {
-                    if let Some(r) = <$module::raw::RawStep as OneKey>::entry(key, map) {
+                    if let Some(r) = <<$module::Kind as KindSpec>::RawStep as OneKey>::entry(key, map) {
                         return Some(r.map(|v| Self::$variant(Box::new(v))));
                     }
                 } )*
@@ -200,25 +194,25 @@ macro_rules! device_kinds {
         impl RawDeviceStep {
             /// The step's `id:`.
             pub(crate) fn id(&self) -> Option<&S<String>> {
-                match self { $( Self::$variant(s) => s.id(), )* }
+                match self { $( Self::$variant(s) => RawKindStep::id(s.as_ref()), )* }
             }
         }
 
         /// An emulator fault of some device kind, as written.
         #[derive(Debug)]
         pub(crate) enum RawDeviceFault {
-            $( $variant(Box<$module::raw::RawFault>), )*
+            $( $variant(Box<<$module::Kind as KindSpec>::RawFault>), )*
         }
 
         impl OneKey for RawDeviceFault {
             fn keys() -> Vec<&'static str> {
                 let mut keys = Vec::new();
-                $( if on_bench($name) { keys.extend(<$module::raw::RawFault as OneKey>::keys()); } )*
+                $( if on_bench($name) { keys.extend(<<$module::Kind as KindSpec>::RawFault as OneKey>::keys()); } )*
                 keys
             }
             fn bare<E: serde::de::Error>(key: &str) -> Option<Result<Self, E>> {
                 $( if let Some(key) = for_kind($name, key) {
-                    if let Some(r) = <$module::raw::RawFault as OneKey>::bare(key) {
+                    if let Some(r) = <<$module::Kind as KindSpec>::RawFault as OneKey>::bare(key) {
                         return Some(r.map(|v| Self::$variant(Box::new(v))));
                     }
                 } )*
@@ -226,7 +220,7 @@ macro_rules! device_kinds {
             }
             fn entry<'de, A: MapAccess<'de>>(key: &str, map: &mut A) -> Option<Result<Self, A::Error>> {
                 $( if let Some(key) = for_kind($name, key) {
-                    if let Some(r) = <$module::raw::RawFault as OneKey>::entry(key, map) {
+                    if let Some(r) = <<$module::Kind as KindSpec>::RawFault as OneKey>::entry(key, map) {
                         return Some(r.map(|v| Self::$variant(Box::new(v))));
                     }
                 } )*
@@ -237,7 +231,7 @@ macro_rules! device_kinds {
         /// Conditions of some device kind, as written.
         #[derive(Debug)]
         pub(crate) enum RawDeviceConds {
-            $( $variant(Box<$module::raw::RawConds>), )*
+            $( $variant(Box<<$module::Kind as KindSpec>::RawConds>), )*
         }
 
         /// Index of a kind in registration order.
@@ -248,13 +242,13 @@ macro_rules! device_kinds {
             /// Every condition key of every kind.
             pub(crate) fn keys() -> Vec<&'static str> {
                 let mut keys = Vec::new();
-                $( if on_bench($name) { keys.extend($module::raw::CONDITION_KEYS); } )*
+                $( if on_bench($name) { keys.extend(<$module::Kind as KindSpec>::CONDITION_KEYS); } )*
                 keys
             }
 
             /// The first kind whose conditions include `key`.
             pub(crate) fn kind_of_key(key: &str) -> Option<KindIndex> {
-                let tables: &[(&str, &[&str])] = &[$( ($name, &$module::raw::CONDITION_KEYS) ),*];
+                let tables: &[(&str, &[&str])] = &[$( ($name, <$module::Kind as KindSpec>::CONDITION_KEYS) ),*];
                 tables
                     .iter()
                     .position(|(kind, keys)| on_bench(kind) && keys.contains(&key))
@@ -274,21 +268,29 @@ macro_rules! device_kinds {
         pub(crate) fn validate_settings(ctx: &Ctx<'_>, raw: &S<RawDevice>) -> Res<DeviceKind> {
             let at = Pos::from_location(&raw.referenced);
             match &raw.value {
-                $( RawDevice::$variant(r) => Ok(DeviceKind::$variant($module::validate::settings(ctx, r, at)?)), )*
+                $( RawDevice::$variant(r) => Ok(DeviceKind::$variant(<$module::Kind as KindSpec>::validate_settings(ctx, r, at)?)), )*
             }
         }
 
         /// Layer 2 of a device step: its label and action.
-        pub(crate) fn validate_step(ctx: &Ctx<'_>, raw: &RawDeviceStep, at: Pos) -> Res<(&'static str, crate::harness::model::StepKind)> {
+        pub(crate) fn validate_step(ctx: &Ctx<'_>, raw: &RawDeviceStep, at: Pos) -> Res<(&'static str, DeviceStep<Action>)> {
             match raw {
-                $( RawDeviceStep::$variant(r) => $module::validate::step(ctx, r, at), )*
+                $( RawDeviceStep::$variant(r) => {
+                    let (label, step) = <$module::Kind as KindSpec>::validate_step(ctx, r, at)?;
+                    Ok((label, DeviceStep {
+                        device: step.device,
+                        action: Action::$variant(step.action),
+                        timeout: step.timeout,
+                        expect_error: step.expect_error,
+                    }))
+                } )*
             }
         }
 
         /// Layer 2 of device conditions.
         pub(crate) fn validate_checks(ctx: &Ctx<'_>, raw: &RawDeviceConds, step: &str, at: Pos) -> Res<Vec<Check>> {
             match raw {
-                $( RawDeviceConds::$variant(r) => Ok($module::validate::checks(ctx, r, step, at)?
+                $( RawDeviceConds::$variant(r) => Ok(<$module::Kind as KindSpec>::validate_checks(ctx, r, step, at)?
                     .into_iter().map(Check::$variant).collect()), )*
             }
         }
@@ -296,10 +298,26 @@ macro_rules! device_kinds {
         /// Layer 2 of a device fault.
         pub(crate) fn validate_fault(ctx: &Ctx<'_>, raw: &RawDeviceFault, at: Pos) -> Res<DeviceFault> {
             match raw {
-                $( RawDeviceFault::$variant(r) => Ok(DeviceFault::$variant($module::validate::fault(ctx, r, at)?)), )*
+                $( RawDeviceFault::$variant(r) => Ok(DeviceFault::$variant(<$module::Kind as KindSpec>::validate_fault(ctx, r, at)?)), )*
             }
         }
     };
+}
+
+/// `a == b` where the compiler can evaluate it (registration checks).
+const fn same_text(a: &str, b: &str) -> bool {
+    let (a, b) = (a.as_bytes(), b.as_bytes());
+    if a.len() != b.len() {
+        return false;
+    }
+    let mut i = 0;
+    while i < a.len() {
+        if a[i] != b[i] {
+            return false;
+        }
+        i += 1;
+    }
+    true
 }
 
 thread_local! {

@@ -6,7 +6,7 @@ use std::sync::Arc;
 use bus::virtual_bus::{VirtualBus, VirtualBusConfig};
 use tokio::time::Instant;
 
-use super::device::Device;
+use crate::devices::Device;
 use super::model::Scenario;
 use super::runner::{Clock, Recorder, RunOptions, Spool};
 use crate::devices::Wiring;

@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use super::error::{from_yaml_error, LoadError, Pos, ScenarioError};
+use crate::scenario::error::{from_yaml_error, LoadError, Pos, ScenarioError};
 use super::model::Scenario;
 use super::raw::{RawBench, RawScenario, S};
 
@@ -11,7 +11,8 @@ use super::raw::{RawBench, RawScenario, S};
 struct RawHead {
     bench: S<RawBench>,
 }
-use super::validate::{matrix_shape, validate_with, Ctx, MatrixShape, Res};
+use super::validate::{matrix_shape, validate_with, MatrixShape};
+use crate::scenario::{Ctx, Res};
 
 /// Parse and validate scenario text; `path` is used for error messages and relative URDFs. A
 /// file with a `matrix:` is refused here (it is several scenarios): see [`parse_variant`].

@@ -5,28 +5,25 @@
 //! wrong types, then validation into a typed [`Scenario`]; every error names the file, line and
 //! column ([`ScenarioError`]). The grammar is documented in `scenarios/README.md`.
 
-pub(crate) mod error;
 mod interrupt;
 mod load;
 pub mod model;
-pub(crate) mod onekey;
 pub(crate) mod raw;
 pub(crate) mod validate;
 
-pub use error::{elide_long_tokens, LoadError, Pos, ScenarioError};
+pub use crate::scenario::{elide_long_tokens, LoadError, Pos, ScenarioError};
 pub use load::{
     discover, discover_suite, load_scenario, load_suite_file, parse_scenario, parse_variant,
     SuiteFile, SuiteLoader, MAX_SCENARIO_BYTES,
 };
 pub use model::Scenario;
 pub(crate) mod bench;
-pub mod device;
 pub mod report;
 pub mod result;
 mod runner;
 
 pub use bench::HOST_NODE;
-pub use device::{Device, DeviceError, Reply, TraceColumn};
+pub use crate::devices::contract::{Device, DeviceError, Reply, TraceColumn};
 pub use interrupt::{Interrupt, InterruptTrigger};
 pub use result::{Outcome, ScenarioResult, StepResult, Verdict};
 pub use runner::{

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 pub use crate::devices::{Action, Check, DeviceFault, DeviceKind};
+pub use crate::scenario::vocab::{ErrorClass, Near, Signal};
 
 /// A validated scenario, ready to run.
 #[derive(Debug, Clone, PartialEq)]
@@ -107,40 +108,6 @@ pub struct Record {
     pub plot: bool,
 }
 
-/// A traced signal group.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
-pub enum Signal {
-    /// Joint angles (0.1°).
-    Joints,
-    /// Joint speeds (0.1°/s).
-    Speeds,
-    /// Motor currents (0.01 A).
-    Currents,
-    /// Gripper stroke (0.1 mm).
-    Gripper,
-    /// Flange position (0.1 mm).
-    Pose,
-    /// Motor temperatures (1 °C).
-    Temperatures,
-    /// Motor torques (devices that report torque).
-    Torques,
-    /// Arm status code and enable mask.
-    Status,
-}
-
-impl Signal {
-    /// Every signal and its scenario name.
-    pub const ALL: [(Signal, &'static str); 8] = [
-        (Signal::Joints, "joints"),
-        (Signal::Speeds, "speeds"),
-        (Signal::Currents, "currents"),
-        (Signal::Gripper, "gripper"),
-        (Signal::Pose, "pose"),
-        (Signal::Temperatures, "temperatures"),
-        (Signal::Torques, "torques"),
-        (Signal::Status, "status"),
-    ];
-}
 
 /// A fault and when to apply it.
 #[derive(Debug, Clone, PartialEq)]
@@ -339,45 +306,3 @@ pub enum StepKind {
     },
 }
 
-/// Classes of driver errors a step can expect.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ErrorClass {
-    /// No (confirming) reply in time.
-    Timeout,
-    /// The device refused or reported an error status.
-    Rejected,
-    /// The bus failed (bus-off, closed...).
-    Bus,
-    /// An argument the driver refused before sending.
-    InvalidArgument,
-    /// Any error at all.
-    Any,
-}
-
-impl ErrorClass {
-    /// Names as written in scenarios.
-    pub const NAMES: [(ErrorClass, &'static str); 5] = [
-        (ErrorClass::Timeout, "timeout"),
-        (ErrorClass::Rejected, "rejected"),
-        (ErrorClass::Bus, "bus"),
-        (ErrorClass::InvalidArgument, "invalid_argument"),
-        (ErrorClass::Any, "any"),
-    ];
-
-    /// The scenario name.
-    pub fn name(self) -> &'static str {
-        Self::NAMES
-            .iter()
-            .find(|(class, _)| *class == self)
-            .map_or("any", |(_, name)| name)
-    }
-}
-
-/// An expected numeric reply value with its tolerance.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Near {
-    /// Expected value.
-    pub value: f64,
-    /// Allowed deviation.
-    pub tolerance: f64,
-}

@@ -4,12 +4,8 @@
 use std::collections::BTreeMap;
 
 use serde::Deserialize;
-use serde_saphyr::Spanned;
-
-use super::onekey::one_key_enum;
-
-/// A spanned value.
-pub(crate) type S<T> = Spanned<T>;
+use crate::scenario::onekey::one_key_enum;
+pub(crate) use crate::scenario::S;
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -213,7 +209,7 @@ impl<'de> Deserialize<'de> for RawConditions {
                     let Some(kind) = crate::devices::RawDeviceConds::kind_of_key(&key) else {
                         let mut keys: Vec<&'static str> = GENERIC_CONDITION_KEYS.to_vec();
                         keys.extend(crate::devices::RawDeviceConds::keys());
-                        return Err(super::onekey::unknown("condition", &key, &keys));
+                        return Err(crate::scenario::onekey::unknown("condition", &key, &keys));
                     };
                     let rest = CondMap {
                         first: Some(key),

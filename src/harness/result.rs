@@ -154,12 +154,22 @@ impl Verdict {
 
 /// What the HTML report needs to know about the bench to draw and decode (never in
 /// snapshots).
-#[derive(Debug, Clone, Default, PartialEq, Eq)]
+#[derive(Clone, Default)]
 pub struct BenchInfo {
     /// URDF of the arm the scenario drives, to draw it.
     pub arm_urdf: Option<&'static str>,
-    /// RobStride motors on the bus (CAN ID, model name), to decode their frames.
-    pub robstride_motors: Vec<(u8, &'static str)>,
+    /// Each CAN device's frame decoder, in bench order: a frame is named by the first that
+    /// knows it.
+    pub frame_decoders: Vec<std::sync::Arc<dyn crate::devices::FrameDecoder>>,
+}
+
+impl std::fmt::Debug for BenchInfo {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("BenchInfo")
+            .field("arm_urdf", &self.arm_urdf.map(|u| u.len()))
+            .field("frame_decoders", &self.frame_decoders.len())
+            .finish()
+    }
 }
 
 /// Everything one scenario run produced.

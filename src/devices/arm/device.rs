@@ -16,7 +16,7 @@ use sim::realman::{RealmanFault, RealmanFaultKind, RealmanHandle};
 use super::model::{ArmAction, ArmCall, ArmCond, ArmFaultKind, MoveArgs, PoseDeg};
 use crate::devices::piper::device::EmulatorControl;
 use crate::devices::{Action, Check, DeviceFault};
-use crate::harness::model::{ErrorClass, Signal};
+use crate::scenario::{ErrorClass, Signal};
 use crate::harness::{Device, DeviceError, Reply, TraceColumn};
 
 /// The vendor's emulator behind the arm.

@@ -16,7 +16,8 @@ pub use model::{
     ArmAction as Action, ArmCond as Check, ArmFault as Fault, ArmSettings as Settings,
 };
 
-use super::Wiring;
+use super::{FrameDecoder, KindSpec, RawKindStep, Wiring};
+use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 use crate::harness::{Clock, Device};
 use device::{ArmDevice, Emulator};
 
@@ -95,3 +96,89 @@ pub(crate) async fn build(
 
 #[cfg(test)]
 mod tests;
+
+/// The vendor-neutral arm kind's contract (registered in `crate::devices`).
+pub(crate) struct Kind;
+
+#[async_trait::async_trait]
+impl KindSpec for Kind {
+    const NAME: &'static str = "arm";
+    type Settings = Settings;
+    type Action = Action;
+    type Check = Check;
+    type Fault = Fault;
+    type RawSettings = raw::RawSettings;
+    type RawStep = raw::RawStep;
+    type RawConds = raw::RawConds;
+    type RawFault = raw::RawFault;
+    const CONDITION_KEYS: &'static [&'static str] = &raw::CONDITION_KEYS;
+
+    fn validate_settings(ctx: &Ctx<'_>, raw: &raw::RawSettings, at: Pos) -> Res<Settings> {
+        validate::settings(ctx, raw, at)
+    }
+
+    fn validate_step(
+        ctx: &Ctx<'_>,
+        raw: &raw::RawStep,
+        at: Pos,
+    ) -> Res<(&'static str, DeviceStep<Action>)> {
+        validate::step(ctx, raw, at)
+    }
+
+    fn validate_checks(
+        ctx: &Ctx<'_>,
+        raw: &raw::RawConds,
+        step: &str,
+        at: Pos,
+    ) -> Res<Vec<Check>> {
+        validate::checks(ctx, raw, step, at)
+    }
+
+    fn validate_fault(ctx: &Ctx<'_>, raw: &raw::RawFault, at: Pos) -> Res<Fault> {
+        validate::fault(ctx, raw, at)
+    }
+
+    fn describe_check(check: &Check) -> String {
+        describe_check(check)
+    }
+
+    fn describe_fault(fault: &Fault) -> String {
+        describe_fault(fault)
+    }
+
+    fn action_needs_emulator(action: &Action) -> Option<String> {
+        action_needs_emulator(action)
+    }
+
+    fn in_process_requirements(settings: &Settings, device: &str) -> Vec<String> {
+        in_process_requirements(settings, device)
+    }
+
+    async fn build(
+        name: &str,
+        settings: &Settings,
+        wiring: &Wiring<'_>,
+    ) -> Result<Arc<dyn Device>, String> {
+        build(name, settings, wiring).await
+    }
+
+    fn urdf(settings: &Settings) -> Option<&'static str> {
+        Some(match settings.vendor {
+            driver::arm::Vendor::Piper => sim::piper::BUNDLED_URDF,
+            driver::arm::Vendor::Realman => sim::realman::plant::RM65B_URDF,
+        })
+    }
+
+    fn frame_decoder(settings: &Settings) -> Option<Arc<dyn FrameDecoder>> {
+        match settings.vendor {
+            driver::arm::Vendor::Piper => Some(Arc::new(super::piper::decode::PiperFrames)),
+            driver::arm::Vendor::Realman => None,
+        }
+    }
+}
+
+impl RawKindStep for raw::RawStep {
+    fn id(&self) -> Option<&S<String>> {
+        raw::RawStep::id(self)
+    }
+}

@@ -3,8 +3,8 @@
 
 use serde::Deserialize;
 
-use crate::harness::onekey::one_key_enum;
-use crate::harness::raw::S;
+use crate::scenario::onekey::one_key_enum;
+use crate::scenario::S;
 
 /// An arm's settings (after `kind: arm`).
 #[derive(Debug, Default, Deserialize)]
@@ -83,9 +83,9 @@ pub(crate) struct RawFaultArgs {}
 
 /// An arm fault as written: one of [`super::model::ArmFaultKind`]'s names.
 pub(crate) type RawFault =
-    crate::harness::onekey::NamedEntry<super::model::ArmFaultKind, RawFaultArgs>;
+    crate::scenario::onekey::NamedEntry<super::model::ArmFaultKind, RawFaultArgs>;
 
-impl crate::harness::onekey::NamedKind for super::model::ArmFaultKind {
+impl crate::scenario::onekey::NamedKind for super::model::ArmFaultKind {
     fn all() -> &'static [Self] {
         &Self::ALL
     }

@@ -7,11 +7,10 @@ use super::model::{
     error_codes, ArmAction, ArmCall, ArmCond, ArmFault, ArmSettings, MoveArgs, PoseDeg,
 };
 use super::raw::{RawArmStep, RawConds, RawFault, RawSettings, RawStep};
-use crate::devices::Action;
-use crate::harness::error::Pos;
-use crate::harness::model::StepKind;
-use crate::harness::raw::S;
-use crate::harness::validate::{pos, Ctx, Res};
+use crate::scenario::error::Pos;
+use crate::scenario::DeviceStep;
+use crate::scenario::S;
+use crate::scenario::{pos, Ctx, Res};
 
 /// Both vendors' arms have six joints.
 const JOINTS: usize = 6;
@@ -239,7 +238,7 @@ fn present_keys(a: &RawArmStep) -> Vec<(&'static str, Pos)> {
 }
 
 /// An `arm` step.
-pub(crate) fn step(ctx: &Ctx<'_>, raw: &RawStep, at: Pos) -> Res<(&'static str, StepKind)> {
+pub(crate) fn step(ctx: &Ctx<'_>, raw: &RawStep, at: Pos) -> Res<(&'static str, DeviceStep<ArmAction>)> {
     let RawStep::Arm(a) = raw;
     let table: Vec<(&str, &str)> = METHODS.iter().map(|(n, _, _)| (*n, *n)).collect();
     let Some(method) = &a.method else {
@@ -268,9 +267,9 @@ pub(crate) fn step(ctx: &Ctx<'_>, raw: &RawStep, at: Pos) -> Res<(&'static str, 
         .transpose()?;
     Ok((
         label,
-        StepKind::Action {
+        DeviceStep {
             device,
-            action: Action::Arm(ArmAction { call, expect_code }),
+            action: ArmAction { call, expect_code },
             timeout,
             expect_error: None,
         },

@@ -14,7 +14,7 @@ use driver::piper::{
 use super::device::PiperDevice;
 use super::model::{CtrlMode, Install, MoveMode, Payload, PiperAction, Pose, Role};
 use super::stream;
-use crate::harness::model::{ErrorClass, Near};
+use crate::scenario::{ErrorClass, Near};
 use crate::harness::{DeviceError, Reply};
 
 /// Deadline of a `mode` step's confirmation on 0x2A1 when the step gives none.

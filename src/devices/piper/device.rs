@@ -8,7 +8,7 @@ use driver::piper::Piper;
 use super::stream::Streams;
 use super::{checks, observe, trace};
 use crate::devices::{Action, Check, DeviceFault};
-use crate::harness::model::Signal;
+use crate::scenario::Signal;
 use crate::harness::{Device, DeviceError, Reply, RunOptions, TraceColumn};
 use sim::piper::PiperFault;
 

@@ -2,6 +2,7 @@
 
 mod actions;
 mod checks;
+pub(crate) mod decode;
 pub(crate) mod device;
 mod emulator;
 pub mod model;
@@ -26,7 +27,8 @@ pub use validate::DEFAULT_FIRMWARE;
 /// A Piper condition.
 pub type Check = model::Check;
 
-use super::Wiring;
+use super::{FrameDecoder, KindSpec, RawKindStep, Wiring};
+use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 use crate::harness::{Clock, Device, RunOptions, HOST_NODE};
 use device::PiperDevice;
 use emulator::PiperSim;
@@ -183,5 +185,85 @@ mod tests {
                 assert_eq!(args.trim(), "—", "{name} takes no arguments");
             }
         }
+    }
+}
+
+/// The Piper kind's contract (registered in `crate::devices`).
+pub(crate) struct Kind;
+
+#[async_trait::async_trait]
+impl KindSpec for Kind {
+    const NAME: &'static str = "piper";
+    type Settings = Settings;
+    type Action = Action;
+    type Check = Check;
+    type Fault = Fault;
+    type RawSettings = raw::RawSettings;
+    type RawStep = raw::RawStep;
+    type RawConds = raw::RawConds;
+    type RawFault = raw::RawFault;
+    const CONDITION_KEYS: &'static [&'static str] = &raw::CONDITION_KEYS;
+
+    fn validate_settings(ctx: &Ctx<'_>, raw: &raw::RawSettings, at: Pos) -> Res<Settings> {
+        validate::settings(ctx, raw, at)
+    }
+
+    fn validate_step(
+        ctx: &Ctx<'_>,
+        raw: &raw::RawStep,
+        at: Pos,
+    ) -> Res<(&'static str, DeviceStep<Action>)> {
+        validate::step(ctx, raw, at)
+    }
+
+    fn validate_checks(
+        ctx: &Ctx<'_>,
+        raw: &raw::RawConds,
+        step: &str,
+        at: Pos,
+    ) -> Res<Vec<Check>> {
+        validate::checks(ctx, raw, step, at)
+    }
+
+    fn validate_fault(ctx: &Ctx<'_>, raw: &raw::RawFault, at: Pos) -> Res<Fault> {
+        validate::fault(ctx, raw, at)
+    }
+
+    fn describe_check(check: &Check) -> String {
+        describe_check(check)
+    }
+
+    fn describe_fault(fault: &Fault) -> String {
+        describe_fault(fault)
+    }
+
+    fn action_needs_emulator(action: &Action) -> Option<String> {
+        action_needs_emulator(action)
+    }
+
+    fn in_process_requirements(settings: &Settings, device: &str) -> Vec<String> {
+        in_process_requirements(settings, device)
+    }
+
+    async fn build(
+        name: &str,
+        settings: &Settings,
+        wiring: &Wiring<'_>,
+    ) -> Result<Arc<dyn Device>, String> {
+        build(name, settings, wiring).await
+    }
+
+    fn urdf(_settings: &Settings) -> Option<&'static str> {
+        Some(sim::piper::BUNDLED_URDF)
+    }
+
+    fn frame_decoder(_settings: &Settings) -> Option<Arc<dyn FrameDecoder>> {
+        Some(Arc::new(decode::PiperFrames))
+    }
+}
+
+impl RawKindStep for raw::RawStep {
+    fn id(&self) -> Option<&S<String>> {
+        raw::RawStep::id(self)
     }
 }

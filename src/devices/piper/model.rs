@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use crate::harness::model::Near;
+use crate::scenario::Near;
 
 /// Number of joints of a Piper arm.
 pub const PIPER_JOINTS: usize = 6;

@@ -7,8 +7,8 @@ use serde::Deserialize;
 
 use sim::piper::FaultKind;
 
-use crate::harness::onekey::{one_key_enum, OneKey};
-use crate::harness::raw::S;
+use crate::scenario::onekey::{one_key_enum, OneKey};
+use crate::scenario::S;
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]

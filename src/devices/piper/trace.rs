@@ -3,7 +3,7 @@
 
 use super::model::PIPER_JOINTS;
 use super::observe::Observation;
-use crate::harness::model::Signal;
+use crate::scenario::Signal;
 use crate::harness::TraceColumn;
 
 /// Quantum of each signal group: coarse enough to be stable across harmless changes, fine

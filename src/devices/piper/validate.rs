@@ -7,10 +7,10 @@ use sim::piper::{FaultKind, NtcBoard, PiperFault};
 use super::model::*;
 use super::raw::*;
 use super::vocab;
-use crate::harness::error::Pos;
-use crate::harness::model::{Near, StepKind};
-use crate::harness::raw::S;
-use crate::harness::validate::{pos, Ctx, Res};
+use crate::scenario::error::Pos;
+use crate::scenario::{DeviceStep, Near};
+use crate::scenario::S;
+use crate::scenario::{pos, Ctx, Res};
 
 /// Default MOVE speed percentage.
 const DEFAULT_SPEED_PCT: u8 = 50;
@@ -458,20 +458,20 @@ macro_rules! common {
     };
 }
 
-fn action(ctx: &Ctx<'_>, common: Common<'_>, at: Pos, action: PiperAction) -> Res<StepKind> {
+fn action(ctx: &Ctx<'_>, common: Common<'_>, at: Pos, action: PiperAction) -> Res<DeviceStep<PiperAction>> {
     let device = ctx.device_of_kind(common.device, at, "piper", "this step")?;
     let timeout = ctx.timeout(common.timeout_ms)?;
     let expect_error = ctx.expect_error(common.expect_error)?;
-    Ok(StepKind::Action {
+    Ok(DeviceStep {
         device,
-        action: crate::devices::Action::Piper(action),
+        action,
         timeout,
         expect_error,
     })
 }
 
 /// A Piper step: its label and action.
-pub(crate) fn step(ctx: &Ctx<'_>, raw: &RawStep, at: Pos) -> Res<(&'static str, StepKind)> {
+pub(crate) fn step(ctx: &Ctx<'_>, raw: &RawStep, at: Pos) -> Res<(&'static str, DeviceStep<PiperAction>)> {
     use PiperAction as P;
     Ok(match raw {
         RawStep::Enable(a) => {

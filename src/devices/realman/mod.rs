@@ -14,7 +14,8 @@ pub use model::{
 };
 pub use observe::Observation;
 
-use super::Wiring;
+use super::{FrameDecoder, KindSpec, RawKindStep, Wiring};
+use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 use crate::harness::{Clock, Device};
 use device::RealmanDevice;
 
@@ -68,4 +69,89 @@ pub(crate) async fn build(
         ));
     }
     Ok(Arc::new(RealmanDevice::start(name, settings).await?))
+}
+
+/// The Realman kind's contract (registered in `crate::devices`).
+pub(crate) struct Kind;
+
+#[async_trait::async_trait]
+impl KindSpec for Kind {
+    const NAME: &'static str = "realman";
+    type Settings = Settings;
+    type Action = Action;
+    type Check = Check;
+    type Fault = Fault;
+    type RawSettings = raw::RawSettings;
+    type RawStep = raw::RawStep;
+    type RawConds = raw::RawConds;
+    type RawFault = raw::RawFault;
+    const CONDITION_KEYS: &'static [&'static str] = &raw::CONDITION_KEYS;
+
+    fn validate_settings(ctx: &Ctx<'_>, raw: &raw::RawSettings, at: Pos) -> Res<Settings> {
+        validate::settings(ctx, raw, at)
+    }
+
+    fn validate_step(
+        ctx: &Ctx<'_>,
+        raw: &raw::RawStep,
+        at: Pos,
+    ) -> Res<(&'static str, DeviceStep<Action>)> {
+        validate::step(ctx, raw, at)
+    }
+
+    fn validate_checks(
+        ctx: &Ctx<'_>,
+        raw: &raw::RawConds,
+        step: &str,
+        at: Pos,
+    ) -> Res<Vec<Check>> {
+        validate::checks(ctx, raw, step, at)
+    }
+
+    fn validate_fault(ctx: &Ctx<'_>, raw: &raw::RawFault, at: Pos) -> Res<Fault> {
+        validate::fault(ctx, raw, at)
+    }
+
+    fn describe_check(check: &Check) -> String {
+        describe_check(check)
+    }
+
+    fn describe_fault(fault: &Fault) -> String {
+        describe_fault(fault)
+    }
+
+    fn action_needs_emulator(action: &Action) -> Option<String> {
+        action_needs_emulator(action)
+    }
+
+    fn in_process_requirements(settings: &Settings, device: &str) -> Vec<String> {
+        in_process_requirements(settings, device)
+    }
+
+    async fn build(
+        name: &str,
+        settings: &Settings,
+        wiring: &Wiring<'_>,
+    ) -> Result<Arc<dyn Device>, String> {
+        build(name, settings, wiring).await
+    }
+
+    fn urdf(settings: &Settings) -> Option<&'static str> {
+        Some(if settings.model.starts_with("RM75") {
+            sim::realman::plant::RM75B_URDF
+        } else {
+            sim::realman::plant::RM65B_URDF
+        })
+    }
+
+    fn frame_decoder(_settings: &Settings) -> Option<Arc<dyn FrameDecoder>> {
+        // JSON over TCP and UDP: no CAN frames.
+        None
+    }
+}
+
+impl RawKindStep for raw::RawStep {
+    fn id(&self) -> Option<&S<String>> {
+        raw::RawStep::id(self)
+    }
 }

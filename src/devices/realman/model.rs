@@ -3,7 +3,7 @@
 
 use sim::realman::{RealmanFault, RealmanFaultKind};
 
-use crate::harness::model::Near;
+use crate::scenario::Near;
 
 /// Settings of a `realman` bench device.
 #[derive(Debug, Clone, PartialEq)]

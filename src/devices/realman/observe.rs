@@ -5,7 +5,7 @@
 use driver::realman::{ArmState, ArmStatus};
 
 use super::model::{RmCond, ARM_STATES, ERRORS};
-use crate::harness::model::Signal;
+use crate::scenario::Signal;
 use crate::harness::TraceColumn;
 
 /// What the driver knows now.

@@ -3,8 +3,8 @@
 
 use serde::Deserialize;
 
-use crate::harness::onekey::one_key_enum;
-use crate::harness::raw::S;
+use crate::scenario::onekey::one_key_enum;
+use crate::scenario::S;
 
 /// A Realman arm's settings (after `kind: realman`).
 #[derive(Debug, Default, Deserialize)]
@@ -125,9 +125,9 @@ pub(crate) struct RawFaultArgs {
 
 /// A Realman emulator fault as written: one of the emulator's fault names and its arguments.
 pub(crate) type RawFault =
-    crate::harness::onekey::NamedEntry<sim::realman::RealmanFaultKind, RawFaultArgs>;
+    crate::scenario::onekey::NamedEntry<sim::realman::RealmanFaultKind, RawFaultArgs>;
 
-impl crate::harness::onekey::NamedKind for sim::realman::RealmanFaultKind {
+impl crate::scenario::onekey::NamedKind for sim::realman::RealmanFaultKind {
     fn all() -> &'static [Self] {
         &Self::ALL
     }

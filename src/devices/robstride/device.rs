@@ -16,7 +16,7 @@ use sim::robstride::{RobstrideBus, RobstrideConfig, RobstrideHandle};
 use super::model::{MotorCheck, RobstrideAction, RobstrideSettings, RsCommand, RsFault, PARAMS};
 use super::observe::{f2, near_text, observe_motor, MotorObservation, Observation};
 use crate::devices::{Action, Check, DeviceFault};
-use crate::harness::model::{ErrorClass, Signal};
+use crate::scenario::{ErrorClass, Signal};
 use crate::harness::{Device, DeviceError, Reply, TraceColumn};
 
 fn classify(error: &RobstrideError) -> ErrorClass {
@@ -600,7 +600,7 @@ fn param_reply(
     reply: &mut Reply,
     param: driver::robstride::Param,
     raw: ParamValue,
-    expect: Option<&crate::harness::model::Near>,
+    expect: Option<&crate::scenario::Near>,
 ) {
     let value = raw.as_f64();
     let name = PARAMS
@@ -671,7 +671,7 @@ mod tests {
 
     use super::super::model::MotorCond;
     use super::*;
-    use crate::harness::model::Near;
+    use crate::scenario::Near;
 
     fn feedback(faults: u8, mode: MotorMode) -> Feedback {
         Feedback {

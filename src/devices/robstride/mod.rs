@@ -1,6 +1,7 @@
 //! RobStride actuators (`kind: robstride`): a bus of motors on the bench's CAN bus.
 
 mod device;
+mod decode;
 pub mod model;
 mod observe;
 pub(crate) mod raw;
@@ -17,7 +18,8 @@ pub use model::{
 };
 pub use observe::{MotorObservation, Observation};
 
-use super::Wiring;
+use super::{FrameDecoder, KindSpec, RawKindStep, Wiring};
+use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 use crate::harness::{Clock, Device, HOST_NODE};
 use device::RobstrideDevice;
 
@@ -67,4 +69,84 @@ pub(crate) async fn build(
         wiring.bitrate_bps,
         wiring.options.deadline(DRIVER_TIMEOUT),
     )?))
+}
+
+/// The RobStride kind's contract (registered in `crate::devices`).
+pub(crate) struct Kind;
+
+#[async_trait::async_trait]
+impl KindSpec for Kind {
+    const NAME: &'static str = "robstride";
+    type Settings = Settings;
+    type Action = Action;
+    type Check = Check;
+    type Fault = Fault;
+    type RawSettings = raw::RawSettings;
+    type RawStep = raw::RawStep;
+    type RawConds = raw::RawConds;
+    type RawFault = raw::RawFault;
+    const CONDITION_KEYS: &'static [&'static str] = &raw::CONDITION_KEYS;
+
+    fn validate_settings(ctx: &Ctx<'_>, raw: &raw::RawSettings, at: Pos) -> Res<Settings> {
+        validate::settings(ctx, raw, at)
+    }
+
+    fn validate_step(
+        ctx: &Ctx<'_>,
+        raw: &raw::RawStep,
+        at: Pos,
+    ) -> Res<(&'static str, DeviceStep<Action>)> {
+        validate::step(ctx, raw, at)
+    }
+
+    fn validate_checks(
+        ctx: &Ctx<'_>,
+        raw: &raw::RawConds,
+        step: &str,
+        at: Pos,
+    ) -> Res<Vec<Check>> {
+        validate::checks(ctx, raw, step, at)
+    }
+
+    fn validate_fault(ctx: &Ctx<'_>, raw: &raw::RawFault, at: Pos) -> Res<Fault> {
+        validate::fault(ctx, raw, at)
+    }
+
+    fn describe_check(check: &Check) -> String {
+        describe_check(check)
+    }
+
+    fn describe_fault(fault: &Fault) -> String {
+        describe_fault(fault)
+    }
+
+    fn action_needs_emulator(action: &Action) -> Option<String> {
+        action_needs_emulator(action)
+    }
+
+    fn in_process_requirements(settings: &Settings, device: &str) -> Vec<String> {
+        in_process_requirements(settings, device)
+    }
+
+    async fn build(
+        name: &str,
+        settings: &Settings,
+        wiring: &Wiring<'_>,
+    ) -> Result<Arc<dyn Device>, String> {
+        build(name, settings, wiring).await
+    }
+
+    fn urdf(_settings: &Settings) -> Option<&'static str> {
+        None
+    }
+
+    fn frame_decoder(settings: &Settings) -> Option<Arc<dyn FrameDecoder>> {
+        Some(Arc::new(decode::RobstrideFrames::new(settings)))
+    }
+}
+
+impl RawKindStep for raw::RawStep {
+    fn id(&self) -> Option<&S<String>> {
+        raw::RawStep::id(self)
+    }
 }

@@ -7,7 +7,7 @@ use std::time::Duration;
 use driver::robstride::{MitMode, OpControl, Param, Protocol, RunMode};
 use sim::robstride::{Fault, MotorConfig};
 
-use crate::harness::model::Near;
+use crate::scenario::Near;
 
 /// Settings of a `robstride` bench device: the motors on its bus.
 #[derive(Debug, Clone, PartialEq)]

@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 use driver::robstride::{FaultReport, Feedback, FeedbackKind, MotorMode};
 
 use super::model::{MotorCond, REPORT_FLAGS, STATUS_FAULTS};
-use crate::harness::model::Near;
+use crate::scenario::Near;
 
 /// Every motor of the bus by CAN ID.
 pub type Observation = BTreeMap<u8, MotorObservation>;

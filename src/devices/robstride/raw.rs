@@ -5,8 +5,8 @@ use serde::Deserialize;
 
 use std::collections::BTreeMap;
 
-use crate::harness::onekey::one_key_enum;
-use crate::harness::raw::S;
+use crate::scenario::onekey::one_key_enum;
+use crate::scenario::S;
 
 /// One motor of a `robstride` device.
 #[derive(Debug, Deserialize)]
@@ -143,9 +143,9 @@ pub(crate) struct RawFaultArgs {
 }
 
 /// A RobStride emulator fault as written: one of the emulator's fault names and its arguments.
-pub(crate) type RawFault = crate::harness::onekey::NamedEntry<sim::robstride::Fault, RawFaultArgs>;
+pub(crate) type RawFault = crate::scenario::onekey::NamedEntry<sim::robstride::Fault, RawFaultArgs>;
 
-impl crate::harness::onekey::NamedKind for sim::robstride::Fault {
+impl crate::scenario::onekey::NamedKind for sim::robstride::Fault {
     fn all() -> &'static [Self] {
         &Self::ALL
     }

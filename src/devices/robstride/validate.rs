@@ -16,11 +16,10 @@ use super::model::{
     MIT_MODES, MODE_STATES, PARAMS, PROTOCOLS, REPORT_FLAGS, RUN_MODES, STATUS_FAULTS,
 };
 use super::raw::{RawConds, RawFault, RawMotorConds, RawRsLoad, RawRsStep, RawSettings, RawStep};
-use crate::devices::Action;
-use crate::harness::error::Pos;
-use crate::harness::model::{Near, StepKind};
-use crate::harness::raw::S;
-use crate::harness::validate::{pos, Ctx, Res};
+use crate::scenario::error::Pos;
+use crate::scenario::{DeviceStep, Near};
+use crate::scenario::S;
+use crate::scenario::{pos, Ctx, Res};
 
 /// Default tolerance of `read_param` expectations.
 const DEFAULT_PARAM_TOLERANCE: f64 = 0.01;
@@ -266,7 +265,11 @@ fn emulator_value(
 }
 
 /// A RobStride step.
-pub(crate) fn step(ctx: &Ctx<'_>, raw: &RawStep, at: Pos) -> Res<(&'static str, StepKind)> {
+pub(crate) fn step(
+    ctx: &Ctx<'_>,
+    raw: &RawStep,
+    at: Pos,
+) -> Res<(&'static str, DeviceStep<RobstrideAction>)> {
     match raw {
         RawStep::Robstride(a) => robstride_step(ctx, a, at),
     }
@@ -282,7 +285,11 @@ pub(crate) fn fault(ctx: &Ctx<'_>, raw: &RawFault, at: Pos) -> Res<RsFault> {
 }
 
 /// A `robstride:` step.
-fn robstride_step(ctx: &Ctx<'_>, a: &RawRsStep, at: Pos) -> Res<(&'static str, StepKind)> {
+fn robstride_step(
+    ctx: &Ctx<'_>,
+    a: &RawRsStep,
+    at: Pos,
+) -> Res<(&'static str, DeviceStep<RobstrideAction>)> {
     let Some(cmd) = &a.command else {
         let names: Vec<&str> = COMMAND_KEYS.iter().map(|(n, _, _)| *n).collect();
         return Err(ctx.err(
@@ -479,9 +486,9 @@ fn robstride_step(ctx: &Ctx<'_>, a: &RawRsStep, at: Pos) -> Res<(&'static str, S
     let expect_error = ctx.expect_error(&a.expect_error)?;
     Ok((
         label,
-        StepKind::Action {
+        DeviceStep {
             device,
-            action: Action::Robstride(RobstrideAction { motor, command }),
+            action: RobstrideAction { motor, command },
             timeout,
             expect_error,
         },

@@ -18,23 +18,14 @@ pub use svg::plot_svg;
 use super::model::Record;
 use super::result::{BenchInfo, ScenarioResult};
 use super::Scenario;
-use crate::devices::DeviceKind;
 
-/// What the HTML report needs to know about `scenario`'s bench.
+/// What the HTML report needs to know about `scenario`'s bench, asked of each device's kind.
 pub fn bench_info(scenario: &Scenario) -> BenchInfo {
-    let robstride_motors = scenario
-        .bench
-        .devices
-        .iter()
-        .filter_map(|d| match &d.kind {
-            DeviceKind::Robstride(s) => Some(s.motors.iter().map(|m| (m.can_id, m.model.name()))),
-            _ => None,
-        })
-        .flatten()
-        .collect();
+    let kinds = || scenario.bench.devices.iter().map(|d| &d.kind);
     BenchInfo {
-        arm_urdf: html::scenario_urdf(scenario),
-        robstride_motors,
+        // The first device that is drawn: the arm the scenario drives.
+        arm_urdf: kinds().find_map(|k| k.urdf()),
+        frame_decoders: kinds().filter_map(|k| k.frame_decoder()).collect(),
     }
 }
 

@@ -8,7 +8,7 @@ use bus::CanId;
 use tokio::task::JoinHandle;
 use tokio::time::Instant;
 
-use crate::harness::device::Device;
+use crate::devices::Device;
 use crate::harness::model::{BusFault, FaultSpec, FrameSelector};
 use crate::harness::result::FaultEvent;
 

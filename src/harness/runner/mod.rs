@@ -17,7 +17,7 @@ pub(crate) use spool::Spool;
 pub use spool::{Omitted, Recording};
 
 use super::bench::{self, BuiltBench};
-use super::device::Device;
+use crate::devices::Device;
 use super::model::{FaultTrigger, Scenario, Step, StepKind};
 use super::result::{BusSummary, Outcome, ScenarioResult, StepResult, Verdict};
 use faults::FaultControl;

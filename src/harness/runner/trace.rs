@@ -5,7 +5,7 @@ use std::time::Duration;
 
 use tokio::time::{Instant, MissedTickBehavior};
 
-use crate::harness::device::Device;
+use crate::devices::Device;
 use crate::harness::model::{Record, Signal};
 use crate::harness::result::{Column, Trace};
 

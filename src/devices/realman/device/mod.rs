@@ -25,7 +25,7 @@ use tokio::time::Instant;
 use super::model::{Motion, PoseDeg, RealmanAction, RealmanSettings, RmCommand, RmFault};
 use super::observe::{self, Observation};
 use crate::devices::{Action, Check, DeviceFault};
-use crate::harness::model::{ErrorClass, Signal};
+use crate::scenario::{ErrorClass, Signal};
 use crate::harness::{Device, DeviceError, Reply, TraceColumn};
 
 /// The IP the driver's host has on the emulated network (the push aims at it).

@@ -29,7 +29,7 @@ fn joint_value(values: &[f64], joint: Option<u8>) -> Result<f64, DeviceError> {
 fn small_int(param: Param, value: f64) -> Result<u8, DeviceError> {
     u8::try_from(value as i64).map_err(|_| {
         DeviceError::new(
-            crate::harness::model::ErrorClass::InvalidArgument,
+            crate::scenario::ErrorClass::InvalidArgument,
             format!("{}: {value} does not fit the command", param.name()),
         )
     })

@@ -5,8 +5,8 @@
 use super::super::model::{JogTarget, RmCommand, JOG_AXES};
 use super::super::raw::RawRmStep;
 use super::int_in;
-use crate::harness::error::Pos;
-use crate::harness::validate::{Ctx, Res};
+use crate::scenario::error::Pos;
+use crate::scenario::{Ctx, Res};
 
 /// `direction:` names as on the wire.
 const DIRECTIONS: [(bool, &str); 2] = [(true, "pos"), (false, "neg")];

@@ -8,12 +8,12 @@ mod stream;
 
 use sim::realman::{RealmanFault, RealmanFaultKind};
 
-use super::model::{RealmanSettings, RmCond, RmFault, ARM_STATES, ERRORS, MODELS};
+use super::model::{RealmanAction, RealmanSettings, RmCond, RmFault, ARM_STATES, ERRORS, MODELS};
 use super::raw::{RawConds, RawFault, RawSettings, RawStep};
-use crate::harness::error::Pos;
-use crate::harness::model::{Near, StepKind};
-use crate::harness::raw::S;
-use crate::harness::validate::{pos, Ctx, Res};
+use crate::scenario::error::Pos;
+use crate::scenario::{DeviceStep, Near};
+use crate::scenario::S;
+use crate::scenario::{pos, Ctx, Res};
 
 /// Default tolerances of the conditions.
 const DEFAULT_TOLERANCE_DEG: f64 = 0.05;
@@ -79,7 +79,7 @@ fn int_in(ctx: &Ctx<'_>, v: &S<i64>, key: &str, lo: i64, hi: i64) -> Res<i64> {
 }
 
 /// A Realman step.
-pub(crate) fn step(ctx: &Ctx<'_>, raw: &RawStep, at: Pos) -> Res<(&'static str, StepKind)> {
+pub(crate) fn step(ctx: &Ctx<'_>, raw: &RawStep, at: Pos) -> Res<(&'static str, DeviceStep<RealmanAction>)> {
     match raw {
         RawStep::Realman(a) => step::realman_step(ctx, a, at),
     }

@@ -6,9 +6,9 @@
 use super::super::model::{Param, RmCommand, PARAMS};
 use super::super::raw::RawRmStep;
 use super::{int_in, joints};
-use crate::harness::error::Pos;
-use crate::harness::model::Near;
-use crate::harness::validate::{pos, Ctx, Res};
+use crate::scenario::error::Pos;
+use crate::scenario::Near;
+use crate::scenario::{pos, Ctx, Res};
 
 /// Default tolerance of a `get_param` expectation (one wire unit of most parameters).
 const DEFAULT_TOLERANCE: f64 = 0.001;

@@ -5,11 +5,10 @@
 use super::super::model::{Motion, PoseDeg, RealmanAction, RmCommand};
 use super::super::raw::RawRmStep;
 use super::{int_in, jog, joints, params, stream, MAX_CLIENTS};
-use crate::devices::Action;
-use crate::harness::error::Pos;
-use crate::harness::model::{Near, StepKind};
-use crate::harness::raw::S;
-use crate::harness::validate::{pos, Ctx, Res};
+use crate::scenario::error::Pos;
+use crate::scenario::{DeviceStep, Near};
+use crate::scenario::S;
+use crate::scenario::{pos, Ctx, Res};
 
 /// Which argument keys each command takes (`client` aside).
 const COMMAND_KEYS: [(&str, &[&str]); 36] = [
@@ -313,7 +312,7 @@ fn command(ctx: &Ctx<'_>, a: &RawRmStep, name: &str, at: Pos) -> Res<RmCommand> 
 }
 
 /// A `realman:` step.
-pub(super) fn realman_step(ctx: &Ctx<'_>, a: &RawRmStep, at: Pos) -> Res<(&'static str, StepKind)> {
+pub(super) fn realman_step(ctx: &Ctx<'_>, a: &RawRmStep, at: Pos) -> Res<(&'static str, DeviceStep<RealmanAction>)> {
     let names: Vec<&str> = COMMAND_KEYS.iter().map(|(n, _)| *n).collect();
     let Some(cmd) = &a.command else {
         return Err(ctx.err(
@@ -347,9 +346,9 @@ pub(super) fn realman_step(ctx: &Ctx<'_>, a: &RawRmStep, at: Pos) -> Res<(&'stat
         .map_or("realman", |(_, l)| l);
     Ok((
         label,
-        StepKind::Action {
+        DeviceStep {
             device,
-            action: Action::Realman(RealmanAction { client, command }),
+            action: RealmanAction { client, command },
             timeout,
             expect_error,
         },

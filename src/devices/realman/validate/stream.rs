@@ -5,8 +5,8 @@ use super::super::model::{RmCommand, Stream, StreamMode, StreamPath, STREAM_MODE
 use super::super::raw::RawRmStep;
 use super::step::pose;
 use super::{int_in, joints};
-use crate::harness::error::Pos;
-use crate::harness::validate::{pos, Ctx, Res};
+use crate::scenario::error::Pos;
+use crate::scenario::{pos, Ctx, Res};
 
 /// Shortest period: a 3rd-generation controller on a wired link takes a point every 2 ms
 /// (docs/protocols/realman.md §4).

@@ -3,8 +3,6 @@
 
 use serde::Serialize;
 
-use crate::devices::DeviceKind;
-use crate::harness::Scenario;
 
 /// Why a URDF could not be turned into a drawable model.
 #[derive(Debug, thiserror::Error)]
@@ -141,23 +139,6 @@ pub fn arm_model(urdf: &str) -> Result<ArmModelJson, ArmModelError> {
         name: robot.name,
         root,
         joints,
-    })
-}
-
-/// The URDF of the arm a scenario drives (the first device that is an arm), for drawing it.
-pub fn scenario_urdf(scenario: &Scenario) -> Option<&'static str> {
-    scenario.bench.devices.iter().find_map(|d| match &d.kind {
-        DeviceKind::Piper(_) => Some(sim::piper::BUNDLED_URDF),
-        DeviceKind::Realman(s) => Some(if s.model.starts_with("RM75") {
-            sim::realman::plant::RM75B_URDF
-        } else {
-            sim::realman::plant::RM65B_URDF
-        }),
-        DeviceKind::Arm(s) => Some(match s.vendor {
-            driver::arm::Vendor::Piper => sim::piper::BUNDLED_URDF,
-            driver::arm::Vendor::Realman => sim::realman::plant::RM65B_URDF,
-        }),
-        DeviceKind::Robstride(_) => None,
     })
 }
 

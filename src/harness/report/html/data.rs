@@ -5,19 +5,16 @@ use std::collections::HashMap;
 use std::fmt::Write as _;
 use std::time::Duration;
 
-use bus::{CanId, ReceivedFrame};
+use bus::ReceivedFrame;
 use serde_json::{json, Value};
 
 use super::super::svg::fault_windows;
 use crate::harness::result::{BenchInfo, Outcome, ScenarioResult, StepResult};
-use crate::interop::{decode_piper, decode_robstride, DecodedFrame};
+use crate::interop::DecodedFrame;
 
 /// Most frames listed in a report: the recording can hold hundreds of thousands; the table
 /// keeps the start and the frames around the first failure (bus.log / bus.pcap keep all).
 pub const MAX_FRAMES: usize = 3000;
-
-/// The RobStride driver's host ID (the address motors reply to).
-const ROBSTRIDE_HOST_ID: u8 = 0xFD;
 
 fn secs(d: Duration) -> f64 {
     // Microsecond resolution keeps the document small and stable.
@@ -68,19 +65,9 @@ fn trace_json(result: &ScenarioResult) -> Value {
 }
 
 fn decode(frame: &ReceivedFrame, info: &BenchInfo) -> Option<DecodedFrame> {
-    match frame.frame.id() {
-        CanId::Standard(_) => decode_piper(&frame.frame).ok().flatten(),
-        CanId::Extended(raw) => {
-            // Motor replies carry the motor's CAN ID in bits 8..16.
-            let motor = ((raw >> 8) & 0xFF) as u8;
-            let model = info
-                .robstride_motors
-                .iter()
-                .find(|(id, _)| *id == motor)
-                .and_then(|(_, name)| driver::robstride::Model::parse(name))?;
-            decode_robstride(&frame.frame, ROBSTRIDE_HOST_ID, model)
-        }
-    }
+    info.frame_decoders
+        .iter()
+        .find_map(|d| d.decode(&frame.frame))
 }
 
 /// Which frames the table lists, out of `n` with the first failure's frame at `centre` (`n`

@@ -11,7 +11,7 @@ mod data;
 
 use std::fmt::Write as _;
 
-pub use arm::{arm_model, scenario_urdf, ArmModelError, ArmModelJson};
+pub use arm::{arm_model, ArmModelError, ArmModelJson};
 pub use data::{report_json, MAX_FRAMES};
 
 use crate::harness::result::{Outcome, ScenarioResult, Verdict};

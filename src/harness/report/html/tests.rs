@@ -13,7 +13,8 @@ fn failed_run() -> ScenarioResult {
     r.duration = Duration::from_millis(800);
     r.bench_info = BenchInfo {
         arm_urdf: Some(sim::piper::BUNDLED_URDF),
-        robstride_motors: Vec::new(),
+        // A Piper's bench: its frames are named by the Piper's decoder.
+        frame_decoders: vec![std::sync::Arc::new(crate::devices::piper::decode::PiperFrames)],
     };
     r.steps.push(StepResult {
         index: 0,

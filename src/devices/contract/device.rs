@@ -1,11 +1,12 @@
-//! The device abstraction the runner drives: one implementation per device kind, in
-//! `crate::devices::<kind>`, registered in `crate::devices`.
+//! The device on a bench, as the runner drives it: one implementation per device kind (its
+//! `device/` folder), built by the kind's [`KindSpec::build`](super::KindSpec::build).
 
 use std::time::Duration;
 
 use async_trait::async_trait;
 
-use super::model::{Action, Check, DeviceFault, ErrorClass, Signal};
+use crate::devices::{Action, Check, DeviceFault};
+use crate::scenario::{ErrorClass, Signal};
 
 /// Why a device action failed.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]

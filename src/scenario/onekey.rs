@@ -22,7 +22,7 @@ pub(crate) fn unknown<E: Error>(what: &str, key: &str, keys: &[&'static str]) ->
     E::custom(format!(
         "unknown {what} `{key}`; expected one of: {}{}",
         keys.join(", "),
-        crate::harness::error::suggestion(key, keys)
+        crate::scenario::error::suggestion(key, keys)
     ))
 }
 
@@ -46,11 +46,11 @@ macro_rules! one_key_enum {
             $( #[doc = "A key of another vocabulary."] $fb($fty), )?
         }
 
-        impl $crate::harness::onekey::OneKey for $name {
+        impl $crate::scenario::onekey::OneKey for $name {
             fn keys() -> Vec<&'static str> {
                 #[allow(unused_mut)]
                 let mut keys = vec![$($key),*];
-                $( keys.extend(<$fty as $crate::harness::onekey::OneKey>::keys()); )?
+                $( keys.extend(<$fty as $crate::scenario::onekey::OneKey>::keys()); )?
                 keys
             }
 
@@ -59,7 +59,7 @@ macro_rules! one_key_enum {
                     $( $key => Some(one_key_enum!(@bare E, $name, $variant, $key $(, $bare)?)), )*
                     #[allow(unused_variables)]
                     other => {
-                        $( return <$fty as $crate::harness::onekey::OneKey>::bare(other)
+                        $( return <$fty as $crate::scenario::onekey::OneKey>::bare(other)
                             .map(|r| r.map($name::$fb)); )?
                         #[allow(unreachable_code)]
                         None
@@ -81,7 +81,7 @@ macro_rules! one_key_enum {
                     })()), )*
                     #[allow(unused_variables)]
                     other => {
-                        $( return <$fty as $crate::harness::onekey::OneKey>::entry(other, map)
+                        $( return <$fty as $crate::scenario::onekey::OneKey>::entry(other, map)
                             .map(|r| r.map($name::$fb)); )?
                         #[allow(unreachable_code)]
                         None
@@ -92,7 +92,7 @@ macro_rules! one_key_enum {
 
         impl<'de> serde::Deserialize<'de> for $name {
             fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
-                use $crate::harness::onekey::OneKey;
+                use $crate::scenario::onekey::OneKey;
                 struct Visit;
                 impl<'de> serde::de::Visitor<'de> for Visit {
                     type Value = $name;
@@ -101,7 +101,7 @@ macro_rules! one_key_enum {
                     }
                     fn visit_str<E: serde::de::Error>(self, text: &str) -> Result<$name, E> {
                         $name::bare(text).unwrap_or_else(|| {
-                            Err($crate::harness::onekey::unknown($what, text, &$name::keys()))
+                            Err($crate::scenario::onekey::unknown($what, text, &$name::keys()))
                         })
                     }
                     fn visit_map<A: serde::de::MapAccess<'de>>(self, mut map: A) -> Result<$name, A::Error> {
@@ -113,7 +113,7 @@ macro_rules! one_key_enum {
                             )));
                         };
                         let value = $name::entry(&key, &mut map).unwrap_or_else(|| {
-                            Err($crate::harness::onekey::unknown($what, &key, &$name::keys()))
+                            Err($crate::scenario::onekey::unknown($what, &key, &$name::keys()))
                         })?;
                         if let Some(extra) = map.next_key::<String>()? {
                             return Err(A::Error::custom(format!(

@@ -1,0 +1,104 @@
+//! Where a CAN emulator under Python control answers: a SocketCAN interface, or a socketcand
+//! server in front of a real-time virtual bus.
+
+use std::collections::BTreeMap;
+use std::net::SocketAddr;
+use std::sync::Arc;
+
+use bus::socketcand::SocketcandServer;
+use bus::virtual_bus::VirtualBus;
+use bus::CanBus;
+use pyo3::exceptions::PyRuntimeError;
+use pyo3::prelude::*;
+
+use crate::{block_on, sim_runtime};
+
+/// The bus a CAN emulator answers on.
+pub(super) struct CanPlace {
+    pub(super) node: Arc<dyn CanBus>,
+    /// The virtual bus behind the socketcand server (`None` on SocketCAN).
+    pub(super) virtual_bus: Option<VirtualBus>,
+    server: Option<SocketcandServer>,
+    iface: Option<String>,
+}
+
+/// A socketcand server on `addr` with a real-time virtual bus, as `armhil sim --socketcand`.
+async fn socketcand_place(addr: &str, node_name: &str) -> Result<CanPlace, String> {
+    let (bus, server) = SocketcandServer::bind_realtime_bus(addr)
+        .await
+        .map_err(|e| format!("cannot serve socketcand on {addr}: {e}"))?;
+    Ok(CanPlace {
+        node: Arc::new(bus.attach(node_name)),
+        virtual_bus: Some(bus),
+        server: Some(server),
+        iface: None,
+    })
+}
+
+#[cfg(target_os = "linux")]
+fn iface_place(iface: &str) -> Result<CanPlace, String> {
+    let socket = bus::socketcan_bus::SocketCanBus::open(iface)
+        .map_err(|e| format!("cannot open SocketCAN interface {iface}: {e}"))?;
+    Ok(CanPlace {
+        node: Arc::new(socket),
+        virtual_bus: None,
+        server: None,
+        iface: Some(iface.to_string()),
+    })
+}
+
+#[cfg(not(target_os = "linux"))]
+fn iface_place(iface: &str) -> Result<CanPlace, String> {
+    Err(format!(
+        "SocketCAN interface {iface}: SocketCAN is Linux only"
+    ))
+}
+
+/// `iface` when given, else a socketcand server on `socketcand` (a bare port = loopback).
+pub(super) fn open_place(
+    py: Python<'_>,
+    iface: Option<&str>,
+    socketcand: &str,
+    node: &str,
+) -> PyResult<CanPlace> {
+    let r = match iface {
+        Some(i) => iface_place(i),
+        None => {
+            let addr = match socketcand.parse::<u16>() {
+                Ok(port) => format!("127.0.0.1:{port}"),
+                Err(_) => socketcand.to_string(),
+            };
+            let node = node.to_string();
+            block_on(py, sim_runtime(), async move {
+                socketcand_place(&addr, &node).await
+            })
+        }
+    };
+    r.map_err(PyRuntimeError::new_err)
+}
+
+impl CanPlace {
+    pub(super) fn socketcand_addr(&self) -> Option<SocketAddr> {
+        self.server.as_ref().map(SocketcandServer::local_addr)
+    }
+
+    /// Closes the node and the server.
+    pub(super) async fn close(self) {
+        self.node.close().await;
+        if let Some(s) = self.server {
+            s.shutdown().await;
+        }
+    }
+
+    /// The `params` a driver uses to reach this bus.
+    pub(super) fn params(&self) -> BTreeMap<&'static str, String> {
+        match (self.socketcand_addr(), &self.iface) {
+            (Some(a), _) => BTreeMap::from([
+                ("socketcand", a.to_string()),
+                ("can_interface", "can0".to_string()),
+            ]),
+            (None, Some(i)) => BTreeMap::from([("can_interface", i.clone())]),
+            (None, None) => BTreeMap::new(),
+        }
+    }
+}

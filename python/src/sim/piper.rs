@@ -1,0 +1,282 @@
+//! The Piper firmware emulator under Python control.
+
+use std::collections::BTreeMap;
+use std::net::SocketAddr;
+use std::sync::{Arc, Mutex};
+
+use bus::virtual_bus::FaultId;
+use pyo3::exceptions::PyRuntimeError;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyTuple};
+use sim::piper::{FaultKind, NtcBoard, PiperConfig, PiperFault, PiperHandle};
+
+use super::can_place::{open_place, CanPlace};
+use super::{deg, exit_false, fault_args, lock, value_err, FaultArgs};
+use crate::{block_on, sim_runtime};
+
+/// A Piper firmware emulator on a SocketCAN interface or behind a socketcand server.
+#[pyclass(module = "armhil.sim", frozen)]
+pub struct PiperEmulator {
+    running: Mutex<Option<(PiperHandle, CanPlace)>>,
+    silenced: Mutex<Option<FaultId>>,
+    params: BTreeMap<&'static str, String>,
+    addr: Option<SocketAddr>,
+}
+
+impl PiperEmulator {
+    fn with<R>(&self, f: impl FnOnce(&PiperHandle, &CanPlace) -> R) -> PyResult<R> {
+        lock(&self.running)
+            .as_ref()
+            .map(|(h, p)| f(h, p))
+            .ok_or_else(|| PyRuntimeError::new_err("the Piper emulator is stopped"))
+    }
+}
+
+fn piper_fault(
+    name: &str,
+    kwargs: Option<&Bound<'_, PyDict>>,
+    clearing: bool,
+) -> PyResult<PiperFault> {
+    let kind = FaultKind::from_name(name).ok_or_else(|| {
+        let known: Vec<_> = FaultKind::ALL.iter().map(|k| k.name()).collect();
+        value_err(format!(
+            "unknown Piper fault {name:?} (known: {})",
+            known.join(", ")
+        ))
+    })?;
+    let mut a = fault_args(name, kwargs);
+    // Clearing ignores the values (a temperature, a torque) but needs the site (the joint).
+    let value = |a: &mut FaultArgs<'_, '_>, key: &'static str, default: f64| -> PyResult<f64> {
+        Ok(a.get(key)?.unwrap_or(default))
+    };
+    let fault = match kind {
+        FaultKind::CommLoss => PiperFault::CommLoss {
+            joint: a.need("joint")?,
+        },
+        FaultKind::MotorOverTemp => PiperFault::MotorOverTemp {
+            joint: a.need("joint")?,
+            temp_c: value(&mut a, "temp_c", 90.0)?,
+        },
+        FaultKind::DriverOverTemp => PiperFault::DriverOverTemp {
+            joint: a.need("joint")?,
+            temp_c: value(&mut a, "temp_c", 90.0)?,
+        },
+        FaultKind::OverCurrent => PiperFault::OverCurrent {
+            joint: a.need("joint")?,
+        },
+        FaultKind::UnderVoltage => PiperFault::UnderVoltage {
+            voltage_v: value(&mut a, "voltage_v", 18.0)?,
+        },
+        FaultKind::DriverError => PiperFault::DriverError {
+            joint: a.need("joint")?,
+        },
+        FaultKind::Stall => PiperFault::Stall {
+            joint: a.need("joint")?,
+        },
+        FaultKind::ExternalTorque => PiperFault::ExternalTorque {
+            joint: a.need("joint")?,
+            torque_nm: if clearing {
+                a.get("torque_nm")?.unwrap_or(0.0)
+            } else {
+                a.need("torque_nm")?
+            },
+        },
+        FaultKind::Collision => PiperFault::Collision {
+            joint: a.need("joint")?,
+        },
+        FaultKind::Estop => PiperFault::Estop,
+        FaultKind::NtcOverTemp => PiperFault::NtcOverTemp {
+            board: match a.get::<String>("board")?.as_deref() {
+                None | Some("main") => NtcBoard::Main,
+                Some("brake_resistor") => NtcBoard::BrakeResistor,
+                Some(other) => {
+                    return Err(value_err(format!(
+                        "board must be main or brake_resistor, got {other:?}"
+                    )))
+                }
+            },
+        },
+        FaultKind::GripperSensorFault => PiperFault::GripperSensorFault,
+        FaultKind::TeachButton => PiperFault::TeachButton,
+    };
+    a.finish()?;
+    Ok(fault)
+}
+
+#[pymethods]
+impl PiperEmulator {
+    /// Host of the socketcand server (`None` on a SocketCAN interface).
+    #[getter]
+    fn host(&self) -> Option<String> {
+        self.addr.map(|a| a.ip().to_string())
+    }
+
+    /// Port of the socketcand server (`None` on a SocketCAN interface).
+    #[getter]
+    fn port(&self) -> Option<u16> {
+        self.addr.map(|a| a.port())
+    }
+
+    /// Always `"piper"`.
+    #[getter]
+    fn arm_type(&self) -> &'static str {
+        "piper"
+    }
+
+    /// The `params` of `ArmFactory.create_arm("piper", name, params)` for this emulator.
+    #[getter]
+    fn params(&self) -> BTreeMap<&'static str, String> {
+        self.params.clone()
+    }
+
+    /// `params` plus `arm_type` and `arm_name`.
+    #[pyo3(signature = (arm_name="arm"))]
+    fn config(&self, arm_name: &str) -> BTreeMap<&'static str, String> {
+        let mut m = self.params.clone();
+        m.insert("arm_type", "piper".into());
+        m.insert("arm_name", arm_name.into());
+        m
+    }
+
+    /// Injects a fault by the Piper's names: comm_loss(joint), motor_over_temp(joint,
+    /// temp_c=90), driver_over_temp(joint, temp_c=90), over_current(joint),
+    /// under_voltage(voltage_v=18), driver_error(joint), stall(joint),
+    /// external_torque(joint, torque_nm), collision(joint), estop,
+    /// ntc_over_temp(board="main"), gripper_sensor_fault, teach_button.
+    #[pyo3(signature = (name, **kwargs))]
+    fn inject(&self, name: &str, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<()> {
+        let fault = piper_fault(name, kwargs, false)?;
+        self.with(|h, _| h.inject(fault))?.map_err(value_err)
+    }
+
+    /// Removes a fault's cause (joint faults need `joint=`).
+    #[pyo3(signature = (name, **kwargs))]
+    fn clear(&self, name: &str, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<()> {
+        let fault = piper_fault(name, kwargs, true)?;
+        self.with(|h, _| h.clear(fault))?.map_err(value_err)
+    }
+
+    /// Drops every frame the emulator sends (the virtual bus's `silence_node`): the link
+    /// reads as lost. Socketcand only.
+    fn silence(&self) -> PyResult<()> {
+        let id = self.with(|_, p| {
+            p.virtual_bus
+                .as_ref()
+                .map(|b| b.faults().silence_node("piper"))
+        })?;
+        let id =
+            id.ok_or_else(|| PyRuntimeError::new_err("silence needs the socketcand emulator"))?;
+        if let Some(old) = lock(&self.silenced).replace(id) {
+            self.with(|_, p| p.virtual_bus.as_ref().map(|b| b.faults().remove(old)))?;
+        }
+        Ok(())
+    }
+
+    /// Ends `silence`.
+    fn unsilence(&self) -> PyResult<()> {
+        if let Some(id) = lock(&self.silenced).take() {
+            self.with(|_, p| p.virtual_bus.as_ref().map(|b| b.faults().remove(id)))?;
+        }
+        Ok(())
+    }
+
+    /// Reported joint angles, degrees.
+    fn joints_deg(&self) -> PyResult<Vec<f64>> {
+        self.with(|h, _| deg(&h.snapshot().reported_joints_rad))
+    }
+
+    /// The simulation's ground truth: time, joints, flange pose, gripper, status bytes.
+    fn state<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let s = self.with(|h, _| h.snapshot())?;
+        let d = PyDict::new(py);
+        d.set_item("time_s", s.time_s)?;
+        d.set_item("joints_deg", deg(&s.reported_joints_rad))?;
+        d.set_item("speeds_deg_s", deg(&s.joint_velocities_rad_s))?;
+        d.set_item("torques_nm", s.joint_torques_nm.to_vec())?;
+        d.set_item("motor_temps_c", s.motor_temps_c.to_vec())?;
+        d.set_item("gripper_stroke_m", s.gripper_stroke_m)?;
+        d.set_item("gripper_force_n", s.gripper_force_n)?;
+        d.set_item("position_m", s.flange_pose.position_m.to_vec())?;
+        d.set_item("euler_rad", s.flange_pose.euler_rad.to_vec())?;
+        d.set_item("contacts", s.contacts)?;
+        d.set_item("ctrl_mode", s.status.ctrl_mode)?;
+        d.set_item("arm_status", s.status.arm_status)?;
+        d.set_item("motion_status", s.status.motion_status)?;
+        d.set_item("comm_bits", s.status.comm_bits)?;
+        d.set_item("enabled", s.status.enabled.to_vec())?;
+        Ok(d)
+    }
+
+    /// Whether it is running.
+    #[getter]
+    fn running(&self) -> bool {
+        lock(&self.running).is_some()
+    }
+
+    /// Stops the emulator and its server (idempotent).
+    fn stop(&self, py: Python<'_>) {
+        let running = lock(&self.running).take();
+        if let Some((h, place)) = running {
+            block_on(py, sim_runtime(), async move {
+                h.shutdown().await;
+                place.close().await;
+            });
+        }
+    }
+
+    fn __enter__(slf: Py<Self>) -> Py<Self> {
+        slf
+    }
+
+    #[pyo3(signature = (*_args))]
+    fn __exit__(&self, py: Python<'_>, _args: &Bound<'_, PyTuple>) -> bool {
+        self.stop(py);
+        exit_false()
+    }
+
+    fn __repr__(&self) -> String {
+        format!("PiperEmulator({:?})", self.params)
+    }
+}
+
+/// Starts a Piper emulator on SocketCAN `iface`, or (default) behind a socketcand server on
+/// `socketcand` (`HOST:PORT`, port 0 = a free port).
+#[pyfunction]
+#[pyo3(signature = (iface=None, socketcand="127.0.0.1:0", firmware="S-V1.8-2", initial_joints_deg=None))]
+pub(super) fn piper(
+    py: Python<'_>,
+    iface: Option<&str>,
+    socketcand: &str,
+    firmware: &str,
+    initial_joints_deg: Option<Vec<f64>>,
+) -> PyResult<PiperEmulator> {
+    let initial_joints_rad = match initial_joints_deg {
+        None => [0.0; 6],
+        Some(d) => {
+            let arr: [f64; 6] = d.as_slice().try_into().map_err(|_| {
+                value_err(format!(
+                    "initial_joints_deg needs 6 values, got {}",
+                    d.len()
+                ))
+            })?;
+            arr.map(f64::to_radians)
+        }
+    };
+    let config = PiperConfig {
+        firmware: firmware.parse().map_err(value_err)?,
+        initial_joints_rad,
+        ..PiperConfig::default()
+    };
+    let place = open_place(py, iface, socketcand, "piper")?;
+    let node = Arc::clone(&place.node);
+    let handle = block_on(py, sim_runtime(), async move {
+        sim::piper::PiperEmulator::spawn(node, config)
+    })
+    .map_err(|e| PyRuntimeError::new_err(format!("cannot start the Piper emulator: {e}")))?;
+    Ok(PiperEmulator {
+        params: place.params(),
+        addr: place.socketcand_addr(),
+        running: Mutex::new(Some((handle, place))),
+        silenced: Mutex::new(None),
+    })
+}

@@ -1,0 +1,228 @@
+//! The Realman controller emulator under Python control (TCP commands, UDP push).
+
+use std::collections::BTreeMap;
+use std::net::{IpAddr, SocketAddr};
+use std::sync::Mutex;
+
+use pyo3::exceptions::PyRuntimeError;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyTuple};
+use sim::realman::model::ArmModel;
+use sim::realman::{
+    ControllerConfig, EmulatorConfig, RealmanEmulator as RealmanSpawner, RealmanFault,
+    RealmanFaultKind, RealmanHandle, Transport,
+};
+
+use super::{deg, exit_false, fault_args, lock, value_err};
+use crate::{block_on, sim_runtime};
+
+/// A Realman arm controller emulator on TCP (commands) and UDP (realtime push).
+#[pyclass(module = "armhil.sim", frozen)]
+pub struct RealmanEmulator {
+    handle: Mutex<Option<RealmanHandle>>,
+    addr: SocketAddr,
+}
+
+impl RealmanEmulator {
+    fn with<R>(&self, f: impl FnOnce(&RealmanHandle) -> R) -> PyResult<R> {
+        lock(&self.handle)
+            .as_ref()
+            .map(f)
+            .ok_or_else(|| PyRuntimeError::new_err("the Realman emulator is stopped"))
+    }
+}
+
+fn realman_fault(name: &str, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<RealmanFault> {
+    let mut a = fault_args(name, kwargs);
+    let fault = match RealmanFaultKind::from_name(name) {
+        Some(RealmanFaultKind::ConnectionDrop) => RealmanFault::ConnectionDrop {
+            peer_ip: match a.get::<String>("peer_ip")? {
+                Some(ip) => Some(ip.parse::<IpAddr>().map_err(value_err)?),
+                None => None,
+            },
+        },
+        Some(RealmanFaultKind::ReplyDelay) => RealmanFault::ReplyDelay {
+            delay_ms: a.need("delay_ms")?,
+        },
+        Some(RealmanFaultKind::MalformedReply) => RealmanFault::MalformedReply {
+            count: a.get("count")?.unwrap_or(1),
+        },
+        Some(RealmanFaultKind::UdpLoss) => RealmanFault::UdpLoss {
+            permille: a.need("permille")?,
+        },
+        Some(RealmanFaultKind::UdpReorder) => RealmanFault::UdpReorder,
+        Some(RealmanFaultKind::JointError) => RealmanFault::JointError {
+            joint: a.need("joint")?,
+            code: a.get("code")?.unwrap_or(0x0008),
+        },
+        Some(RealmanFaultKind::PowerLoss) => RealmanFault::PowerLoss,
+        Some(RealmanFaultKind::Collision) => RealmanFault::Collision,
+        Some(RealmanFaultKind::EStop) => RealmanFault::EStop,
+        Some(RealmanFaultKind::GripperFault) => RealmanFault::GripperFault {
+            bits: a.get("bits")?.unwrap_or(1),
+        },
+        None => {
+            let known: Vec<_> = RealmanFaultKind::ALL.iter().map(|k| k.name()).collect();
+            return Err(value_err(format!(
+                "unknown Realman fault {name:?} (known: {})",
+                known.join(", ")
+            )));
+        }
+    };
+    a.finish()?;
+    // The emulator's table bounds every value (a reply delay of years is a typo).
+    fault.check().map_err(value_err)?;
+    Ok(fault)
+}
+
+#[pymethods]
+impl RealmanEmulator {
+    /// Address the command server listens on.
+    #[getter]
+    fn host(&self) -> String {
+        self.addr.ip().to_string()
+    }
+
+    /// TCP port of the command server.
+    #[getter]
+    fn port(&self) -> u16 {
+        self.addr.port()
+    }
+
+    /// Always `"realman"`.
+    #[getter]
+    fn arm_type(&self) -> &'static str {
+        "realman"
+    }
+
+    /// The `params` of `ArmFactory.create_arm("realman", name, params)` for this emulator
+    /// (push to a free local UDP port every 5 ms).
+    #[getter]
+    fn params(&self) -> BTreeMap<&'static str, String> {
+        BTreeMap::from([
+            ("ip", self.addr.ip().to_string()),
+            ("port", self.addr.port().to_string()),
+            ("udp_ip", self.addr.ip().to_string()),
+            ("udp_port", "0".to_string()),
+            ("udp_cycle", "1".to_string()),
+        ])
+    }
+
+    /// `params` plus `arm_type` and `arm_name`: an `ArmFactoryParam` dictionary or the
+    /// content of a configuration file.
+    #[pyo3(signature = (arm_name="arm"))]
+    fn config(&self, arm_name: &str) -> BTreeMap<&'static str, String> {
+        let mut m = self.params();
+        m.insert("arm_type", "realman".into());
+        m.insert("arm_name", arm_name.into());
+        m.insert("enable_gripper", "false".into());
+        m
+    }
+
+    /// Injects a fault by name: connection_drop(peer_ip=None), reply_delay(delay_ms),
+    /// malformed_reply(count=1), udp_loss(permille), udp_reorder, joint_error(joint,
+    /// code=8), power_loss, collision, estop, gripper_fault(bits=1).
+    #[pyo3(signature = (name, **kwargs))]
+    fn inject(&self, name: &str, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<()> {
+        let fault = realman_fault(name, kwargs)?;
+        self.with(|h| h.inject(fault))?.map_err(value_err)
+    }
+
+    /// Removes a fault by name.
+    fn clear(&self, name: &str) -> PyResult<()> {
+        let kind = RealmanFaultKind::from_name(name)
+            .ok_or_else(|| value_err(format!("unknown Realman fault {name:?}")))?;
+        self.with(|h| h.clear(kind))
+    }
+
+    /// Measured joint angles, degrees.
+    fn joints_deg(&self) -> PyResult<Vec<f64>> {
+        self.with(|h| deg(&h.snapshot().joints_rad))
+    }
+
+    /// The simulation's ground truth: time, joints, pose, power, errors, status.
+    fn state<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let s = self.with(|h| h.snapshot())?;
+        let d = PyDict::new(py);
+        d.set_item("time_ms", s.time_ms)?;
+        d.set_item("joints_deg", deg(&s.joints_rad))?;
+        d.set_item("speeds_deg_s", deg(&s.speeds_rad_s))?;
+        d.set_item("setpoint_deg", deg(&s.setpoint_rad))?;
+        d.set_item("position_m", s.pose.position_m.to_vec())?;
+        d.set_item("euler_rad", s.pose.euler_rad.to_vec())?;
+        d.set_item("power_on", s.power_on)?;
+        d.set_item("enabled", s.enabled)?;
+        d.set_item("errors", s.errors)?;
+        d.set_item("status", s.status)?;
+        d.set_item("queued_moves", s.queued_moves)?;
+        Ok(d)
+    }
+
+    /// Open client connections.
+    fn connections(&self) -> PyResult<usize> {
+        self.with(|h| h.connections())
+    }
+
+    /// Whether it is serving.
+    #[getter]
+    fn running(&self) -> bool {
+        lock(&self.handle).is_some()
+    }
+
+    /// Stops serving and closes every connection (idempotent).
+    fn stop(&self, py: Python<'_>) {
+        let handle = lock(&self.handle).take();
+        if let Some(h) = handle {
+            block_on(py, sim_runtime(), h.shutdown());
+        }
+    }
+
+    fn __enter__(slf: Py<Self>) -> Py<Self> {
+        slf
+    }
+
+    #[pyo3(signature = (*_args))]
+    fn __exit__(&self, py: Python<'_>, _args: &Bound<'_, PyTuple>) -> bool {
+        self.stop(py);
+        exit_false()
+    }
+
+    fn __repr__(&self) -> String {
+        format!("RealmanEmulator(tcp://{})", self.addr)
+    }
+}
+
+/// Starts a Realman emulator (`port=0`: a free port).
+#[pyfunction]
+#[pyo3(signature = (port=0, host="127.0.0.1", model="RM65-B", firmware="V1.7.0", initial_joints_deg=None, gripper=true))]
+pub(super) fn realman(
+    py: Python<'_>,
+    port: u16,
+    host: &str,
+    model: &str,
+    firmware: &str,
+    initial_joints_deg: Option<Vec<f64>>,
+    gripper: bool,
+) -> PyResult<RealmanEmulator> {
+    let ip: IpAddr = host.parse().map_err(value_err)?;
+    let model = ArmModel::from_product(model)
+        .ok_or_else(|| value_err(format!("unknown Realman model {model:?} (try RM65-B)")))?;
+    let mut controller = ControllerConfig::new(model);
+    controller.firmware = firmware.parse().map_err(value_err)?;
+    controller.gripper = gripper;
+    controller.initial_joints_rad =
+        initial_joints_deg.map(|d| d.iter().map(|x| x.to_radians()).collect());
+    let config = EmulatorConfig::new(controller);
+    let addr = SocketAddr::new(ip, port);
+    let handle = block_on(
+        py,
+        sim_runtime(),
+        RealmanSpawner::spawn(config, Transport::Tcp(addr)),
+    )
+    .map_err(|e| PyRuntimeError::new_err(format!("cannot start the Realman emulator: {e}")))?;
+    let addr = handle.local_addr().unwrap_or(addr);
+    Ok(RealmanEmulator {
+        handle: Mutex::new(Some(handle)),
+        addr,
+    })
+}

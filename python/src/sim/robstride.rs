@@ -1,0 +1,180 @@
+//! RobStride actuators under Python control.
+
+use std::collections::BTreeMap;
+use std::net::SocketAddr;
+use std::sync::{Arc, Mutex};
+
+use pyo3::exceptions::PyRuntimeError;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyTuple};
+use sim::robstride::{Fault, Model, MotorConfig, RobstrideBus, RobstrideConfig, RobstrideHandle};
+
+use super::can_place::{open_place, CanPlace};
+use super::{exit_false, lock, value_err};
+use crate::{block_on, sim_runtime};
+
+/// RobStride actuators on a SocketCAN interface or behind a socketcand server.
+#[pyclass(module = "armhil.sim", frozen)]
+pub struct RobstrideEmulator {
+    running: Mutex<Option<(RobstrideHandle, CanPlace)>>,
+    params: BTreeMap<&'static str, String>,
+    addr: Option<SocketAddr>,
+}
+
+fn robstride_fault(name: &str) -> PyResult<Fault> {
+    Fault::from_name(name).ok_or_else(|| {
+        let known: Vec<_> = Fault::ALL.iter().map(|f| f.name()).collect();
+        value_err(format!(
+            "unknown RobStride fault {name:?} (known: {})",
+            known.join(", ")
+        ))
+    })
+}
+
+impl RobstrideEmulator {
+    /// Runs a request on the emulator task (it answers through a channel).
+    fn request<F, R>(&self, py: Python<'_>, f: F) -> PyResult<R>
+    where
+        F: for<'a> FnOnce(
+            &'a RobstrideHandle,
+        ) -> std::pin::Pin<
+            Box<
+                dyn std::future::Future<Output = Result<R, sim::robstride::RobstrideError>>
+                    + Send
+                    + 'a,
+            >,
+        >,
+        R: Send,
+    {
+        let guard = lock(&self.running);
+        let (h, _) = guard
+            .as_ref()
+            .ok_or_else(|| PyRuntimeError::new_err("the RobStride emulator is stopped"))?;
+        block_on(py, sim_runtime(), f(h)).map_err(value_err)
+    }
+}
+
+#[pymethods]
+impl RobstrideEmulator {
+    /// Host of the socketcand server (`None` on a SocketCAN interface).
+    #[getter]
+    fn host(&self) -> Option<String> {
+        self.addr.map(|a| a.ip().to_string())
+    }
+
+    /// Port of the socketcand server (`None` on a SocketCAN interface).
+    #[getter]
+    fn port(&self) -> Option<u16> {
+        self.addr.map(|a| a.port())
+    }
+
+    /// Where a client finds the bus (`socketcand` and `can_interface`, or `can_interface`).
+    #[getter]
+    fn params(&self) -> BTreeMap<&'static str, String> {
+        self.params.clone()
+    }
+
+    /// Injects a fault on motor `can_id`: over_temperature, under_voltage, over_voltage,
+    /// phase_a/b/c_over_current, encoder_not_calibrated, stall_overload, gate_driver.
+    fn inject(&self, py: Python<'_>, name: &str, can_id: u8) -> PyResult<()> {
+        let fault = robstride_fault(name)?;
+        self.request(py, move |h| Box::pin(h.inject(can_id, fault)))
+    }
+
+    /// Removes a fault's cause on motor `can_id`.
+    fn clear(&self, py: Python<'_>, name: &str, can_id: u8) -> PyResult<()> {
+        let fault = robstride_fault(name)?;
+        self.request(py, move |h| Box::pin(h.clear(can_id, fault)))
+    }
+
+    /// One dictionary per motor: CAN ID, model, mode, angle, speed, torque, temperature,
+    /// voltage, fault word.
+    fn state<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
+        let motors = self.request(py, |h| Box::pin(h.snapshot()))?;
+        motors
+            .iter()
+            .map(|m| {
+                let d = PyDict::new(py);
+                d.set_item("can_id", m.can_id)?;
+                d.set_item("model", m.model.name())?;
+                d.set_item("mode", format!("{:?}", m.mode).to_lowercase())?;
+                d.set_item("run_mode", m.run_mode)?;
+                d.set_item("angle_rad", m.angle_rad)?;
+                d.set_item("speed_rad_s", m.speed_rad_s)?;
+                d.set_item("torque_nm", m.torque_nm)?;
+                d.set_item("temperature_c", m.temperature_c)?;
+                d.set_item("bus_voltage_v", m.bus_voltage_v)?;
+                d.set_item("fault_word", m.fault_word)?;
+                Ok(d)
+            })
+            .collect()
+    }
+
+    /// Whether it is running.
+    #[getter]
+    fn running(&self) -> bool {
+        lock(&self.running).is_some()
+    }
+
+    /// Stops the emulator and its server (idempotent).
+    fn stop(&self, py: Python<'_>) {
+        let running = lock(&self.running).take();
+        if let Some((h, place)) = running {
+            block_on(py, sim_runtime(), async move {
+                h.shutdown().await;
+                place.close().await;
+            });
+        }
+    }
+
+    fn __enter__(slf: Py<Self>) -> Py<Self> {
+        slf
+    }
+
+    #[pyo3(signature = (*_args))]
+    fn __exit__(&self, py: Python<'_>, _args: &Bound<'_, PyTuple>) -> bool {
+        self.stop(py);
+        exit_false()
+    }
+}
+
+/// Starts RobStride actuators (`motors`: `"ID:MODEL"` strings, default one RS03 on ID 127)
+/// on SocketCAN `iface` or (default) behind a socketcand server on `socketcand`.
+#[pyfunction]
+#[pyo3(signature = (motors=None, iface=None, socketcand="127.0.0.1:0"))]
+pub(super) fn robstride(
+    py: Python<'_>,
+    motors: Option<Vec<String>>,
+    iface: Option<&str>,
+    socketcand: &str,
+) -> PyResult<RobstrideEmulator> {
+    let specs = motors.unwrap_or_else(|| vec!["127:RS03".to_string()]);
+    let motors = specs
+        .iter()
+        .map(|s| {
+            let (id, model) = s.split_once(':').ok_or_else(|| {
+                value_err(format!("motor {s:?}: expected ID:MODEL, e.g. 127:RS03"))
+            })?;
+            let id: u8 = id
+                .trim()
+                .parse()
+                .map_err(|_| value_err(format!("motor {s:?}: bad CAN ID")))?;
+            let model = Model::from_name(model).ok_or_else(|| {
+                value_err(format!("motor {s:?}: unknown model (RS00..RS06, EL05)"))
+            })?;
+            Ok(MotorConfig::new(id, model))
+        })
+        .collect::<PyResult<Vec<_>>>()?;
+    let config = RobstrideConfig::new(motors);
+    let place = open_place(py, iface, socketcand, "robstride")?;
+    let node = Arc::clone(&place.node);
+    let handle = block_on(py, sim_runtime(), async move {
+        RobstrideBus::spawn(node, config)
+    })
+    .map_err(|e| PyRuntimeError::new_err(format!("cannot start the RobStride emulator: {e}")))?;
+    Ok(RobstrideEmulator {
+        params: place.params(),
+        addr: place.socketcand_addr(),
+        running: Mutex::new(Some((handle, place))),
+    })
+}

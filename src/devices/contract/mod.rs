@@ -1,0 +1,127 @@
+//! The contract of a device kind: what every kind provides, checked by the compiler.
+//!
+//! A kind is a folder under `src/devices/` whose `mod.rs` implements [`KindSpec`] for a unit
+//! struct `Kind`, and one line in the registry (`device_kinds!` in `src/devices/mod.rs`). The
+//! harness, the report, the web view, `armhil decode` and the Python emulators reach a kind
+//! only through this trait and the [`Device`] it builds:
+//!
+//! - its **scenario vocabulary**: the file shapes (`Raw*`, layer 1) and their validation into
+//!   `Settings`, actions, checks and faults (layer 2, errors with file:line:col), built from
+//!   the grammar core in [`crate::scenario`];
+//! - **how to build it on a bench** ([`KindSpec::build`]): emulator (in-process runs) and
+//!   driver, on the transport the device speaks;
+//! - what the **views** need: the URDF to draw ([`KindSpec::urdf`]) and a decoder for its
+//!   frames in reports ([`KindSpec::frame_decoder`]);
+//! - its **trace columns**, observations and fault injection, through [`Device`].
+
+mod device;
+
+use std::fmt::Debug;
+use std::sync::Arc;
+
+use async_trait::async_trait;
+use bus::CanFrame;
+
+pub use device::{Device, DeviceError, Reply, TraceColumn};
+
+use crate::harness::{Clock, RunOptions};
+use crate::interop::DecodedFrame;
+use crate::scenario::onekey::OneKey;
+use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
+
+/// What a kind's `build` gets: the scenario's clock and options, and, for CAN devices, the
+/// in-process virtual bus or the SocketCAN interface to open.
+pub(crate) struct Wiring<'a> {
+    /// The in-process virtual bus (virtual and real-time clocks).
+    pub bus: Option<&'a bus::virtual_bus::VirtualBus>,
+    /// Clock of the run.
+    pub clock: &'a Clock,
+    /// Run options (deadline scaling).
+    pub options: &'a RunOptions,
+    /// Bit rate of the bench's CAN bus.
+    pub bitrate_bps: u32,
+}
+
+/// A step as written in a kind's vocabulary: a one-key mapping that may carry an `id:`.
+pub(crate) trait RawKindStep: OneKey + Debug {
+    /// The step's `id:`, if it has one.
+    fn id(&self) -> Option<&S<String>>;
+}
+
+/// Names a device's CAN frames for the report's frame table (and `armhil decode`): `None` for
+/// a frame that is not this device's, so that on a bench of several devices each frame is
+/// decoded by the device it belongs to, never by guessing from the identifier's width.
+pub trait FrameDecoder: Send + Sync {
+    /// The frame's message name and fields, if it is one of this device's.
+    fn decode(&self, frame: &CanFrame) -> Option<DecodedFrame>;
+}
+
+/// One device kind. Implemented by a unit struct `Kind` in each kind's `mod.rs`.
+#[async_trait]
+pub(crate) trait KindSpec: 'static {
+    /// The kind's name in scenario files (`kind: piper`).
+    const NAME: &'static str;
+
+    /// Validated settings of one device of this kind.
+    type Settings: Debug + Clone + PartialEq + Send + Sync;
+    /// A validated action.
+    type Action: Debug + Clone + PartialEq + Send + Sync;
+    /// A validated condition on the device's state.
+    type Check: Debug + Clone + PartialEq + Send + Sync;
+    /// A validated emulator fault.
+    type Fault: Debug + Clone + PartialEq + Send + Sync;
+
+    /// The device entry as written (after `kind:`).
+    type RawSettings: for<'de> serde::Deserialize<'de> + Debug;
+    /// A step as written (one-key mapping).
+    type RawStep: RawKindStep;
+    /// The conditions of `expect` / `wait_until` as written.
+    type RawConds: for<'de> serde::Deserialize<'de> + Debug;
+    /// A fault as written (one-key mapping).
+    type RawFault: OneKey + Debug;
+
+    /// Every key [`Self::RawConds`] reads (how a condition map finds its kind).
+    const CONDITION_KEYS: &'static [&'static str];
+
+    /// Layer 2 of a device entry.
+    fn validate_settings(ctx: &Ctx<'_>, raw: &Self::RawSettings, at: Pos)
+        -> Res<Self::Settings>;
+    /// Layer 2 of a step: its label for reports and the device step.
+    fn validate_step(
+        ctx: &Ctx<'_>,
+        raw: &Self::RawStep,
+        at: Pos,
+    ) -> Res<(&'static str, DeviceStep<Self::Action>)>;
+    /// Layer 2 of conditions (`step` names the step for messages).
+    fn validate_checks(
+        ctx: &Ctx<'_>,
+        raw: &Self::RawConds,
+        step: &str,
+        at: Pos,
+    ) -> Res<Vec<Self::Check>>;
+    /// Layer 2 of a fault.
+    fn validate_fault(ctx: &Ctx<'_>, raw: &Self::RawFault, at: Pos) -> Res<Self::Fault>;
+
+    /// What a condition wants, for reports.
+    fn describe_check(check: &Self::Check) -> String;
+    /// Short description of a fault for logs and reports.
+    fn describe_fault(fault: &Self::Fault) -> String;
+    /// Why an action needs the in-process emulator, if it does.
+    fn action_needs_emulator(action: &Self::Action) -> Option<String>;
+    /// What `settings` need from the in-process emulator (a separate emulator process on a
+    /// real interface cannot be configured from the scenario); `device` names it in messages.
+    fn in_process_requirements(settings: &Self::Settings, device: &str) -> Vec<String>;
+
+    /// Start the device: its emulator (in-process runs) and its driver.
+    async fn build(
+        name: &str,
+        settings: &Self::Settings,
+        wiring: &Wiring<'_>,
+    ) -> Result<Arc<dyn Device>, String>;
+
+    /// The URDF the 3D views draw this device with, if it is a robot or arm.
+    fn urdf(settings: &Self::Settings) -> Option<&'static str>;
+
+    /// A decoder of this device's CAN frames for reports, if it speaks CAN.
+    fn frame_decoder(settings: &Self::Settings) -> Option<Arc<dyn FrameDecoder>>;
+}
