@@ -3,91 +3,78 @@
 use std::fmt;
 
 /// The Arm API's result codes, with the numeric values the vendor-neutral API defines.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+///
+/// The upper-case names (`ARM_OUT_OF_RANGE`) are the variants' names in screaming snake case.
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Hash,
+    strum::IntoStaticStr,
+    strum::VariantArray,
+    strum::EnumCount,
+)]
+#[strum(serialize_all = "SCREAMING_SNAKE_CASE")]
+#[repr(i32)]
 pub enum AbcErrorCode {
     /// 0: success.
-    Success,
+    Success = 0,
     /// -1: an error no other code describes.
-    UnknownError,
+    UnknownError = -1,
     /// -2: a local wait timed out.
-    Timeout,
+    Timeout = -2,
     /// -3: the handle (connection) is not valid.
-    InvalidHandle,
+    InvalidHandle = -3,
     /// -4: the call is not valid in the current state.
-    InvalidState,
+    InvalidState = -4,
     /// -5: the arm is not connected yet.
-    NotInitialized,
+    NotInitialized = -5,
     /// -6: this vendor cannot do this.
-    NotImplemented,
+    NotImplemented = -6,
     /// -7: an argument is invalid (wrong length, unknown vendor, not finite).
-    InvalidArgument,
+    InvalidArgument = -7,
     /// -50: a configuration parameter is missing or malformed.
-    ParamError,
+    ParamError = -50,
     /// -51: a parameter is outside its range.
-    ParamOutOfRange,
+    ParamOutOfRange = -51,
     /// -100: the arm reports an error.
-    ArmError,
+    ArmError = -100,
     /// -101: the controller refused the command.
-    ArmCtrlFalse,
+    ArmCtrlFalse = -101,
     /// -102: sending to the arm failed.
-    ArmDataSendFailed,
+    ArmDataSendFailed = -102,
     /// -103: receiving from the arm failed (connection lost).
-    ArmDataReceiveFailed,
+    ArmDataReceiveFailed = -103,
     /// -104: the arm's reply could not be understood.
-    ArmReturnDataErr,
+    ArmReturnDataErr = -104,
     /// -105: a check on the arm's side failed.
-    ArmCheckFailed,
+    ArmCheckFailed = -105,
     /// -106: the arm did not answer or arrive in time.
-    ArmTimeout,
+    ArmTimeout = -106,
     /// -107: the target is outside what the arm can reach.
-    ArmOutOfRange,
+    ArmOutOfRange = -107,
 }
 
 impl AbcErrorCode {
     /// Every code, in table order.
-    pub const ALL: [Self; 18] = [
-        Self::Success,
-        Self::UnknownError,
-        Self::Timeout,
-        Self::InvalidHandle,
-        Self::InvalidState,
-        Self::NotInitialized,
-        Self::NotImplemented,
-        Self::InvalidArgument,
-        Self::ParamError,
-        Self::ParamOutOfRange,
-        Self::ArmError,
-        Self::ArmCtrlFalse,
-        Self::ArmDataSendFailed,
-        Self::ArmDataReceiveFailed,
-        Self::ArmReturnDataErr,
-        Self::ArmCheckFailed,
-        Self::ArmTimeout,
-        Self::ArmOutOfRange,
-    ];
+    ///
+    /// An array, built from the derived variant list, so callers iterate it by value.
+    pub const ALL: [Self; <AbcErrorCode as strum::EnumCount>::COUNT] = {
+        let variants = <AbcErrorCode as strum::VariantArray>::VARIANTS;
+        let mut all = [AbcErrorCode::Success; <AbcErrorCode as strum::EnumCount>::COUNT];
+        let mut i = 0;
+        while i < all.len() {
+            all[i] = variants[i];
+            i += 1;
+        }
+        all
+    };
 
     /// The numeric value.
     pub fn value(self) -> i32 {
-        match self {
-            Self::Success => 0,
-            Self::UnknownError => -1,
-            Self::Timeout => -2,
-            Self::InvalidHandle => -3,
-            Self::InvalidState => -4,
-            Self::NotInitialized => -5,
-            Self::NotImplemented => -6,
-            Self::InvalidArgument => -7,
-            Self::ParamError => -50,
-            Self::ParamOutOfRange => -51,
-            Self::ArmError => -100,
-            Self::ArmCtrlFalse => -101,
-            Self::ArmDataSendFailed => -102,
-            Self::ArmDataReceiveFailed => -103,
-            Self::ArmReturnDataErr => -104,
-            Self::ArmCheckFailed => -105,
-            Self::ArmTimeout => -106,
-            Self::ArmOutOfRange => -107,
-        }
+        self as i32
     }
 
     /// The code with numeric value `value`, if it is one.
@@ -97,26 +84,7 @@ impl AbcErrorCode {
 
     /// The upper-case name (`ARM_OUT_OF_RANGE`).
     pub fn name(self) -> &'static str {
-        match self {
-            Self::Success => "SUCCESS",
-            Self::UnknownError => "UNKNOWN_ERROR",
-            Self::Timeout => "TIMEOUT",
-            Self::InvalidHandle => "INVALID_HANDLE",
-            Self::InvalidState => "INVALID_STATE",
-            Self::NotInitialized => "NOT_INITIALIZED",
-            Self::NotImplemented => "NOT_IMPLEMENTED",
-            Self::InvalidArgument => "INVALID_ARGUMENT",
-            Self::ParamError => "PARAM_ERROR",
-            Self::ParamOutOfRange => "PARAM_OUT_OF_RANGE",
-            Self::ArmError => "ARM_ERROR",
-            Self::ArmCtrlFalse => "ARM_CTRL_FALSE",
-            Self::ArmDataSendFailed => "ARM_DATA_SEND_FAILED",
-            Self::ArmDataReceiveFailed => "ARM_DATA_RECEIVE_FAILED",
-            Self::ArmReturnDataErr => "ARM_RETURN_DATA_ERR",
-            Self::ArmCheckFailed => "ARM_CHECK_FAILED",
-            Self::ArmTimeout => "ARM_TIMEOUT",
-            Self::ArmOutOfRange => "ARM_OUT_OF_RANGE",
-        }
+        self.into()
     }
 }
 

@@ -12,7 +12,22 @@ use super::types::{
 };
 
 /// One method of the Arm API, for capability queries.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+///
+/// A method's name is its variant's name in snake case (`move_joint_position`).
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Hash,
+    PartialOrd,
+    Ord,
+    strum::IntoStaticStr,
+    strum::VariantArray,
+    strum::EnumCount,
+)]
+#[strum(serialize_all = "snake_case")]
 pub enum Method {
     /// `connect` / `disconnect`.
     Connect,
@@ -31,6 +46,7 @@ pub enum Method {
     /// `move_pose_follow`.
     MovePoseFollow,
     /// `realtime_arm_state_call_back` and [`ArmInterface::subscribe_realtime`].
+    #[strum(serialize = "realtime_arm_state_call_back")]
     RealtimeState,
     /// `set_arm_slow_stop`.
     SetArmSlowStop,
@@ -82,77 +98,22 @@ pub enum Method {
 
 impl Method {
     /// Every method, in the API's order.
-    pub const ALL: [Self; 32] = [
-        Self::Connect,
-        Self::MoveJointPosition,
-        Self::MoveCartesianLinear,
-        Self::MoveJointPose,
-        Self::MoveJointPositionCanfd,
-        Self::MoveCartesianPoseCanfd,
-        Self::MoveJointFollow,
-        Self::MovePoseFollow,
-        Self::RealtimeState,
-        Self::SetArmSlowStop,
-        Self::SetArmStop,
-        Self::SetArmPause,
-        Self::SetArmContinue,
-        Self::SetPlusMode,
-        Self::SetGripperRelease,
-        Self::SetGripperPick,
-        Self::SetGripperPickOn,
-        Self::SetGripperPosition,
-        Self::GetGripperState,
-        Self::SetHandPosture,
-        Self::SetHandAngle,
-        Self::SetHandFollowAngle,
-        Self::SetHandFollowPos,
-        Self::SetHandSpeed,
-        Self::SetHandForce,
-        Self::GetJointDegree,
-        Self::ForwardKinematics,
-        Self::InverseKinematics,
-        Self::SetModbusMode,
-        Self::CloseModbusMode,
-        Self::WriteRegisters,
-        Self::GetErrorFlag,
-    ];
+    ///
+    /// An array, built from the derived variant list, so callers iterate it by value.
+    pub const ALL: [Self; <Method as strum::EnumCount>::COUNT] = {
+        let variants = <Method as strum::VariantArray>::VARIANTS;
+        let mut all = [Method::Connect; <Method as strum::EnumCount>::COUNT];
+        let mut i = 0;
+        while i < all.len() {
+            all[i] = variants[i];
+            i += 1;
+        }
+        all
+    };
 
     /// The API's method name (`move_joint_position`).
     pub fn name(self) -> &'static str {
-        match self {
-            Self::Connect => "connect",
-            Self::MoveJointPosition => "move_joint_position",
-            Self::MoveCartesianLinear => "move_cartesian_linear",
-            Self::MoveJointPose => "move_joint_pose",
-            Self::MoveJointPositionCanfd => "move_joint_position_canfd",
-            Self::MoveCartesianPoseCanfd => "move_cartesian_pose_canfd",
-            Self::MoveJointFollow => "move_joint_follow",
-            Self::MovePoseFollow => "move_pose_follow",
-            Self::RealtimeState => "realtime_arm_state_call_back",
-            Self::SetArmSlowStop => "set_arm_slow_stop",
-            Self::SetArmStop => "set_arm_stop",
-            Self::SetArmPause => "set_arm_pause",
-            Self::SetArmContinue => "set_arm_continue",
-            Self::SetPlusMode => "set_plus_mode",
-            Self::SetGripperRelease => "set_gripper_release",
-            Self::SetGripperPick => "set_gripper_pick",
-            Self::SetGripperPickOn => "set_gripper_pick_on",
-            Self::SetGripperPosition => "set_gripper_position",
-            Self::GetGripperState => "get_gripper_state",
-            Self::SetHandPosture => "set_hand_posture",
-            Self::SetHandAngle => "set_hand_angle",
-            Self::SetHandFollowAngle => "set_hand_follow_angle",
-            Self::SetHandFollowPos => "set_hand_follow_pos",
-            Self::SetHandSpeed => "set_hand_speed",
-            Self::SetHandForce => "set_hand_force",
-            Self::GetJointDegree => "get_joint_degree",
-            Self::ForwardKinematics => "forward_kinematics",
-            Self::InverseKinematics => "inverse_kinematics",
-            Self::SetModbusMode => "set_modbus_mode",
-            Self::CloseModbusMode => "close_modbus_mode",
-            Self::WriteRegisters => "write_registers",
-            Self::GetErrorFlag => "get_error_flag",
-        }
+        self.into()
     }
 }
 
@@ -414,5 +375,17 @@ mod tests {
         names.sort_unstable();
         names.dedup();
         assert_eq!(names.len(), Method::ALL.len());
+    }
+
+    #[test]
+    fn method_names_are_the_api_names() {
+        assert_eq!(Method::ALL.len(), 32);
+        assert_eq!(Method::ALL[0].name(), "connect");
+        assert_eq!(
+            Method::MoveJointPositionCanfd.name(),
+            "move_joint_position_canfd"
+        );
+        assert_eq!(Method::RealtimeState.name(), "realtime_arm_state_call_back");
+        assert_eq!(Method::GetErrorFlag.name(), "get_error_flag");
     }
 }
