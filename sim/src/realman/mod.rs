@@ -1,7 +1,7 @@
 //! Realman arm-controller emulator (RM65-B and kin; JSON over TCP, realtime push over UDP;
 //! protocol in docs/protocols/realman.md).
 //!
-//! - [`controller`]: the synchronous controller state machine on an [`plant::ArmPlant`]
+//! - [`firmware`]: the synchronous controller state machine on an [`plant::ArmPlant`]
 //!   (1 kHz), answering requests and producing arrival events.
 //! - [`server`]: the transport — TCP listener in real time or in-memory duplex streams in
 //!   virtual time, request framing ([`framing`]), per-client reply streams, the UDP push
@@ -58,9 +58,9 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-pub mod controller;
 pub mod facts;
 pub mod faults;
+pub mod firmware;
 pub mod framing;
 pub mod ioports;
 pub mod kinematics;
@@ -74,8 +74,8 @@ pub mod push;
 pub mod server;
 pub mod wire;
 
-pub use controller::{Answer, ClientId, Controller, ControllerConfig, ControllerError, Event};
 pub use faults::{build_fault, FaultError, RealmanFault, RealmanFaultKind};
+pub use firmware::{Answer, ClientId, Controller, ControllerConfig, ControllerError, Event};
 pub use profile::FirmwareProfile;
 pub use server::{
     EmulatorConfig, RealmanEmulator, RealmanHandle, RealmanMonitor, ServerError, ServerStats,

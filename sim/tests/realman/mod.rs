@@ -1,6 +1,6 @@
 //! The Realman controller emulator.
 
-mod controller;
+mod firmware;
 mod fixtures;
 mod io;
 mod kinematics;

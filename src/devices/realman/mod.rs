@@ -20,7 +20,7 @@ use crate::harness::{Clock, Device};
 use device::RealmanDevice;
 
 /// Whether a Realman emulator's physical state (joint angles and speeds) is finite.
-pub(crate) fn realman_health(s: &sim::realman::controller::ArmSnapshot) -> Result<(), String> {
+pub(crate) fn realman_health(s: &sim::realman::firmware::ArmSnapshot) -> Result<(), String> {
     let angles = s
         .joints_rad
         .iter()
@@ -102,13 +102,19 @@ impl KindSpec for Kind {
     fn validate_checks(
         ctx: &Ctx<'_>,
         raw: &raw::RawConds,
+        _device: usize,
         step: &str,
         at: Pos,
     ) -> Res<Vec<Check>> {
         validate::checks(ctx, raw, step, at)
     }
 
-    fn validate_fault(ctx: &Ctx<'_>, raw: &raw::RawFault, at: Pos) -> Res<Fault> {
+    fn validate_fault(
+        ctx: &Ctx<'_>,
+        raw: &raw::RawFault,
+        _device: Option<usize>,
+        at: Pos,
+    ) -> Res<Fault> {
         validate::fault(ctx, raw, at)
     }
 

@@ -10,7 +10,7 @@ use tokio::time::{sleep, sleep_until, Instant};
 
 use super::tcp::admit;
 use super::{lock, Activity, Outgoing, Shared, EVENT_HEADROOM, READ_CHUNK};
-use crate::realman::controller::{Answer, ClientId};
+use crate::realman::firmware::{Answer, ClientId};
 use crate::realman::framing::{Splitter, Unit, MAX_REQUEST_BYTES};
 use bus::socketcand::http_guard::HttpGuard;
 

@@ -20,8 +20,8 @@ use super::tcp::accept_loop;
 use super::{
     lock, EmulatorConfig, ServerError, ServerStats, Shared, Transport, WireFaults, DUPLEX_BYTES,
 };
-use crate::realman::controller::{ArmSnapshot, Controller};
 use crate::realman::faults::{FaultError, RealmanFault, RealmanFaultKind};
+use crate::realman::firmware::{ArmSnapshot, Controller};
 use crate::realman::params::StateFileError;
 use crate::realman::push::{Datagram, PushFaults, PushSink};
 use crate::supervise::{DeathWatch, Supervisor};

@@ -30,7 +30,7 @@ use std::time::Duration;
 use tokio::sync::{mpsc, watch};
 use tokio::time::Instant;
 
-use super::controller::{ClientId, Controller, ControllerConfig, ControllerError};
+use super::firmware::{ClientId, Controller, ControllerConfig, ControllerError};
 use super::push::{PushFaults, PushStats};
 
 /// Default most simultaneous connections.

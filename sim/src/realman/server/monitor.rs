@@ -7,8 +7,8 @@ use std::sync::Arc;
 use super::core_task::push_targets;
 use super::fault_injection::{clear_fault, inject_fault};
 use super::{lock, ServerStats, Shared};
-use crate::realman::controller::{ArmSnapshot, Controller};
 use crate::realman::faults::{FaultError, RealmanFault, RealmanFaultKind};
+use crate::realman::firmware::{ArmSnapshot, Controller};
 
 /// A shared view of a running emulator, from [`RealmanHandle::monitor`](super::RealmanHandle::monitor).
 #[derive(Clone)]

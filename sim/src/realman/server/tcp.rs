@@ -12,7 +12,7 @@ use tokio::time::{sleep, Instant};
 
 use super::connection::serve_connection;
 use super::{lock, Activity, Client, Outgoing, Shared, CLIENT_QUEUE, EVICT_IDLE_AFTER};
-use crate::realman::controller::ClientId;
+use crate::realman::firmware::ClientId;
 
 /// Accept TCP connections until the emulator stops, each served by its own task.
 pub(super) async fn accept_loop(shared: Arc<Shared>, listener: TcpListener) {

@@ -1,4 +1,5 @@
-//! Realman controller behaviour seen through the wire, in virtual time (in-memory streams).
+//! Realman firmware (the controller's behaviour) seen through the wire, in virtual time
+//! (in-memory streams).
 
 use std::time::Duration;
 
