@@ -5,11 +5,11 @@ use std::sync::{Mutex, PoisonError};
 
 use driver::piper::{ArmStatusCode, CtrlMode, DriverStatus, MotionStatus};
 use serde_json::{json, Map, Value};
-use sim::piper::{FaultKind, NtcBoard, PiperFault, PiperMonitor};
+use sim::fault_args::{FaultArgValue, FaultArgs};
+use sim::piper::{FaultKind, PiperFault, PiperMonitor};
 
 use super::bus_tap::BusTap;
 use super::{Command, LiveSource};
-use crate::harness::elide_long_tokens;
 use crate::harness::report::html::arm_model;
 
 /// A running Piper emulator as the web view sees it.
@@ -54,82 +54,41 @@ impl PiperLive {
     }
 }
 
-fn number(args: &Map<String, Value>, key: &str, kind: FaultKind) -> Result<f64, String> {
-    match args.get(key) {
-        Some(v) => v
-            .as_f64()
-            .or_else(|| v.as_str().and_then(|s| s.trim().parse().ok()))
-            .filter(|x| x.is_finite())
-            .ok_or_else(|| elide_long_tokens(&format!("`{key}` must be a number, got {v}"))),
-        None => kind
-            .params()
-            .iter()
-            .find(|p| p.name == key)
-            .and_then(|p| p.default)
-            .ok_or_else(|| format!("`{}` needs `{key}`", kind.name())),
+/// A page command's arguments as the fault builder reads them: numbers, and words; a number
+/// typed into a text box (`"1.5"`) is a number, an empty box or `null` is not given.
+fn fault_args(args: &Map<String, Value>) -> FaultArgs {
+    let mut out = FaultArgs::new();
+    for (name, value) in args {
+        let value = match value {
+            Value::Null => continue,
+            Value::Number(n) => match n.as_f64() {
+                Some(x) => FaultArgValue::Number(x),
+                None => FaultArgValue::Text(n.to_string()),
+            },
+            Value::String(s) if s.trim().is_empty() => continue,
+            Value::String(s) => s
+                .trim()
+                .parse()
+                .map_or_else(|_| FaultArgValue::Text(s.clone()), FaultArgValue::Number),
+            other => FaultArgValue::Text(other.to_string()),
+        };
+        out.push(name.as_str(), value);
     }
+    out
 }
 
-fn joint(args: &Map<String, Value>, kind: FaultKind) -> Result<u8, String> {
-    let j = number(args, "joint", kind)?;
-    if (1.0..=6.0).contains(&j) && j.fract() == 0.0 {
-        Ok(j as u8)
-    } else {
-        Err(elide_long_tokens(&format!("`joint` must be 1..6, got {j}")))
-    }
-}
-
-/// The fault a page command names, with the table's defaults for omitted parameters. Values
-/// are not range-checked here: injecting checks them against the fault table (the emulator's
-/// `inject`, the one check every caller goes through), and clearing ignores them.
+/// The fault a page command names, built by the emulator's fault builder
+/// ([`sim::piper::build_fault`]): the same defaults, ranges and messages as scenario files.
 pub fn piper_fault(name: &str, args: &Map<String, Value>) -> Result<PiperFault, String> {
-    let kind = FaultKind::from_name(name).ok_or_else(|| format!("no Piper fault `{name}`"))?;
-    let n = |key: &str| number(args, key, kind);
-    Ok(match kind {
-        FaultKind::CommLoss => PiperFault::CommLoss {
-            joint: joint(args, kind)?,
-        },
-        FaultKind::MotorOverTemp => PiperFault::MotorOverTemp {
-            joint: joint(args, kind)?,
-            temp_c: n("temp_c")?,
-        },
-        FaultKind::DriverOverTemp => PiperFault::DriverOverTemp {
-            joint: joint(args, kind)?,
-            temp_c: n("temp_c")?,
-        },
-        FaultKind::OverCurrent => PiperFault::OverCurrent {
-            joint: joint(args, kind)?,
-        },
-        FaultKind::UnderVoltage => PiperFault::UnderVoltage {
-            voltage_v: n("voltage_v")?,
-        },
-        FaultKind::DriverError => PiperFault::DriverError {
-            joint: joint(args, kind)?,
-        },
-        FaultKind::Stall => PiperFault::Stall {
-            joint: joint(args, kind)?,
-        },
-        FaultKind::ExternalTorque => PiperFault::ExternalTorque {
-            joint: joint(args, kind)?,
-            torque_nm: n("torque_nm")?,
-        },
-        FaultKind::Collision => PiperFault::Collision {
-            joint: joint(args, kind)?,
-        },
-        FaultKind::Estop => PiperFault::Estop,
-        FaultKind::NtcOverTemp => {
-            let board = match args.get("board").and_then(Value::as_str) {
-                None | Some("") => NtcBoard::Main,
-                Some(b) => NtcBoard::ALL
-                    .into_iter()
-                    .find(|x| x.name() == b)
-                    .ok_or_else(|| format!("`board` must be main or brake_resistor, got {b}"))?,
-            };
-            PiperFault::NtcOverTemp { board }
-        }
-        FaultKind::GripperSensorFault => PiperFault::GripperSensorFault,
-        FaultKind::TeachButton => PiperFault::TeachButton,
-    })
+    sim::piper::build_fault(name, &fault_args(args)).map_err(|e| e.message)
+}
+
+/// The fault a page's `clear` names: its site (joint, board) checked, its values ignored
+/// ([`FaultKind::build_to_clear`]).
+pub fn piper_fault_to_clear(name: &str, args: &Map<String, Value>) -> Result<PiperFault, String> {
+    FaultKind::named(name)
+        .and_then(|kind| kind.build_to_clear(&fault_args(args)))
+        .map_err(|e| e.message)
 }
 
 fn deg(values: &[f64; 6]) -> Vec<f64> {
@@ -197,10 +156,15 @@ impl LiveSource for PiperLive {
     }
 
     async fn command(&self, command: &Command) -> Result<String, String> {
-        let fault = piper_fault(&command.fault, &command.args)?;
+        let inject = command.action == "inject";
+        let fault = if inject {
+            piper_fault(&command.fault, &command.args)?
+        } else {
+            piper_fault_to_clear(&command.fault, &command.args)?
+        };
         let text = fault.to_string();
         let mut active = self.active.lock().unwrap_or_else(PoisonError::into_inner);
-        if command.action == "inject" {
+        if inject {
             self.monitor.inject(fault).map_err(|e| e.to_string())?;
             active.retain(|(_, f)| !f.same_site(&fault));
             active.push((text.clone(), fault));
@@ -267,25 +231,51 @@ mod tests {
 
     #[test]
     fn an_absurd_value_from_the_page_is_refused_by_the_emulator_table() {
-        let fault = piper_fault(
+        // Refused when the fault is built (the emulator's builder), with the table's message.
+        let err = piper_fault(
             "external_torque",
             &args(json!({"joint": 1, "torque_nm": 1e308})),
         )
-        .unwrap();
-        let err = fault.check().unwrap_err().to_string();
+        .unwrap_err();
         assert_eq!(err, "`torque_nm` must be between -320 and 320, got 1e308");
-        let sag = piper_fault("under_voltage", &args(json!({"voltage_v": -5}))).unwrap();
-        assert!(
-            sag.check().is_err(),
+        let sag = piper_fault("under_voltage", &args(json!({"voltage_v": -5}))).unwrap_err();
+        assert_eq!(
+            sag, "`voltage_v` must be between 0 and 60, got -5",
             "a negative voltage is refused, not clamped"
         );
     }
 
     #[test]
+    fn clearing_from_the_page_needs_the_site_not_the_values() {
+        assert_eq!(
+            piper_fault_to_clear("external_torque", &args(json!({"joint": 2}))),
+            Ok(PiperFault::ExternalTorque {
+                joint: 2,
+                torque_nm: 0.0
+            })
+        );
+        assert!(piper_fault_to_clear("external_torque", &Map::new()).is_err());
+        assert!(piper_fault_to_clear("nope", &Map::new()).is_err());
+    }
+
+    #[test]
+    fn an_argument_the_fault_does_not_take_is_refused() {
+        let err = piper_fault("estop", &args(json!({"joint": 1}))).unwrap_err();
+        assert_eq!(err, "`estop` takes no `joint` (it takes: no arguments)");
+    }
+
+    #[test]
     fn every_fault_of_the_table_can_be_built_from_the_page() {
-        let full = args(json!({"joint": 1, "torque_nm": 1.0}));
+        // What the page sends: each of the fault's parameters, as the page fills them in.
+        let full = args(json!({"joint": 1, "torque_nm": 1.0, "temp_c": 95,
+                               "voltage_v": "12.5", "board": "brake_resistor"}));
         for kind in FaultKind::ALL {
-            let fault = piper_fault(kind.name(), &full).unwrap();
+            let mine: Map<String, Value> = full
+                .iter()
+                .filter(|(name, _)| kind.param(name).is_some())
+                .map(|(name, value)| (name.clone(), value.clone()))
+                .collect();
+            let fault = piper_fault(kind.name(), &mine).unwrap();
             assert_eq!(fault.kind(), kind);
         }
     }

@@ -7,11 +7,12 @@ use std::sync::{Arc, Mutex};
 use bus::virtual_bus::FaultId;
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyTuple};
-use sim::piper::{FaultKind, NtcBoard, PiperConfig, PiperFault, PiperHandle};
+use pyo3::types::{PyDict, PyString, PyTuple};
+use sim::fault_args::{FaultArgValue, FaultArgs as BuilderArgs};
+use sim::piper::{FaultKind, PiperConfig, PiperFault, PiperHandle};
 
 use super::can_place::{open_place, CanPlace};
-use super::{deg, exit_false, fault_args, lock, value_err, FaultArgs};
+use super::{deg, exit_false, lock, value_err};
 use crate::{block_on, sim_runtime};
 
 /// A Piper firmware emulator on a SocketCAN interface or behind a socketcand server.
@@ -32,75 +33,41 @@ impl PiperEmulator {
     }
 }
 
+/// Python's keyword arguments as the emulator's fault builder reads them: `str` is a word,
+/// anything a float accepts (int, float, bool) a number, anything else its `str()` (which
+/// the builder then refuses by name).
+fn builder_args(kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<BuilderArgs> {
+    let mut args = BuilderArgs::new();
+    for (key, value) in kwargs.into_iter().flat_map(|k| k.iter()) {
+        let key: String = key.extract()?;
+        let value = if value.is_instance_of::<PyString>() {
+            FaultArgValue::Text(value.extract()?)
+        } else if let Ok(x) = value.extract::<f64>() {
+            FaultArgValue::Number(x)
+        } else {
+            FaultArgValue::Text(value.str()?.to_string())
+        };
+        args.push(key, value);
+    }
+    Ok(args)
+}
+
+/// The fault `name` with `kwargs`, built by the emulator's one fault builder
+/// ([`FaultKind::build`]; [`FaultKind::build_to_clear`] when `clearing`: the site is needed,
+/// the values are not): the defaults, ranges and messages of scenario files.
 fn piper_fault(
     name: &str,
     kwargs: Option<&Bound<'_, PyDict>>,
     clearing: bool,
 ) -> PyResult<PiperFault> {
-    let kind = FaultKind::from_name(name).ok_or_else(|| {
-        let known: Vec<_> = FaultKind::ALL.iter().map(|k| k.name()).collect();
-        value_err(format!(
-            "unknown Piper fault {name:?} (known: {})",
-            known.join(", ")
-        ))
-    })?;
-    let mut a = fault_args(name, kwargs);
-    // Clearing ignores the values (a temperature, a torque) but needs the site (the joint).
-    let value = |a: &mut FaultArgs<'_, '_>, key: &'static str, default: f64| -> PyResult<f64> {
-        Ok(a.get(key)?.unwrap_or(default))
+    let args = builder_args(kwargs)?;
+    let kind = FaultKind::named(name).map_err(value_err)?;
+    let built = if clearing {
+        kind.build_to_clear(&args)
+    } else {
+        kind.build(&args)
     };
-    let fault = match kind {
-        FaultKind::CommLoss => PiperFault::CommLoss {
-            joint: a.need("joint")?,
-        },
-        FaultKind::MotorOverTemp => PiperFault::MotorOverTemp {
-            joint: a.need("joint")?,
-            temp_c: value(&mut a, "temp_c", 90.0)?,
-        },
-        FaultKind::DriverOverTemp => PiperFault::DriverOverTemp {
-            joint: a.need("joint")?,
-            temp_c: value(&mut a, "temp_c", 90.0)?,
-        },
-        FaultKind::OverCurrent => PiperFault::OverCurrent {
-            joint: a.need("joint")?,
-        },
-        FaultKind::UnderVoltage => PiperFault::UnderVoltage {
-            voltage_v: value(&mut a, "voltage_v", 18.0)?,
-        },
-        FaultKind::DriverError => PiperFault::DriverError {
-            joint: a.need("joint")?,
-        },
-        FaultKind::Stall => PiperFault::Stall {
-            joint: a.need("joint")?,
-        },
-        FaultKind::ExternalTorque => PiperFault::ExternalTorque {
-            joint: a.need("joint")?,
-            torque_nm: if clearing {
-                a.get("torque_nm")?.unwrap_or(0.0)
-            } else {
-                a.need("torque_nm")?
-            },
-        },
-        FaultKind::Collision => PiperFault::Collision {
-            joint: a.need("joint")?,
-        },
-        FaultKind::Estop => PiperFault::Estop,
-        FaultKind::NtcOverTemp => PiperFault::NtcOverTemp {
-            board: match a.get::<String>("board")?.as_deref() {
-                None | Some("main") => NtcBoard::Main,
-                Some("brake_resistor") => NtcBoard::BrakeResistor,
-                Some(other) => {
-                    return Err(value_err(format!(
-                        "board must be main or brake_resistor, got {other:?}"
-                    )))
-                }
-            },
-        },
-        FaultKind::GripperSensorFault => PiperFault::GripperSensorFault,
-        FaultKind::TeachButton => PiperFault::TeachButton,
-    };
-    a.finish()?;
-    Ok(fault)
+    built.map_err(value_err)
 }
 
 #[pymethods]

@@ -44,8 +44,10 @@
 //!   as the firmware ignores them; unknown IDs are ignored.
 //!
 //! Layout: [`codec`] (the emulator's own wire codec), [`profile`] (firmware differences),
-//! [`firmware`] (the synchronous master-controller state machine on the physics world),
-//! [`emulator`] (its async tasks and the [`PiperHandle`]), [`faults`] (the fault API).
+//! [`firmware`] (the synchronous master-controller state machine on the physics world: command
+//! families, feedback, protections), [`emulator`] (its async tasks and the [`PiperHandle`]),
+//! [`faults`] (the fault table and its one builder, [`build_fault`], which scenario files, the
+//! web view and Python all go through).
 
 pub mod codec;
 mod config;
@@ -64,7 +66,7 @@ pub mod trajectory;
 
 pub use config::{PiperConfig, PiperError, BUNDLED_URDF};
 pub use emulator::{PiperEmulator, PiperHandle, PiperMonitor};
-pub use faults::{FaultError, FaultKind, FaultParam, NtcBoard, PiperFault};
+pub use faults::{build_fault, FaultError, FaultKind, FaultParam, NtcBoard, PiperFault};
 pub use firmware::Firmware;
 pub use flash::Flash;
 pub use profile::FirmwareProfile;
