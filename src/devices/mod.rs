@@ -14,9 +14,10 @@ use crate::scenario::onekey::OneKey;
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 
 pub mod contract;
-pub(crate) use contract::{KindSpec, RawKindStep, Wiring};
 pub use contract::{Device, DeviceError, FrameDecoder, Reply, TraceColumn};
+pub(crate) use contract::{KindSpec, RawKindStep, Wiring};
 
+pub mod actuator_group;
 pub mod arm;
 pub mod piper;
 pub mod realman;
@@ -82,6 +83,11 @@ macro_rules! device_kinds {
             /// What this device's settings need from the in-process emulator.
             pub fn in_process_requirements(&self, device: &str) -> Vec<String> {
                 match self { $( Self::$variant(s) => <$module::Kind as KindSpec>::in_process_requirements(s, device), )* }
+            }
+
+            /// The names of the device's parts that steps address (a group's joints).
+            pub fn parts(&self) -> Vec<String> {
+                match self { $( Self::$variant(s) => <$module::Kind as KindSpec>::parts(s), )* }
             }
 
             /// The URDF the 3D views draw this device with, if it is a robot or arm.
@@ -288,17 +294,17 @@ macro_rules! device_kinds {
         }
 
         /// Layer 2 of device conditions.
-        pub(crate) fn validate_checks(ctx: &Ctx<'_>, raw: &RawDeviceConds, step: &str, at: Pos) -> Res<Vec<Check>> {
+        pub(crate) fn validate_checks(ctx: &Ctx<'_>, raw: &RawDeviceConds, device: usize, step: &str, at: Pos) -> Res<Vec<Check>> {
             match raw {
-                $( RawDeviceConds::$variant(r) => Ok(<$module::Kind as KindSpec>::validate_checks(ctx, r, step, at)?
+                $( RawDeviceConds::$variant(r) => Ok(<$module::Kind as KindSpec>::validate_checks(ctx, r, device, step, at)?
                     .into_iter().map(Check::$variant).collect()), )*
             }
         }
 
         /// Layer 2 of a device fault.
-        pub(crate) fn validate_fault(ctx: &Ctx<'_>, raw: &RawDeviceFault, at: Pos) -> Res<DeviceFault> {
+        pub(crate) fn validate_fault(ctx: &Ctx<'_>, raw: &RawDeviceFault, device: Option<usize>, at: Pos) -> Res<DeviceFault> {
             match raw {
-                $( RawDeviceFault::$variant(r) => Ok(DeviceFault::$variant(<$module::Kind as KindSpec>::validate_fault(ctx, r, at)?)), )*
+                $( RawDeviceFault::$variant(r) => Ok(DeviceFault::$variant(<$module::Kind as KindSpec>::validate_fault(ctx, r, device, at)?)), )*
             }
         }
     };
@@ -359,6 +365,7 @@ device_kinds! {
     "robstride" => Robstride(robstride),
     "realman" => Realman(realman),
     "arm" => Arm(arm),
+    "actuator_group" => ActuatorGroup(actuator_group),
 }
 
 impl<'de> Deserialize<'de> for RawDevice {

@@ -62,6 +62,7 @@ pub(crate) fn validate_with(
         .iter()
         .map(|d| (d.name.clone(), d.kind.name()))
         .collect();
+    ctx.parts = bench.devices.iter().map(|d| d.kind.parts()).collect();
     let record = record(ctx, raw.record.as_ref())?;
 
     if raw.steps.value.is_empty() {
@@ -451,7 +452,8 @@ fn fault(ctx: &Ctx<'_>, raw: &S<RawFault>, device: &Option<S<String>>, at: Pos) 
     };
     match &raw.value {
         RawFault::Device(f) => {
-            let fault = devices::validate_fault(ctx, f, fpos)?;
+            let known_device = ctx.device(device, at).ok();
+            let fault = devices::validate_fault(ctx, f, known_device, fpos)?;
             let device = ctx.device_of_kind(
                 device,
                 at,
@@ -612,7 +614,7 @@ fn checks(ctx: &Ctx<'_>, c: &RawConditions, device: usize, step: &str, at: Pos) 
             ),
         ));
     };
-    let checks = devices::validate_checks(ctx, conds, step, at)?;
+    let checks = devices::validate_checks(ctx, conds, device, step, at)?;
     let (name, actual) = &ctx.devices[device];
     if let Some(other) = checks.iter().find(|c| c.kind_name() != *actual) {
         return Err(ctx.err(

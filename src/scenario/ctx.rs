@@ -25,6 +25,9 @@ pub(crate) struct Ctx<'a> {
     pub text: &'a str,
     /// The bench's devices: name and kind, in bench order.
     pub(crate) devices: Vec<(String, &'static str)>,
+    /// The parts of each device a step can address by name (a group's joints), in bench
+    /// order; empty for kinds without named parts.
+    pub(crate) parts: Vec<Vec<String>>,
     /// Every step's `id:`, in step order.
     pub(crate) step_ids: Vec<Option<String>>,
     /// The variant being loaded: requested value, then (once checked against the file's
@@ -33,13 +36,13 @@ pub(crate) struct Ctx<'a> {
     pub(crate) matrix: Option<(String, String)>,
 }
 
-
 impl<'a> Ctx<'a> {
     pub fn new(file: &'a Path, text: &'a str) -> Self {
         Self {
             file,
             text,
             devices: Vec::new(),
+            parts: Vec::new(),
             step_ids: Vec::new(),
             variant: None,
             matrix: None,
@@ -239,6 +242,25 @@ impl<'a> Ctx<'a> {
         Ok(index)
     }
 
+    /// The index of the part `name` of device `device` (a joint of a group), or an error
+    /// listing the device's parts.
+    pub(crate) fn part(&self, device: usize, name: &S<String>, what: &str) -> Res<usize> {
+        let parts = self.parts.get(device).map_or(&[][..], Vec::as_slice);
+        parts.iter().position(|p| *p == name.value).ok_or_else(|| {
+            let names: Vec<&str> = parts.iter().map(String::as_str).collect();
+            self.err(
+                pos(name),
+                format!(
+                    "unknown {what} `{}`; device `{}` has: {}{}",
+                    name.value,
+                    self.devices.get(device).map_or("", |(n, _)| n.as_str()),
+                    names.join(", "),
+                    super::error::suggestion(&name.value, &names)
+                ),
+            )
+        })
+    }
+
     pub(crate) fn choice<T: Copy>(
         &self,
         value: &S<String>,
@@ -262,4 +284,3 @@ impl<'a> Ctx<'a> {
             })
     }
 }
-

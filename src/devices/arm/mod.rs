@@ -17,8 +17,8 @@ pub use model::{
 };
 
 use super::{FrameDecoder, KindSpec, RawKindStep, Wiring};
-use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 use crate::harness::{Clock, Device};
+use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 use device::{ArmDevice, Emulator};
 
 /// Short description of a fault for logs and reports.
@@ -128,13 +128,19 @@ impl KindSpec for Kind {
     fn validate_checks(
         ctx: &Ctx<'_>,
         raw: &raw::RawConds,
+        _device: usize,
         step: &str,
         at: Pos,
     ) -> Res<Vec<Check>> {
         validate::checks(ctx, raw, step, at)
     }
 
-    fn validate_fault(ctx: &Ctx<'_>, raw: &raw::RawFault, at: Pos) -> Res<Fault> {
+    fn validate_fault(
+        ctx: &Ctx<'_>,
+        raw: &raw::RawFault,
+        _device: Option<usize>,
+        at: Pos,
+    ) -> Res<Fault> {
         validate::fault(ctx, raw, at)
     }
 

@@ -84,23 +84,29 @@ pub(crate) trait KindSpec: 'static {
     const CONDITION_KEYS: &'static [&'static str];
 
     /// Layer 2 of a device entry.
-    fn validate_settings(ctx: &Ctx<'_>, raw: &Self::RawSettings, at: Pos)
-        -> Res<Self::Settings>;
+    fn validate_settings(ctx: &Ctx<'_>, raw: &Self::RawSettings, at: Pos) -> Res<Self::Settings>;
     /// Layer 2 of a step: its label for reports and the device step.
     fn validate_step(
         ctx: &Ctx<'_>,
         raw: &Self::RawStep,
         at: Pos,
     ) -> Res<(&'static str, DeviceStep<Self::Action>)>;
-    /// Layer 2 of conditions (`step` names the step for messages).
+    /// Layer 2 of conditions on device `device` (`step` names the step for messages).
     fn validate_checks(
         ctx: &Ctx<'_>,
         raw: &Self::RawConds,
+        device: usize,
         step: &str,
         at: Pos,
     ) -> Res<Vec<Self::Check>>;
-    /// Layer 2 of a fault.
-    fn validate_fault(ctx: &Ctx<'_>, raw: &Self::RawFault, at: Pos) -> Res<Self::Fault>;
+    /// Layer 2 of a fault; `device` is the device it is on when that is already known (the
+    /// entry's `device:`, or the only device on the bench).
+    fn validate_fault(
+        ctx: &Ctx<'_>,
+        raw: &Self::RawFault,
+        device: Option<usize>,
+        at: Pos,
+    ) -> Res<Self::Fault>;
 
     /// What a condition wants, for reports.
     fn describe_check(check: &Self::Check) -> String;
@@ -118,6 +124,13 @@ pub(crate) trait KindSpec: 'static {
         settings: &Self::Settings,
         wiring: &Wiring<'_>,
     ) -> Result<Arc<dyn Device>, String>;
+
+    /// The names of the device's parts that steps, checks and faults address (a group's
+    /// joints); empty for kinds that address none by name.
+    fn parts(settings: &Self::Settings) -> Vec<String> {
+        let _ = settings;
+        Vec::new()
+    }
 
     /// The URDF the 3D views draw this device with, if it is a robot or arm.
     fn urdf(settings: &Self::Settings) -> Option<&'static str>;

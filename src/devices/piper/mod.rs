@@ -28,8 +28,8 @@ pub use validate::DEFAULT_FIRMWARE;
 pub type Check = model::Check;
 
 use super::{FrameDecoder, KindSpec, RawKindStep, Wiring};
-use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 use crate::harness::{Clock, Device, RunOptions, HOST_NODE};
+use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 use device::PiperDevice;
 use emulator::PiperSim;
 
@@ -219,13 +219,19 @@ impl KindSpec for Kind {
     fn validate_checks(
         ctx: &Ctx<'_>,
         raw: &raw::RawConds,
+        _device: usize,
         step: &str,
         at: Pos,
     ) -> Res<Vec<Check>> {
         validate::checks(ctx, raw, step, at)
     }
 
-    fn validate_fault(ctx: &Ctx<'_>, raw: &raw::RawFault, at: Pos) -> Res<Fault> {
+    fn validate_fault(
+        ctx: &Ctx<'_>,
+        raw: &raw::RawFault,
+        _device: Option<usize>,
+        at: Pos,
+    ) -> Res<Fault> {
         validate::fault(ctx, raw, at)
     }
 

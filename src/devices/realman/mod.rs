@@ -15,8 +15,8 @@ pub use model::{
 pub use observe::Observation;
 
 use super::{FrameDecoder, KindSpec, RawKindStep, Wiring};
-use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 use crate::harness::{Clock, Device};
+use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 use device::RealmanDevice;
 
 /// Whether a Realman emulator's physical state (joint angles and speeds) is finite.

@@ -1,7 +1,7 @@
 //! RobStride actuators (`kind: robstride`): a bus of motors on the bench's CAN bus.
 
-mod device;
 mod decode;
+mod device;
 pub mod model;
 mod observe;
 pub(crate) mod raw;
@@ -19,8 +19,8 @@ pub use model::{
 pub use observe::{MotorObservation, Observation};
 
 use super::{FrameDecoder, KindSpec, RawKindStep, Wiring};
-use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 use crate::harness::{Clock, Device, HOST_NODE};
+use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 use device::RobstrideDevice;
 
 /// How long the RobStride driver waits for each reply (its default, before time scaling).
@@ -102,13 +102,19 @@ impl KindSpec for Kind {
     fn validate_checks(
         ctx: &Ctx<'_>,
         raw: &raw::RawConds,
+        _device: usize,
         step: &str,
         at: Pos,
     ) -> Res<Vec<Check>> {
         validate::checks(ctx, raw, step, at)
     }
 
-    fn validate_fault(ctx: &Ctx<'_>, raw: &raw::RawFault, at: Pos) -> Res<Fault> {
+    fn validate_fault(
+        ctx: &Ctx<'_>,
+        raw: &raw::RawFault,
+        _device: Option<usize>,
+        at: Pos,
+    ) -> Res<Fault> {
         validate::fault(ctx, raw, at)
     }
 

@@ -1,0 +1,137 @@
+//! A group of RobStride actuators addressed by joint name (`kind: actuator_group`): the
+//! actuators of one limb on one bus, each driving its joint. Built on the RobStride emulator
+//! and driver, and added through the device-kind contract alone ([`KindSpec`]): its folder and
+//! one registration line.
+
+mod device;
+pub mod model;
+pub(crate) mod raw;
+pub(crate) mod validate;
+
+#[cfg(test)]
+mod tests;
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use bus::CanBus;
+
+pub use model::{
+    GroupAction as Action, GroupCheck as Check, GroupFault as Fault, GroupSettings as Settings,
+};
+
+use super::{Device, FrameDecoder, KindSpec, RawKindStep, Wiring};
+use crate::harness::{Clock, HOST_NODE};
+use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
+use device::GroupDevice;
+
+/// How long the driver waits for each reply (before time scaling): the RobStride driver's.
+const DRIVER_TIMEOUT: Duration = Duration::from_millis(20);
+
+/// The actuator-group kind's contract.
+pub(crate) struct Kind;
+
+#[async_trait::async_trait]
+impl KindSpec for Kind {
+    const NAME: &'static str = "actuator_group";
+    type Settings = Settings;
+    type Action = Action;
+    type Check = Check;
+    type Fault = Fault;
+    type RawSettings = raw::RawSettings;
+    type RawStep = raw::RawStep;
+    type RawConds = raw::RawConds;
+    type RawFault = raw::RawFault;
+    const CONDITION_KEYS: &'static [&'static str] = &raw::CONDITION_KEYS;
+
+    fn validate_settings(ctx: &Ctx<'_>, raw: &raw::RawSettings, at: Pos) -> Res<Settings> {
+        validate::settings(ctx, raw, at)
+    }
+
+    fn validate_step(
+        ctx: &Ctx<'_>,
+        raw: &raw::RawStep,
+        at: Pos,
+    ) -> Res<(&'static str, DeviceStep<Action>)> {
+        validate::step(ctx, raw, at)
+    }
+
+    fn validate_checks(
+        ctx: &Ctx<'_>,
+        raw: &raw::RawConds,
+        device: usize,
+        step: &str,
+        at: Pos,
+    ) -> Res<Vec<Check>> {
+        validate::checks(ctx, raw, device, step, at)
+    }
+
+    fn validate_fault(
+        ctx: &Ctx<'_>,
+        raw: &raw::RawFault,
+        device: Option<usize>,
+        at: Pos,
+    ) -> Res<Fault> {
+        validate::fault(ctx, raw, device, at)
+    }
+
+    fn describe_check(check: &Check) -> String {
+        check.describe()
+    }
+
+    fn describe_fault(fault: &Fault) -> String {
+        format!("{} on joint {}", fault.fault.name(), fault.joint)
+    }
+
+    fn action_needs_emulator(_action: &Action) -> Option<String> {
+        None
+    }
+
+    fn in_process_requirements(_settings: &Settings, _device: &str) -> Vec<String> {
+        Vec::new()
+    }
+
+    async fn build(
+        name: &str,
+        settings: &Settings,
+        wiring: &Wiring<'_>,
+    ) -> Result<Arc<dyn Device>, String> {
+        let (host, emulator): (Arc<dyn CanBus>, _) = match (wiring.bus, wiring.clock) {
+            (Some(bus), _) => {
+                let node: Arc<dyn CanBus> = Arc::new(bus.attach(name));
+                let emulator = device::spawn_emulator(node, settings, wiring.bitrate_bps)
+                    .map_err(|e| format!("device `{name}`: emulator: {e}"))?;
+                (Arc::new(bus.attach(HOST_NODE)), Some(emulator))
+            }
+            (None, Clock::Iface(link)) => (link.open("driver").await?, None),
+            (None, _) => return Err(format!("device `{name}`: no bus to attach to")),
+        };
+        let device = GroupDevice::start(
+            name,
+            settings,
+            host,
+            emulator,
+            wiring.options.deadline(DRIVER_TIMEOUT),
+        )?;
+        Ok(Arc::new(device))
+    }
+
+    fn parts(settings: &Settings) -> Vec<String> {
+        settings.actuators.iter().map(|a| a.joint.clone()).collect()
+    }
+
+    fn urdf(_settings: &Settings) -> Option<&'static str> {
+        // A group is a set of actuators, not a robot: there is nothing to draw.
+        None
+    }
+
+    fn frame_decoder(_settings: &Settings) -> Option<Arc<dyn FrameDecoder>> {
+        None
+    }
+}
+
+impl RawKindStep for raw::RawStep {
+    fn id(&self) -> Option<&S<String>> {
+        raw::RawStep::id(self)
+    }
+}

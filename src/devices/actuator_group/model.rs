@@ -1,0 +1,92 @@
+//! The validated `actuator_group` vocabulary.
+
+use sim::robstride::{Fault as MotorFault, Load, Model};
+
+/// One actuator: the joint it drives and its motor.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GroupActuator {
+    /// The joint's name (how steps, checks, faults and trace columns address it).
+    pub joint: String,
+    /// The motor's CAN ID.
+    pub can_id: u8,
+    /// The motor's model.
+    pub model: Model,
+    /// What the shaft drives.
+    pub load: Load,
+}
+
+/// A group's settings: its actuators in file order, one bus.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GroupSettings {
+    /// The actuators.
+    pub actuators: Vec<GroupActuator>,
+}
+
+/// A joint target: the actuator's index in [`GroupSettings::actuators`] and an angle.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JointTarget {
+    /// Index of the actuator.
+    pub actuator: usize,
+    /// Angle (rad).
+    pub angle_rad: f64,
+}
+
+/// What a `group:` step does.
+#[derive(Debug, Clone, PartialEq)]
+pub enum GroupAction {
+    /// Enable every actuator (each holds where it is) and turn on their active reports.
+    Enable,
+    /// Disable every actuator (torque off).
+    Disable,
+    /// Send each listed joint an operation-control (MIT) command to hold `angle_rad`.
+    Hold {
+        /// The joints and their angles.
+        targets: Vec<JointTarget>,
+        /// Stiffness (N·m/rad).
+        kp: f64,
+        /// Damping (N·m·s/rad).
+        kd: f64,
+    },
+}
+
+/// A condition on the group as the driver sees it.
+#[derive(Debug, Clone, PartialEq)]
+pub enum GroupCheck {
+    /// Each listed joint within `tolerance_rad` of its angle.
+    Joints {
+        /// The joints, their names (for reports) and angles.
+        targets: Vec<(String, JointTarget)>,
+        /// Allowed deviation (rad).
+        tolerance_rad: f64,
+    },
+    /// Exactly these joints' actuators are enabled (running), the others not.
+    EnabledJoints(Vec<String>),
+}
+
+/// A RobStride emulator fault on one actuator.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GroupFault {
+    /// The joint's name.
+    pub joint: String,
+    /// Index of the actuator in [`GroupSettings::actuators`].
+    pub actuator: usize,
+    /// The fault.
+    pub fault: MotorFault,
+}
+
+impl GroupCheck {
+    /// What the condition wants, for reports.
+    pub fn describe(&self) -> String {
+        match self {
+            Self::Joints {
+                targets,
+                tolerance_rad,
+            } => targets
+                .iter()
+                .map(|(name, t)| format!("{name} {:.3} ±{tolerance_rad} rad", t.angle_rad))
+                .collect::<Vec<_>>()
+                .join(", "),
+            Self::EnabledJoints(joints) => format!("enabled: [{}]", joints.join(", ")),
+        }
+    }
+}

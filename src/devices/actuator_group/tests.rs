@@ -1,0 +1,92 @@
+//! Unit tests of the actuator-group grammar: joints resolved by name, errors at their places.
+
+use std::path::Path;
+
+use super::model::{GroupAction, GroupCheck, JointTarget};
+use crate::devices::{Action, Check, DeviceFault};
+use crate::harness::model::{FaultSpec, StepKind};
+use crate::harness::parse_scenario;
+use crate::harness::test_support::error_of;
+
+const BENCH: &str = "bench:\n  devices:\n    arm:\n      kind: actuator_group\n      actuators:\n        - {joint: shoulder, can_id: 11, model: RS03}\n        - {joint: elbow, can_id: 12, model: RS02}\n";
+
+#[test]
+fn joints_are_resolved_by_name_to_their_actuators() {
+    let text = format!(
+        "{BENCH}steps:\n  - group: {{do: hold, targets_rad: {{elbow: -0.4, shoulder: 0.5}}, kp: 40, kd: 2}}\n  - expect: {{joints_rad: {{elbow: -0.4}}, tolerance_rad: 0.01, enabled_joints: [elbow]}}\n  - inject: {{fault: {{actuator_fault: {{joint: elbow, fault: over_temperature}}}}}}\n"
+    );
+    let s = parse_scenario(Path::new("ok.yaml"), &text).expect("valid");
+    let StepKind::Action {
+        action: Action::ActuatorGroup(GroupAction::Hold { targets, kp, kd }),
+        ..
+    } = &s.steps[0].kind
+    else {
+        panic!("not a hold: {:?}", s.steps[0].kind);
+    };
+    // Actuator 0 is the shoulder, 1 the elbow: the file's order, not the map's.
+    assert!(targets.contains(&JointTarget {
+        actuator: 0,
+        angle_rad: 0.5
+    }));
+    assert!(targets.contains(&JointTarget {
+        actuator: 1,
+        angle_rad: -0.4
+    }));
+    assert_eq!((*kp, *kd), (40.0, 2.0));
+    let StepKind::Expect { checks, .. } = &s.steps[1].kind else {
+        panic!("not an expect");
+    };
+    assert_eq!(
+        checks[1],
+        Check::ActuatorGroup(GroupCheck::EnabledJoints(vec!["elbow".to_owned()]))
+    );
+    let StepKind::Inject {
+        fault:
+            FaultSpec::Emulator {
+                fault: DeviceFault::ActuatorGroup(f),
+                ..
+            },
+        ..
+    } = &s.steps[2].kind
+    else {
+        panic!("not an actuator fault");
+    };
+    assert_eq!((f.actuator, f.fault.name()), (1, "over_temperature"));
+}
+
+#[test]
+fn an_unknown_joint_is_named_with_the_groups_joints() {
+    let e = error_of(&format!(
+        "{BENCH}steps:\n  - group: {{do: hold, targets_rad: {{elbw: 0.1}}, kp: 1, kd: 0}}\n"
+    ));
+    assert!(e.starts_with("broken.yaml:9:"), "{e}");
+    assert!(
+        e.contains(
+            "unknown joint `elbw`; device `arm` has: shoulder, elbow; did you mean `elbow`?"
+        ),
+        "{e}"
+    );
+}
+
+#[test]
+fn two_actuators_on_one_can_id_are_refused_at_the_second() {
+    let e = error_of(
+        "bench:\n  devices:\n    arm:\n      kind: actuator_group\n      actuators:\n        - {joint: a, can_id: 11, model: RS03}\n        - {joint: b, can_id: 11, model: RS02}\nsteps:\n  - group: {do: enable}\n",
+    );
+    assert!(e.starts_with("broken.yaml:7:"), "{e}");
+    assert!(
+        e.contains("CAN ID 11 is already joint `a`'s on this bus"),
+        "{e}"
+    );
+}
+
+#[test]
+fn an_unknown_fault_gets_the_emulators_message() {
+    let e = error_of(&format!(
+        "{BENCH}steps:\n  - inject: {{fault: {{actuator_fault: {{joint: elbow, fault: melted}}}}}}\n"
+    ));
+    assert!(
+        e.contains("no RobStride fault `melted`; known: over_temperature"),
+        "{e}"
+    );
+}

@@ -1,0 +1,228 @@
+//! Layer 2 of the `actuator_group` grammar, with file:line:col errors.
+
+use sim::robstride::{Fault as MotorFault, Load, Model};
+
+use super::model::{
+    GroupAction, GroupActuator, GroupCheck, GroupFault, GroupSettings, JointTarget,
+};
+use super::raw::{RawConds, RawFault, RawSettings, RawStep};
+use crate::scenario::{pos, Ctx, DeviceStep, Pos, Res, S};
+
+/// The CAN IDs a RobStride motor takes (the firmware's range).
+const CAN_IDS: std::ops::RangeInclusive<i64> = 1..=127;
+
+/// The group's actuators: joints named once, CAN IDs distinct and in range, known models.
+pub(crate) fn settings(ctx: &Ctx<'_>, raw: &RawSettings, _at: Pos) -> Res<GroupSettings> {
+    if raw.actuators.value.is_empty() {
+        return Err(ctx.err(
+            pos(&raw.actuators),
+            "`actuators` is empty; a group needs at least one",
+        ));
+    }
+    let mut actuators: Vec<GroupActuator> = Vec::new();
+    for entry in &raw.actuators.value {
+        let a = &entry.value;
+        if actuators.iter().any(|b| b.joint == a.joint.value) {
+            return Err(ctx.err(
+                pos(&a.joint),
+                format!("joint `{}` is listed twice", a.joint.value),
+            ));
+        }
+        if !CAN_IDS.contains(&a.can_id.value) {
+            return Err(ctx.err(
+                pos(&a.can_id),
+                format!("`can_id` must be 1..=127, got {}", a.can_id.value),
+            ));
+        }
+        let can_id = a.can_id.value as u8;
+        if let Some(other) = actuators.iter().find(|b| b.can_id == can_id) {
+            return Err(ctx.err(
+                pos(&a.can_id),
+                format!(
+                    "CAN ID {can_id} is already joint `{}`'s on this bus",
+                    other.joint
+                ),
+            ));
+        }
+        let model = Model::from_name(&a.model.value).ok_or_else(|| {
+            let known: Vec<&str> = Model::ALL.iter().map(|m| m.name()).collect();
+            ctx.err(
+                pos(&a.model),
+                format!(
+                    "unknown model `{}`; expected one of: {}",
+                    a.model.value,
+                    known.join(", ")
+                ),
+            )
+        })?;
+        let load = match &a.pendulum {
+            None => Load::default(),
+            Some(p) => Load::Pendulum {
+                mass_kg: positive(ctx, &p.value.mass_kg, "mass_kg")?,
+                length_m: positive(ctx, &p.value.length_m, "length_m")?,
+            },
+        };
+        actuators.push(GroupActuator {
+            joint: a.joint.value.clone(),
+            can_id,
+            model,
+            load,
+        });
+    }
+    Ok(GroupSettings { actuators })
+}
+
+fn positive(ctx: &Ctx<'_>, value: &S<f64>, key: &str) -> Res<f64> {
+    let v = ctx.finite(value, key)?;
+    if v <= 0.0 {
+        return Err(ctx.err(pos(value), format!("`{key}` must be > 0, got {v}")));
+    }
+    Ok(v)
+}
+
+/// Joint names to targets, each joint a part of device `device`.
+fn targets(
+    ctx: &Ctx<'_>,
+    device: usize,
+    raw: &S<std::collections::BTreeMap<String, S<f64>>>,
+    key: &str,
+) -> Res<Vec<(String, JointTarget)>> {
+    if raw.value.is_empty() {
+        return Err(ctx.err(pos(raw), format!("`{key}` names no joint")));
+    }
+    raw.value
+        .iter()
+        .map(|(joint, angle)| {
+            // The map's keys carry no span; the value's place is the joint's line.
+            let name = S::new(joint.clone(), angle.referenced, angle.defined);
+            let actuator = ctx.part(device, &name, "joint")?;
+            let angle_rad = ctx.finite(angle, key)?;
+            Ok((
+                joint.clone(),
+                JointTarget {
+                    actuator,
+                    angle_rad,
+                },
+            ))
+        })
+        .collect()
+}
+
+/// A `group:` step.
+pub(crate) fn step(
+    ctx: &Ctx<'_>,
+    raw: &RawStep,
+    at: Pos,
+) -> Res<(&'static str, DeviceStep<GroupAction>)> {
+    let RawStep::Group(s) = raw;
+    let device = ctx.device(&s.device, at)?;
+    let command = ctx.required(&s.command, "do", "group", at)?;
+    let present: Vec<(&'static str, Pos)> = [
+        ("targets_rad", s.targets_rad.as_ref().map(pos)),
+        ("kp", s.kp.as_ref().map(pos)),
+        ("kd", s.kd.as_ref().map(pos)),
+    ]
+    .into_iter()
+    .filter_map(|(k, p)| p.map(|p| (k, p)))
+    .collect();
+    let (label, action) = match command.value.as_str() {
+        "enable" => {
+            ctx.only_arguments(&present, &[], "enable", "no arguments")?;
+            ("group enable", GroupAction::Enable)
+        }
+        "disable" => {
+            ctx.only_arguments(&present, &[], "disable", "no arguments")?;
+            ("group disable", GroupAction::Disable)
+        }
+        "hold" => {
+            let raw_targets = ctx.required(&s.targets_rad, "targets_rad", "do: hold", at)?;
+            let targets = targets(ctx, device, raw_targets, "targets_rad")?
+                .into_iter()
+                .map(|(_, t)| t)
+                .collect();
+            let kp = ctx.non_negative(ctx.required(&s.kp, "kp", "do: hold", at)?, "kp")?;
+            let kd = ctx.non_negative(ctx.required(&s.kd, "kd", "do: hold", at)?, "kd")?;
+            ("group hold", GroupAction::Hold { targets, kp, kd })
+        }
+        other => {
+            return Err(ctx.err(
+                pos(command),
+                format!(
+                    "`do`: unknown group command `{other}`; expected one of: enable, disable, hold"
+                ),
+            ))
+        }
+    };
+    Ok((
+        label,
+        DeviceStep {
+            device,
+            action,
+            timeout: ctx.timeout(&s.timeout_ms)?,
+            expect_error: ctx.expect_error(&s.expect_error)?,
+        },
+    ))
+}
+
+/// The group's conditions.
+pub(crate) fn checks(
+    ctx: &Ctx<'_>,
+    raw: &RawConds,
+    device: usize,
+    _step: &str,
+    _at: Pos,
+) -> Res<Vec<GroupCheck>> {
+    let mut checks = Vec::new();
+    match (&raw.joints_rad, &raw.tolerance_rad) {
+        (Some(joints), Some(tolerance)) => checks.push(GroupCheck::Joints {
+            targets: targets(ctx, device, joints, "joints_rad")?,
+            tolerance_rad: ctx.non_negative(tolerance, "tolerance_rad")?,
+        }),
+        (Some(joints), None) => {
+            return Err(ctx.err(pos(joints), "`joints_rad` needs `tolerance_rad`"))
+        }
+        (None, Some(tolerance)) => {
+            return Err(ctx.err(pos(tolerance), "`tolerance_rad` needs `joints_rad`"))
+        }
+        (None, None) => {}
+    }
+    if let Some(joints) = &raw.enabled_joints {
+        let mut names: Vec<String> = Vec::new();
+        for joint in &joints.value {
+            ctx.part(device, joint, "joint")?;
+            if names.contains(&joint.value) {
+                return Err(ctx.err(
+                    pos(joint),
+                    format!("joint `{}` is listed twice", joint.value),
+                ));
+            }
+            names.push(joint.value.clone());
+        }
+        checks.push(GroupCheck::EnabledJoints(names));
+    }
+    Ok(checks)
+}
+
+/// `actuator_fault: {joint, fault}`, built by the RobStride emulator's one fault builder.
+pub(crate) fn fault(
+    ctx: &Ctx<'_>,
+    raw: &RawFault,
+    device: Option<usize>,
+    at: Pos,
+) -> Res<GroupFault> {
+    let RawFault::Actuator(f) = raw;
+    let device = device.ok_or_else(|| {
+        ctx.err(
+            at,
+            "the bench has several devices: say which group with `device:`",
+        )
+    })?;
+    let actuator = ctx.part(device, &f.joint, "joint")?;
+    // The emulator's own fault names and message (its one fault builder's).
+    let fault = MotorFault::named(&f.fault.value).map_err(|e| ctx.err(pos(&f.fault), e.message))?;
+    Ok(GroupFault {
+        joint: f.joint.value.clone(),
+        actuator,
+        fault,
+    })
+}
