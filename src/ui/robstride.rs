@@ -4,8 +4,9 @@
 use std::sync::{Mutex, PoisonError};
 use std::time::Instant;
 
-use serde_json::{json, Value};
-use sim::robstride::{Fault, ModeState, MotorSnapshot, RobstrideMonitor};
+use serde_json::{json, Map, Value};
+use sim::fault_args::{FaultArgValue, FaultArgs};
+use sim::robstride::{Fault, ModeState, MotorFault, MotorSnapshot, RobstrideMonitor};
 
 use super::bus_tap::BusTap;
 use super::{Command, LiveSource};
@@ -30,8 +31,9 @@ impl RobstrideLive {
             .map(|f| {
                 json!({"name": f.name(),
                        "description": format!("sets fault word bit 0x{:08X}; clear removes the cause, the latch stays until stop + clear", f.word_bit()),
-                       "params": [{"name": "motor", "description": "CAN ID of the motor",
-                                   "required": true, "default": first}]})
+                       "params": f.params().iter().map(|p| json!({
+                           "name": p.name, "description": format!("{} of the motor", p.what),
+                           "required": true, "default": first})).collect::<Vec<_>>()})
             })
             .collect();
         let hello = json!({"type": "hello", "device": "robstride", "title": title,
@@ -82,19 +84,35 @@ fn motor_json(m: &MotorSnapshot) -> Value {
     })
 }
 
-/// The motor ID and fault of a page command.
-pub fn robstride_fault(command: &Command) -> Result<(u8, Fault), String> {
-    let fault = Fault::from_name(&command.fault)
-        .ok_or_else(|| format!("no RobStride fault `{}`", command.fault))?;
-    let motor = command
-        .args
-        .get("motor")
-        .and_then(|v| v.as_f64().or_else(|| v.as_str()?.trim().parse().ok()))
-        .ok_or_else(|| "`motor` (CAN ID) is required".to_owned())?;
-    if !(1.0..=127.0).contains(&motor) || motor.fract() != 0.0 {
-        return Err(format!("`motor` must be a CAN ID 1..127, got {motor}"));
+/// A page command's arguments as the fault builder reads them: numbers, and words; a number
+/// typed into a text box (`"5"`) is a number, an empty box or `null` is not given.
+fn fault_args(args: &Map<String, Value>) -> FaultArgs {
+    let mut out = FaultArgs::new();
+    for (name, value) in args {
+        let value = match value {
+            Value::Null => continue,
+            Value::Number(n) => match n.as_f64() {
+                Some(x) => FaultArgValue::Number(x),
+                None => FaultArgValue::Text(n.to_string()),
+            },
+            Value::String(s) if s.trim().is_empty() => continue,
+            Value::String(s) => s
+                .trim()
+                .parse()
+                .map_or_else(|_| FaultArgValue::Text(s.clone()), FaultArgValue::Number),
+            other => FaultArgValue::Text(other.to_string()),
+        };
+        out.push(name.as_str(), value);
     }
-    Ok((motor as u8, fault))
+    out
+}
+
+/// The motor ID and fault of a page command, made by the emulator's one fault builder
+/// ([`sim::robstride::build_fault`]): the names, CAN ID range and messages of scenario files.
+pub fn robstride_fault(command: &Command) -> Result<(u8, Fault), String> {
+    sim::robstride::build_fault(&command.fault, &fault_args(&command.args))
+        .map(|MotorFault { motor, fault }| (motor, fault))
+        .map_err(|e| e.message)
 }
 
 #[async_trait::async_trait]
@@ -178,6 +196,16 @@ mod tests {
         assert!(robstride_fault(&command("gate_driver", json!({}))).is_err());
         assert!(robstride_fault(&command("gate_driver", json!({"motor": 200}))).is_err());
         assert!(robstride_fault(&command("melted", json!({"motor": 1}))).is_err());
+        // An argument the fault does not take is refused, as in scenario files (it used to be
+        // ignored here).
+        assert_eq!(
+            robstride_fault(&command("gate_driver", json!({"motor": 1, "joint": 2}))),
+            Err("fault `gate_driver` has no argument `joint`; it takes: motor".to_owned())
+        );
+        assert_eq!(
+            robstride_fault(&command("gate_driver", json!({"motor": ""}))),
+            Err("`gate_driver` needs `motor`".to_owned())
+        );
         for f in Fault::ALL {
             assert_eq!(
                 robstride_fault(&command(f.name(), json!({"motor": 1}))),

@@ -252,3 +252,45 @@ fn a_robstride_fault_is_scheduled_with_its_motor() {
         Some(std::time::Duration::from_millis(50))
     );
 }
+
+/// One fault builder, three front ends: a scenario file, the web view's page command and the
+/// builder itself refuse the same bad arguments with the same message (the scenario's at the
+/// argument's line and column).
+#[test]
+fn scenario_web_view_and_builder_refuse_a_fault_with_one_message() {
+    use sim::fault_args::{FaultArgValue, FaultArgs};
+    let cases: [(&str, FaultArgs, serde_json::Value, &str); 2] = [
+        (
+            "{motor: 128}",
+            FaultArgs::new().with("motor", FaultArgValue::Number(128.0)),
+            serde_json::json!({"motor": 128}),
+            "broken.yaml:5:49: ",
+        ),
+        (
+            "{}",
+            FaultArgs::new(),
+            serde_json::json!({}),
+            "broken.yaml:5:",
+        ),
+    ];
+    for (yaml_args, args, json_args, at) in cases {
+        let builder = sim::robstride::build_fault("under_voltage", &args)
+            .unwrap_err()
+            .message;
+        let text = format!("{BENCH}faults:\n  - {{at_ms: 100, fault: {{under_voltage: {yaml_args}}}}}\nsteps:\n  - wait_ms: 1\n");
+        let scenario = error_of(&text);
+        assert!(
+            scenario.starts_with(at) && scenario.ends_with(&format!(": {builder}")),
+            "{scenario} / {builder}"
+        );
+        let command = crate::ui::Command {
+            action: "inject".into(),
+            fault: "under_voltage".into(),
+            args: json_args.as_object().cloned().unwrap_or_default(),
+        };
+        assert_eq!(
+            crate::ui::robstride::robstride_fault(&command),
+            Err(builder)
+        );
+    }
+}
