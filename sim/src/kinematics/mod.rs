@@ -60,13 +60,14 @@ impl MdhRow {
     }
 }
 
-/// The frame of every joint of the chain `rows` in its base frame, m (frame i turns about its
-/// own z with joint i). `joints_rad` holds one reading per row; a missing one counts as 0.
+/// The frame of every joint of the chain `rows` (base first) in its base frame, m (frame i
+/// turns about its own z with joint i). `joints_rad` holds one reading per row; a missing one
+/// counts as 0.
 pub fn joint_frames_m<'a>(
-    rows: &'a [MdhRow],
+    rows: impl IntoIterator<Item = MdhRow> + 'a,
     joints_rad: &'a [f64],
 ) -> impl Iterator<Item = Isometry3<f64>> + 'a {
-    rows.iter()
+    rows.into_iter()
         .enumerate()
         .scan(Isometry3::identity(), move |acc, (i, row)| {
             let q_rad = joints_rad.get(i).copied().unwrap_or(0.0);

@@ -15,7 +15,7 @@ fn planar() -> [MdhRow; 3] {
 #[test]
 fn frames_follow_the_rows_and_missing_readings_count_as_zero() {
     let rows = planar();
-    let frames: Vec<_> = joint_frames_m(&rows, &[FRAC_PI_2, 0.0]).collect();
+    let frames: Vec<_> = joint_frames_m(rows, &[FRAC_PI_2, 0.0]).collect();
     assert_eq!(frames.len(), 3);
     // Joint 1 turns the arm to +y; the links lie along it.
     let tip = frames[2].translation.vector;
@@ -49,8 +49,8 @@ fn jacobian_columns_match_finite_differences() {
         MdhRow::new(0.0, FRAC_PI_2, 0.2, 0.0),
     ];
     let q = [0.2, -0.4, 0.7, 0.1];
-    let tip_of = |q: &[f64]| joint_frames_m(&rows, q).last().unwrap();
-    let frames: Vec<_> = joint_frames_m(&rows, &q).collect();
+    let tip_of = |q: &[f64]| joint_frames_m(rows, q).last().unwrap();
+    let frames: Vec<_> = joint_frames_m(rows, &q).collect();
     let tip = tip_of(&q);
     let h = 1e-7;
     for (i, frame) in frames.iter().enumerate() {

@@ -134,7 +134,7 @@ impl FlangePose {
 pub fn link_frames_m(variant: DhVariant, q_rad: &[f64; JOINTS]) -> [Isometry3<f64>; JOINTS] {
     let table = variant.table();
     let mut frames = [Isometry3::identity(); JOINTS];
-    for (frame, chained) in frames.iter_mut().zip(joint_frames_m(&table, q_rad)) {
+    for (frame, chained) in frames.iter_mut().zip(joint_frames_m(table, q_rad)) {
         *frame = chained;
     }
     frames

@@ -126,9 +126,11 @@ pub enum IkError {
 /// flange frame, in the base frame. `joints_rad` must have `model.dof` entries (missing ones
 /// count as 0, extra ones are ignored).
 pub fn joint_frames(model: &ArmModel, joints_rad: &[f64]) -> Vec<Isometry3<f64>> {
-    let rows: Vec<kinematics::MdhRow> = model.mdh.iter().map(shared_row).collect();
     let mut frames = Vec::with_capacity(model.dof + 1);
-    frames.extend(kinematics::joint_frames_m(&rows, joints_rad));
+    frames.extend(kinematics::joint_frames_m(
+        model.mdh.iter().map(shared_row),
+        joints_rad,
+    ));
     let last = frames.last().copied().unwrap_or_else(Isometry3::identity);
     frames.push(last * Isometry3::translation(0.0, 0.0, model.flange_d_m));
     frames
