@@ -7,7 +7,10 @@ use std::sync::{Arc, Mutex};
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
-use sim::robstride::{Fault, Model, MotorConfig, RobstrideBus, RobstrideConfig, RobstrideHandle};
+use sim::fault_args::{FaultArgValue, FaultArgs};
+use sim::robstride::{
+    build_fault, Model, MotorConfig, MotorFault, RobstrideBus, RobstrideConfig, RobstrideHandle,
+};
 
 use super::can_place::{open_place, CanPlace};
 use super::{exit_false, lock, value_err};
@@ -21,14 +24,12 @@ pub struct RobstrideEmulator {
     addr: Option<SocketAddr>,
 }
 
-fn robstride_fault(name: &str) -> PyResult<Fault> {
-    Fault::from_name(name).ok_or_else(|| {
-        let known: Vec<_> = Fault::ALL.iter().map(|f| f.name()).collect();
-        value_err(format!(
-            "unknown RobStride fault {name:?} (known: {})",
-            known.join(", ")
-        ))
-    })
+/// The fault `name` on motor `can_id`, made by the emulator's one fault builder
+/// ([`build_fault`]): the names, the CAN ID range and the messages of scenario files.
+fn robstride_fault(name: &str, can_id: i64) -> PyResult<MotorFault> {
+    // Every i64 a CAN ID could be is exact in f64 up to 2^53; beyond, it is refused anyway.
+    let args = FaultArgs::new().with("motor", FaultArgValue::Number(can_id as f64));
+    build_fault(name, &args).map_err(value_err)
 }
 
 impl RobstrideEmulator {
@@ -76,15 +77,15 @@ impl RobstrideEmulator {
 
     /// Injects a fault on motor `can_id`: over_temperature, under_voltage, over_voltage,
     /// phase_a/b/c_over_current, encoder_not_calibrated, stall_overload, gate_driver.
-    fn inject(&self, py: Python<'_>, name: &str, can_id: u8) -> PyResult<()> {
-        let fault = robstride_fault(name)?;
-        self.request(py, move |h| Box::pin(h.inject(can_id, fault)))
+    fn inject(&self, py: Python<'_>, name: &str, can_id: i64) -> PyResult<()> {
+        let MotorFault { motor, fault } = robstride_fault(name, can_id)?;
+        self.request(py, move |h| Box::pin(h.inject(motor, fault)))
     }
 
     /// Removes a fault's cause on motor `can_id`.
-    fn clear(&self, py: Python<'_>, name: &str, can_id: u8) -> PyResult<()> {
-        let fault = robstride_fault(name)?;
-        self.request(py, move |h| Box::pin(h.clear(can_id, fault)))
+    fn clear(&self, py: Python<'_>, name: &str, can_id: i64) -> PyResult<()> {
+        let MotorFault { motor, fault } = robstride_fault(name, can_id)?;
+        self.request(py, move |h| Box::pin(h.clear(motor, fault)))
     }
 
     /// One dictionary per motor: CAN ID, model, mode, angle, speed, torque, temperature,
