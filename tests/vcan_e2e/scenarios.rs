@@ -147,9 +147,9 @@ fn firmware_of(file: &Path) -> String {
         .iter()
         .map(|d| match &d.kind {
             DeviceKind::Piper(p) => p.firmware.clone(),
-            // RobStride, Realman and vendor-neutral arm scenarios are not tagged `vcan` (they
-            // need the in-process emulators; a Realman arm is not on CAN at all).
-            DeviceKind::Robstride(_) | DeviceKind::Realman(_) | DeviceKind::Arm(_) => String::new(),
+            // Only Piper scenarios are tagged `vcan`: the other kinds need their in-process
+            // emulators (a Realman arm is not on CAN at all).
+            _ => String::new(),
         })
         .next()
         .expect("one device")

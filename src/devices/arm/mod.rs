@@ -94,9 +94,6 @@ pub(crate) async fn build(
     Ok(Arc::new(ArmDevice::new(name, arm, emulator)))
 }
 
-#[cfg(test)]
-mod tests;
-
 /// The vendor-neutral arm kind's contract (registered in `crate::devices`).
 pub(crate) struct Kind;
 
@@ -188,3 +185,6 @@ impl RawKindStep for raw::RawStep {
         raw::RawStep::id(self)
     }
 }
+
+#[cfg(test)]
+mod tests;

@@ -153,41 +153,6 @@ pub(crate) async fn build(
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use sim::piper::FaultKind;
-
-    /// The scenario guide's fault table is written by hand: it must name every fault of the
-    /// emulator's table, with its parameters and their defaults.
-    #[test]
-    fn the_scenario_guide_lists_every_emulator_fault_with_its_parameters() {
-        let guide = include_str!("../../../scenarios/README.md");
-        let rows: Vec<&str> = guide
-            .lines()
-            .skip_while(|l| !l.starts_with("| Emulator fault |"))
-            .take_while(|l| l.starts_with('|'))
-            .collect();
-        for kind in FaultKind::ALL {
-            let name = format!("`{}`", kind.name());
-            let row = rows
-                .iter()
-                .find(|r| r.split('|').nth(1).is_some_and(|c| c.contains(&name)))
-                .unwrap_or_else(|| panic!("no row for {name} in scenarios/README.md"));
-            let args = row.split('|').nth(2).unwrap_or_default();
-            for p in kind.params() {
-                assert!(args.contains(p.name), "{name}: `{}` not listed", p.name);
-                if let Some(d) = p.default {
-                    let shown = format!("`{}` ({d})", p.name);
-                    assert!(args.contains(&shown), "{name}: default {shown} not shown");
-                }
-            }
-            if kind.params().is_empty() {
-                assert_eq!(args.trim(), "—", "{name} takes no arguments");
-            }
-        }
-    }
-}
-
 /// The Piper kind's contract (registered in `crate::devices`).
 pub(crate) struct Kind;
 
@@ -271,5 +236,40 @@ impl KindSpec for Kind {
 impl RawKindStep for raw::RawStep {
     fn id(&self) -> Option<&S<String>> {
         raw::RawStep::id(self)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use sim::piper::FaultKind;
+
+    /// The scenario guide's fault table is written by hand: it must name every fault of the
+    /// emulator's table, with its parameters and their defaults.
+    #[test]
+    fn the_scenario_guide_lists_every_emulator_fault_with_its_parameters() {
+        let guide = include_str!("../../../scenarios/README.md");
+        let rows: Vec<&str> = guide
+            .lines()
+            .skip_while(|l| !l.starts_with("| Emulator fault |"))
+            .take_while(|l| l.starts_with('|'))
+            .collect();
+        for kind in FaultKind::ALL {
+            let name = format!("`{}`", kind.name());
+            let row = rows
+                .iter()
+                .find(|r| r.split('|').nth(1).is_some_and(|c| c.contains(&name)))
+                .unwrap_or_else(|| panic!("no row for {name} in scenarios/README.md"));
+            let args = row.split('|').nth(2).unwrap_or_default();
+            for p in kind.params() {
+                assert!(args.contains(p.name), "{name}: `{}` not listed", p.name);
+                if let Some(d) = p.default {
+                    let shown = format!("`{}` ({d})", p.name);
+                    assert!(args.contains(&shown), "{name}: default {shown} not shown");
+                }
+            }
+            if kind.params().is_empty() {
+                assert_eq!(args.trim(), "—", "{name} takes no arguments");
+            }
+        }
     }
 }
