@@ -5,56 +5,45 @@
 use std::sync::{Mutex, PoisonError};
 
 use serde_json::{json, Map, Value};
-use sim::realman::faults::RealmanFaultParam;
+use sim::fault_args::{FaultArgValue, FaultArgs};
 use sim::realman::{RealmanFault, RealmanFaultKind, RealmanMonitor};
 
 use super::{Command, LiveSource};
 use crate::harness::elide_long_tokens;
 use crate::harness::report::html::arm_model;
 
-fn int(args: &Map<String, Value>, p: &RealmanFaultParam) -> Result<u64, String> {
-    let name = p.name;
-    let v = args
-        .get(name)
-        .and_then(|v| v.as_f64().or_else(|| v.as_str()?.trim().parse().ok()))
-        .ok_or_else(|| format!("`{name}` is required"))?;
-    if v.fract() != 0.0 || v < p.min as f64 || v > p.max as f64 {
-        return Err(elide_long_tokens(&format!(
-            "`{name}` must be an integer in {}..={}, got {v}",
-            p.min, p.max
-        )));
+/// A page command's arguments as the fault builder reads them: numbers, and words; a number
+/// typed into a text box (`"600"`) is a number, an empty box or `null` is not given.
+fn fault_args(args: &Map<String, Value>) -> FaultArgs {
+    let mut out = FaultArgs::new();
+    for (name, value) in args {
+        let value = match value {
+            Value::Null => continue,
+            Value::Number(n) => match n.as_f64() {
+                Some(x) => FaultArgValue::Number(x),
+                None => FaultArgValue::Text(n.to_string()),
+            },
+            Value::String(s) if s.trim().is_empty() => continue,
+            Value::String(s) => s
+                .trim()
+                .parse()
+                .map_or_else(|_| FaultArgValue::Text(s.clone()), FaultArgValue::Number),
+            other => FaultArgValue::Text(other.to_string()),
+        };
+        out.push(name.as_str(), value);
     }
-    Ok(v as u64)
+    out
 }
 
-/// The fault a page command names, its values checked against the emulator's table
-/// ([`RealmanFaultKind::params`]).
+/// The fault a page command names, built by the emulator's one fault builder
+/// ([`RealmanFaultKind::build`]): the ranges and messages of scenario files (a huge value is
+/// elided from the message). The page picks the name from the hello's list, so an unknown
+/// name is refused without repeating that list.
 pub fn realman_fault(name: &str, args: &Map<String, Value>) -> Result<RealmanFault, String> {
     let kind = RealmanFaultKind::from_name(name)
         .ok_or_else(|| elide_long_tokens(&format!("no Realman fault `{name}`")))?;
-    let p = kind.params();
-    let n = |i: usize| int(args, &p[i]);
-    let fault = match kind {
-        RealmanFaultKind::ConnectionDrop => RealmanFault::ConnectionDrop { peer_ip: None },
-        RealmanFaultKind::ReplyDelay => RealmanFault::ReplyDelay { delay_ms: n(0)? },
-        RealmanFaultKind::MalformedReply => RealmanFault::MalformedReply {
-            count: n(0)? as u32,
-        },
-        RealmanFaultKind::UdpLoss => RealmanFault::UdpLoss {
-            permille: n(0)? as u16,
-        },
-        RealmanFaultKind::UdpReorder => RealmanFault::UdpReorder,
-        RealmanFaultKind::JointError => RealmanFault::JointError {
-            joint: n(0)? as u8,
-            code: n(1)? as u16,
-        },
-        RealmanFaultKind::PowerLoss => RealmanFault::PowerLoss,
-        RealmanFaultKind::Collision => RealmanFault::Collision,
-        RealmanFaultKind::EStop => RealmanFault::EStop,
-        RealmanFaultKind::GripperFault => RealmanFault::GripperFault { bits: n(0)? as u8 },
-    };
-    fault.check().map_err(|e| e.to_string())?;
-    Ok(fault)
+    kind.build(&fault_args(args))
+        .map_err(|e| elide_long_tokens(&e.message))
 }
 
 /// A running Realman emulator as the web view sees it.
@@ -248,15 +237,23 @@ mod tests {
         assert!(realman_fault("udp_loss", &args(json!({"permille": 1001}))).is_err());
         assert!(realman_fault("reply_delay", &Map::new()).is_err());
         assert!(realman_fault("nope", &Map::new()).is_err());
+        // What the page sends: each of the fault's own parameters (an argument the fault does
+        // not take is refused, as in scenario files and Python).
         let full = args(
             json!({"delay_ms": 1, "count": 1, "permille": 1, "joint": 1, "code": 1, "bits": 1}),
         );
         for kind in RealmanFaultKind::ALL {
+            let mine: Map<String, Value> = full
+                .iter()
+                .filter(|(name, _)| kind.param(name).is_some())
+                .map(|(name, value)| (name.clone(), value.clone()))
+                .collect();
             assert_eq!(
-                realman_fault(kind.name(), &full).map(|f| f.kind()),
+                realman_fault(kind.name(), &mine).map(|f| f.kind()),
                 Ok(kind)
             );
         }
+        assert!(realman_fault("estop", &args(json!({"joint": 1}))).is_err());
     }
 
     /// An RM65-B emulator without sockets, for the view's state.

@@ -6,14 +6,15 @@ use std::sync::Mutex;
 
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyTuple};
+use pyo3::types::{PyDict, PyString, PyTuple};
+use sim::fault_args::{FaultArgValue, FaultArgs as BuilderArgs};
 use sim::realman::model::ArmModel;
 use sim::realman::{
     ControllerConfig, EmulatorConfig, RealmanEmulator as RealmanSpawner, RealmanFault,
     RealmanFaultKind, RealmanHandle, Transport,
 };
 
-use super::{deg, exit_false, fault_args, lock, value_err};
+use super::{deg, exit_false, lock, value_err};
 use crate::{block_on, sim_runtime};
 
 /// A Realman arm controller emulator on TCP (commands) and UDP (realtime push).
@@ -32,47 +33,29 @@ impl RealmanEmulator {
     }
 }
 
+/// Python's keyword arguments as the emulator's fault builder reads them: `str` is a word,
+/// anything else a number (`int`, `float`), or shown by its `str()` if it is not one.
+fn builder_args(kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<BuilderArgs> {
+    let mut args = BuilderArgs::new();
+    for (key, value) in kwargs.into_iter().flat_map(|k| k.iter()) {
+        let key: String = key.extract()?;
+        let value = if value.is_instance_of::<PyString>() {
+            FaultArgValue::Text(value.extract()?)
+        } else if let Ok(x) = value.extract::<f64>() {
+            FaultArgValue::Number(x)
+        } else {
+            FaultArgValue::Text(value.str()?.to_string())
+        };
+        args.push(key, value);
+    }
+    Ok(args)
+}
+
+/// The fault `name` with `kwargs`, built by the emulator's one fault builder
+/// ([`sim::realman::build_fault`]): the ranges, required arguments and messages of scenario
+/// files (`peer_ip="10.0.0.2"` narrows `connection_drop` to one client).
 fn realman_fault(name: &str, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<RealmanFault> {
-    let mut a = fault_args(name, kwargs);
-    let fault = match RealmanFaultKind::from_name(name) {
-        Some(RealmanFaultKind::ConnectionDrop) => RealmanFault::ConnectionDrop {
-            peer_ip: match a.get::<String>("peer_ip")? {
-                Some(ip) => Some(ip.parse::<IpAddr>().map_err(value_err)?),
-                None => None,
-            },
-        },
-        Some(RealmanFaultKind::ReplyDelay) => RealmanFault::ReplyDelay {
-            delay_ms: a.need("delay_ms")?,
-        },
-        Some(RealmanFaultKind::MalformedReply) => RealmanFault::MalformedReply {
-            count: a.get("count")?.unwrap_or(1),
-        },
-        Some(RealmanFaultKind::UdpLoss) => RealmanFault::UdpLoss {
-            permille: a.need("permille")?,
-        },
-        Some(RealmanFaultKind::UdpReorder) => RealmanFault::UdpReorder,
-        Some(RealmanFaultKind::JointError) => RealmanFault::JointError {
-            joint: a.need("joint")?,
-            code: a.get("code")?.unwrap_or(0x0008),
-        },
-        Some(RealmanFaultKind::PowerLoss) => RealmanFault::PowerLoss,
-        Some(RealmanFaultKind::Collision) => RealmanFault::Collision,
-        Some(RealmanFaultKind::EStop) => RealmanFault::EStop,
-        Some(RealmanFaultKind::GripperFault) => RealmanFault::GripperFault {
-            bits: a.get("bits")?.unwrap_or(1),
-        },
-        None => {
-            let known: Vec<_> = RealmanFaultKind::ALL.iter().map(|k| k.name()).collect();
-            return Err(value_err(format!(
-                "unknown Realman fault {name:?} (known: {})",
-                known.join(", ")
-            )));
-        }
-    };
-    a.finish()?;
-    // The emulator's table bounds every value (a reply delay of years is a typo).
-    fault.check().map_err(value_err)?;
-    Ok(fault)
+    sim::realman::build_fault(name, &builder_args(kwargs)?).map_err(|e| value_err(e.message))
 }
 
 #[pymethods]
@@ -120,8 +103,9 @@ impl RealmanEmulator {
     }
 
     /// Injects a fault by name: connection_drop(peer_ip=None), reply_delay(delay_ms),
-    /// malformed_reply(count=1), udp_loss(permille), udp_reorder, joint_error(joint,
-    /// code=8), power_loss, collision, estop, gripper_fault(bits=1).
+    /// malformed_reply(count), udp_loss(permille), udp_reorder, joint_error(joint, code),
+    /// power_loss, collision, estop, gripper_fault(bits). Every argument but `peer_ip` is
+    /// required, as in scenario files; a value out of range raises `ValueError`.
     #[pyo3(signature = (name, **kwargs))]
     fn inject(&self, name: &str, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<()> {
         let fault = realman_fault(name, kwargs)?;

@@ -5,8 +5,8 @@
 use driver::realman::{ArmState, ArmStatus};
 
 use super::model::{RmCond, ARM_STATES, ERRORS};
-use crate::scenario::Signal;
 use crate::harness::TraceColumn;
+use crate::scenario::Signal;
 
 /// What the driver knows now.
 #[derive(Debug, Clone, Default, PartialEq)]

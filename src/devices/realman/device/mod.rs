@@ -25,8 +25,8 @@ use tokio::time::Instant;
 use super::model::{Motion, PoseDeg, RealmanAction, RealmanSettings, RmCommand, RmFault};
 use super::observe::{self, Observation};
 use crate::devices::{Action, Check, DeviceFault};
-use crate::scenario::{ErrorClass, Signal};
 use crate::harness::{Device, DeviceError, Reply, TraceColumn};
+use crate::scenario::{ErrorClass, Signal};
 
 /// The IP the driver's host has on the emulated network (the push aims at it).
 pub(crate) const HOST_IP: Ipv4Addr = Ipv4Addr::new(192, 168, 1, 10);

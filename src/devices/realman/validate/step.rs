@@ -6,9 +6,9 @@ use super::super::model::{Motion, PoseDeg, RealmanAction, RmCommand};
 use super::super::raw::RawRmStep;
 use super::{int_in, jog, joints, params, stream, MAX_CLIENTS};
 use crate::scenario::error::Pos;
-use crate::scenario::{DeviceStep, Near};
 use crate::scenario::S;
 use crate::scenario::{pos, Ctx, Res};
+use crate::scenario::{DeviceStep, Near};
 
 /// Which argument keys each command takes (`client` aside).
 const COMMAND_KEYS: [(&str, &[&str]); 36] = [
@@ -312,7 +312,11 @@ fn command(ctx: &Ctx<'_>, a: &RawRmStep, name: &str, at: Pos) -> Res<RmCommand> 
 }
 
 /// A `realman:` step.
-pub(super) fn realman_step(ctx: &Ctx<'_>, a: &RawRmStep, at: Pos) -> Res<(&'static str, DeviceStep<RealmanAction>)> {
+pub(super) fn realman_step(
+    ctx: &Ctx<'_>,
+    a: &RawRmStep,
+    at: Pos,
+) -> Res<(&'static str, DeviceStep<RealmanAction>)> {
     let names: Vec<&str> = COMMAND_KEYS.iter().map(|(n, _)| *n).collect();
     let Some(cmd) = &a.command else {
         return Err(ctx.err(

@@ -2,6 +2,8 @@
 
 use std::path::Path;
 
+use serde_json::{json, Map, Value};
+use sim::fault_args::{FaultArgValue, FaultArgs};
 use sim::realman::RealmanFault;
 
 use crate::devices::realman::model::{RmCommand, RmCond};
@@ -222,4 +224,88 @@ fn bad_new_commands_are_errors_at_their_line() {
         "{BENCH}steps:\n  - realman: {{do: set_param, name: collision_stage, joint: 1, value: 2}}\n"
     ));
     assert!(e.contains("is not per joint"), "{e}");
+}
+
+/// The headline of the error a fault entry `fault` (flow YAML) gets: `(line:col, message)`.
+fn fault_error(fault: &str) -> (String, String) {
+    let headline = error_of(&format!(
+        "{BENCH}faults:\n  - {{at_ms: 5, fault: {fault}}}\nsteps:\n  - wait_ms: 1\n"
+    ));
+    // `broken.yaml:LINE:COL: message`
+    let mut parts = headline.splitn(4, ':');
+    let _file = parts.next();
+    let place = format!(
+        "{}:{}",
+        parts.next().unwrap_or(""),
+        parts.next().unwrap_or("")
+    );
+    (place, parts.next().unwrap_or_default().trim().to_owned())
+}
+
+fn number(name: &str, value: f64) -> FaultArgs {
+    FaultArgs::new().with(name, FaultArgValue::Number(value))
+}
+
+#[test]
+fn scenario_web_view_and_builder_refuse_bad_arguments_alike() {
+    let cases = [
+        (
+            "{reply_delay: {delay_ms: -5}}",
+            "reply_delay",
+            json!({"delay_ms": -5}),
+            number("delay_ms", -5.0),
+        ),
+        (
+            "{udp_loss: {permille: 1001}}",
+            "udp_loss",
+            json!({"permille": 1001}),
+            number("permille", 1001.0),
+        ),
+        (
+            "{joint_error: {joint: 3}}",
+            "joint_error",
+            json!({"joint": 3}),
+            number("joint", 3.0),
+        ),
+        (
+            "{joint_error: {joint: 8, code: 8}}",
+            "joint_error",
+            json!({"joint": 8, "code": 8}),
+            number("joint", 8.0).with("code", FaultArgValue::Number(8.0)),
+        ),
+        (
+            "{estop: {bits: 1}}",
+            "estop",
+            json!({"bits": 1}),
+            number("bits", 1.0),
+        ),
+        (
+            "{reply_delay: {delay_ms: 600, count: 2}}",
+            "reply_delay",
+            json!({"delay_ms": 600, "count": 2}),
+            number("delay_ms", 600.0).with("count", FaultArgValue::Number(2.0)),
+        ),
+    ];
+    for (yaml, name, page, args) in cases {
+        let built = sim::realman::build_fault(name, &args).unwrap_err().message;
+        assert_eq!(fault_error(yaml).1, built, "{yaml}");
+        let page = page
+            .as_object()
+            .cloned()
+            .unwrap_or_else(Map::<String, Value>::new);
+        let web = crate::ui::realman::realman_fault(name, &page).unwrap_err();
+        assert_eq!(web, built, "{yaml}");
+    }
+    // The scenario error points at the refused argument, or at the fault when one is missing.
+    let line = 5;
+    let value_col = "  - {at_ms: 5, fault: {reply_delay: {delay_ms: ".len() + 1;
+    assert_eq!(
+        fault_error("{reply_delay: {delay_ms: -5}}").0,
+        format!("{line}:{value_col}")
+    );
+    let fault_col = "  - {at_ms: 5, fault: ".len() + 1;
+    assert_eq!(
+        fault_error("{joint_error: {joint: 3}}").0,
+        format!("{line}:{fault_col}")
+    );
 }
