@@ -5,6 +5,7 @@ pub(crate) mod device;
 pub mod model;
 mod observe;
 pub(crate) mod raw;
+mod trace;
 pub(crate) mod validate;
 
 use std::sync::Arc;

@@ -23,7 +23,8 @@ use tokio::task::JoinHandle;
 use tokio::time::Instant;
 
 use super::model::{Motion, PoseDeg, RealmanAction, RealmanSettings, RmCommand, RmFault};
-use super::observe::{self, Observation};
+use super::observe::Observation;
+use super::trace;
 use crate::devices::{Action, Check, DeviceFault};
 use crate::harness::{Device, DeviceError, Reply, TraceColumn};
 use crate::scenario::{ErrorClass, Signal};
@@ -436,11 +437,11 @@ impl Device for RealmanDevice {
     }
 
     fn trace_columns(&self, signals: &[Signal]) -> Vec<TraceColumn> {
-        observe::columns(signals, self.dof)
+        trace::columns(signals, self.dof)
     }
 
     fn trace_row(&self, signals: &[Signal]) -> Vec<Option<f64>> {
-        observe::row(signals, self.dof, &self.observe())
+        trace::row(signals, self.dof, &self.observe())
     }
 
     async fn inject(&self, fault: &DeviceFault) -> Result<(), DeviceError> {
