@@ -18,6 +18,8 @@ mod motion;
 pub mod peripherals;
 mod status;
 mod stream;
+#[cfg(test)]
+mod tests;
 
 use std::collections::BTreeSet;
 use std::path::PathBuf;
