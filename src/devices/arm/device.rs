@@ -15,9 +15,8 @@ use sim::realman::{RealmanFault, RealmanFaultKind, RealmanHandle};
 
 use super::model::{ArmAction, ArmCall, ArmCond, ArmFaultKind, MoveArgs, PoseDeg};
 use crate::devices::piper::device::EmulatorControl;
-use crate::devices::{Action, Check, DeviceFault};
+use crate::devices::{Action, Check, Device, DeviceError, DeviceFault, Reply, TraceColumn};
 use crate::scenario::{ErrorClass, Signal};
-use crate::harness::{Device, DeviceError, Reply, TraceColumn};
 
 /// The vendor's emulator behind the arm.
 pub(crate) enum Emulator {

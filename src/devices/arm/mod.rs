@@ -16,8 +16,8 @@ pub use model::{
     ArmAction as Action, ArmCond as Check, ArmFault as Fault, ArmSettings as Settings,
 };
 
-use super::{FrameDecoder, KindSpec, RawKindStep, Wiring};
-use crate::harness::{Clock, Device};
+use super::{Device, FrameDecoder, KindSpec, RawKindStep, Wiring};
+use crate::harness::Clock;
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 use device::{ArmDevice, Emulator};
 

@@ -238,7 +238,11 @@ fn present_keys(a: &RawArmStep) -> Vec<(&'static str, Pos)> {
 }
 
 /// An `arm` step.
-pub(crate) fn step(ctx: &Ctx<'_>, raw: &RawStep, at: Pos) -> Res<(&'static str, DeviceStep<ArmAction>)> {
+pub(crate) fn step(
+    ctx: &Ctx<'_>,
+    raw: &RawStep,
+    at: Pos,
+) -> Res<(&'static str, DeviceStep<ArmAction>)> {
     let RawStep::Arm(a) = raw;
     let table: Vec<(&str, &str)> = METHODS.iter().map(|(n, _, _)| (*n, *n)).collect();
     let Some(method) = &a.method else {

@@ -18,8 +18,8 @@ pub use model::{
 };
 pub use observe::{MotorObservation, Observation};
 
-use super::{FrameDecoder, KindSpec, RawKindStep, Wiring};
-use crate::harness::{Clock, Device, HOST_NODE};
+use super::{Device, FrameDecoder, KindSpec, RawKindStep, Wiring};
+use crate::harness::{Clock, HOST_NODE};
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 use device::RobstrideDevice;
 

@@ -3,8 +3,8 @@
 
 use super::model::{MODE_STATES, STATUS_FAULTS};
 use super::observe::MotorObservation;
+use crate::devices::TraceColumn;
 use crate::scenario::Signal;
-use crate::harness::TraceColumn;
 
 /// Quanta: 1 mrad, 0.01 rad/s and 0.01 N·m resolve a wrong scale or sign in the snapshot.
 const RAD_Q: f64 = 0.001;

@@ -12,7 +12,7 @@ use sim::robstride::{RobstrideBus, RobstrideHandle};
 use super::{lock, RobstrideDevice};
 use crate::devices::robstride::model::{RobstrideAction, RsCommand, PARAMS};
 use crate::devices::robstride::observe::{f2, near_text};
-use crate::harness::{DeviceError, Reply};
+use crate::devices::{DeviceError, Reply};
 use crate::scenario::ErrorClass;
 
 pub(super) fn classify(error: &RobstrideError) -> ErrorClass {

@@ -13,7 +13,7 @@ use sim::robstride::{RobstrideBus, RobstrideConfig, RobstrideHandle};
 
 use super::model::{MotorCheck, RobstrideSettings, RsFault};
 use crate::devices::{Action, Check, DeviceFault};
-use crate::harness::{Device, DeviceError, Reply, TraceColumn};
+use crate::devices::{Device, DeviceError, Reply, TraceColumn};
 use crate::scenario::Signal;
 
 mod actions;
