@@ -1,17 +1,12 @@
 //! The AgileX Piper arm (`kind: piper`): a CAN device on the bench's bus.
 
-mod actions;
-mod checks;
 pub(crate) mod decode;
 pub(crate) mod device;
-mod emulator;
 pub mod model;
 mod observe;
 pub(crate) mod raw;
-mod stream;
 mod trace;
 pub(crate) mod validate;
-pub mod vocab;
 
 use std::sync::Arc;
 
@@ -31,7 +26,8 @@ use super::{FrameDecoder, KindSpec, RawKindStep, Wiring};
 use crate::harness::{Clock, Device, RunOptions, HOST_NODE};
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 use device::PiperDevice;
-use emulator::PiperSim;
+use device::checks;
+use device::emulator::PiperSim;
 
 /// Short description of a fault for logs and reports (the emulator's: `name joint N value`).
 pub fn describe_fault(fault: &Fault) -> String {

@@ -11,11 +11,11 @@ use driver::piper::{
     MoveKind, PiperError, Pose as DriverPose, RoleOffsets,
 };
 
-use super::device::PiperDevice;
-use super::model::{CtrlMode, Install, MoveMode, Payload, PiperAction, Pose, Role};
 use super::stream;
-use crate::scenario::{ErrorClass, Near};
+use super::PiperDevice;
+use crate::devices::piper::model::{CtrlMode, Install, MoveMode, Payload, PiperAction, Pose, Role};
 use crate::harness::{DeviceError, Reply};
+use crate::scenario::{ErrorClass, Near};
 
 /// Deadline of a `mode` step's confirmation on 0x2A1 when the step gives none.
 const MODE_CONFIRM: Duration = Duration::from_millis(300);

@@ -1,7 +1,7 @@
 //! Evaluate a Piper's conditions against its [`Observation`].
 
-use super::model::Check;
-use super::observe::Observation;
+use crate::devices::piper::model::Check;
+use crate::devices::piper::observe::Observation;
 
 fn fmt1(v: f64) -> String {
     let text = format!("{v:.1}");
@@ -31,7 +31,7 @@ fn opt_list(values: &[Option<f64>]) -> String {
 }
 
 /// What a condition wants, for reports.
-pub(super) fn expected_text(check: &Check) -> String {
+pub(in crate::devices::piper) fn expected_text(check: &Check) -> String {
     match check {
         Check::JointsNear {
             targets_deg,

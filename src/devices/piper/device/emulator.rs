@@ -9,8 +9,8 @@ use sim::piper::{
     FirmwareProfile, Flash, PiperConfig, PiperEmulator, PiperFault, PiperHandle, PiperSimState,
 };
 
-use super::device::EmulatorControl;
-use super::model::{ObstacleShape, PiperSettings};
+use super::EmulatorControl;
+use crate::devices::piper::model::{ObstacleShape, PiperSettings};
 
 /// A running in-process Piper emulator.
 pub(crate) struct PiperSim {

@@ -1,16 +1,24 @@
-//! The Piper on the bench: our driver (always) plus, in-process, the firmware emulator.
+//! The Piper on the bench: our driver (always) plus, in-process, the firmware emulator. One
+//! file per concern: [`actions`] (what each step sends), [`stream`] (re-sent targets),
+//! [`checks`] (evaluating conditions on observations), [`emulator`] (the in-process emulator's
+//! wiring).
+
+mod actions;
+pub(super) mod checks;
+pub(super) mod emulator;
+mod stream;
 
 use std::time::Duration;
 
 use async_trait::async_trait;
 use driver::piper::Piper;
 
-use super::stream::Streams;
-use super::{checks, observe, trace};
+use super::{observe, trace};
 use crate::devices::{Action, Check, DeviceFault};
-use crate::scenario::Signal;
 use crate::harness::{Device, DeviceError, Reply, RunOptions, TraceColumn};
+use crate::scenario::Signal;
 use sim::piper::PiperFault;
+use stream::Streams;
 
 /// Control of an in-process emulator (the seam between the harness and `sim::piper`).
 #[async_trait]

@@ -14,7 +14,7 @@ use tokio::task::JoinHandle;
 use tokio::time::{interval_at, Instant, MissedTickBehavior};
 
 use super::actions::pose;
-use super::model::PiperAction;
+use crate::devices::piper::model::PiperAction;
 
 /// A background task that ends when dropped.
 #[derive(Debug)]

@@ -1,12 +1,13 @@
 //! Layer 2 of the Piper's vocabulary: check its raw settings (here), steps ([`step`]),
-//! conditions ([`checks`]) and emulator faults ([`fault`], the scenario front end of the
-//! emulator's fault builder), with file:line:col errors.
+//! conditions ([`checks`], with the status words of [`vocab`]) and emulator faults ([`fault`],
+//! the scenario front end of the emulator's fault builder), with file:line:col errors.
 
 mod checks;
 mod fault;
 mod step;
 #[cfg(test)]
 mod tests;
+mod vocab;
 
 pub(crate) use checks::checks;
 pub(crate) use fault::fault;
@@ -16,7 +17,6 @@ use std::path::PathBuf;
 
 use super::model::*;
 use super::raw::*;
-use super::vocab;
 use crate::scenario::error::Pos;
 use crate::scenario::Near;
 use crate::scenario::S;
