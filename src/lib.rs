@@ -2,11 +2,12 @@
 //!
 //! Layers, each depending only on those above it: [`scenario`] (the grammar core: spans,
 //! errors, one-key mappings, the validation context), [`devices`] (the device kinds and their
-//! contract), [`harness`] (loading whole scenarios, the runner, reports).
+//! contract, built on [`bench`]: clock, links, run options), [`harness`] (loading whole scenarios, the runner, reports).
 //!
 //! The CLI (`armhil run`, `armhil check`) is a thin layer over this library; [`ui`] is the live
 //! web view of `armhil sim ... --ui`.
 
+pub mod bench;
 pub mod devices;
 pub mod harness;
 pub mod interop;

@@ -6,13 +6,12 @@ use std::sync::Arc;
 use bus::virtual_bus::{VirtualBus, VirtualBusConfig};
 use tokio::time::Instant;
 
-use crate::devices::Device;
 use super::model::Scenario;
 use super::runner::{Clock, Recorder, RunOptions, Spool};
+use crate::devices::Device;
 use crate::devices::Wiring;
 
-/// Node name of the drivers on the virtual bus (bus faults can target it as `host`).
-pub const HOST_NODE: &str = "host";
+pub use crate::bench::HOST_NODE;
 
 /// A built bench.
 pub(crate) struct BuiltBench {
@@ -71,18 +70,4 @@ pub(crate) async fn build(
         recorder,
         t0,
     })
-}
-
-/// Open a SocketCAN socket on `iface` for `what`.
-#[cfg(target_os = "linux")]
-pub(crate) fn open_iface(iface: &str, what: &str) -> Result<Arc<dyn bus::CanBus>, String> {
-    bus::socketcan_bus::SocketCanBus::open(iface)
-        .map(|b| Arc::new(b) as Arc<dyn bus::CanBus>)
-        .map_err(|e| format!("cannot open {iface} for the {what}: {e}"))
-}
-
-/// Open a SocketCAN socket on `iface` for `what`.
-#[cfg(not(target_os = "linux"))]
-pub(crate) fn open_iface(iface: &str, _what: &str) -> Result<Arc<dyn bus::CanBus>, String> {
-    Err(format!("SocketCAN interface `{iface}` needs Linux"))
 }

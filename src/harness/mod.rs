@@ -5,7 +5,6 @@
 //! wrong types, then validation into a typed [`Scenario`]; every error names the file, line and
 //! column ([`ScenarioError`]). The grammar is documented in `scenarios/README.md`.
 
-mod interrupt;
 mod load;
 pub mod model;
 pub(crate) mod raw;
@@ -24,7 +23,7 @@ mod runner;
 
 pub use bench::HOST_NODE;
 pub use crate::devices::contract::{Device, DeviceError, Reply, TraceColumn};
-pub use interrupt::{Interrupt, InterruptTrigger};
+pub use crate::bench::{Interrupt, InterruptTrigger};
 pub use result::{Outcome, ScenarioResult, StepResult, Verdict};
 pub use runner::{
     run_scenario, run_scenario_with, Clock, Link, Omitted, Recording, RunOptions,

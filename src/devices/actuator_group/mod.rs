@@ -21,7 +21,7 @@ pub use model::{
 };
 
 use super::{Device, FrameDecoder, KindSpec, RawKindStep, Wiring};
-use crate::harness::{Clock, HOST_NODE};
+use crate::bench::{Clock, HOST_NODE};
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 use device::GroupDevice;
 

@@ -17,7 +17,7 @@ pub use model::{
 };
 
 use super::{Device, FrameDecoder, KindSpec, RawKindStep, Wiring};
-use crate::harness::Clock;
+use crate::bench::Clock;
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 use device::{ArmDevice, Emulator};
 

@@ -24,7 +24,7 @@ use bus::CanFrame;
 
 pub use device::{Device, DeviceError, Reply, TraceColumn};
 
-use crate::harness::{Clock, RunOptions};
+use crate::bench::{Clock, RunOptions};
 use crate::interop::DecodedFrame;
 use crate::scenario::onekey::OneKey;
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};

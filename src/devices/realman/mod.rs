@@ -15,8 +15,8 @@ pub use model::{
 };
 pub use observe::Observation;
 
-use super::{FrameDecoder, KindSpec, RawKindStep, Wiring};
-use crate::harness::{Clock, Device};
+use super::{Device, FrameDecoder, KindSpec, RawKindStep, Wiring};
+use crate::bench::Clock;
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 use device::RealmanDevice;
 

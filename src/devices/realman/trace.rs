@@ -3,7 +3,7 @@
 
 use super::model::ARM_STATES;
 use super::observe::Observation;
-use crate::harness::TraceColumn;
+use crate::devices::TraceColumn;
 use crate::scenario::Signal;
 
 /// Quanta of the trace (the snapshot stores integer multiples).

@@ -19,7 +19,7 @@ pub use model::{
 pub use observe::{MotorObservation, Observation};
 
 use super::{Device, FrameDecoder, KindSpec, RawKindStep, Wiring};
-use crate::harness::{Clock, HOST_NODE};
+use crate::bench::{Clock, HOST_NODE};
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 use device::RobstrideDevice;
 

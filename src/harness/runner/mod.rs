@@ -10,156 +10,20 @@ use std::time::Duration;
 
 use tokio::time::Instant;
 
-use super::interrupt::Interrupt;
+pub use crate::bench::{
+    Clock, Link, RunOptions, DEFAULT_RECORDING_LIMIT_BYTES, MAX_DEADLINE, MAX_TIME_SCALE,
+};
 
 pub(crate) use recorder::Recorder;
 pub(crate) use spool::Spool;
 pub use spool::{Omitted, Recording};
 
 use super::bench::{self, BuiltBench};
-use crate::devices::Device;
 use super::model::{FaultTrigger, Scenario, Step, StepKind};
 use super::result::{BusSummary, Outcome, ScenarioResult, StepResult, Verdict};
+use crate::devices::Device;
 use faults::FaultControl;
 use trace::Sampler;
-
-/// Which clock and bus a run uses.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub enum Clock {
-    /// In-process emulator and virtual bus on tokio's paused clock (deterministic, fast).
-    Virtual,
-    /// In-process emulator and virtual bus on the real clock.
-    Realtime,
-    /// Real time on a CAN link (a SocketCAN interface or a socketcand server), against a
-    /// separate emulator process (`armhil sim <kind> --iface IF` or `--socketcand ADDR`). Bus
-    /// and emulator faults are unavailable.
-    Iface(Link),
-}
-
-/// The CAN link of a [`Clock::Iface`] run.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub enum Link {
-    /// A SocketCAN interface, e.g. `vcan0`.
-    SocketCan(String),
-    /// A socketcand server at `HOST:PORT`.
-    Socketcand(String),
-}
-
-impl Link {
-    /// The command-line option that names this kind of link, the same for every command
-    /// (`armhil run`, `armhil record`, `armhil sim`): `--iface` or `--socketcand`.
-    pub fn flag(&self) -> &'static str {
-        match self {
-            Self::SocketCan(_) => "--iface",
-            Self::Socketcand(_) => "--socketcand",
-        }
-    }
-
-    /// The `armhil sim` option that serves an emulator on this link.
-    pub fn sim_option(&self) -> String {
-        match self {
-            Self::SocketCan(iface) | Self::Socketcand(iface) => format!("{} {iface}", self.flag()),
-        }
-    }
-
-    /// Connect to the bus as a node; `what` names it in errors (the recorder, or the driver
-    /// of a CAN device kind). On a SocketCAN interface a second socket sees every frame, the
-    /// driver's and the emulator's; on a socketcand server so does a second connection.
-    pub async fn open(&self, what: &str) -> Result<Arc<dyn bus::CanBus>, String> {
-        match self {
-            Self::SocketCan(iface) => bench::open_iface(iface, what),
-            Self::Socketcand(addr) => bus::socketcand::SocketcandBus::connect(addr, "can0")
-                .await
-                .map(|b| Arc::new(b) as Arc<dyn bus::CanBus>)
-                .map_err(|e| format!("cannot reach the socketcand server for the {what}: {e}")),
-        }
-    }
-
-    /// One word for a candump log's interface column: the interface, or `socketcand`.
-    pub fn channel(&self) -> &str {
-        match self {
-            Self::SocketCan(iface) => iface,
-            Self::Socketcand(_) => "socketcand",
-        }
-    }
-}
-
-impl std::fmt::Display for Link {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Self::SocketCan(iface) => write!(f, "{iface}"),
-            Self::Socketcand(addr) => write!(f, "socketcand {addr}"),
-        }
-    }
-}
-
-impl Clock {
-    fn describe(&self) -> String {
-        match self {
-            Self::Virtual => "virtual".to_owned(),
-            Self::Realtime => "realtime".to_owned(),
-            Self::Iface(Link::SocketCan(iface)) => format!("iface {iface}"),
-            Self::Iface(link @ Link::Socketcand(_)) => link.to_string(),
-        }
-    }
-}
-
-/// Options of a run beyond the clock.
-#[derive(Debug, Clone)]
-pub struct RunOptions {
-    /// Multiplies every deadline (`wait_until` and action `timeout_ms`, the driver's own
-    /// timeouts) for real-time runs on slow machines (e.g. a vcan VM under emulation). Waits
-    /// (`wait_ms`) and hold durations (`for_ms`) are not scaled. 1 in virtual time.
-    pub time_scale: f64,
-    /// Added to every deadline after scaling: room for the stalls of a slow machine (a VM
-    /// under emulation pauses a process for seconds now and then), which a factor alone would
-    /// give short deadlines too little of and long ones far too much. Zero in virtual time.
-    pub deadline_slack: Duration,
-    /// Fired to stop the run early (SIGINT, SIGTERM): the step running ends at once, the
-    /// rest are not run, and the outputs are still written.
-    pub interrupt: Interrupt,
-    /// The size limit of each bus recording file (`bus.log`, `bus.pcap`); past it a recording
-    /// keeps the run's beginning and end (see `report` and [`Omitted`]).
-    pub recording_limit_bytes: u64,
-}
-
-/// Default size limit of each bus recording file: 64 MiB holds ~7 minutes of a Piper's
-/// traffic (~3,000 frames/s), the first half and the last of a longer run.
-pub const DEFAULT_RECORDING_LIMIT_BYTES: u64 = 64 << 20;
-
-impl Default for RunOptions {
-    fn default() -> Self {
-        Self {
-            time_scale: 1.0,
-            deadline_slack: Duration::ZERO,
-            interrupt: Interrupt::default(),
-            recording_limit_bytes: DEFAULT_RECORDING_LIMIT_BYTES,
-        }
-    }
-}
-
-impl RunOptions {
-    /// Scale a deadline and add the slack. Never panics: a factor that would overflow
-    /// `Duration` (`Duration::mul_f64` panics there) gives [`MAX_DEADLINE`], and so does
-    /// anything longer; the CLI refuses such factors before a run starts.
-    pub(crate) fn deadline(&self, d: Duration) -> Duration {
-        let scaled = if self.time_scale.is_finite() && self.time_scale > 0.0 {
-            Duration::try_from_secs_f64(d.as_secs_f64() * self.time_scale).unwrap_or(MAX_DEADLINE)
-        } else {
-            d
-        };
-        scaled.saturating_add(self.deadline_slack).min(MAX_DEADLINE)
-    }
-}
-
-/// Longest deadline a run uses, whatever the scaling: 1000 h, the longest a scenario can ask
-/// for (an hour) times the largest `--time-scale` (1000), and far from the overflow of an
-/// `Instant` plus a `Duration` (a panic) that an unbounded deadline risks.
-pub const MAX_DEADLINE: Duration = Duration::from_secs(1000 * 3600);
-
-/// Largest `--time-scale` factor: a VM under full emulation runs ~100× slower than the host;
-/// ten times that still leaves room, and more only turns typos into runs that never end.
-pub const MAX_TIME_SCALE: f64 = 1000.0;
 
 /// Polling period of `wait_until` and `expect … for_ms`.
 const POLL: Duration = Duration::from_millis(1);

@@ -26,7 +26,7 @@ use super::model::{Motion, PoseDeg, RealmanAction, RealmanSettings, RmCommand, R
 use super::observe::Observation;
 use super::trace;
 use crate::devices::{Action, Check, DeviceFault};
-use crate::harness::{Device, DeviceError, Reply, TraceColumn};
+use crate::devices::{Device, DeviceError, Reply, TraceColumn};
 use crate::scenario::{ErrorClass, Signal};
 
 /// The IP the driver's host has on the emulated network (the push aims at it).

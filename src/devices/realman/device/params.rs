@@ -5,7 +5,7 @@
 use driver::realman::{RealmanClient, RealmanError};
 
 use crate::devices::realman::model::{Param, RmCommand};
-use crate::harness::{DeviceError, Reply};
+use crate::devices::{DeviceError, Reply};
 
 use super::derr;
 
