@@ -3,6 +3,7 @@
 //! - [`fault_args`]: a named fault's arguments as a front end read them (scenario, web view,
 //!   Python), for each emulator's one fault builder.
 //! - [`cpu_budget`]: how much a late real-time wake-up may catch up, bounded by CPU.
+//! - [`kinematics`]: modified-DH kinematics (one row type, frames, Jacobian) for every arm.
 //! - [`physics`]: URDF loading into rapier3d, fixed-step stepping, torque-driven joints.
 //! - [`piper`]: the AgileX Piper arm's firmware (CAN, 11-bit IDs).
 //! - [`realman`]: the Realman arm controller (JSON over TCP, realtime push over UDP).

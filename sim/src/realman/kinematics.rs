@@ -10,7 +10,7 @@
 
 use nalgebra::{DMatrix, DVector, Isometry3, Translation3, UnitQuaternion, Vector3};
 
-use super::model::{ArmModel, MdhRow};
+use super::model::ArmModel;
 use crate::kinematics;
 
 /// A flange (or any) pose: position in m, orientation as intrinsic Z-Y-X Euler angles in rad
@@ -128,18 +128,12 @@ pub enum IkError {
 pub fn joint_frames(model: &ArmModel, joints_rad: &[f64]) -> Vec<Isometry3<f64>> {
     let mut frames = Vec::with_capacity(model.dof + 1);
     frames.extend(kinematics::joint_frames_m(
-        model.mdh.iter().map(shared_row),
+        model.mdh.iter().copied(),
         joints_rad,
     ));
     let last = frames.last().copied().unwrap_or_else(Isometry3::identity);
     frames.push(last * Isometry3::translation(0.0, 0.0, model.flange_d_m));
     frames
-}
-
-/// The shared row of a row of the model's table (the same four values; until
-/// `model::MdhRow` is a re-export of [`kinematics::MdhRow`]).
-fn shared_row(row: &MdhRow) -> kinematics::MdhRow {
-    kinematics::MdhRow::new(row.a_m, row.alpha_rad, row.d_m, row.offset_rad)
 }
 
 /// The flange frame in the base frame as an isometry (m).

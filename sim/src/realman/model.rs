@@ -6,30 +6,9 @@
 //! `TransZ(flange_d)` on the last frame. Joint angles are the controller's readings; the MDH
 //! offset is added to them.
 
-/// One row of a modified-DH table (Craig convention, see the module docs).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct MdhRow {
-    /// Link length a(i−1), m.
-    pub a_m: f64,
-    /// Link twist α(i−1), rad.
-    pub alpha_rad: f64,
-    /// Link offset d(i), m.
-    pub d_m: f64,
-    /// Offset added to the joint reading to get the model angle, rad.
-    pub offset_rad: f64,
-}
-
-impl MdhRow {
-    /// A row from the table's units: a mm, α °, d mm, offset °.
-    pub fn from_mm_deg(a_mm: f64, alpha_deg: f64, d_mm: f64, offset_deg: f64) -> Self {
-        Self {
-            a_m: a_mm / 1000.0,
-            alpha_rad: alpha_deg.to_radians(),
-            d_m: d_mm / 1000.0,
-            offset_rad: offset_deg.to_radians(),
-        }
-    }
-}
+/// One row of a modified-DH table (Craig convention, see the module docs): the one MDH row
+/// type of the emulators, shared with the Piper.
+pub use crate::kinematics::MdhRow;
 
 /// One Realman arm model: what the controller's kinematics, planner and the physics plant need.
 ///
