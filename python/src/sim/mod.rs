@@ -11,7 +11,8 @@ mod robstride;
 
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyString};
+use sim::fault_args::{FaultArgValue, FaultArgs};
 use std::sync::Mutex;
 
 use piper::PiperEmulator;
@@ -26,65 +27,23 @@ pub(super) fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
     m.lock().unwrap_or_else(|p| p.into_inner())
 }
 
-/// Fault keyword arguments, checked against what the fault takes.
-pub(super) struct FaultArgs<'a, 'py> {
-    name: &'a str,
-    kwargs: Option<&'a Bound<'py, PyDict>>,
-    used: Vec<&'static str>,
-}
-
-impl<'py> FaultArgs<'_, 'py> {
-    pub(super) fn get<T: for<'a> FromPyObject<'a, 'py>>(
-        &mut self,
-        key: &'static str,
-    ) -> PyResult<Option<T>> {
-        self.used.push(key);
-        match self.kwargs.map(|k| k.get_item(key)).transpose()?.flatten() {
-            None => Ok(None),
-            Some(v) => v.extract::<T>().map(Some).map_err(|_| {
-                value_err(format!(
-                    "fault {:?}: {key} = {v} has the wrong type",
-                    self.name
-                ))
-            }),
-        }
+/// Python's keyword arguments as an emulator's fault builder reads them
+/// (`sim::fault_args`): `str` is a word, anything else a number (`int`, `float`), or shown by
+/// its `str()` if it is not one (the builder then refuses it by name).
+pub(super) fn builder_args(kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<FaultArgs> {
+    let mut args = FaultArgs::new();
+    for (key, value) in kwargs.into_iter().flat_map(|k| k.iter()) {
+        let key: String = key.extract()?;
+        let value = if value.is_instance_of::<PyString>() {
+            FaultArgValue::Text(value.extract()?)
+        } else if let Ok(x) = value.extract::<f64>() {
+            FaultArgValue::Number(x)
+        } else {
+            FaultArgValue::Text(value.str()?.to_string())
+        };
+        args.push(key, value);
     }
-
-    pub(super) fn need<T: for<'a> FromPyObject<'a, 'py>>(
-        &mut self,
-        key: &'static str,
-    ) -> PyResult<T> {
-        self.get(key)?
-            .ok_or_else(|| value_err(format!("fault {:?} needs {key}=…", self.name)))
-    }
-
-    /// Refuses keywords the fault does not take (a typo must not pass silently).
-    pub(super) fn finish(self) -> PyResult<()> {
-        if let Some(k) = self.kwargs {
-            for key in k.keys() {
-                let key: String = key.extract()?;
-                if !self.used.contains(&key.as_str()) {
-                    return Err(value_err(format!(
-                        "fault {:?} takes no argument {key:?} (it takes: {})",
-                        self.name,
-                        self.used.join(", ")
-                    )));
-                }
-            }
-        }
-        Ok(())
-    }
-}
-
-pub(super) fn fault_args<'a, 'py>(
-    name: &'a str,
-    kwargs: Option<&'a Bound<'py, PyDict>>,
-) -> FaultArgs<'a, 'py> {
-    FaultArgs {
-        name,
-        kwargs,
-        used: Vec::new(),
-    }
+    Ok(args)
 }
 
 pub(super) fn deg(rad: &[f64]) -> Vec<f64> {

@@ -7,12 +7,11 @@ use std::sync::{Arc, Mutex};
 use bus::virtual_bus::FaultId;
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyString, PyTuple};
-use sim::fault_args::{FaultArgValue, FaultArgs as BuilderArgs};
+use pyo3::types::{PyDict, PyTuple};
 use sim::piper::{FaultKind, PiperConfig, PiperFault, PiperHandle};
 
 use super::can_place::{open_place, CanPlace};
-use super::{deg, exit_false, lock, value_err};
+use super::{builder_args, deg, exit_false, lock, value_err};
 use crate::{block_on, sim_runtime};
 
 /// A Piper firmware emulator on a SocketCAN interface or behind a socketcand server.
@@ -31,25 +30,6 @@ impl PiperEmulator {
             .map(|(h, p)| f(h, p))
             .ok_or_else(|| PyRuntimeError::new_err("the Piper emulator is stopped"))
     }
-}
-
-/// Python's keyword arguments as the emulator's fault builder reads them: `str` is a word,
-/// anything a float accepts (int, float, bool) a number, anything else its `str()` (which
-/// the builder then refuses by name).
-fn builder_args(kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<BuilderArgs> {
-    let mut args = BuilderArgs::new();
-    for (key, value) in kwargs.into_iter().flat_map(|k| k.iter()) {
-        let key: String = key.extract()?;
-        let value = if value.is_instance_of::<PyString>() {
-            FaultArgValue::Text(value.extract()?)
-        } else if let Ok(x) = value.extract::<f64>() {
-            FaultArgValue::Number(x)
-        } else {
-            FaultArgValue::Text(value.str()?.to_string())
-        };
-        args.push(key, value);
-    }
-    Ok(args)
 }
 
 /// The fault `name` with `kwargs`, built by the emulator's one fault builder

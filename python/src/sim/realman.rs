@@ -6,15 +6,14 @@ use std::sync::Mutex;
 
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyString, PyTuple};
-use sim::fault_args::{FaultArgValue, FaultArgs as BuilderArgs};
+use pyo3::types::{PyDict, PyTuple};
 use sim::realman::model::ArmModel;
 use sim::realman::{
     ControllerConfig, EmulatorConfig, RealmanEmulator as RealmanSpawner, RealmanFault,
     RealmanFaultKind, RealmanHandle, Transport,
 };
 
-use super::{deg, exit_false, lock, value_err};
+use super::{builder_args, deg, exit_false, lock, value_err};
 use crate::{block_on, sim_runtime};
 
 /// A Realman arm controller emulator on TCP (commands) and UDP (realtime push).
@@ -31,24 +30,6 @@ impl RealmanEmulator {
             .map(f)
             .ok_or_else(|| PyRuntimeError::new_err("the Realman emulator is stopped"))
     }
-}
-
-/// Python's keyword arguments as the emulator's fault builder reads them: `str` is a word,
-/// anything else a number (`int`, `float`), or shown by its `str()` if it is not one.
-fn builder_args(kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<BuilderArgs> {
-    let mut args = BuilderArgs::new();
-    for (key, value) in kwargs.into_iter().flat_map(|k| k.iter()) {
-        let key: String = key.extract()?;
-        let value = if value.is_instance_of::<PyString>() {
-            FaultArgValue::Text(value.extract()?)
-        } else if let Ok(x) = value.extract::<f64>() {
-            FaultArgValue::Number(x)
-        } else {
-            FaultArgValue::Text(value.str()?.to_string())
-        };
-        args.push(key, value);
-    }
-    Ok(args)
 }
 
 /// The fault `name` with `kwargs`, built by the emulator's one fault builder
