@@ -5,10 +5,10 @@ use std::sync::{Mutex, PoisonError};
 
 use driver::piper::{ArmStatusCode, CtrlMode, DriverStatus, MotionStatus};
 use serde_json::{json, Map, Value};
-use sim::fault_args::{FaultArgValue, FaultArgs};
 use sim::piper::{FaultKind, PiperFault, PiperMonitor};
 
 use super::bus_tap::BusTap;
+use super::fault_args::fault_args;
 use super::{Command, LiveSource};
 use crate::harness::report::html::arm_model;
 
@@ -52,29 +52,6 @@ impl PiperLive {
             active: Mutex::new(Vec::new()),
         }
     }
-}
-
-/// A page command's arguments as the fault builder reads them: numbers, and words; a number
-/// typed into a text box (`"1.5"`) is a number, an empty box or `null` is not given.
-fn fault_args(args: &Map<String, Value>) -> FaultArgs {
-    let mut out = FaultArgs::new();
-    for (name, value) in args {
-        let value = match value {
-            Value::Null => continue,
-            Value::Number(n) => match n.as_f64() {
-                Some(x) => FaultArgValue::Number(x),
-                None => FaultArgValue::Text(n.to_string()),
-            },
-            Value::String(s) if s.trim().is_empty() => continue,
-            Value::String(s) => s
-                .trim()
-                .parse()
-                .map_or_else(|_| FaultArgValue::Text(s.clone()), FaultArgValue::Number),
-            other => FaultArgValue::Text(other.to_string()),
-        };
-        out.push(name.as_str(), value);
-    }
-    out
 }
 
 /// The fault a page command names, built by the emulator's fault builder

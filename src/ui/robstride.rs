@@ -4,11 +4,11 @@
 use std::sync::{Mutex, PoisonError};
 use std::time::Instant;
 
-use serde_json::{json, Map, Value};
-use sim::fault_args::{FaultArgValue, FaultArgs};
+use serde_json::{json, Value};
 use sim::robstride::{Fault, ModeState, MotorFault, MotorSnapshot, RobstrideMonitor};
 
 use super::bus_tap::BusTap;
+use super::fault_args::fault_args;
 use super::{Command, LiveSource};
 
 /// RobStride actuators on one bus as the web view sees them.
@@ -82,29 +82,6 @@ fn motor_json(m: &MotorSnapshot) -> Value {
         "warning_word": format!("0x{:08X}", m.warning_word),
         "listening": m.listening,
     })
-}
-
-/// A page command's arguments as the fault builder reads them: numbers, and words; a number
-/// typed into a text box (`"5"`) is a number, an empty box or `null` is not given.
-fn fault_args(args: &Map<String, Value>) -> FaultArgs {
-    let mut out = FaultArgs::new();
-    for (name, value) in args {
-        let value = match value {
-            Value::Null => continue,
-            Value::Number(n) => match n.as_f64() {
-                Some(x) => FaultArgValue::Number(x),
-                None => FaultArgValue::Text(n.to_string()),
-            },
-            Value::String(s) if s.trim().is_empty() => continue,
-            Value::String(s) => s
-                .trim()
-                .parse()
-                .map_or_else(|_| FaultArgValue::Text(s.clone()), FaultArgValue::Number),
-            other => FaultArgValue::Text(other.to_string()),
-        };
-        out.push(name.as_str(), value);
-    }
-    out
 }
 
 /// The motor ID and fault of a page command, made by the emulator's one fault builder

@@ -22,12 +22,12 @@ pub use validate::DEFAULT_FIRMWARE;
 /// A Piper condition.
 pub type Check = model::Check;
 
-use super::{FrameDecoder, KindSpec, RawKindStep, Wiring};
-use crate::harness::{Clock, Device, RunOptions, HOST_NODE};
+use super::{Device, FrameDecoder, KindSpec, RawKindStep, Wiring};
+use crate::bench::{Clock, RunOptions, HOST_NODE};
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
-use device::PiperDevice;
 use device::checks;
 use device::emulator::PiperSim;
+use device::PiperDevice;
 
 /// Short description of a fault for logs and reports (the emulator's: `name joint N value`).
 pub fn describe_fault(fault: &Fault) -> String {

@@ -3,8 +3,8 @@
 
 use super::model::PIPER_JOINTS;
 use super::observe::Observation;
+use crate::devices::TraceColumn;
 use crate::scenario::Signal;
-use crate::harness::TraceColumn;
 
 /// Quantum of each signal group: coarse enough to be stable across harmless changes, fine
 /// enough that a wrong scale factor (×10, ×1000, rad for deg) changes the snapshot.

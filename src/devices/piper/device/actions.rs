@@ -14,7 +14,7 @@ use driver::piper::{
 use super::stream;
 use super::PiperDevice;
 use crate::devices::piper::model::{CtrlMode, Install, MoveMode, Payload, PiperAction, Pose, Role};
-use crate::harness::{DeviceError, Reply};
+use crate::devices::{DeviceError, Reply};
 use crate::scenario::{ErrorClass, Near};
 
 /// Deadline of a `mode` step's confirmation on 0x2A1 when the step gives none.

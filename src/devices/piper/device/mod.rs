@@ -14,8 +14,8 @@ use async_trait::async_trait;
 use driver::piper::Piper;
 
 use super::{observe, trace};
-use crate::devices::{Action, Check, DeviceFault};
-use crate::harness::{Device, DeviceError, Reply, RunOptions, TraceColumn};
+use crate::bench::RunOptions;
+use crate::devices::{Action, Check, Device, DeviceError, DeviceFault, Reply, TraceColumn};
 use crate::scenario::Signal;
 use sim::piper::PiperFault;
 use stream::Streams;
