@@ -54,10 +54,7 @@ impl FaultArgs {
 
     /// The value of `name`, if given.
     pub fn get(&self, name: &str) -> Option<&FaultArgValue> {
-        self.entries
-            .iter()
-            .find(|(n, _)| n == name)
-            .map(|(_, v)| v)
+        self.entries.iter().find(|(n, _)| n == name).map(|(_, v)| v)
     }
 
     /// Every argument, in order.
@@ -67,7 +64,11 @@ impl FaultArgs {
 
     /// `Err` naming the first argument not in `known` (the fault's parameters).
     pub fn only(&self, fault: &str, known: &[&str]) -> Result<(), FaultArgError> {
-        match self.entries.iter().find(|(n, _)| !known.contains(&n.as_str())) {
+        match self
+            .entries
+            .iter()
+            .find(|(n, _)| !known.contains(&n.as_str()))
+        {
             None => Ok(()),
             Some((name, _)) => Err(FaultArgError::at(
                 name,

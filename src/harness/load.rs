@@ -2,9 +2,9 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::scenario::error::{from_yaml_error, LoadError, Pos, ScenarioError};
 use super::model::Scenario;
 use super::raw::{RawBench, RawScenario, S};
+use crate::scenario::error::{from_yaml_error, LoadError, Pos, ScenarioError};
 
 /// The bench alone (every other key ignored).
 #[derive(serde::Deserialize)]

@@ -21,9 +21,9 @@ pub mod report;
 pub mod result;
 mod runner;
 
-pub use bench::HOST_NODE;
-pub use crate::devices::contract::{Device, DeviceError, Reply, TraceColumn};
 pub use crate::bench::{Interrupt, InterruptTrigger};
+pub use crate::devices::contract::{Device, DeviceError, Reply, TraceColumn};
+pub use bench::HOST_NODE;
 pub use result::{Outcome, ScenarioResult, StepResult, Verdict};
 pub use runner::{
     run_scenario, run_scenario_with, Clock, Link, Omitted, Recording, RunOptions,

@@ -108,7 +108,6 @@ pub struct Record {
     pub plot: bool,
 }
 
-
 /// A fault and when to apply it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ScheduledFault {
@@ -305,4 +304,3 @@ pub enum StepKind {
         device: usize,
     },
 }
-

@@ -2,10 +2,10 @@
 
 use std::time::Duration;
 
-use crate::scenario::{pos, Ctx, Pos, Res, MAX_NAME_CHARS};
 use super::model::*;
 use super::raw::*;
 use crate::devices;
+use crate::scenario::{pos, Ctx, Pos, Res, MAX_NAME_CHARS};
 
 /// Validate a raw scenario.
 ///

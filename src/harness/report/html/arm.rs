@@ -3,7 +3,6 @@
 
 use serde::Serialize;
 
-
 /// Why a URDF could not be turned into a drawable model.
 #[derive(Debug, thiserror::Error)]
 pub enum ArmModelError {

@@ -14,7 +14,9 @@ fn failed_run() -> ScenarioResult {
     r.bench_info = BenchInfo {
         arm_urdf: Some(sim::piper::BUNDLED_URDF),
         // A Piper's bench: its frames are named by the Piper's decoder.
-        frame_decoders: vec![std::sync::Arc::new(crate::devices::piper::decode::PiperFrames)],
+        frame_decoders: vec![std::sync::Arc::new(
+            crate::devices::piper::decode::PiperFrames,
+        )],
     };
     r.steps.push(StepResult {
         index: 0,
