@@ -29,42 +29,6 @@ use device::checks;
 use device::emulator::PiperSim;
 use device::PiperDevice;
 
-/// Short description of a fault for logs and reports (the emulator's: `name joint N value`).
-pub fn describe_fault(fault: &Fault) -> String {
-    fault.to_string()
-}
-
-/// What a condition wants, for reports.
-pub fn describe_check(check: &Check) -> String {
-    checks::expected_text(check)
-}
-
-/// Piper actions all go through the driver; none needs the in-process emulator.
-pub fn action_needs_emulator(_action: &Action) -> Option<String> {
-    None
-}
-
-/// What `settings` need from the in-process emulator (a separate emulator process on a real
-/// interface cannot be configured from the scenario).
-pub fn in_process_requirements(settings: &Settings, device: &str) -> Vec<String> {
-    let mut needs = Vec::new();
-    if !settings.obstacles.is_empty() {
-        needs.push(format!("obstacles on `{device}`"));
-    }
-    if settings.initial_joints_deg.iter().any(|a| *a != 0.0) {
-        needs.push(format!("initial_joints_deg on `{device}`"));
-    }
-    if settings.gripper_max_mm.is_some() || settings.collision_levels.is_some() {
-        needs.push(format!(
-            "flash settings (gripper_max_mm, collision_levels) on `{device}`"
-        ));
-    }
-    if settings.urdf.is_some() {
-        needs.push(format!("urdf on `{device}`"));
-    }
-    needs
-}
-
 /// The driver's timeouts, scaled for slow real-time runs.
 fn driver_timeouts(options: &RunOptions) -> Timeouts {
     let d = Timeouts::default();
@@ -101,52 +65,6 @@ pub(crate) async fn spawn_default(
         .await
         .map_err(|e| format!("device `{name}`: driver could not connect: {e}"))?;
     Ok((Box::new(sim), driver))
-}
-
-/// Start a Piper: the emulator on the virtual bus (in-process runs) and the driver.
-pub(crate) async fn build(
-    name: &str,
-    settings: &Settings,
-    wiring: &Wiring<'_>,
-) -> Result<Arc<dyn Device>, String> {
-    match (wiring.bus, wiring.clock) {
-        (Some(bus), _) => {
-            let node: Arc<dyn CanBus> = Arc::new(bus.attach(name));
-            let sim = PiperSim::spawn(node, settings)
-                .map_err(|e| format!("device `{name}`: emulator: {e}"))?;
-            let host: Arc<dyn CanBus> = Arc::new(bus.attach(HOST_NODE));
-            let driver = PiperBuilder::new(host)
-                .connect()
-                .await
-                .map_err(|e| format!("device `{name}`: driver could not connect: {e}"))?;
-            Ok(Arc::new(PiperDevice::new(
-                name,
-                driver,
-                Some(Box::new(sim)),
-                wiring.options.clone(),
-            )))
-        }
-        (None, Clock::Iface(link)) => {
-            let host = link.open("driver").await?;
-            let driver = PiperBuilder::new(host)
-                .timeouts(driver_timeouts(wiring.options))
-                .connect()
-                .await
-                .map_err(|e| {
-                    format!(
-                        "device `{name}`: driver could not connect on {link} (is `armhil sim piper {}` running?): {e}",
-                        link.sim_option()
-                    )
-                })?;
-            Ok(Arc::new(PiperDevice::new(
-                name,
-                driver,
-                None,
-                wiring.options.clone(),
-            )))
-        }
-        (None, _) => Err(format!("device `{name}`: no bus to attach to")),
-    }
 }
 
 /// The Piper kind's contract (registered in `crate::devices`).
@@ -196,28 +114,86 @@ impl KindSpec for Kind {
         validate::fault(ctx, raw, at)
     }
 
+    /// What a condition wants, for reports.
     fn describe_check(check: &Check) -> String {
-        describe_check(check)
+        checks::expected_text(check)
     }
 
+    /// Short description of a fault for logs and reports (the emulator's: `name joint N value`).
     fn describe_fault(fault: &Fault) -> String {
-        describe_fault(fault)
+        fault.to_string()
     }
 
-    fn action_needs_emulator(action: &Action) -> Option<String> {
-        action_needs_emulator(action)
+    /// Piper actions all go through the driver; none needs the in-process emulator.
+    fn action_needs_emulator(_action: &Action) -> Option<String> {
+        None
     }
 
+    /// What `settings` need from the in-process emulator (a separate emulator process on a real
+    /// interface cannot be configured from the scenario).
     fn in_process_requirements(settings: &Settings, device: &str) -> Vec<String> {
-        in_process_requirements(settings, device)
+        let mut needs = Vec::new();
+        if !settings.obstacles.is_empty() {
+            needs.push(format!("obstacles on `{device}`"));
+        }
+        if settings.initial_joints_deg.iter().any(|a| *a != 0.0) {
+            needs.push(format!("initial_joints_deg on `{device}`"));
+        }
+        if settings.gripper_max_mm.is_some() || settings.collision_levels.is_some() {
+            needs.push(format!(
+                "flash settings (gripper_max_mm, collision_levels) on `{device}`"
+            ));
+        }
+        if settings.urdf.is_some() {
+            needs.push(format!("urdf on `{device}`"));
+        }
+        needs
     }
 
+    /// Start a Piper: the emulator on the virtual bus (in-process runs) and the driver.
     async fn build(
         name: &str,
         settings: &Settings,
         wiring: &Wiring<'_>,
     ) -> Result<Arc<dyn Device>, String> {
-        build(name, settings, wiring).await
+        match (wiring.bus, wiring.clock) {
+            (Some(bus), _) => {
+                let node: Arc<dyn CanBus> = Arc::new(bus.attach(name));
+                let sim = PiperSim::spawn(node, settings)
+                    .map_err(|e| format!("device `{name}`: emulator: {e}"))?;
+                let host: Arc<dyn CanBus> = Arc::new(bus.attach(HOST_NODE));
+                let driver = PiperBuilder::new(host)
+                    .connect()
+                    .await
+                    .map_err(|e| format!("device `{name}`: driver could not connect: {e}"))?;
+                Ok(Arc::new(PiperDevice::new(
+                    name,
+                    driver,
+                    Some(Box::new(sim)),
+                    wiring.options.clone(),
+                )))
+            }
+            (None, Clock::Iface(link)) => {
+                let host = link.open("driver").await?;
+                let driver = PiperBuilder::new(host)
+                    .timeouts(driver_timeouts(wiring.options))
+                    .connect()
+                    .await
+                    .map_err(|e| {
+                        format!(
+                            "device `{name}`: driver could not connect on {link} (is `armhil sim piper {}` running?): {e}",
+                            link.sim_option()
+                        )
+                    })?;
+                Ok(Arc::new(PiperDevice::new(
+                    name,
+                    driver,
+                    None,
+                    wiring.options.clone(),
+                )))
+            }
+            (None, _) => Err(format!("device `{name}`: no bus to attach to")),
+        }
     }
 
     fn urdf(_settings: &Settings) -> Option<&'static str> {

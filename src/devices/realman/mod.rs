@@ -35,43 +35,6 @@ pub(crate) fn realman_health(s: &sim::realman::firmware::ArmSnapshot) -> Result<
     crate::devices::finite_state(angles.chain(speeds))
 }
 
-/// Short description of a fault for logs and reports.
-pub fn describe_fault(fault: &Fault) -> String {
-    fault.describe()
-}
-
-/// What a condition wants, for reports.
-pub fn describe_check(check: &Check) -> String {
-    check.expected_text()
-}
-
-/// Every Realman action goes through the driver.
-pub fn action_needs_emulator(_action: &Action) -> Option<String> {
-    None
-}
-
-/// A Realman arm is always emulated in-process (it is not a CAN device: `--iface` runs cannot
-/// reach it).
-pub fn in_process_requirements(_settings: &Settings, device: &str) -> Vec<String> {
-    vec![format!(
-        "the Realman arm `{device}` (TCP/UDP, not on a CAN interface)"
-    )]
-}
-
-/// Start a Realman arm: the emulator on in-memory streams and the driver.
-pub(crate) async fn build(
-    name: &str,
-    settings: &Settings,
-    wiring: &Wiring<'_>,
-) -> Result<Arc<dyn Device>, String> {
-    if let Clock::Iface(iface) = wiring.clock {
-        return Err(format!(
-            "device `{name}`: a Realman arm speaks TCP/UDP, not CAN; it cannot run on {iface}"
-        ));
-    }
-    Ok(Arc::new(RealmanDevice::start(name, settings).await?))
-}
-
 /// The Realman kind's contract (registered in `crate::devices`).
 pub(crate) struct Kind;
 
@@ -119,28 +82,41 @@ impl KindSpec for Kind {
         validate::fault(ctx, raw, at)
     }
 
+    /// What a condition wants, for reports.
     fn describe_check(check: &Check) -> String {
-        describe_check(check)
+        check.expected_text()
     }
 
+    /// Short description of a fault for logs and reports.
     fn describe_fault(fault: &Fault) -> String {
-        describe_fault(fault)
+        fault.describe()
     }
 
-    fn action_needs_emulator(action: &Action) -> Option<String> {
-        action_needs_emulator(action)
+    /// Every Realman action goes through the driver.
+    fn action_needs_emulator(_action: &Action) -> Option<String> {
+        None
     }
 
-    fn in_process_requirements(settings: &Settings, device: &str) -> Vec<String> {
-        in_process_requirements(settings, device)
+    /// A Realman arm is always emulated in-process (it is not a CAN device: `--iface` runs cannot
+    /// reach it).
+    fn in_process_requirements(_settings: &Settings, device: &str) -> Vec<String> {
+        vec![format!(
+            "the Realman arm `{device}` (TCP/UDP, not on a CAN interface)"
+        )]
     }
 
+    /// Start a Realman arm: the emulator on in-memory streams and the driver.
     async fn build(
         name: &str,
         settings: &Settings,
         wiring: &Wiring<'_>,
     ) -> Result<Arc<dyn Device>, String> {
-        build(name, settings, wiring).await
+        if let Clock::Iface(iface) = wiring.clock {
+            return Err(format!(
+                "device `{name}`: a Realman arm speaks TCP/UDP, not CAN; it cannot run on {iface}"
+            ));
+        }
+        Ok(Arc::new(RealmanDevice::start(name, settings).await?))
     }
 
     fn urdf(settings: &Settings) -> Option<&'static str> {

@@ -26,51 +26,6 @@ use device::RobstrideDevice;
 /// How long the RobStride driver waits for each reply (its default, before time scaling).
 const DRIVER_TIMEOUT: Duration = Duration::from_millis(20);
 
-/// Short description of a fault for logs and reports.
-pub fn describe_fault(fault: &Fault) -> String {
-    fault.describe()
-}
-
-/// What a condition wants, for reports.
-pub fn describe_check(check: &Check) -> String {
-    check.cond.expected_text(check.motor)
-}
-
-/// Why an action needs the in-process emulator, if it does.
-pub fn action_needs_emulator(action: &Action) -> Option<String> {
-    action
-        .command
-        .needs_emulator()
-        .then(|| format!("robstride `{}`", action.command.name()))
-}
-
-/// RobStride settings are all the emulator's (motors, models, loads), and a separate emulator
-/// process is configured on its own command line: none needs the in-process emulator.
-pub fn in_process_requirements(_settings: &Settings, _device: &str) -> Vec<String> {
-    Vec::new()
-}
-
-/// Start a RobStride bus: the emulator on the virtual bus (in-process runs) and the driver.
-pub(crate) async fn build(
-    name: &str,
-    settings: &Settings,
-    wiring: &Wiring<'_>,
-) -> Result<Arc<dyn Device>, String> {
-    let host: Arc<dyn CanBus> = match (wiring.bus, wiring.clock) {
-        (Some(bus), _) => Arc::new(bus.attach(HOST_NODE)),
-        (None, Clock::Iface(link)) => link.open("driver").await?,
-        (None, _) => return Err(format!("device `{name}`: no bus to attach to")),
-    };
-    Ok(Arc::new(RobstrideDevice::start(
-        name,
-        settings,
-        host,
-        wiring.bus,
-        wiring.bitrate_bps,
-        wiring.options.deadline(DRIVER_TIMEOUT),
-    )?))
-}
-
 /// The RobStride kind's contract (registered in `crate::devices`).
 pub(crate) struct Kind;
 
@@ -118,28 +73,49 @@ impl KindSpec for Kind {
         validate::fault(ctx, raw, at)
     }
 
+    /// What a condition wants, for reports.
     fn describe_check(check: &Check) -> String {
-        describe_check(check)
+        check.cond.expected_text(check.motor)
     }
 
+    /// Short description of a fault for logs and reports.
     fn describe_fault(fault: &Fault) -> String {
-        describe_fault(fault)
+        fault.describe()
     }
 
+    /// Why an action needs the in-process emulator, if it does.
     fn action_needs_emulator(action: &Action) -> Option<String> {
-        action_needs_emulator(action)
+        action
+            .command
+            .needs_emulator()
+            .then(|| format!("robstride `{}`", action.command.name()))
     }
 
-    fn in_process_requirements(settings: &Settings, device: &str) -> Vec<String> {
-        in_process_requirements(settings, device)
+    /// RobStride settings are all the emulator's (motors, models, loads), and a separate emulator
+    /// process is configured on its own command line: none needs the in-process emulator.
+    fn in_process_requirements(_settings: &Settings, _device: &str) -> Vec<String> {
+        Vec::new()
     }
 
+    /// Start a RobStride bus: the emulator on the virtual bus (in-process runs) and the driver.
     async fn build(
         name: &str,
         settings: &Settings,
         wiring: &Wiring<'_>,
     ) -> Result<Arc<dyn Device>, String> {
-        build(name, settings, wiring).await
+        let host: Arc<dyn CanBus> = match (wiring.bus, wiring.clock) {
+            (Some(bus), _) => Arc::new(bus.attach(HOST_NODE)),
+            (None, Clock::Iface(link)) => link.open("driver").await?,
+            (None, _) => return Err(format!("device `{name}`: no bus to attach to")),
+        };
+        Ok(Arc::new(RobstrideDevice::start(
+            name,
+            settings,
+            host,
+            wiring.bus,
+            wiring.bitrate_bps,
+            wiring.options.deadline(DRIVER_TIMEOUT),
+        )?))
     }
 
     fn urdf(_settings: &Settings) -> Option<&'static str> {
