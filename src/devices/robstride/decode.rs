@@ -41,3 +41,49 @@ impl FrameDecoder for RobstrideFrames {
         decode_robstride(frame, HOST_ID, *model)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    use bus::CanFrame;
+
+    use super::RobstrideFrames;
+    use crate::devices::piper::decode::PiperFrames;
+    use crate::devices::{DeviceKind, FrameDecoder};
+    use crate::harness::parse_scenario;
+
+    fn bus_of_motor_1() -> RobstrideFrames {
+        let text = "bench:\n  devices:\n    m: {kind: robstride, motors: [{id: 1, model: RS03}]}\nsteps:\n  - wait_ms: 1\n";
+        let s = parse_scenario(Path::new("ok.yaml"), text).expect("valid");
+        let DeviceKind::Robstride(settings) = &s.bench.devices[0].kind else {
+            panic!("not a robstride bus");
+        };
+        RobstrideFrames::new(settings)
+    }
+
+    #[test]
+    fn a_motors_status_frame_is_named_and_other_frames_are_left_to_their_devices() {
+        let decoder = bus_of_motor_1();
+        // Type 2 status from motor 1 to host 0xFD, at rest mid-range (0x8000 = 0 rad).
+        let status = CanFrame::extended(
+            0x0200_01FD,
+            &[0x80, 0x00, 0x80, 0x00, 0x80, 0x00, 0x01, 0x2C],
+        )
+        .unwrap();
+        let named = decoder.decode(&status).expect("motor 1's status");
+        assert_eq!(named.name, "Status");
+        // Motor 2 is not on this bus; an 11-bit frame is no private-protocol frame. Before each
+        // device decoded its own frames, the report named every 11-bit frame as a Piper's,
+        // whatever the bench held.
+        let other_motor = CanFrame::extended(
+            0x0200_02FD,
+            &[0x80, 0x00, 0x80, 0x00, 0x80, 0x00, 0x01, 0x2C],
+        )
+        .unwrap();
+        assert!(decoder.decode(&other_motor).is_none());
+        let eleven_bit = CanFrame::standard(0x2A1, &[0; 8]).unwrap();
+        assert!(decoder.decode(&eleven_bit).is_none());
+        assert!(PiperFrames.decode(&status).is_none());
+    }
+}
