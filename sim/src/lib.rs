@@ -4,6 +4,7 @@
 //!   Python), for each emulator's one fault builder.
 //! - [`cpu_budget`]: how much a late real-time wake-up may catch up, bounded by CPU.
 //! - [`kinematics`]: modified-DH kinematics (one row type, frames, Jacobian) for every arm.
+//! - [`pacer`]: an emulator clock task's wake-ups, on absolute deadlines in real time.
 //! - [`physics`]: URDF loading into rapier3d, fixed-step stepping, torque-driven joints.
 //! - [`piper`]: the AgileX Piper arm's firmware (CAN, 11-bit IDs).
 //! - [`realman`]: the Realman arm controller (JSON over TCP, realtime push over UDP).
@@ -18,10 +19,12 @@ pub mod bounded_read;
 pub mod cpu_budget;
 pub mod fault_args;
 pub mod kinematics;
+pub mod pacer;
 pub mod physics;
 pub mod piper;
 pub mod realman;
 pub mod realtime;
+pub mod robot;
 pub mod robstride;
 pub mod state_file;
 pub mod supervise;

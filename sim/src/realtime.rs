@@ -1,5 +1,6 @@
 //! Real-time bookkeeping shared by the emulators' transmit and clock tasks: frames per ID,
-//! inter-frame period percentiles per ID, late wake-ups and overruns.
+//! inter-frame period percentiles per ID, the clock task's wake-up periods, late wake-ups and
+//! overruns.
 //!
 //! Periods go into a fixed histogram (10 µs bins up to 100 ms) so a long run costs constant
 //! memory; percentiles are therefore accurate to one bin (reported at its lower edge).
@@ -24,6 +25,25 @@ struct IdRecord {
 }
 
 impl IdRecord {
+    fn starting_at(at: Instant) -> Self {
+        Self {
+            frames: 1,
+            last: at,
+            bins: vec![0; BINS],
+            max: Duration::ZERO,
+        }
+    }
+
+    /// One more event at `at`: the period since the previous one goes into the histogram.
+    fn record(&mut self, at: Instant) {
+        let period = at.saturating_duration_since(self.last);
+        let bin = (period.as_micros() as u64 / BIN_US).min(BINS as u64 - 1) as usize;
+        self.bins[bin] = self.bins[bin].saturating_add(1);
+        self.max = self.max.max(period);
+        self.frames += 1;
+        self.last = at;
+    }
+
     fn percentile(&self, q: f64) -> Option<Duration> {
         let total: u64 = self.bins.iter().map(|&c| u64::from(c)).sum();
         if total == 0 {
@@ -48,6 +68,8 @@ impl IdRecord {
 pub(crate) struct RealtimeCounters {
     started: Instant,
     ids: BTreeMap<u32, IdRecord>,
+    /// The clock task's wake-ups, as periods between them.
+    wakes: Option<IdRecord>,
     steps: u64,
     late_wakeups: u64,
     overruns: u64,
@@ -60,6 +82,7 @@ impl RealtimeCounters {
         Self {
             started: Instant::now(),
             ids: BTreeMap::new(),
+            wakes: None,
             steps: 0,
             late_wakeups: 0,
             overruns: 0,
@@ -70,30 +93,19 @@ impl RealtimeCounters {
     /// A frame with `id` left on the bus at `at`.
     pub(crate) fn record_frame(&mut self, id: u32, at: Instant) {
         match self.ids.get_mut(&id) {
-            Some(r) => {
-                let period = at.saturating_duration_since(r.last);
-                let bin = (period.as_micros() as u64 / BIN_US).min(BINS as u64 - 1) as usize;
-                r.bins[bin] = r.bins[bin].saturating_add(1);
-                r.max = r.max.max(period);
-                r.frames += 1;
-                r.last = at;
-            }
+            Some(r) => r.record(at),
             None => {
-                self.ids.insert(
-                    id,
-                    IdRecord {
-                        frames: 1,
-                        last: at,
-                        bins: vec![0; BINS],
-                        max: Duration::ZERO,
-                    },
-                );
+                self.ids.insert(id, IdRecord::starting_at(at));
             }
         }
     }
 
-    /// A wake-up of the clock task ran `steps` steps; `late` when it had to catch up.
-    pub(crate) fn record_wakeup(&mut self, steps: u64, late: bool) {
+    /// A wake-up of the clock task at `at` ran `steps` steps; `late` when it had to catch up.
+    pub(crate) fn record_wakeup(&mut self, at: Instant, steps: u64, late: bool) {
+        match &mut self.wakes {
+            Some(w) => w.record(at),
+            None => self.wakes = Some(IdRecord::starting_at(at)),
+        }
         self.steps += steps;
         if late {
             self.late_wakeups += 1;
@@ -116,6 +128,12 @@ impl RealtimeCounters {
             late_wakeups: self.late_wakeups,
             overruns: self.overruns,
             skipped_steps: self.skipped_steps,
+            wake_period_p50: self.wakes.as_ref().and_then(|w| w.percentile(0.50)),
+            wake_period_p99: self.wakes.as_ref().and_then(|w| w.percentile(0.99)),
+            wake_period_max: self
+                .wakes
+                .as_ref()
+                .and_then(|w| (w.frames > 1).then_some(w.max)),
             ids: self
                 .ids
                 .iter()
@@ -162,6 +180,13 @@ pub struct RealtimeStats {
     pub overruns: u64,
     /// Steps dropped by overruns (each one is a step of emulated time lost).
     pub skipped_steps: u64,
+    /// Median time between two wake-ups of the clock task (`None` before the second).
+    pub wake_period_p50: Option<Duration>,
+    /// 99th percentile of the time between two wake-ups: its excess over the nominal
+    /// period is how late the clock runs at worst, short of the rare stalls.
+    pub wake_period_p99: Option<Duration>,
+    /// Longest time between two wake-ups.
+    pub wake_period_max: Option<Duration>,
     /// Per-ID figures, by ID.
     pub ids: Vec<IdStats>,
 }
@@ -190,6 +215,13 @@ impl fmt::Display for RealtimeStats {
             self.late_wakeups,
             self.overruns,
             self.skipped_steps
+        )?;
+        writeln!(
+            f,
+            "wake-up period p50 {} ms, p99 {} ms, max {} ms",
+            ms(self.wake_period_p50),
+            ms(self.wake_period_p99),
+            ms(self.wake_period_max)
         )?;
         writeln!(
             f,
@@ -234,12 +266,16 @@ mod tests {
         assert_eq!(s.period_p99, Some(Duration::from_millis(5)));
         assert_eq!(s.period_max, Some(Duration::from_millis(40)));
         c.record_overrun(120);
-        c.record_wakeup(5, true);
+        c.record_wakeup(t0, 5, true);
+        c.record_wakeup(t0 + Duration::from_micros(1_130), 1, false);
         let r = c.report();
         assert_eq!(
             (r.overruns, r.skipped_steps, r.late_wakeups, r.steps),
-            (1, 120, 1, 5)
+            (1, 120, 1, 6)
         );
+        // One wake-up period, 1.13 ms: reported at its 10 µs bin's lower edge.
+        assert_eq!(r.wake_period_p99, Some(Duration::from_micros(1_130)));
+        assert_eq!(r.wake_period_max, Some(Duration::from_micros(1_130)));
         assert!(r.to_string().contains("0x2a1"));
     }
 }

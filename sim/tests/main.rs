@@ -9,4 +9,5 @@
 mod codec_props;
 mod piper;
 mod realman;
+mod robot;
 mod robstride;

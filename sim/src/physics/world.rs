@@ -23,6 +23,10 @@ pub struct WorldConfig {
     pub step_s: f64,
     /// Gravity in the URDF base frame, m/s². Default `[0, 0, −9.81]` (URDF is Z-up).
     pub gravity_m_s2: [f64; 3],
+    /// `None` (default): the URDF root link is fixed to the world at the origin. `Some(h)`:
+    /// the root link is a free body whose origin starts `h` m above the world origin (a
+    /// legged robot; give it ground to stand on with [`ArmWorld::add_obstacle`]).
+    pub floating_base_height_m: Option<f64>,
 }
 
 impl Default for WorldConfig {
@@ -30,6 +34,7 @@ impl Default for WorldConfig {
         Self {
             step_s: 0.001,
             gravity_m_s2: DEFAULT_GRAVITY_M_S2,
+            floating_base_height_m: None,
         }
     }
 }
@@ -47,7 +52,7 @@ struct JointBinding {
     kind: JointKind,
 }
 
-/// A fixed-base articulated world: one URDF tree as a rapier3d multibody, gravity, static
+/// An articulated world: one URDF tree as a rapier3d multibody, gravity, static
 /// obstacles, and motor torques applied at the joints.
 ///
 /// - Time advances only through [`ArmWorld::step`], by exactly `config.step_s`; rapier is
@@ -55,7 +60,8 @@ struct JointBinding {
 /// - Joint vectors (positions, velocities, torques) have one entry per actuated joint in the
 ///   order of [`ArmWorld::joints`] (URDF document order); units are rad, rad/s, N·m for
 ///   revolute joints and m, m/s, N for prismatic joints.
-/// - The URDF root link is fixed to the world. Self-collisions are disabled (the primitive
+/// - The URDF root link is fixed to the world, or free above it
+///   ([`WorldConfig::floating_base_height_m`]). Self-collisions are disabled (the primitive
 ///   collision shapes of neighbouring links overlap); links do collide with obstacles.
 /// - Joint limits are rapier limit constraints, plus a projection after each step that puts a
 ///   joint that sank into its stop back on the limit (see `enforce_hard_stops`): observed
@@ -144,8 +150,24 @@ impl ArmWorld {
         // pass unchanged (joint limits are projected exactly after the step anyway).
         physics.integration_parameters.num_solver_iterations = 1;
 
+        if config
+            .floating_base_height_m
+            .is_some_and(|h| !(h.is_finite() && (h as Real).is_finite()))
+        {
+            return Err(PhysicsError::InvalidConfig {
+                reason: format!(
+                    "the floating base's start height must be finite, got {:?}",
+                    config.floating_base_height_m
+                ),
+            });
+        }
         let options = UrdfLoaderOptions {
-            make_roots_fixed: true,
+            make_roots_fixed: config.floating_base_height_m.is_none(),
+            shift: Pose::from_translation(Vector::new(
+                0.0,
+                0.0,
+                config.floating_base_height_m.unwrap_or(0.0) as Real,
+            )),
             // A held arm is at rest: it must not fall asleep and ignore the next torque.
             rigid_body_blueprint: RigidBodyBuilder::dynamic().can_sleep(false),
             ..UrdfLoaderOptions::default()

@@ -20,13 +20,14 @@ use std::time::Duration;
 use bus::{BusError, CanBus, CanFrame};
 use tokio::sync::{mpsc, watch};
 use tokio::task::JoinHandle;
-use tokio::time::{interval, sleep, Instant, MissedTickBehavior};
+use tokio::time::{sleep, Instant};
 
 use super::config::{PiperConfig, PiperError};
 use super::faults::{FaultError, PiperFault};
 use super::firmware::{Firmware, STEP_S};
 use super::state::PiperSimState;
 use crate::cpu_budget::CpuBudget;
+use crate::pacer::Pacer;
 use crate::physics::{ObstacleId, ObstacleShape};
 use crate::realtime::{RealtimeCounters, RealtimeStats};
 use crate::supervise::{DeathWatch, Supervisor};
@@ -161,10 +162,13 @@ impl PiperEmulator {
         let mut tick_stop = stop_rx.clone();
         let ticker = supervisor.spawn(&runtime, "Piper core", async move {
             let per_wake = u64::from(ticks_per_wake);
-            let mut clock = interval(Duration::from_secs_f64(STEP_S * per_wake as f64));
-            // The interval only paces the wake-ups; how many steps run comes from the clock
-            // (`plan_wake_within`), so skipping missed wake-ups loses no emulated time.
-            clock.set_missed_tick_behavior(MissedTickBehavior::Skip);
+            // The pacer only prompts the wake-ups (on absolute deadlines in real time); how
+            // many steps run comes from the clock (`plan_wake_within`), so a skipped wake-up
+            // loses no emulated time.
+            let mut clock = Pacer::new(
+                Duration::from_secs_f64(STEP_S * per_wake as f64),
+                "piper-clock",
+            );
             let boot = Instant::now();
             let mut done: u64 = 0;
             let mut produced = Vec::with_capacity(32);
@@ -208,7 +212,7 @@ impl PiperEmulator {
                 budget.observe(plan.run, woke.elapsed());
                 {
                     let mut c = lock(&tick_counters);
-                    c.record_wakeup(plan.run, late);
+                    c.record_wakeup(woke, plan.run, late);
                     if plan.skipped > 0 {
                         c.record_overrun(plan.skipped);
                         unreported_drops += plan.skipped;

@@ -8,14 +8,21 @@ use std::time::Duration;
 use bus::{BusError, CanBus, CanFrame};
 use tokio::sync::{mpsc, oneshot};
 use tokio::task::JoinHandle;
-use tokio::time::{interval, sleep, MissedTickBehavior};
+use tokio::time::{sleep, Instant};
 
+use crate::pacer::Pacer;
 use crate::robstride::faults::{
     check_bus_voltage_v, check_external_torque_nm, check_temperature_c, Fault, ValueError,
 };
 use crate::robstride::firmware::{Actuator, MotorConfig, MotorSnapshot, DEFAULT_HOST_ID};
 use crate::robstride::state_file::{uid_key, StateFile, StateFileError};
 use crate::supervise::{DeathWatch, Supervisor};
+
+/// The actuators' control step.
+const STEP: Duration = Duration::from_millis(1);
+/// Most steps one late wake-up catches up (100 ms of emulated time); a longer stall of the
+/// machine is lost time, as for the Piper emulator.
+const MAX_CATCH_UP_STEPS: u64 = 100;
 
 /// Configuration of an emulated RobStride bus.
 #[derive(Debug, Clone, PartialEq)]
@@ -300,8 +307,12 @@ impl Runner {
                 }
             }
         });
-        let mut tick = interval(Duration::from_millis(1));
-        tick.set_missed_tick_behavior(MissedTickBehavior::Burst);
+        // 1 ms control steps; the pacer (absolute deadlines in real time) only prompts them.
+        // Every step the clock owes runs, so a late wake-up catches up as the firmware's own
+        // clock would, up to MAX_CATCH_UP_STEPS (a stalled machine drops the rest).
+        let mut tick = Pacer::new(STEP, "robstride-clock");
+        let started = Instant::now();
+        let mut steps_done: u64 = 0;
         let outcome = loop {
             tokio::select! {
                 biased;
@@ -323,7 +334,19 @@ impl Runner {
                     }
                     None => break Ok(()),
                 },
-                _ = tick.tick() => self.on_tick().await,
+                _ = tick.tick() => {
+                    // Steps at 0, 1, 2 … ms: by elapsed time t, floor(t / 1 ms) + 1 are due.
+                    let due = (started.elapsed().as_nanos() / STEP.as_nanos()) as u64 + 1;
+                    let owed = due.saturating_sub(steps_done);
+                    let run = owed.min(MAX_CATCH_UP_STEPS);
+                    if run < owed {
+                        tracing::debug!(dropped = owed - run, "robstride emulator: steps dropped behind the wall clock");
+                    }
+                    steps_done = due;
+                    for _ in 0..run {
+                        self.on_tick().await;
+                    }
+                }
             }
         };
         receiver.abort();

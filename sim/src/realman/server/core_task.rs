@@ -5,10 +5,11 @@ use std::net::SocketAddr;
 use std::sync::Arc;
 use std::time::Duration;
 
-use tokio::time::{sleep_until, Instant};
+use tokio::time::Instant;
 
 use super::connection::route_events;
 use super::{lock, Shared, MAX_CATCH_UP_TICKS, OVERRUN_SLACK_MS};
+use crate::pacer::Pacer;
 use crate::realman::params::PushConfig;
 use crate::realman::push::{self, Datagram, PushSink, PushStats};
 
@@ -18,13 +19,14 @@ use crate::realman::push::{self, Datagram, PushSink, PushStats};
 pub(super) async fn core_loop(shared: Arc<Shared>, sink: PushSink, ticks_per_wake: u64) {
     let mut stop = shared.stop.clone();
     let start = Instant::now();
-    let period = Duration::from_millis(ticks_per_wake);
+    // Wake-ups on absolute deadlines in real time (see `Pacer`); the first one, at once,
+    // finds nothing due.
+    let mut pacer = Pacer::new(Duration::from_millis(ticks_per_wake), "realman-clock");
     let mut done: u64 = 0;
-    let mut next = start + period;
     let mut push_stats = PushStats::default();
     loop {
         tokio::select! {
-            _ = sleep_until(next) => {}
+            _ = pacer.tick() => {}
             _ = stop.changed() => break,
         }
         let due = (Instant::now() - start).as_millis() as u64;
@@ -48,10 +50,6 @@ pub(super) async fn core_loop(shared: Arc<Shared>, sink: PushSink, ticks_per_wak
         route_events(&shared);
         if push_due {
             send_push(&shared, &sink, &mut push_stats).await;
-        }
-        next += period;
-        if next < Instant::now() {
-            next = Instant::now() + period;
         }
     }
 }

@@ -134,12 +134,23 @@ impl Actuator {
         persisted: Option<&PersistedMotor>,
         bus_bitrate_bps: u32,
     ) -> Self {
+        let plant = make_plant(&config, &config.model.spec());
+        Self::with_plant(config, persisted, bus_bitrate_bps, plant)
+    }
+
+    /// [`Actuator::new`] driving `plant` instead of the rig its configuration describes (a
+    /// joint of a robot's world: `crate::robot`).
+    pub fn with_plant(
+        config: MotorConfig,
+        persisted: Option<&PersistedMotor>,
+        bus_bitrate_bps: u32,
+        plant: Box<dyn Plant>,
+    ) -> Self {
         let ranges = config
             .ranges
             .unwrap_or_else(|| config.model.ranges(config.range_table));
         let spec = config.model.spec();
         let mut params = ParamStore::new(config.model, &ranges);
-        let plant = make_plant(&config, &spec);
         let saved_params = persisted
             .map(|saved| saved.params.clone())
             .unwrap_or_default();

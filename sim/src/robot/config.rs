@@ -1,0 +1,178 @@
+//! What a robot is made of, as the emulator takes it: plain data, checked by
+//! [`RobotConfig::check`]. Robot files (YAML with positions for errors) are read into this by
+//! the `armhil` crate.
+
+use std::path::PathBuf;
+
+use crate::robstride::MotorConfig;
+
+/// How the robot's root link meets the world.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum Base {
+    /// Bolted down: the URDF root link does not move (an arm on a table).
+    #[default]
+    Fixed,
+    /// Free: the root link is a free body above a ground plane at z = 0, which the links'
+    /// collision shapes stand on; a robot whose actuators let go falls.
+    Floating {
+        /// Height of the root link's origin above the ground at start (m).
+        start_height_m: f64,
+    },
+}
+
+/// One CAN bus of the robot.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BusConfig {
+    /// Its name (`can0` …): the interface or socketcand channel it is served on.
+    pub name: String,
+    /// Bit rate (bit/s).
+    pub bitrate_bps: u32,
+}
+
+/// An actuated joint: which motor drives it, on which bus, and how the shaft meets the joint.
+#[derive(Debug, Clone, PartialEq)]
+pub struct JointActuator {
+    /// The URDF joint (revolute or continuous).
+    pub joint: String,
+    /// Index into [`RobotConfig::buses`].
+    pub bus: usize,
+    /// The motor (its model, CAN id, thermal model …); its `load` and rig fields are unused:
+    /// the robot is the load.
+    pub motor: MotorConfig,
+    /// +1 when the shaft turns the joint's positive way, −1 when mounted the other way round.
+    pub direction: f64,
+    /// Joint position (rad) at which the shaft reads 0.
+    pub zero_offset_rad: f64,
+}
+
+/// A whole robot: its URDF, base, buses and actuators.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RobotConfig {
+    /// The robot's name (for logs and views).
+    pub name: String,
+    /// The URDF text.
+    pub urdf: String,
+    /// Fixed or floating base.
+    pub base: Base,
+    /// The buses.
+    pub buses: Vec<BusConfig>,
+    /// The actuated joints; joints not listed are passive.
+    pub actuators: Vec<JointActuator>,
+    /// Joint positions at start (rad), by URDF joint name; unnamed joints start at 0.
+    pub start_positions_rad: Vec<(String, f64)>,
+    /// Where the actuators' flash (saved parameters, ids, zeros) lives across restarts.
+    pub state_file: Option<PathBuf>,
+    /// Host ID the motors answer to until a host speaks.
+    pub host_id: u8,
+}
+
+/// A robot configuration that cannot run.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RobotConfigError {
+    /// An actuator names a bus that is not there.
+    #[error("joint `{joint}`: bus index {bus} is not one of the robot's {buses} buses")]
+    UnknownBus {
+        /// The joint.
+        joint: String,
+        /// The index.
+        bus: usize,
+        /// How many buses there are.
+        buses: usize,
+    },
+    /// Two actuators answer to one CAN id on one bus.
+    #[error("joints `{first}` and `{second}` both use CAN id {can_id} on bus `{bus}`")]
+    DuplicateCanId {
+        /// The bus.
+        bus: String,
+        /// The id.
+        can_id: u8,
+        /// The first joint with it.
+        first: String,
+        /// The second one.
+        second: String,
+    },
+    /// Two actuators drive one joint.
+    #[error("joint `{joint}` has two actuators")]
+    JointTwice {
+        /// The joint.
+        joint: String,
+    },
+    /// A CAN id outside 1..=127.
+    #[error("joint `{joint}`: CAN id {can_id} is outside 1..=127")]
+    InvalidCanId {
+        /// The joint.
+        joint: String,
+        /// The id.
+        can_id: u8,
+    },
+    /// A non-finite or non-positive number where one is needed.
+    #[error("{what} must be finite{positive}, got {value}", positive = if *.positive { " and positive" } else { "" })]
+    BadNumber {
+        /// Which value.
+        what: String,
+        /// The value.
+        value: f64,
+        /// Whether it must be positive.
+        positive: bool,
+    },
+}
+
+impl RobotConfig {
+    /// Checks what does not need the URDF: bus references, ids, numbers. (Joint names and
+    /// the URDF itself are checked when the world loads.)
+    pub fn check(&self) -> Result<(), RobotConfigError> {
+        let finite = |what: String, value: f64, positive: bool| {
+            if value.is_finite() && (!positive || value > 0.0) {
+                Ok(())
+            } else {
+                Err(RobotConfigError::BadNumber {
+                    what,
+                    value,
+                    positive,
+                })
+            }
+        };
+        if let Base::Floating { start_height_m } = self.base {
+            finite("base start height".into(), start_height_m, false)?;
+        }
+        for (i, a) in self.actuators.iter().enumerate() {
+            if a.bus >= self.buses.len() {
+                return Err(RobotConfigError::UnknownBus {
+                    joint: a.joint.clone(),
+                    bus: a.bus,
+                    buses: self.buses.len(),
+                });
+            }
+            if !(1..=0x7F).contains(&a.motor.can_id) {
+                return Err(RobotConfigError::InvalidCanId {
+                    joint: a.joint.clone(),
+                    can_id: a.motor.can_id,
+                });
+            }
+            finite(
+                format!("joint `{}` zero offset", a.joint),
+                a.zero_offset_rad,
+                false,
+            )?;
+            for b in &self.actuators[..i] {
+                if b.joint == a.joint {
+                    return Err(RobotConfigError::JointTwice {
+                        joint: a.joint.clone(),
+                    });
+                }
+                if b.bus == a.bus && b.motor.can_id == a.motor.can_id {
+                    return Err(RobotConfigError::DuplicateCanId {
+                        bus: self.buses[a.bus].name.clone(),
+                        can_id: a.motor.can_id,
+                        first: b.joint.clone(),
+                        second: a.joint.clone(),
+                    });
+                }
+            }
+        }
+        for (name, q) in &self.start_positions_rad {
+            finite(format!("start position of `{name}`"), *q, false)?;
+        }
+        Ok(())
+    }
+}

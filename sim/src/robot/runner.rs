@@ -1,0 +1,604 @@
+//! The task that runs a whole robot: every actuator's firmware, one physics world, every bus;
+//! and the handle the harness and `armhil sim robot` hold.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Duration;
+
+use bus::{BusError, CanBus, CanFrame};
+use tokio::sync::{mpsc, oneshot};
+use tokio::task::JoinHandle;
+use tokio::time::{sleep, Instant};
+
+use super::config::{RobotConfig, RobotConfigError};
+use super::world::{RobotWorld, RobotWorldError};
+use crate::pacer::Pacer;
+use crate::physics::PhysicsError;
+use crate::robstride::faults::{check_external_torque_nm, check_temperature_c, ValueError};
+use crate::robstride::state_file::{uid_key, StateFile, StateFileError};
+use crate::robstride::{Actuator, Fault, MotorSnapshot};
+use crate::supervise::{DeathWatch, Supervisor};
+
+/// The actuators' control step and the world's step.
+const STEP: Duration = Duration::from_millis(1);
+/// Most steps one late wake-up catches up (100 ms of emulated time); a longer stall of the
+/// machine is lost time, as for the single-device emulators.
+const MAX_CATCH_UP_STEPS: u64 = 100;
+/// Frames received from all buses and not yet handled; a full queue holds the receivers
+/// back, and each bus's own receive queue then decides what is dropped.
+const RX_QUEUE_FRAMES: usize = 4096;
+/// Harness requests waiting for the runner.
+const REQUEST_QUEUE: usize = 64;
+
+/// Why a robot could not start or a request failed.
+#[derive(Debug, thiserror::Error)]
+pub enum RobotError {
+    /// The configuration is inconsistent.
+    #[error(transparent)]
+    Config(#[from] RobotConfigError),
+    /// The URDF or a joint name did not load.
+    #[error(transparent)]
+    World(#[from] RobotWorldError),
+    /// `spawn` got another number of buses than the configuration has.
+    #[error("the robot has {expected} buses but {given} were given to serve them")]
+    BusCount {
+        /// Buses in the configuration.
+        expected: usize,
+        /// Buses given.
+        given: usize,
+    },
+    /// No actuator drives a joint of this name.
+    #[error("no actuator drives joint `{joint}`")]
+    UnknownJoint {
+        /// The name asked for.
+        joint: String,
+    },
+    /// The robot has no bus of this name.
+    #[error("the robot has no bus `{bus}`")]
+    UnknownBus {
+        /// The name asked for.
+        bus: String,
+    },
+    /// A temperature or torque that is not finite or out of range.
+    #[error("joint `{joint}`: {source}")]
+    BadValue {
+        /// The joint.
+        joint: String,
+        /// What is wrong.
+        source: ValueError,
+    },
+    /// The state file could not be read or written.
+    #[error(transparent)]
+    StateFile(#[from] StateFileError),
+    /// The emulator task has stopped.
+    #[error("the robot emulator has stopped")]
+    Stopped,
+}
+
+/// One actuated joint's state.
+#[derive(Debug, Clone, PartialEq)]
+pub struct JointSnapshot {
+    /// The URDF joint.
+    pub joint: String,
+    /// The bus its actuator is on.
+    pub bus: String,
+    /// Joint position in the world (rad).
+    pub position_rad: f64,
+    /// Joint speed in the world (rad/s).
+    pub velocity_rad_s: f64,
+    /// The actuator's own view (its shaft angle is after direction and zero offset).
+    pub motor: MotorSnapshot,
+}
+
+/// The whole robot's state.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RobotSnapshot {
+    /// Emulated time since power-on (s).
+    pub time_s: f64,
+    /// Position of the URDF root link's origin in the world (m).
+    pub base_position_m: [f64; 3],
+    /// Every actuated joint, in configuration order.
+    pub joints: Vec<JointSnapshot>,
+    /// The buses currently cut off (a `bus_lost` fault).
+    pub lost_buses: Vec<String>,
+}
+
+impl RobotSnapshot {
+    /// The joint of this name.
+    pub fn joint(&self, name: &str) -> Option<&JointSnapshot> {
+        self.joints.iter().find(|j| j.joint == name)
+    }
+}
+
+enum Request {
+    Inject(String, Fault, oneshot::Sender<Result<(), RobotError>>),
+    RemoveCause(String, Fault, oneshot::Sender<Result<(), RobotError>>),
+    SetTemperature(String, f64, oneshot::Sender<Result<(), RobotError>>),
+    SetExternalTorque(String, f64, oneshot::Sender<Result<(), RobotError>>),
+    SetBusLost(String, bool, oneshot::Sender<Result<(), RobotError>>),
+    Snapshot(oneshot::Sender<RobotSnapshot>),
+    Shutdown(oneshot::Sender<()>),
+}
+
+/// Emulated robots.
+#[derive(Debug)]
+pub struct RobotEmulator;
+
+/// The harness's handle on a running robot.
+#[derive(Debug)]
+pub struct RobotHandle {
+    view: RobotMonitor,
+    task: Option<JoinHandle<()>>,
+    death: DeathWatch,
+}
+
+/// A cloneable view of a running robot (snapshots and faults), for monitors.
+#[derive(Debug, Clone)]
+pub struct RobotMonitor {
+    requests: mpsc::Sender<Request>,
+}
+
+impl RobotEmulator {
+    /// Power the robot on and serve `buses` (one per [`RobotConfig::buses`], same order).
+    /// Spawns on the current runtime; works under a paused clock (virtual time).
+    pub fn spawn(
+        config: RobotConfig,
+        buses: Vec<Arc<dyn CanBus>>,
+    ) -> Result<RobotHandle, RobotError> {
+        config.check()?;
+        if buses.len() != config.buses.len() {
+            return Err(RobotError::BusCount {
+                expected: config.buses.len(),
+                given: buses.len(),
+            });
+        }
+        let state = match &config.state_file {
+            Some(path) => StateFile::load(path)?,
+            None => StateFile::default(),
+        };
+        let (world, plants) = RobotWorld::new(&config)?;
+        let mut actuators = Vec::with_capacity(plants.len());
+        for (spec, plant) in config.actuators.iter().zip(plants) {
+            let saved = state.motors.get(&uid_key(spec.motor.effective_uid()));
+            let bitrate = config.buses[spec.bus].bitrate_bps;
+            let mut actuator =
+                Actuator::with_plant(spec.motor.clone(), saved, bitrate, Box::new(plant));
+            if saved.is_none() {
+                actuator.set_master_id(config.host_id);
+            }
+            actuators.push(JointActuator {
+                joint: spec.joint.clone(),
+                bus: spec.bus,
+                firmware: actuator,
+            });
+        }
+        let ports = config
+            .buses
+            .iter()
+            .zip(buses)
+            .map(|(b, bus)| Port {
+                name: b.name.clone(),
+                bus,
+                lost: false,
+            })
+            .collect();
+        let (requests, inbox) = mpsc::channel(REQUEST_QUEUE);
+        let runner = Runner {
+            ports,
+            actuators,
+            world,
+            state,
+            state_path: config.state_file,
+        };
+        let (supervisor, death) = Supervisor::new();
+        let task = supervisor.spawn(
+            &tokio::runtime::Handle::current(),
+            "robot runner",
+            runner.run(inbox),
+        );
+        Ok(RobotHandle {
+            view: RobotMonitor { requests },
+            task: Some(task),
+            death,
+        })
+    }
+}
+
+impl RobotMonitor {
+    async fn ask<T>(
+        &self,
+        make: impl FnOnce(oneshot::Sender<T>) -> Request,
+    ) -> Result<T, RobotError> {
+        let (reply, answer) = oneshot::channel();
+        self.requests
+            .send(make(reply))
+            .await
+            .map_err(|_| RobotError::Stopped)?;
+        answer.await.map_err(|_| RobotError::Stopped)
+    }
+
+    /// Inject a fault into the actuator of `joint` (see [`crate::robstride::Fault`]).
+    pub async fn inject(&self, joint: &str, fault: Fault) -> Result<(), RobotError> {
+        self.ask(|reply| Request::Inject(joint.to_owned(), fault, reply))
+            .await?
+    }
+
+    /// Remove a fault's cause; the latched bit stays until the host clears it.
+    pub async fn clear(&self, joint: &str, fault: Fault) -> Result<(), RobotError> {
+        self.ask(|reply| Request::RemoveCause(joint.to_owned(), fault, reply))
+            .await?
+    }
+
+    /// Set the winding temperature (°C) of `joint`'s actuator.
+    pub async fn set_temperature(&self, joint: &str, celsius: f64) -> Result<(), RobotError> {
+        self.ask(|reply| Request::SetTemperature(joint.to_owned(), celsius, reply))
+            .await?
+    }
+
+    /// Push `joint` with an external torque (N·m, shaft frame) until changed.
+    pub async fn set_external_torque(&self, joint: &str, torque_nm: f64) -> Result<(), RobotError> {
+        self.ask(|reply| Request::SetExternalTorque(joint.to_owned(), torque_nm, reply))
+            .await?
+    }
+
+    /// Cut a bus off (`lost = true`: no frame reaches its actuators, none leaves them) or
+    /// restore it.
+    pub async fn set_bus_lost(&self, bus: &str, lost: bool) -> Result<(), RobotError> {
+        self.ask(|reply| Request::SetBusLost(bus.to_owned(), lost, reply))
+            .await?
+    }
+
+    /// The robot's state now.
+    pub async fn snapshot(&self) -> Result<RobotSnapshot, RobotError> {
+        self.ask(Request::Snapshot).await
+    }
+}
+
+impl RobotHandle {
+    /// A cloneable view for monitors; its calls fail with [`RobotError::Stopped`] once the
+    /// robot is shut down.
+    pub fn monitor(&self) -> RobotMonitor {
+        self.view.clone()
+    }
+
+    /// See [`RobotMonitor::inject`].
+    pub async fn inject(&self, joint: &str, fault: Fault) -> Result<(), RobotError> {
+        self.view.inject(joint, fault).await
+    }
+
+    /// See [`RobotMonitor::clear`].
+    pub async fn clear(&self, joint: &str, fault: Fault) -> Result<(), RobotError> {
+        self.view.clear(joint, fault).await
+    }
+
+    /// See [`RobotMonitor::set_temperature`].
+    pub async fn set_temperature(&self, joint: &str, celsius: f64) -> Result<(), RobotError> {
+        self.view.set_temperature(joint, celsius).await
+    }
+
+    /// See [`RobotMonitor::set_external_torque`].
+    pub async fn set_external_torque(&self, joint: &str, torque_nm: f64) -> Result<(), RobotError> {
+        self.view.set_external_torque(joint, torque_nm).await
+    }
+
+    /// See [`RobotMonitor::set_bus_lost`].
+    pub async fn set_bus_lost(&self, bus: &str, lost: bool) -> Result<(), RobotError> {
+        self.view.set_bus_lost(bus, lost).await
+    }
+
+    /// See [`RobotMonitor::snapshot`].
+    pub async fn snapshot(&self) -> Result<RobotSnapshot, RobotError> {
+        self.view.snapshot().await
+    }
+
+    /// A watch that tells when the robot stops on its own (a panic, a state file that cannot
+    /// be written, physics that diverged).
+    pub fn death_watch(&self) -> DeathWatch {
+        self.death.clone()
+    }
+
+    /// Power the robot off; persistent state is already on disk.
+    pub async fn shutdown(mut self) {
+        let _ = self.view.ask(Request::Shutdown).await;
+        if let Some(task) = self.task.take() {
+            let _ = task.await;
+        }
+    }
+}
+
+impl Drop for RobotHandle {
+    fn drop(&mut self) {
+        if let Some(task) = self.task.take() {
+            task.abort();
+        }
+    }
+}
+
+struct JointActuator {
+    joint: String,
+    bus: usize,
+    firmware: Actuator,
+}
+
+struct Port {
+    name: String,
+    bus: Arc<dyn CanBus>,
+    lost: bool,
+}
+
+struct Runner {
+    ports: Vec<Port>,
+    actuators: Vec<JointActuator>,
+    world: RobotWorld,
+    state: StateFile,
+    state_path: Option<PathBuf>,
+}
+
+/// Why the runner stopped on its own.
+#[derive(Debug, thiserror::Error)]
+enum Stop {
+    #[error(transparent)]
+    StateFile(#[from] StateFileError),
+    #[error(transparent)]
+    Physics(#[from] PhysicsError),
+}
+
+impl Runner {
+    async fn run(mut self, mut inbox: mpsc::Receiver<Request>) -> Result<(), String> {
+        let (frames_tx, mut frames) = mpsc::channel::<(usize, CanFrame)>(RX_QUEUE_FRAMES);
+        // One receiving task per bus keeps `recv` out of `select!` (never cancelled mid-frame).
+        let receivers: Vec<_> = self
+            .ports
+            .iter()
+            .enumerate()
+            .map(|(index, port)| {
+                let bus = Arc::clone(&port.bus);
+                let tx = frames_tx.clone();
+                let name = port.name.clone();
+                tokio::spawn(async move {
+                    loop {
+                        match bus.recv().await {
+                            Ok(received) => {
+                                if tx.send((index, received.frame)).await.is_err() {
+                                    break;
+                                }
+                            }
+                            Err(BusError::Closed) => break,
+                            Err(error) => {
+                                tracing::warn!(bus = %name, %error, "robot emulator: receive error");
+                                sleep(Duration::from_millis(1)).await;
+                            }
+                        }
+                    }
+                })
+            })
+            .collect();
+        drop(frames_tx);
+        let mut tick = Pacer::new(STEP, "robot-clock");
+        let started = Instant::now();
+        let mut steps_done: u64 = 0;
+        let outcome = loop {
+            tokio::select! {
+                biased;
+                request = inbox.recv() => match request {
+                    Some(Request::Shutdown(done)) => {
+                        let _ = done.send(());
+                        break Ok(());
+                    }
+                    Some(request) => self.serve(request).await,
+                    None => break Ok(()),
+                },
+                frame = frames.recv() => match frame {
+                    Some((port, frame)) => {
+                        if let Err(error) = self.on_frame(port, &frame).await {
+                            break Err(error.to_string());
+                        }
+                    }
+                    None => break Ok(()),
+                },
+                _ = tick.tick() => {
+                    let due = (started.elapsed().as_nanos() / STEP.as_nanos()) as u64 + 1;
+                    let owed = due.saturating_sub(steps_done);
+                    let run = owed.min(MAX_CATCH_UP_STEPS);
+                    if run < owed {
+                        tracing::debug!(dropped = owed - run, "robot emulator: steps dropped behind the wall clock");
+                    }
+                    steps_done = due;
+                    let mut failed = None;
+                    for _ in 0..run {
+                        if let Err(error) = self.on_tick().await {
+                            failed = Some(error);
+                            break;
+                        }
+                    }
+                    if let Some(error) = failed {
+                        break Err(Stop::from(error).to_string());
+                    }
+                }
+            }
+        };
+        for receiver in receivers {
+            receiver.abort();
+        }
+        outcome
+    }
+
+    fn actuator_mut(&mut self, joint: &str) -> Result<&mut JointActuator, RobotError> {
+        self.actuators
+            .iter_mut()
+            .find(|a| a.joint == joint)
+            .ok_or_else(|| RobotError::UnknownJoint {
+                joint: joint.to_owned(),
+            })
+    }
+
+    async fn serve(&mut self, request: Request) {
+        match request {
+            Request::Inject(joint, fault, reply) => {
+                let result = self
+                    .actuator_mut(&joint)
+                    .map(|a| (a.bus, a.firmware.inject(fault)));
+                let result = match result {
+                    Ok((bus, frame)) => {
+                        self.send(bus, frame).await;
+                        Ok(())
+                    }
+                    Err(error) => Err(error),
+                };
+                let _ = reply.send(result);
+            }
+            Request::RemoveCause(joint, fault, reply) => {
+                let result = self
+                    .actuator_mut(&joint)
+                    .map(|a| a.firmware.remove_cause(fault));
+                let _ = reply.send(result);
+            }
+            Request::SetTemperature(joint, celsius, reply) => {
+                let result = self.actuator_mut(&joint).and_then(|a| {
+                    let celsius =
+                        check_temperature_c(celsius).map_err(|source| RobotError::BadValue {
+                            joint: joint.clone(),
+                            source,
+                        })?;
+                    a.firmware.set_temperature(celsius);
+                    Ok(())
+                });
+                let _ = reply.send(result);
+            }
+            Request::SetExternalTorque(joint, torque, reply) => {
+                let result = self.actuator_mut(&joint).and_then(|a| {
+                    let model = a.firmware.config().model;
+                    let torque = check_external_torque_nm(model, torque).map_err(|source| {
+                        RobotError::BadValue {
+                            joint: joint.clone(),
+                            source,
+                        }
+                    })?;
+                    a.firmware.set_external_torque(torque);
+                    Ok(())
+                });
+                let _ = reply.send(result);
+            }
+            Request::SetBusLost(bus, lost, reply) => {
+                let result = match self.ports.iter_mut().find(|p| p.name == bus) {
+                    Some(port) => {
+                        port.lost = lost;
+                        Ok(())
+                    }
+                    None => Err(RobotError::UnknownBus { bus }),
+                };
+                let _ = reply.send(result);
+            }
+            Request::Snapshot(reply) => {
+                let _ = reply.send(self.snapshot());
+            }
+            Request::Shutdown(done) => {
+                let _ = done.send(());
+            }
+        }
+    }
+
+    fn snapshot(&self) -> RobotSnapshot {
+        let world = self.world.world();
+        let q = world.joint_positions();
+        let qd = world.joint_velocities();
+        let base_position_m = world
+            .model()
+            .link_names()
+            .first()
+            .and_then(|root| world.link_pose(root))
+            .map_or([0.0; 3], |pose| {
+                let t = pose.translation.vector;
+                [t.x, t.y, t.z]
+            });
+        let joints = self
+            .actuators
+            .iter()
+            .enumerate()
+            .map(|(k, a)| {
+                let i = self.world.joint_index(k).unwrap_or(0);
+                JointSnapshot {
+                    joint: a.joint.clone(),
+                    bus: self.ports[a.bus].name.clone(),
+                    position_rad: q.get(i).copied().unwrap_or(0.0),
+                    velocity_rad_s: qd.get(i).copied().unwrap_or(0.0),
+                    motor: a.firmware.snapshot(),
+                }
+            })
+            .collect();
+        RobotSnapshot {
+            time_s: world.time_s(),
+            base_position_m,
+            joints,
+            lost_buses: self
+                .ports
+                .iter()
+                .filter(|p| p.lost)
+                .map(|p| p.name.clone())
+                .collect(),
+        }
+    }
+
+    async fn on_frame(&mut self, port: usize, frame: &CanFrame) -> Result<(), StateFileError> {
+        if self.ports[port].lost {
+            return Ok(());
+        }
+        let mut replies = Vec::new();
+        for a in self.actuators.iter_mut().filter(|a| a.bus == port) {
+            replies.extend(a.firmware.handle_frame(frame));
+        }
+        self.persist_if_requested()?;
+        self.send(port, replies).await;
+        Ok(())
+    }
+
+    async fn on_tick(&mut self) -> Result<(), PhysicsError> {
+        let mut out: Vec<(usize, CanFrame)> = Vec::new();
+        for a in &mut self.actuators {
+            let bus = a.bus;
+            out.extend(a.firmware.tick().into_iter().map(|f| (bus, f)));
+        }
+        self.world.step()?;
+        for (bus, frame) in out {
+            self.send(bus, Some(frame)).await;
+        }
+        Ok(())
+    }
+
+    fn persist_if_requested(&mut self) -> Result<(), StateFileError> {
+        let mut changed = false;
+        for a in &mut self.actuators {
+            if a.firmware.take_persist_request() {
+                self.state
+                    .motors
+                    .insert(uid_key(a.firmware.uid()), a.firmware.persisted());
+                changed = true;
+            }
+        }
+        if let (true, Some(path)) = (changed, &self.state_path) {
+            self.state.save(path)?;
+        }
+        Ok(())
+    }
+
+    async fn send(&self, port: usize, frames: impl IntoIterator<Item = CanFrame>) {
+        let port = &self.ports[port];
+        if port.lost {
+            return;
+        }
+        for frame in frames {
+            // A full transmit queue is the mailbox being busy: retry briefly, then drop the
+            // frame as a firmware would.
+            for _attempt in 0..50 {
+                match port.bus.send(frame).await {
+                    Err(BusError::TxQueueFull { .. }) => sleep(Duration::from_micros(100)).await,
+                    Err(error) => {
+                        tracing::debug!(bus = %port.name, %error, %frame, "robot emulator: frame not sent");
+                        break;
+                    }
+                    Ok(()) => break,
+                }
+            }
+        }
+    }
+}

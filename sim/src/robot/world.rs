@@ -1,0 +1,164 @@
+//! One physics world for a whole robot, its actuated joints bound to the actuators' plants.
+
+use crate::physics::{ArmWorld, ObstacleShape, PhysicsError, WorldConfig};
+
+use super::config::{Base, RobotConfig};
+use super::joint_plant::{joint_pair, JointLink, JointPlant};
+
+/// World steps between two refreshes of the joints' effective inertia: it changes with the
+/// pose, slowly at the speeds a robot moves, and the mass matrix costs more than a step.
+const INERTIA_REFRESH_STEPS: u64 = 10;
+
+/// Half the thickness of the ground slab (m): thick enough that no foot tunnels through it
+/// in one 1 ms step.
+const GROUND_HALF_THICKNESS_M: f64 = 0.5;
+/// Half the side of the ground slab (m).
+const GROUND_HALF_SIDE_M: f64 = 50.0;
+
+/// The robot's world and, per actuator, the link to its joint.
+pub struct RobotWorld {
+    world: ArmWorld,
+    /// Per actuator (configuration order): the world's joint index and the link.
+    joints: Vec<(usize, JointLink)>,
+    /// Per world joint, the torque applied in the last step (N·m).
+    applied_nm: Vec<f64>,
+}
+
+impl std::fmt::Debug for RobotWorld {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("RobotWorld")
+            .field("world", &self.world)
+            .field("actuators", &self.joints.len())
+            .finish()
+    }
+}
+
+/// Why a robot's world could not be built.
+#[derive(Debug, thiserror::Error)]
+pub enum RobotWorldError {
+    /// The URDF did not load into the physics world.
+    #[error(transparent)]
+    Physics(#[from] PhysicsError),
+    /// An actuator or start position names a joint the URDF does not have (or one that is
+    /// fixed).
+    #[error("joint `{joint}` is not a revolute, continuous or prismatic joint of the URDF (its movable joints: {known})")]
+    UnknownJoint {
+        /// The name given.
+        joint: String,
+        /// The URDF's movable joints, comma-separated.
+        known: String,
+    },
+}
+
+impl RobotWorld {
+    /// Loads the robot's URDF with its base, sets the start positions and each actuator's
+    /// rotor inertia, and returns the world with one [`JointPlant`] per actuator (in
+    /// configuration order) for the actuators' firmware.
+    pub fn new(config: &RobotConfig) -> Result<(Self, Vec<JointPlant>), RobotWorldError> {
+        let world_config = WorldConfig {
+            floating_base_height_m: match config.base {
+                Base::Fixed => None,
+                Base::Floating { start_height_m } => Some(start_height_m),
+            },
+            ..WorldConfig::default()
+        };
+        let mut world = ArmWorld::from_urdf_str(&config.urdf, world_config)?;
+        if matches!(config.base, Base::Floating { .. }) {
+            let h = GROUND_HALF_SIDE_M;
+            world.add_obstacle(
+                ObstacleShape::Box {
+                    half_extents_m: [h, h, GROUND_HALF_THICKNESS_M],
+                },
+                [0.0, 0.0, -GROUND_HALF_THICKNESS_M],
+            );
+        }
+        let index_of = |name: &str| {
+            world
+                .joint_index(name)
+                .ok_or_else(|| RobotWorldError::UnknownJoint {
+                    joint: name.to_owned(),
+                    known: world
+                        .joints()
+                        .iter()
+                        .map(|j| j.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", "),
+                })
+        };
+        let mut q = vec![0.0; world.joints().len()];
+        for (name, value) in &config.start_positions_rad {
+            q[index_of(name)?] = *value;
+        }
+        let mut indices = Vec::with_capacity(config.actuators.len());
+        for actuator in &config.actuators {
+            let index = index_of(&actuator.joint)?;
+            indices.push(index);
+        }
+        for (actuator, &index) in config.actuators.iter().zip(&indices) {
+            world.set_armature(index, actuator.motor.model.spec().rotor_inertia_kg_m2);
+        }
+        world.set_joint_positions(&q)?;
+        let inertia = world.model().mass_matrix_diagonal(&q)?;
+        let mut joints = Vec::with_capacity(indices.len());
+        let mut plants = Vec::with_capacity(indices.len());
+        for (actuator, &index) in config.actuators.iter().zip(&indices) {
+            let (link, plant) = joint_pair(
+                actuator.direction,
+                actuator.zero_offset_rad,
+                q[index],
+                inertia[index],
+                actuator.motor.model.spec().peak_torque_nm,
+            );
+            joints.push((index, link));
+            plants.push(plant);
+        }
+        let applied_nm = vec![0.0; world.joints().len()];
+        Ok((
+            Self {
+                world,
+                joints,
+                applied_nm,
+            },
+            plants,
+        ))
+    }
+
+    /// One 1 ms world step with the torques the actuators applied since the last one; then
+    /// every joint's state goes back to its actuator. An `Err` means the physics diverged.
+    pub fn step(&mut self) -> Result<(), PhysicsError> {
+        self.applied_nm.fill(0.0);
+        for (index, link) in &self.joints {
+            self.applied_nm[*index] = link.take_joint_torque_nm();
+        }
+        let velocities_before = self.world.joint_velocities();
+        self.world.step(&self.applied_nm);
+        self.world.check_finite()?;
+        let q = self.world.joint_positions();
+        let qd = self.world.joint_velocities();
+        let refresh = self.world.steps().is_multiple_of(INERTIA_REFRESH_STEPS);
+        let inertia = if refresh {
+            Some(self.world.model().mass_matrix_diagonal(&q)?)
+        } else {
+            None
+        };
+        let dt = self.world.config().step_s;
+        for (index, link) in &self.joints {
+            let i = *index;
+            let j = inertia
+                .as_ref()
+                .map_or_else(|| link.state().inertia_kg_m2, |m| m[i]);
+            link.sync_from_world(q[i], velocities_before[i], qd[i], j, self.applied_nm[i], dt);
+        }
+        Ok(())
+    }
+
+    /// The physics world (positions, link poses, contacts for views and checks).
+    pub fn world(&self) -> &ArmWorld {
+        &self.world
+    }
+
+    /// The world's joint index of actuator `actuator` (configuration order).
+    pub fn joint_index(&self, actuator: usize) -> Option<usize> {
+        self.joints.get(actuator).map(|(i, _)| *i)
+    }
+}

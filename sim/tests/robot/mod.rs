@@ -1,0 +1,293 @@
+//! Whole robots on the virtual bus (paused clock): one world, several buses, the actuators'
+//! firmware driving the joints against gravity and each other.
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use bus::virtual_bus::{VirtualBus, VirtualBusConfig, VirtualNode};
+use bus::{CanBus, CanFrame};
+use sim::physics::ArmModel;
+use sim::robot::{
+    Base, BusConfig, JointActuator, RobotConfig, RobotConfigError, RobotEmulator, RobotError,
+    RobotHandle,
+};
+use sim::robstride::{ModeState, Model, MotorConfig};
+
+const ARM_URDF: &str = include_str!("../../../urdf/robstride_arm6.urdf");
+const HOST: u32 = 0xFD;
+
+/// The 6-DoF arm: shoulder and elbow (ids 1–3) on `can0`, the wrist (ids 4–6) on `can1`.
+fn arm_config(start: &[(&str, f64)]) -> RobotConfig {
+    let joints = [
+        ("shoulder_yaw", Model::RS03, 0),
+        ("shoulder_pitch", Model::RS04, 0),
+        ("elbow_pitch", Model::RS03, 0),
+        ("wrist_roll", Model::RS02, 1),
+        ("wrist_pitch", Model::RS02, 1),
+        ("flange_roll", Model::RS02, 1),
+    ];
+    RobotConfig {
+        name: "robstride_arm6".into(),
+        urdf: ARM_URDF.into(),
+        base: Base::Fixed,
+        buses: ["can0", "can1"]
+            .iter()
+            .map(|name| BusConfig {
+                name: (*name).into(),
+                bitrate_bps: 1_000_000,
+            })
+            .collect(),
+        actuators: joints
+            .iter()
+            .enumerate()
+            .map(|(k, (joint, model, bus))| JointActuator {
+                joint: (*joint).into(),
+                bus: *bus,
+                motor: MotorConfig::new(k as u8 + 1, *model),
+                direction: 1.0,
+                zero_offset_rad: 0.0,
+            })
+            .collect(),
+        start_positions_rad: start.iter().map(|(j, q)| ((*j).into(), *q)).collect(),
+        state_file: None,
+        host_id: HOST as u8,
+    }
+}
+
+struct Rig {
+    robot: RobotHandle,
+    hosts: Vec<VirtualNode>,
+    _buses: Vec<VirtualBus>,
+}
+
+fn spawn(config: RobotConfig) -> Rig {
+    let buses: Vec<VirtualBus> = config
+        .buses
+        .iter()
+        .map(|_| VirtualBus::new(VirtualBusConfig::default()))
+        .collect();
+    let nodes: Vec<Arc<dyn CanBus>> = buses
+        .iter()
+        .map(|b| Arc::new(b.attach("robot")) as Arc<dyn CanBus>)
+        .collect();
+    let hosts = buses.iter().map(|b| b.attach("host")).collect();
+    let robot = RobotEmulator::spawn(config, nodes).expect("the robot starts");
+    Rig {
+        robot,
+        hosts,
+        _buses: buses,
+    }
+}
+
+fn ext(comm: u32, data2: u32, motor: u32, data: [u8; 8]) -> CanFrame {
+    CanFrame::extended((comm << 24) | (data2 << 8) | motor, &data).unwrap()
+}
+
+/// Type 18: write a float parameter.
+fn write_f32(index: u16, value: f32, motor: u32) -> CanFrame {
+    let [lo, hi] = index.to_le_bytes();
+    let v = value.to_le_bytes();
+    ext(0x12, HOST, motor, [lo, hi, 0, 0, v[0], v[1], v[2], v[3]])
+}
+
+/// Type 18: write a byte parameter.
+fn write_u8(index: u16, value: u8, motor: u32) -> CanFrame {
+    let [lo, hi] = index.to_le_bytes();
+    ext(0x12, HOST, motor, [lo, hi, 0, 0, value, 0, 0, 0])
+}
+
+/// Drains what the host has received so far.
+async fn drain(host: &VirtualNode) {
+    while let Ok(Ok(_)) = tokio::time::timeout(Duration::from_millis(1), host.recv()).await {}
+}
+
+/// Puts motor `motor` on `host`'s bus in CSP (run_mode 5), enabled, targeting `target_rad`.
+async fn csp_hold(host: &VirtualNode, motor: u32, target_rad: f32) {
+    send(host, write_u8(0x7005, 5, motor)).await;
+    send(host, ext(0x03, HOST, motor, [0; 8])).await;
+    send(host, write_f32(0x7017, 3.0, motor)).await; // limit_spd
+    send(host, write_f32(0x7016, target_rad, motor)).await; // loc_ref
+}
+
+/// Sends one frame and lets the bus carry it (a host's transmit queue is ten frames deep).
+async fn send(host: &VirtualNode, frame: CanFrame) {
+    host.send(frame).await.unwrap();
+    tokio::time::sleep(Duration::from_micros(200)).await;
+}
+
+#[tokio::test(start_paused = true)]
+async fn the_arm_holds_a_pose_against_gravity_with_the_torque_its_urdf_needs() {
+    let start = [
+        ("shoulder_pitch", 1.0),
+        ("elbow_pitch", 0.6),
+        ("wrist_pitch", 0.3),
+    ];
+    let rig = spawn(arm_config(&start));
+    let targets = [0.0, 1.0, 0.6, 0.0, 0.3, 0.0];
+    for (k, target) in targets.iter().enumerate() {
+        let bus = usize::from(k >= 3);
+        csp_hold(&rig.hosts[bus], k as u32 + 1, *target as f32).await;
+    }
+    tokio::time::sleep(Duration::from_secs(4)).await;
+    for host in &rig.hosts {
+        drain(host).await;
+    }
+    let snap = rig.robot.snapshot().await.unwrap();
+    assert!((snap.time_s - 4.0).abs() < 0.05, "{}", snap.time_s);
+    let model = ArmModel::from_urdf_str(ARM_URDF).unwrap();
+    let q: Vec<f64> = snap.joints.iter().map(|j| j.position_rad).collect();
+    let gravity = model.gravity_torques(&q, [0.0, 0.0, -9.81]).unwrap();
+    for (k, joint) in snap.joints.iter().enumerate() {
+        assert_eq!(joint.motor.mode, ModeState::Run, "{}", joint.joint);
+        assert!(
+            (joint.position_rad - targets[k]).abs() < 0.02,
+            "{} at {} rad, target {}",
+            joint.joint,
+            joint.position_rad,
+            targets[k]
+        );
+        // The motor carries the gravity load (our own Jacobian-transpose reference): 5 %
+        // or 0.1 N·m for the nearly unloaded wrist.
+        let tolerance = (0.05 * gravity[k].abs()).max(0.1);
+        assert!(
+            (joint.motor.torque_nm - gravity[k]).abs() <= tolerance,
+            "{}: motor torque {} N·m, gravity needs {} N·m",
+            joint.joint,
+            joint.motor.torque_nm,
+            gravity[k]
+        );
+    }
+    assert!(
+        gravity[1].abs() > 8.0,
+        "the shoulder carries the arm: {}",
+        gravity[1]
+    );
+    rig.robot.shutdown().await;
+}
+
+#[tokio::test(start_paused = true)]
+async fn an_unpowered_arm_topples_from_upright_and_the_shorted_windings_brake_it() {
+    // q = 0 is the arm straight up: unpowered, it topples forward, slowed by the drive's
+    // short-circuit brake, and comes to rest on the shoulder's stop (2 rad).
+    let rig = spawn(arm_config(&[("shoulder_pitch", 0.3)]));
+    let mut fastest: f64 = 0.0;
+    for _ in 0..30 {
+        tokio::time::sleep(Duration::from_millis(100)).await;
+        let snap = rig.robot.snapshot().await.unwrap();
+        fastest = fastest.max(snap.joint("shoulder_pitch").unwrap().velocity_rad_s.abs());
+    }
+    let snap = rig.robot.snapshot().await.unwrap();
+    let shoulder = snap.joint("shoulder_pitch").unwrap();
+    assert_eq!(shoulder.motor.mode, ModeState::Reset);
+    assert!(
+        (shoulder.position_rad - 2.0).abs() < 0.01,
+        "on its stop: {}",
+        shoulder.position_rad
+    );
+    assert!(
+        shoulder.velocity_rad_s.abs() < 0.05,
+        "at rest: {}",
+        shoulder.velocity_rad_s
+    );
+    // A free fall of 1.7 rad would reach ~6 rad/s; the brake holds it well below.
+    assert!(fastest > 0.1 && fastest < 3.0, "fastest {fastest} rad/s");
+    rig.robot.shutdown().await;
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_lost_bus_stops_its_actuators_by_their_watchdog_and_the_others_hold() {
+    let rig = spawn(arm_config(&[("shoulder_pitch", 0.5)]));
+    for (k, target) in [0.0f32, 0.5, 0.0, 0.0, 0.0, 0.0].iter().enumerate() {
+        let bus = usize::from(k >= 3);
+        let host = &rig.hosts[bus];
+        let motor = k as u32 + 1;
+        // canTimeout 0x7028: 20 000 ticks = 1 s.
+        send(
+            host,
+            ext(0x12, HOST, motor, [0x28, 0x70, 0, 0, 0x20, 0x4E, 0, 0]),
+        )
+        .await;
+        csp_hold(host, motor, *target).await;
+    }
+    rig.robot.set_bus_lost("can1", true).await.unwrap();
+    // The host keeps commanding both buses every 100 ms; can1's frames are lost.
+    for _ in 0..30 {
+        for (k, host) in rig.hosts.iter().enumerate() {
+            let first = k as u32 * 3 + 1;
+            for motor in first..first + 3 {
+                send(host, ext(0x02, HOST, motor, [0; 8])).await;
+            }
+            drain(host).await;
+        }
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
+    let snap = rig.robot.snapshot().await.unwrap();
+    assert_eq!(snap.lost_buses, ["can1"]);
+    for joint in &snap.joints {
+        let expected = if joint.bus == "can1" {
+            ModeState::Reset
+        } else {
+            ModeState::Run
+        };
+        assert_eq!(
+            joint.motor.mode, expected,
+            "{} on {}",
+            joint.joint, joint.bus
+        );
+    }
+    let shoulder = snap.joint("shoulder_pitch").unwrap();
+    assert!(
+        (shoulder.position_rad - 0.5).abs() < 0.03,
+        "{}",
+        shoulder.position_rad
+    );
+    assert!(matches!(
+        rig.robot.set_bus_lost("can7", true).await,
+        Err(RobotError::UnknownBus { .. })
+    ));
+    rig.robot.shutdown().await;
+}
+
+#[tokio::test(start_paused = true)]
+async fn configuration_mistakes_are_named() {
+    let mut twice = arm_config(&[]);
+    twice.actuators[1].motor.can_id = 1;
+    let nodes = || -> Vec<Arc<dyn CanBus>> {
+        let bus = VirtualBus::new(VirtualBusConfig::default());
+        vec![Arc::new(bus.attach("a")), Arc::new(bus.attach("b"))]
+    };
+    match RobotEmulator::spawn(twice, nodes()) {
+        Err(RobotError::Config(RobotConfigError::DuplicateCanId {
+            bus,
+            can_id: 1,
+            first,
+            second,
+        })) => {
+            assert_eq!(
+                (bus.as_str(), first.as_str(), second.as_str()),
+                ("can0", "shoulder_yaw", "shoulder_pitch")
+            );
+        }
+        other => panic!("{other:?}"),
+    }
+    let mut unknown = arm_config(&[]);
+    unknown.actuators[0].joint = "shoulder_yew".into();
+    let error = RobotEmulator::spawn(unknown, nodes())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        error.contains("`shoulder_yew`") && error.contains("shoulder_yaw, shoulder_pitch"),
+        "{error}"
+    );
+    let error = RobotEmulator::spawn(arm_config(&[]), nodes()[..1].to_vec()).unwrap_err();
+    assert!(
+        matches!(
+            error,
+            RobotError::BusCount {
+                expected: 2,
+                given: 1
+            }
+        ),
+        "{error}"
+    );
+}
