@@ -5,11 +5,12 @@
 //! contract, built on [`bench`]: clock, links, run options), [`harness`] (loading whole scenarios, the runner, reports).
 //!
 //! The CLI (`armhil run`, `armhil check`) is a thin layer over this library; [`ui`] is the live
-//! web view of `armhil sim ... --ui`.
+//! web view of `armhil sim ... --ui`; [`robots`] reads robot files for `armhil sim robot`.
 
 pub mod bench;
 pub mod devices;
 pub mod harness;
 pub mod interop;
+pub mod robots;
 pub mod scenario;
 pub mod ui;

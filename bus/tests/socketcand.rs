@@ -264,3 +264,38 @@ async fn a_server_that_is_not_socketcand_fails_the_handshake() {
         "{error}"
     );
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn named_channels_keep_each_bus_to_the_clients_that_opened_it() {
+    let names = ["can0".to_string(), "can1".to_string()];
+    let (buses, server) = SocketcandServer::bind_realtime_channels("127.0.0.1:0", &names)
+        .await
+        .unwrap();
+    let addr = server.local_addr().to_string();
+    let robot: Vec<VirtualNode> = buses.iter().map(|b| b.attach("robot")).collect();
+    let on_can0 = SocketcandBus::connect(&addr, "can0").await.unwrap();
+    let on_can1 = SocketcandBus::connect(&addr, "can1").await.unwrap();
+    settle().await;
+    send(&on_can1, CanFrame::extended(0x0300_FD05, &[1; 8]).unwrap()).await;
+    assert_eq!(recv(&robot[1]).await.raw_id(), 0x0300_FD05);
+    send(&robot[0], CanFrame::standard(0x123, &[2]).unwrap()).await;
+    assert_eq!(recv(&on_can0).await.raw_id(), 0x123);
+    // Neither frame crossed to the other bus.
+    settle().await;
+    assert!(timeout(Duration::from_millis(100), robot[0].recv())
+        .await
+        .is_err());
+    assert!(timeout(Duration::from_millis(100), on_can1.recv())
+        .await
+        .is_err());
+    // A name the server does not have is refused with the ones it has.
+    let mut stream = TcpStream::connect(&addr).await.unwrap();
+    read_until(&mut stream, "< hi >").await;
+    stream.write_all(b"< open can7 >").await.unwrap();
+    let refusal = read_until(&mut stream, ">").await;
+    assert!(
+        refusal.contains("< error no bus can7 here; this server has can0 can1 >"),
+        "{refusal}"
+    );
+    server.shutdown().await;
+}

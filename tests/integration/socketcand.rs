@@ -61,3 +61,39 @@ async fn the_robstride_driver_reaches_the_emulator_over_socketcand() {
         tokio::time::sleep(Duration::from_millis(20)).await;
     }
 }
+
+/// `armhil sim robot`: the 6-DoF arm's two buses are two socketcand channels; our driver on
+/// each moves its joints in CSP, and the shoulder (can0) carries the wrist (can1).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_robot_answers_on_each_of_its_buses_over_socketcand_channels() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let file = format!("{root}/robots/robstride_arm6.yaml");
+    let (_sim, addr) = start_sim(&["robot", &file]);
+    let mut drivers = Vec::new();
+    for bus in ["can0", "can1"] {
+        let host: Arc<dyn CanBus> = Arc::new(SocketcandBus::connect(&addr, bus).await.unwrap());
+        drivers.push(RobstrideDriver::new(host, DriverConfig::default()));
+    }
+    let shoulder = drivers[0].motor(2, Model::RS04).unwrap();
+    let wrist = drivers[1].motor(5, Model::RS02).unwrap();
+    // Motor 5 is on can1 only: can0 has no one answering to it.
+    let stranger = drivers[0].motor(5, Model::RS02).unwrap();
+    assert!(stranger.device_id().await.is_err(), "id 5 answered on can0");
+    for (motor, target) in [(&shoulder, 0.6f32), (&wrist, -0.4)] {
+        motor.switch_mode(RunMode::CyclicPosition).await.unwrap();
+        motor.enable().await.unwrap();
+        motor.set_position(target, 2.0).await.unwrap();
+    }
+    let deadline = Instant::now() + Duration::from_secs(10);
+    loop {
+        let (s, w) = (shoulder.poll().await.unwrap(), wrist.poll().await.unwrap());
+        if (s.angle_rad - 0.6).abs() < 0.01 && (w.angle_rad + 0.4).abs() < 0.01 {
+            // Holding the arm tilted 0.6 rad forward takes torque; the wrist carries little.
+            assert!(s.torque_nm.abs() > 3.0, "shoulder {s:?}");
+            assert!(w.torque_nm.abs() < 2.0, "wrist {w:?}");
+            break;
+        }
+        assert!(Instant::now() < deadline, "never got there: {s:?} {w:?}");
+        tokio::time::sleep(Duration::from_millis(20)).await;
+    }
+}

@@ -152,7 +152,7 @@ impl Counters {
 
 /// What every connection task shares.
 struct Shared {
-    bus: VirtualBus,
+    channels: Channels,
     config: ServerConfig,
     counters: Counters,
     /// Numbers connections in the order they were accepted.
@@ -181,6 +181,31 @@ fn end_grace(raw: &watch::Sender<Option<Instant>>) {
         }
         _ => false,
     });
+}
+
+/// The buses a server offers.
+enum Channels {
+    /// One bus, whatever name a client opens (a single-bus emulator).
+    Any(VirtualBus),
+    /// A bus per name (a robot's `can0` … `can3`): `< open can2 >` reaches `can2` only.
+    Named(Vec<(String, VirtualBus)>),
+}
+
+impl Channels {
+    /// The bus a client's `< open NAME >` reaches, or the reply refusing it.
+    fn open(&self, name: &str) -> Result<&VirtualBus, String> {
+        match self {
+            Self::Any(bus) => Ok(bus),
+            Self::Named(buses) => buses
+                .iter()
+                .find(|(n, _)| n == name)
+                .map(|(_, bus)| bus)
+                .ok_or_else(|| {
+                    let names: Vec<&str> = buses.iter().map(|(n, _)| n.as_str()).collect();
+                    format!("no bus {name} here; this server has {}", names.join(" "))
+                }),
+        }
+    }
 }
 
 /// A running socketcand server. Dropping it (or [`SocketcandServer::shutdown`]) stops
@@ -212,6 +237,24 @@ impl SocketcandServer {
         bus: VirtualBus,
         config: ServerConfig,
     ) -> Result<Self, ServerError> {
+        Self::bind_channels_inner(addr, Channels::Any(bus), config).await
+    }
+
+    /// Listen on `addr` and serve one bus per name: a client's `< open NAME >` reaches the
+    /// bus of that name only, and an unknown name is refused with the names there are.
+    pub async fn bind_channels(
+        addr: &str,
+        channels: Vec<(String, VirtualBus)>,
+        config: ServerConfig,
+    ) -> Result<Self, ServerError> {
+        Self::bind_channels_inner(addr, Channels::Named(channels), config).await
+    }
+
+    async fn bind_channels_inner(
+        addr: &str,
+        channels: Channels,
+        config: ServerConfig,
+    ) -> Result<Self, ServerError> {
         let listener = TcpListener::bind(addr)
             .await
             .map_err(|source| ServerError::Bind {
@@ -223,7 +266,7 @@ impl SocketcandServer {
             source,
         })?;
         let shared = Arc::new(Shared {
-            bus,
+            channels,
             config,
             counters: Counters::default(),
             next_connection: AtomicU64::new(0),
@@ -253,6 +296,30 @@ impl SocketcandServer {
         });
         let server = Self::bind(addr, bus.clone(), ServerConfig::default()).await?;
         Ok((bus, server))
+    }
+
+    /// Real-time virtual buses, one per name in `names`, served on `addr` as
+    /// [`SocketcandServer::bind_channels`] does (timestamps in Unix time, as
+    /// [`SocketcandServer::bind_realtime_bus`]). Returns the buses in `names` order.
+    pub async fn bind_realtime_channels(
+        addr: &str,
+        names: &[String],
+    ) -> Result<(Vec<VirtualBus>, Self), ServerError> {
+        let epoch = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .unwrap_or_default();
+        let buses: Vec<VirtualBus> = names
+            .iter()
+            .map(|_| {
+                VirtualBus::new(crate::virtual_bus::VirtualBusConfig {
+                    epoch,
+                    ..crate::virtual_bus::VirtualBusConfig::default()
+                })
+            })
+            .collect();
+        let channels = names.iter().cloned().zip(buses.iter().cloned()).collect();
+        let server = Self::bind_channels(addr, channels, ServerConfig::default()).await?;
+        Ok((buses, server))
     }
 
     /// The address the server listens on (the actual port when bound to port 0).
@@ -596,14 +663,19 @@ impl Session<'_> {
         let node = self.node.borrow().clone();
         match (command, node) {
             (Command::Open(name), None) => {
+                let bus = match self.shared.channels.open(&name) {
+                    Ok(bus) => bus,
+                    Err(refusal) => {
+                        tracing::debug!(peer = %self.peer, bus = name, "unknown bus refused");
+                        self.reply(Reply::Error(refusal));
+                        return Ok(());
+                    }
+                };
                 let options = NodeOptions {
                     receive_own: false,
                     tx_queue_len: Some(self.shared.config.node_tx_queue),
                 };
-                let node = self
-                    .shared
-                    .bus
-                    .attach_with(&format!("socketcand {}", self.peer), options);
+                let node = bus.attach_with(&format!("socketcand {}", self.peer), options);
                 tracing::debug!(peer = %self.peer, bus = name, "bus opened");
                 self.node.send_replace(Some(Arc::new(node)));
                 self.reply(Reply::Ok);

@@ -10,6 +10,7 @@ use super::signals::StopSignals;
 
 pub mod piper;
 pub mod realman;
+pub mod robot;
 pub mod robstride;
 pub mod served_bus;
 
@@ -28,6 +29,8 @@ enum Device {
     Realman(realman::Args),
     /// RobStride actuators (CAN, 29-bit IDs), any number on one bus.
     Robstride(robstride::Args),
+    /// A whole robot from its robot file: one physics world, every bus served at once.
+    Robot(robot::Args),
 }
 
 /// `--socketcand` takes `HOST:PORT`; a bare port means loopback.
@@ -184,6 +187,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         Device::Piper(args) => piper::run(args),
         Device::Realman(args) => realman::run(args),
         Device::Robstride(args) => robstride::run(args),
+        Device::Robot(args) => robot::run(args),
     }
 }
 

@@ -110,7 +110,7 @@ impl ServedBus {
 }
 
 #[cfg(target_os = "linux")]
-fn open_socketcan(iface: &str) -> anyhow::Result<Arc<dyn CanBus>> {
+pub(crate) fn open_socketcan(iface: &str) -> anyhow::Result<Arc<dyn CanBus>> {
     use anyhow::Context as _;
     let socket = bus::socketcan_bus::SocketCanBus::open(iface).with_context(|| {
         format!("cannot open SocketCAN interface {iface} (is it up? `ip link set up {iface}`)")
@@ -119,7 +119,7 @@ fn open_socketcan(iface: &str) -> anyhow::Result<Arc<dyn CanBus>> {
 }
 
 #[cfg(not(target_os = "linux"))]
-fn open_socketcan(iface: &str) -> anyhow::Result<Arc<dyn CanBus>> {
+pub(crate) fn open_socketcan(iface: &str) -> anyhow::Result<Arc<dyn CanBus>> {
     anyhow::bail!("SocketCAN interface {iface}: SocketCAN exists only on Linux (use --socketcand)")
 }
 

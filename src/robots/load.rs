@@ -1,0 +1,374 @@
+//! Reading a robot file into the emulator's [`RobotConfig`] (layer 2): every problem names
+//! file, line and column; doubtful but runnable choices come back as warnings.
+
+use std::path::{Path, PathBuf};
+
+use sim::bounded_read::{read_regular_file, BoundedReadError};
+use sim::physics::{ArmModel, JointKind};
+use sim::robot::{Base, BusConfig, JointActuator, RobotConfig};
+use sim::robstride::{baud_code_bps, Model, MotorConfig, DEFAULT_HOST_ID};
+
+use super::raw::RawRobot;
+use crate::scenario::error::{from_yaml_error, suggestion};
+use crate::scenario::{pos, Pos, ScenarioError, S};
+
+/// Largest robot file read (bytes). The humanoid's is under 4 KB.
+const MAX_ROBOT_FILE_BYTES: u64 = 1024 * 1024;
+
+/// A robot file that loaded.
+#[derive(Debug, Clone)]
+pub struct LoadedRobot {
+    /// What the emulator runs.
+    pub config: RobotConfig,
+    /// The robot file.
+    pub file: PathBuf,
+    /// The URDF file it names.
+    pub urdf_path: PathBuf,
+    /// Choices that run but are probably wrong (an actuator weaker than its joint's URDF
+    /// effort), each at its place in the file.
+    pub warnings: Vec<ScenarioError>,
+}
+
+/// Why a robot file could not be loaded.
+#[derive(Debug, thiserror::Error)]
+pub enum RobotFileError {
+    /// The file could not be read (missing, not a regular file, too large).
+    #[error("{}: {message}", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        message: String,
+    },
+    /// The file was read but is not a valid robot file.
+    #[error("{0}")]
+    Invalid(#[from] Box<ScenarioError>),
+}
+
+/// Loads and checks the robot file `path` and the URDF it names.
+pub fn load_robot_file(path: &Path) -> Result<LoadedRobot, RobotFileError> {
+    let bytes = read_regular_file(path, MAX_ROBOT_FILE_BYTES).map_err(|error| {
+        let message = match error {
+            BoundedReadError::NotAFile => "not a regular file".to_owned(),
+            BoundedReadError::TooLarge { .. } => {
+                "larger than 1 MiB, the limit for a robot file (is it one?)".to_owned()
+            }
+            BoundedReadError::Io(e) => format!("cannot read: {e}"),
+        };
+        RobotFileError::Read {
+            path: path.to_owned(),
+            message,
+        }
+    })?;
+    let text = String::from_utf8(bytes).map_err(|_| RobotFileError::Read {
+        path: path.to_owned(),
+        message: "not UTF-8 text".into(),
+    })?;
+    let raw: RawRobot =
+        serde_saphyr::from_str(&text).map_err(|e| Box::new(from_yaml_error(path, &text, &e)))?;
+    let checker = Checker {
+        file: path,
+        text: &text,
+    };
+    checker.check(raw).map_err(RobotFileError::Invalid)
+}
+
+struct Checker<'a> {
+    file: &'a Path,
+    text: &'a str,
+}
+
+type Res<T> = Result<T, Box<ScenarioError>>;
+
+impl Checker<'_> {
+    fn err(&self, at: Pos, message: impl Into<String>) -> Box<ScenarioError> {
+        Box::new(ScenarioError::new(self.file, at, message).with_source(self.text))
+    }
+
+    fn check(&self, raw: RawRobot) -> Res<LoadedRobot> {
+        let dir = self.file.parent().unwrap_or(Path::new("."));
+        let urdf_path = dir.join(&raw.urdf.value);
+        let model = ArmModel::from_urdf_file(&urdf_path).map_err(|e| {
+            self.err(
+                pos(&raw.urdf),
+                format!("the URDF `{}` does not load: {e}", raw.urdf.value),
+            )
+        })?;
+        let urdf = std::fs::read_to_string(&urdf_path).map_err(|e| {
+            self.err(
+                pos(&raw.urdf),
+                format!("cannot read `{}`: {e}", raw.urdf.value),
+            )
+        })?;
+        let base = self.base(&raw)?;
+        let buses = self.buses(&raw)?;
+        let mut warnings = Vec::new();
+        let mut actuators: Vec<JointActuator> = Vec::new();
+        let movable: Vec<&str> = model.joints().iter().map(|j| j.name.as_str()).collect();
+        for a in &raw.actuators.value {
+            let a = &a.value;
+            let joint = self.joint(&a.joint, &movable)?;
+            let info = &model.joints()[joint];
+            if info.kind != JointKind::Revolute {
+                return Err(self.err(
+                    pos(&a.joint),
+                    format!(
+                        "joint `{}` is prismatic; a RobStride actuator turns",
+                        info.name
+                    ),
+                ));
+            }
+            if let Some(other) = actuators.iter().find(|o| o.joint == info.name) {
+                return Err(self.err(
+                    pos(&a.joint),
+                    format!(
+                        "joint `{}` already has an actuator (id {})",
+                        other.joint, other.motor.can_id
+                    ),
+                ));
+            }
+            let model_name = Model::from_name(&a.model.value).ok_or_else(|| {
+                let known: Vec<&str> = Model::ALL.iter().map(|m| m.name()).collect();
+                self.err(
+                    pos(&a.model),
+                    format!(
+                        "unknown model `{}`; expected one of: {}",
+                        a.model.value,
+                        known.join(", ")
+                    ),
+                )
+            })?;
+            if !(1..=0x7F).contains(&a.id.value) {
+                return Err(self.err(
+                    pos(&a.id),
+                    format!("`id` must be 1..=127, got {}", a.id.value),
+                ));
+            }
+            let can_id = a.id.value as u8;
+            let names: Vec<&str> = buses.iter().map(|b| b.name.as_str()).collect();
+            let bus = names
+                .iter()
+                .position(|n| *n == a.bus.value)
+                .ok_or_else(|| {
+                    self.err(
+                        pos(&a.bus),
+                        format!(
+                            "no bus `{}` in `buses` (they are: {}){}",
+                            a.bus.value,
+                            names.join(", "),
+                            suggestion(&a.bus.value, &names)
+                        ),
+                    )
+                })?;
+            if let Some(other) = actuators
+                .iter()
+                .find(|o| o.bus == bus && o.motor.can_id == can_id)
+            {
+                return Err(self.err(
+                    pos(&a.id),
+                    format!(
+                        "id {can_id} is already joint `{}`'s on bus `{}`: two actuators on one bus need two ids",
+                        other.joint, names[bus]
+                    ),
+                ));
+            }
+            let direction = match a.direction.as_ref().map(|d| d.value) {
+                None | Some(1) => 1.0,
+                Some(-1) => -1.0,
+                Some(other) => {
+                    let at = a.direction.as_ref().map(pos).unwrap_or_default();
+                    return Err(self.err(at, format!("`direction` must be 1 or -1, got {other}")));
+                }
+            };
+            let zero_offset_rad = match &a.zero_offset_rad {
+                None => 0.0,
+                Some(z) if z.value.is_finite() && z.value.abs() <= 4.0 * std::f64::consts::PI => {
+                    z.value
+                }
+                Some(z) => {
+                    return Err(self.err(
+                        pos(z),
+                        format!("`zero_offset_rad` must be within ±4π, got {}", z.value),
+                    ))
+                }
+            };
+            let peak = model_name.spec().peak_torque_nm;
+            if info.effort_limit.is_finite() && peak + 1e-9 < info.effort_limit {
+                warnings.push(*self.err(
+                    pos(&a.model),
+                    format!(
+                        "{} peaks at {peak} N·m, below joint `{}`'s URDF effort of {} N·m",
+                        model_name.name(),
+                        info.name,
+                        info.effort_limit
+                    ),
+                ));
+            }
+            actuators.push(JointActuator {
+                joint: info.name.clone(),
+                bus,
+                motor: MotorConfig::new(can_id, model_name),
+                direction,
+                zero_offset_rad,
+            });
+        }
+        for (k, b) in raw.buses.value.iter().enumerate() {
+            if !actuators.iter().any(|a| a.bus == k) {
+                return Err(self.err(
+                    pos(&b.value.name),
+                    format!("bus `{}` has no actuator on it", b.value.name.value),
+                ));
+            }
+        }
+        let mut start_positions_rad = Vec::new();
+        for s in raw.start_rad.iter().flat_map(|s| &s.value) {
+            let s = &s.value;
+            let joint = self.joint(&s.joint, &movable)?;
+            let info = &model.joints()[joint];
+            if !(s.rad.value.is_finite() && info.within_limits(s.rad.value)) {
+                return Err(self.err(
+                    pos(&s.rad),
+                    format!(
+                        "{} rad is outside joint `{}`'s limits [{}, {}]",
+                        s.rad.value, info.name, info.lower, info.upper
+                    ),
+                ));
+            }
+            start_positions_rad.push((info.name.clone(), s.rad.value));
+        }
+        self.masses(&model, &raw)?;
+        Ok(LoadedRobot {
+            config: RobotConfig {
+                name: raw.robot.value.clone(),
+                urdf,
+                base,
+                buses,
+                actuators,
+                start_positions_rad,
+                state_file: None,
+                host_id: DEFAULT_HOST_ID,
+            },
+            file: self.file.to_owned(),
+            urdf_path,
+            warnings,
+        })
+    }
+
+    fn base(&self, raw: &RawRobot) -> Res<Base> {
+        let floating = match raw.base.as_ref().map(|b| b.value.as_str()) {
+            None | Some("fixed") => false,
+            Some("floating") => true,
+            Some(other) => {
+                let at = raw.base.as_ref().map(pos).unwrap_or_default();
+                return Err(self.err(
+                    at,
+                    format!("`base` must be `fixed` or `floating`, got `{other}`"),
+                ));
+            }
+        };
+        match (floating, &raw.start_height_m) {
+            (false, None) => Ok(Base::Fixed),
+            (false, Some(h)) => Err(self.err(
+                pos(h),
+                "`start_height_m` is for a floating base; a fixed base stays where the URDF puts it",
+            )),
+            (true, None) => Err(self.err(
+                raw.base.as_ref().map(pos).unwrap_or_default(),
+                "a floating base needs `start_height_m`: the root link's height above the ground at start",
+            )),
+            (true, Some(h)) if h.value.is_finite() && (0.0..=10.0).contains(&h.value) => {
+                Ok(Base::Floating {
+                    start_height_m: h.value,
+                })
+            }
+            (true, Some(h)) => Err(self.err(
+                pos(h),
+                format!("`start_height_m` must be 0..=10 m, got {}", h.value),
+            )),
+        }
+    }
+
+    fn buses(&self, raw: &RawRobot) -> Res<Vec<BusConfig>> {
+        if raw.buses.value.is_empty() {
+            return Err(self.err(pos(&raw.buses), "a robot needs at least one bus"));
+        }
+        let mut buses: Vec<BusConfig> = Vec::new();
+        for b in &raw.buses.value {
+            let b = &b.value;
+            let name = &b.name.value;
+            let valid = !name.is_empty()
+                && name.len() <= 15
+                && name
+                    .chars()
+                    .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-');
+            if !valid {
+                return Err(self.err(
+                    pos(&b.name),
+                    format!("bus name `{name}` must be 1 to 15 letters, digits, `_` or `-` (it names a network interface)"),
+                ));
+            }
+            if buses.iter().any(|o| &o.name == name) {
+                return Err(self.err(pos(&b.name), format!("bus `{name}` is listed twice")));
+            }
+            let bitrates: Vec<u32> = (1..=4).filter_map(baud_code_bps).collect();
+            let bitrate_bps = match &b.bitrate {
+                None => 1_000_000,
+                Some(r) => match u32::try_from(r.value).ok().filter(|v| bitrates.contains(v)) {
+                    Some(v) => v,
+                    None => {
+                        let list: Vec<String> = bitrates.iter().map(u32::to_string).collect();
+                        return Err(self.err(
+                            pos(r),
+                            format!(
+                                "`bitrate` {} is not one a RobStride actuator runs at ({})",
+                                r.value,
+                                list.join(", ")
+                            ),
+                        ));
+                    }
+                },
+            };
+            buses.push(BusConfig {
+                name: name.clone(),
+                bitrate_bps,
+            });
+        }
+        Ok(buses)
+    }
+
+    fn joint(&self, name: &S<String>, movable: &[&str]) -> Res<usize> {
+        movable
+            .iter()
+            .position(|j| *j == name.value)
+            .ok_or_else(|| {
+                self.err(
+                    pos(name),
+                    format!(
+                        "the URDF has no movable joint `{}`{}",
+                        name.value,
+                        suggestion(&name.value, movable)
+                    ),
+                )
+            })
+    }
+
+    /// A link moved by a joint must have mass: the physics cannot accelerate a massless body.
+    fn masses(&self, model: &ArmModel, raw: &RawRobot) -> Res<()> {
+        for joint in model.joints() {
+            let Some(link) = model.link_index(&joint.child_link) else {
+                continue;
+            };
+            let mass = model.inertials().get(link).map_or(0.0, |i| i.mass_kg);
+            if mass <= 0.0 {
+                return Err(self.err(
+                    pos(&raw.urdf),
+                    format!(
+                        "link `{}` (moved by joint `{}`) has no mass in the URDF; the physics cannot move a massless link",
+                        joint.child_link, joint.name
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+}

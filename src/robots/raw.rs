@@ -1,0 +1,63 @@
+//! A robot file as written (layer 1): every value with its place in the file.
+
+use serde::Deserialize;
+
+use crate::scenario::S;
+
+/// The whole file.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawRobot {
+    /// The robot's name.
+    pub robot: S<String>,
+    /// The URDF, relative to the robot file.
+    pub urdf: S<String>,
+    /// `fixed` (default) or `floating`.
+    pub base: Option<S<String>>,
+    /// Floating base: the root link's height above the ground at start (m).
+    pub start_height_m: Option<S<f64>>,
+    /// The buses.
+    pub buses: S<Vec<S<RawBus>>>,
+    /// The actuated joints.
+    pub actuators: S<Vec<S<RawActuator>>>,
+    /// Joint positions at start (rad), as a list of one-key mappings in file order.
+    pub start_rad: Option<S<Vec<S<RawStart>>>>,
+}
+
+/// One bus.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawBus {
+    /// `can0` …: also the SocketCAN interface and the socketcand channel it is served on.
+    pub name: S<String>,
+    /// Bit rate (bit/s); 1 Mbit/s when left out.
+    pub bitrate: Option<S<i64>>,
+}
+
+/// One actuated joint.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawActuator {
+    /// The URDF joint.
+    pub joint: S<String>,
+    /// RobStride model (`RS03` …).
+    pub model: S<String>,
+    /// CAN id (1..=127).
+    pub id: S<i64>,
+    /// The bus's name.
+    pub bus: S<String>,
+    /// +1 or −1; +1 when left out.
+    pub direction: Option<S<i64>>,
+    /// Joint position at which the shaft reads 0 (rad); 0 when left out.
+    pub zero_offset_rad: Option<S<f64>>,
+}
+
+/// One start position: `{joint: knee, rad: 0.3}`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawStart {
+    /// The URDF joint.
+    pub joint: S<String>,
+    /// Its position (rad).
+    pub rad: S<f64>,
+}

@@ -1,0 +1,170 @@
+//! Robot files: the shipped ones load, and each mistake is named at its place.
+
+use std::path::{Path, PathBuf};
+
+use super::*;
+use sim::robot::Base;
+
+fn repo(path: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(path)
+}
+
+/// A robot file in a temporary folder beside a copy of the arm's URDF.
+fn write(text: &str) -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(
+        repo("urdf/robstride_arm6.urdf"),
+        dir.path().join("arm.urdf"),
+    )
+    .unwrap();
+    let file = dir.path().join("robot.yaml");
+    std::fs::write(&file, text).unwrap();
+    (dir, file)
+}
+
+const ARM: &str = "robot: arm
+urdf: arm.urdf
+buses:
+  - {name: can0}
+  - {name: can1, bitrate: 500000}
+actuators:
+  - {joint: shoulder_yaw, model: RS03, id: 1, bus: can0}
+  - {joint: shoulder_pitch, model: RS04, id: 2, bus: can0, direction: -1, zero_offset_rad: 0.1}
+  - {joint: elbow_pitch, model: RS03, id: 3, bus: can0}
+  - {joint: wrist_pitch, model: RS02, id: 1, bus: can1}
+start_rad:
+  - {joint: shoulder_pitch, rad: 0.5}
+";
+
+fn error_of(text: &str) -> String {
+    let (_dir, file) = write(text);
+    match load_robot_file(&file) {
+        Err(RobotFileError::Invalid(e)) => {
+            format!("{}:{}: {}", e.pos.line, e.pos.column, e.message)
+        }
+        other => panic!("expected an invalid file, got {other:?}"),
+    }
+}
+
+#[test]
+fn a_valid_file_becomes_the_emulators_configuration() {
+    let (_dir, file) = write(ARM);
+    let robot = load_robot_file(&file).unwrap();
+    let c = &robot.config;
+    assert_eq!(c.base, Base::Fixed);
+    assert_eq!(c.buses.len(), 2);
+    assert_eq!(c.buses[1].bitrate_bps, 500_000);
+    assert_eq!(c.actuators.len(), 4);
+    let shoulder = &c.actuators[1];
+    assert_eq!(
+        (shoulder.direction, shoulder.zero_offset_rad, shoulder.bus),
+        (-1.0, 0.1, 0)
+    );
+    assert_eq!(c.actuators[3].motor.can_id, 1);
+    assert_eq!(c.actuators[3].bus, 1, "id 1 twice, on two buses");
+    assert_eq!(c.start_positions_rad, [("shoulder_pitch".to_string(), 0.5)]);
+    assert!(robot.warnings.is_empty(), "{:?}", robot.warnings);
+}
+
+#[test]
+fn each_mistake_is_named_at_its_line_and_column() {
+    let cases = [
+        (
+            ARM.replace("joint: elbow_pitch", "joint: elbow_pich"),
+            "9:13: the URDF has no movable joint `elbow_pich`; did you mean `elbow_pitch`?",
+        ),
+        (
+            ARM.replace("id: 3, bus: can0", "id: 2, bus: can0"),
+            "9:43: id 2 is already joint `shoulder_pitch`'s on bus `can0`",
+        ),
+        (
+            ARM.replace("bus: can1}", "bus: can2}"),
+            "10:51: no bus `can2` in `buses` (they are: can0, can1); did you mean `can0`?",
+        ),
+        (
+            ARM.replace(
+                "  - {joint: wrist_pitch, model: RS02, id: 1, bus: can1}\n",
+                "",
+            ),
+            "5:12: bus `can1` has no actuator on it",
+        ),
+        (
+            ARM.replace("model: RS04", "model: RS09"),
+            "8:36: unknown model `RS09`",
+        ),
+        (
+            ARM.replace("direction: -1", "direction: 2"),
+            "8:71: `direction` must be 1 or -1, got 2",
+        ),
+        (
+            ARM.replace("rad: 0.5", "rad: 5.0"),
+            "12:34: 5 rad is outside joint `shoulder_pitch`'s limits",
+        ),
+        (
+            ARM.replace("urdf: arm.urdf", "urdf: missing.urdf"),
+            "2:7: the URDF `missing.urdf` does not load",
+        ),
+        (
+            ARM.replace("bitrate: 500000", "bitrate: 400000"),
+            "5:27: `bitrate` 400000 is not one a RobStride actuator runs at",
+        ),
+        (
+            ARM.replace("robot: arm", "robot: arm\nbase: floating"),
+            "2:7: a floating base needs `start_height_m`",
+        ),
+        (ARM.replace("buses:", "busses:"), "did you mean `buses`?"),
+    ];
+    for (text, expected) in cases {
+        let error = error_of(&text);
+        assert!(
+            error.starts_with(expected) || error.contains(expected),
+            "expected `{expected}`, got `{error}`"
+        );
+    }
+}
+
+#[test]
+fn an_actuator_weaker_than_its_joints_urdf_effort_is_a_warning() {
+    let (_dir, file) = write(&ARM.replace("model: RS04", "model: RS03"));
+    let robot = load_robot_file(&file).unwrap();
+    assert_eq!(robot.warnings.len(), 1);
+    assert_eq!(
+        robot.warnings[0].headline(),
+        format!(
+            "{}:8:36: RS03 peaks at 60 N·m, below joint `shoulder_pitch`'s URDF effort of 120 N·m",
+            file.display()
+        )
+    );
+}
+
+#[test]
+fn a_massless_moving_link_is_refused() {
+    let (dir, file) = write(ARM);
+    let urdf = std::fs::read_to_string(dir.path().join("arm.urdf")).unwrap();
+    let massless = urdf.replacen("<mass value=\"1.28\"/>", "<mass value=\"0\"/>", 1);
+    std::fs::write(dir.path().join("arm.urdf"), massless).unwrap();
+    let error = load_robot_file(&file).unwrap_err().to_string();
+    assert!(
+        error.contains("link `upper_arm` (moved by joint `shoulder_pitch`) has no mass"),
+        "{error}"
+    );
+}
+
+#[test]
+fn every_shipped_robot_loads_without_warnings() {
+    let mut found = 0;
+    for entry in std::fs::read_dir(repo("robots")).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "yaml") {
+            let robot = load_robot_file(&path).unwrap_or_else(|e| panic!("{e}"));
+            assert!(
+                robot.warnings.is_empty(),
+                "{}: {:?}",
+                path.display(),
+                robot.warnings
+            );
+            found += 1;
+        }
+    }
+    assert!(found >= 1);
+}
