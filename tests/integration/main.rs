@@ -18,6 +18,7 @@ mod fuzz_regressions;
 mod long_run;
 mod piper_flow;
 mod realman_flow;
+mod robot_flow;
 mod robstride_flow;
 mod robstride_mit;
 mod scenario_errors;

@@ -39,6 +39,9 @@ impl Default for WorldConfig {
     }
 }
 
+/// Solver iterations (substeps) per step for a floating base.
+const FLOATING_SOLVER_ITERATIONS: usize = 4;
+
 /// How one actuated URDF joint maps onto the rapier multibody.
 #[derive(Debug, Clone, Copy)]
 struct JointBinding {
@@ -149,6 +152,11 @@ impl ArmWorld {
         // At a 1 ms step one substep is enough: the holding-torque, limit and contact tests
         // pass unchanged (joint limits are projected exactly after the step anyway).
         physics.integration_parameters.num_solver_iterations = 1;
+        if config.floating_base_height_m.is_some() {
+            // A robot standing on its feet rests on contacts alone, and one iteration lets
+            // them creep: a rigidly held humanoid slid and tipped over within seconds.
+            physics.integration_parameters.num_solver_iterations = FLOATING_SOLVER_ITERATIONS;
+        }
 
         if config
             .floating_base_height_m
@@ -448,10 +456,14 @@ impl ArmWorld {
                 mb.apply_displacements(&displacement);
             }
         }
+        // A free root's pose lives in its rigid body (placed by the loader's shift, or where
+        // the robot has moved to); without reading it, forward kinematics would put the root
+        // back at the world origin. A fixed root is where it always was either way.
+        let read_root_pose = self.config.floating_base_height_m.is_some();
         for b in &self.bindings {
             if let Some((mb, _)) = mb_joints.get_mut(b.handle) {
                 mb.generalized_velocity_mut().fill(0.0);
-                mb.forward_kinematics(&self.physics.bodies, false);
+                mb.forward_kinematics(&self.physics.bodies, read_root_pose);
                 mb.update_rigid_bodies(&mut self.physics.bodies, true);
             }
         }
@@ -613,9 +625,11 @@ impl ArmWorld {
             }
             touched.push(b.handle);
         }
+        // As in `set_joint_positions`: a free root's pose is its rigid body's.
+        let read_root_pose = self.config.floating_base_height_m.is_some();
         for handle in touched {
             if let Some((mb, _)) = mb_joints.get_mut(handle) {
-                mb.forward_kinematics(&self.physics.bodies, false);
+                mb.forward_kinematics(&self.physics.bodies, read_root_pose);
                 mb.update_rigid_bodies(&mut self.physics.bodies, false);
             }
         }

@@ -1,14 +1,19 @@
 //! The joint an actuator drives inside a robot's physics world, as the actuator's [`Plant`].
 //!
-//! The firmware's control loops run at 10 kHz (ten 100 µs substeps per 1 ms tick); stepping a
-//! 20-joint world with contacts at 10 kHz would cost more than real time. So the two are
-//! co-simulated: during a tick each actuator integrates *its own joint* locally — the joint's
-//! effective inertia (the world's mass-matrix diagonal plus the rotor), the torque the motor
-//! applies, and the load the rest of the robot put on the joint during the previous world step
-//! (gravity, the other joints' coupling, contacts, limits) — while recording the mean torque
-//! it applied. The world then steps 1 ms with every joint's mean torque, and each joint's
-//! local state is reset to what the world computed ([`JointLink::sync_from_world`]). The
-//! control loops keep their 10 kHz behaviour; the world decides where the robot really is.
+//! The world owns the joint's state: once per 1 ms tick every actuator computes its torque
+//! from the state the world computed last (its control loops run once per tick, see
+//! [`crate::robstride::Actuator::set_control_substeps`]), the world steps 1 ms with all the
+//! torques at once, and each joint's state goes back to its actuator
+//! ([`JointLink::sync_from_world`]).
+//!
+//! Why not the built-in rig's 10 kHz loops against a local model of the joint between world
+//! steps: a joint's response depends on the whole robot — a stance leg's ankle moves the
+//! whole body, and the foot's contact with the ground decides how — so a one-joint model
+//! with the fixed-base inertia predicted the wrong motion, and the humanoid's joints
+//! chattered until it fell (measured: a standing humanoid in CSP toppled within 5 s).
+//! Computing every torque from the world's own state keeps the world the only judge; the
+//! firmware's stability caps use the 1 ms step and the joint's fixed-base inertia, which a
+//! ground contact only raises.
 //!
 //! Shaft and joint frames: the shaft angle θ = direction · (q − zero offset), where q is the
 //! URDF joint position; the joint torque is direction · shaft torque.
@@ -24,27 +29,16 @@ pub struct JointState {
     pub shaft_angle_rad: f64,
     /// Shaft speed (rad/s).
     pub shaft_speed_rad_s: f64,
-    /// Effective inertia about the joint: mass-matrix diagonal plus rotor (kg·m²).
+    /// Inertia about the joint with the other joints held: the mass-matrix diagonal plus the
+    /// rotor (kg·m²).
     pub inertia_kg_m2: f64,
-    /// The load the rest of the robot puts on the shaft, measured over the last world step
-    /// (N·m, shaft frame).
-    pub load_nm: f64,
     /// An external torque on the shaft (the harness's hand), N·m.
     pub external_nm: f64,
     /// ∫ motor torque dt since the last world step (N·m·s, shaft frame).
     torque_impulse_nm_s: f64,
-    /// Time integrated since the last world step (s).
+    /// Time the actuator ran since the last world step (s).
     integrated_s: f64,
 }
-
-/// Largest load the measured estimate may carry, as a multiple of the motor's peak torque: a
-/// joint hitting its hard stop gets an impulse whose one-step "load" is meaningless for the
-/// next prediction, and the world corrects the state at every step anyway.
-const MAX_LOAD_PER_PEAK: f64 = 4.0;
-
-/// Share of a new load measurement taken per world step (a first-order filter with a time
-/// constant of about 10 steps = 10 ms).
-const LOAD_FILTER_GAIN: f64 = 0.1;
 
 /// The robot's side of a joint: where the world reads the motor's torque and writes back the
 /// joint's state.
@@ -53,7 +47,6 @@ pub struct JointLink {
     state: Arc<Mutex<JointState>>,
     direction: f64,
     zero_offset_rad: f64,
-    max_load_nm: f64,
 }
 
 /// The actuator's side of a joint (its [`Plant`]).
@@ -65,20 +58,18 @@ pub struct JointPlant {
 /// A joint link and the plant for the actuator driving it.
 ///
 /// `direction` is +1 or −1 (anything negative counts as −1); `joint_q` the joint's start
-/// position; `peak_torque_nm` the motor's peak torque (bounds the measured load).
+/// position.
 pub fn joint_pair(
     direction: f64,
     zero_offset_rad: f64,
     joint_q: f64,
     inertia_kg_m2: f64,
-    peak_torque_nm: f64,
 ) -> (JointLink, JointPlant) {
     let direction = if direction < 0.0 { -1.0 } else { 1.0 };
     let state = Arc::new(Mutex::new(JointState {
         shaft_angle_rad: direction * (joint_q - zero_offset_rad),
         shaft_speed_rad_s: 0.0,
         inertia_kg_m2: inertia_kg_m2.max(1e-6),
-        load_nm: 0.0,
         external_nm: 0.0,
         torque_impulse_nm_s: 0.0,
         integrated_s: 0.0,
@@ -88,7 +79,6 @@ pub fn joint_pair(
             state: Arc::clone(&state),
             direction,
             zero_offset_rad,
-            max_load_nm: MAX_LOAD_PER_PEAK * peak_torque_nm.abs().max(1.0),
         },
         JointPlant { state },
     )
@@ -117,36 +107,18 @@ impl JointLink {
         self.direction * (mean + s.external_nm)
     }
 
-    /// After a world step of `dt_s` in which the joint got `applied_joint_nm` and its speed
-    /// went from `joint_qd_before` to `joint_qd`: take the world's position and speed, set the
-    /// effective inertia, and measure the load the rest of the robot put on the joint (what
-    /// the world's acceleration needed beyond the applied torque; measured on the world's own
-    /// speeds so the local integration's error does not feed back).
-    pub fn sync_from_world(
-        &self,
-        joint_q: f64,
-        joint_qd_before: f64,
-        joint_qd: f64,
-        inertia_kg_m2: f64,
-        applied_joint_nm: f64,
-        dt_s: f64,
-    ) {
+    /// After a world step: the joint's position and speed as the world computed them, and
+    /// its inertia (`None` keeps the last one). A non-finite state is not taken (the world
+    /// reports its divergence itself).
+    pub fn sync_from_world(&self, joint_q: f64, joint_qd: f64, inertia_kg_m2: Option<f64>) {
         let mut s = lock(&self.state);
-        let speed_before = self.direction * joint_qd_before;
-        let speed = self.direction * joint_qd;
-        let inertia = inertia_kg_m2.max(1e-6);
-        if dt_s > 0.0 && speed.is_finite() && joint_q.is_finite() {
-            let needed = inertia * (speed - speed_before) / dt_s;
-            let measured = (needed - self.direction * applied_joint_nm)
-                .clamp(-self.max_load_nm, self.max_load_nm);
-            // Low-pass: a load measured one step late and fed straight back makes the
-            // controller and the world chatter at half the step rate; the loads that matter
-            // (gravity, the other joints' motion) change far slower than 1 ms.
-            s.load_nm += LOAD_FILTER_GAIN * (measured - s.load_nm);
+        if joint_q.is_finite() && joint_qd.is_finite() {
             s.shaft_angle_rad = self.direction * (joint_q - self.zero_offset_rad);
-            s.shaft_speed_rad_s = speed;
+            s.shaft_speed_rad_s = self.direction * joint_qd;
         }
-        s.inertia_kg_m2 = inertia;
+        if let Some(inertia) = inertia_kg_m2.filter(|j| j.is_finite()) {
+            s.inertia_kg_m2 = inertia.max(1e-6);
+        }
     }
 
     /// The shaft's state now.
@@ -156,6 +128,7 @@ impl JointLink {
 }
 
 impl Plant for JointPlant {
+    /// Records the torque; the joint moves when the world steps.
     fn step(&mut self, torque_nm: f64, dt_s: f64) {
         let mut s = lock(&self.state);
         let torque = if torque_nm.is_finite() {
@@ -163,12 +136,6 @@ impl Plant for JointPlant {
         } else {
             0.0
         };
-        let accel = (torque + s.load_nm + s.external_nm) / s.inertia_kg_m2;
-        let speed = s.shaft_speed_rad_s + accel * dt_s;
-        if speed.is_finite() {
-            s.shaft_speed_rad_s = speed;
-            s.shaft_angle_rad += speed * dt_s;
-        }
         s.torque_impulse_nm_s += torque * dt_s;
         s.integrated_s += dt_s;
     }
@@ -200,7 +167,7 @@ mod tests {
 
     #[test]
     fn the_mean_torque_reaches_the_joint_in_its_direction() {
-        let (link, mut plant) = joint_pair(-1.0, 0.5, 0.5, 0.1, 10.0);
+        let (link, mut plant) = joint_pair(-1.0, 0.5, 0.5, 0.1);
         assert_eq!(
             plant.position_rad(),
             0.0,
@@ -214,24 +181,17 @@ mod tests {
     }
 
     #[test]
-    fn the_load_is_what_the_acceleration_needed_beyond_the_torque() {
-        // Gravity pulls the joint with −5 N·m while the motor applied +2: the world's joint
-        // sped down by 3 N·m / 0.1 kg·m² · 1 ms = −0.03 rad/s.
-        let (link, plant) = joint_pair(1.0, 0.0, 0.0, 0.1, 10.0);
-        for _ in 0..200 {
-            link.sync_from_world(0.0, 0.0, -0.03, 0.1, 2.0, 1e-3);
-        }
-        let s = link.state();
-        assert!((s.load_nm + 5.0).abs() < 1e-6, "{s:?}");
-        assert_eq!(plant.velocity_rad_s(), -0.03);
-    }
-
-    #[test]
-    fn a_hard_stop_impulse_does_not_become_a_huge_load() {
-        let (link, _plant) = joint_pair(1.0, 0.0, 0.0, 0.1, 10.0);
-        for _ in 0..200 {
-            link.sync_from_world(0.0, 0.0, -50.0, 0.1, 0.0, 1e-3);
-        }
-        assert!((link.state().load_nm + 40.0).abs() < 1e-6);
+    fn the_world_state_reaches_the_shaft_through_direction_and_offset() {
+        let (link, plant) = joint_pair(-1.0, 0.2, 0.0, 0.1);
+        link.sync_from_world(0.7, 1.5, Some(0.3));
+        assert!((plant.position_rad() + 0.5).abs() < 1e-12);
+        assert_eq!(plant.velocity_rad_s(), -1.5);
+        assert_eq!(plant.inertia_kg_m2(), 0.3);
+        link.sync_from_world(f64::NAN, 0.0, None);
+        assert!(
+            (plant.position_rad() + 0.5).abs() < 1e-12,
+            "NaN is not taken"
+        );
+        assert_eq!(plant.inertia_kg_m2(), 0.3, "None keeps the inertia");
     }
 }

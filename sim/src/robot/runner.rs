@@ -166,6 +166,8 @@ impl RobotEmulator {
             if saved.is_none() {
                 actuator.set_master_id(config.host_id);
             }
+            // The world steps once per tick for every joint (see `joint_plant`).
+            actuator.set_control_substeps(1);
             actuators.push(JointActuator {
                 joint: spec.joint.clone(),
                 bus: spec.bus,

@@ -107,7 +107,6 @@ impl RobotWorld {
                 actuator.zero_offset_rad,
                 q[index],
                 inertia[index],
-                actuator.motor.model.spec().peak_torque_nm,
             );
             joints.push((index, link));
             plants.push(plant);
@@ -130,7 +129,6 @@ impl RobotWorld {
         for (index, link) in &self.joints {
             self.applied_nm[*index] = link.take_joint_torque_nm();
         }
-        let velocities_before = self.world.joint_velocities();
         self.world.step(&self.applied_nm);
         self.world.check_finite()?;
         let q = self.world.joint_positions();
@@ -141,13 +139,9 @@ impl RobotWorld {
         } else {
             None
         };
-        let dt = self.world.config().step_s;
         for (index, link) in &self.joints {
             let i = *index;
-            let j = inertia
-                .as_ref()
-                .map_or_else(|| link.state().inertia_kg_m2, |m| m[i]);
-            link.sync_from_world(q[i], velocities_before[i], qd[i], j, self.applied_nm[i], dt);
+            link.sync_from_world(q[i], qd[i], inertia.as_ref().map(|m| m[i]));
         }
         Ok(())
     }

@@ -107,6 +107,8 @@ pub struct Actuator {
     speed_ramp_rad_s: f64,
     speed_loop: SpeedLoop,
     plant: Box<dyn Plant>,
+    /// Control-loop substeps per 1 ms tick ([`SUBSTEPS`] unless a robot's world sets 1).
+    substeps: u32,
     zero_offset_rad: f64,
     iq_a: f64,
     torque_nm: f64,
@@ -194,6 +196,7 @@ impl Actuator {
             speed_ramp_rad_s: 0.0,
             speed_loop: SpeedLoop::default(),
             plant,
+            substeps: SUBSTEPS,
             zero_offset_rad: zero,
             iq_a: 0.0,
             torque_nm: 0.0,
@@ -210,6 +213,15 @@ impl Actuator {
             saved_params,
             canopen: canopen::CanopenNode::new(),
         }
+    }
+
+    /// Run the control loops `substeps` times per 1 ms tick (at least once). The default, 10
+    /// (10 kHz), suits the built-in rig, which the loops integrate themselves. A robot's
+    /// physics world steps once per tick for all its joints, so its actuators run once per
+    /// tick (1 kHz) against the state the world computed; the loops' stability caps follow
+    /// the longer step.
+    pub fn set_control_substeps(&mut self, substeps: u32) {
+        self.substeps = substeps.max(1);
     }
 
     /// Current CAN ID.

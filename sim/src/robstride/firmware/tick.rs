@@ -2,7 +2,7 @@
 
 use bus::CanFrame;
 
-use super::{canopen, mit, Actuator, ModeState, ReportType, SUBSTEPS};
+use super::{canopen, mit, Actuator, ModeState, ReportType};
 use crate::robstride::codec::CommType;
 use crate::robstride::control::{SpeedEnvelope, ZERO_MODE_SPEED_RAD_S};
 use crate::robstride::faults::{Fault, WARNING_OVER_TEMP};
@@ -21,8 +21,8 @@ impl Actuator {
                 self.mode = ModeState::Reset;
             }
         }
-        let dt = 1e-3 / f64::from(SUBSTEPS);
-        for _ in 0..SUBSTEPS {
+        let dt = 1e-3 / f64::from(self.substeps);
+        for _ in 0..self.substeps {
             let torque = self.control(dt);
             self.plant.step(torque, dt);
         }
