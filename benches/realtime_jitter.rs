@@ -23,6 +23,7 @@ const RUN: Duration = Duration::from_secs(4);
 fn run_emulator(ticks_per_wake: u32) -> RealtimeStats {
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
+        .on_thread_start(sim::pacer::prefer_punctual_thread)
         .enable_all()
         .build()
         .expect("a tokio runtime");

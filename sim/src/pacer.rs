@@ -122,6 +122,15 @@ impl Drop for Pacer {
     }
 }
 
+/// Asks the kernel to run the calling thread on time, as the deadline thread does itself: 1 ns
+/// timer slack and, where the process may take it, a low real-time (FIFO) priority. For the
+/// worker threads of a real-time emulator's runtime (`Builder::on_thread_start`): the deadline
+/// thread wakes on time, but the step it prompts runs on a worker, which a busy core would
+/// otherwise make wait for its turn. Best effort: without the privilege nothing changes.
+pub fn prefer_punctual_thread() {
+    deadline::prefer_this_thread();
+}
+
 /// The deadline thread's body: sleep to each deadline, notify, until `stop`.
 fn deadline_loop(period: Duration, woken: &Notify, stop: &AtomicBool) {
     deadline::prefer_this_thread();

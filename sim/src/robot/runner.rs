@@ -390,14 +390,8 @@ impl Runner {
                     Some(request) => self.serve(request).await,
                     None => break Ok(()),
                 },
-                frame = frames.recv() => match frame {
-                    Some((port, frame)) => {
-                        if let Err(error) = self.on_frame(port, &frame).await {
-                            break Err(error.to_string());
-                        }
-                    }
-                    None => break Ok(()),
-                },
+                // Time before frames: a host flooding the buses must not stop the clock
+                // (frames arriving faster than they are handled would starve the tick).
                 _ = tick.tick() => {
                     let due = (started.elapsed().as_nanos() / STEP.as_nanos()) as u64 + 1;
                     let owed = due.saturating_sub(steps_done);
@@ -417,6 +411,14 @@ impl Runner {
                         break Err(Stop::from(error).to_string());
                     }
                 }
+                frame = frames.recv() => match frame {
+                    Some((port, frame)) => {
+                        if let Err(error) = self.on_frame(port, &frame).await {
+                            break Err(error.to_string());
+                        }
+                    }
+                    None => break Ok(()),
+                },
             }
         };
         for receiver in receivers {

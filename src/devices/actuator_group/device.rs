@@ -5,19 +5,103 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use async_trait::async_trait;
+use bus::virtual_bus::{VirtualBus, VirtualBusConfig};
 use bus::CanBus;
 use driver::robstride::{
     DriverConfig, Motor, MotorMode, OpControl, RobstrideDriver, RobstrideError,
 };
+use sim::robot::{RobotEmulator, RobotHandle};
 use sim::robstride::{MotorConfig, RobstrideBus, RobstrideConfig, RobstrideHandle};
 use tokio::sync::Mutex;
 
-use super::model::{GroupAction, GroupCheck, GroupFault, GroupSettings};
+use sim::robstride::Fault as MotorFault;
+
+use super::model::{GroupAction, GroupActuator, GroupCheck, GroupFault, GroupSettings};
 use crate::devices::{Action, Check, Device, DeviceError, DeviceFault, Reply, TraceColumn};
 use crate::scenario::{ErrorClass, Signal};
 
 /// Quantum of traced angles (rad): a thousandth, so a wrong scale factor still shows.
 const RAD_Q: f64 = 0.001;
+
+/// What answers for the group in an in-process run.
+pub(crate) enum GroupEmulator {
+    /// The RobStride emulator, every actuator on the bench's bus driving its own rig.
+    Rigs(RobstrideHandle),
+    /// A whole robot: one world, its actuators on its own buses.
+    Robot(RobotHandle),
+}
+
+impl GroupEmulator {
+    async fn inject(&self, actuator: &GroupActuator, fault: MotorFault) -> Result<(), String> {
+        match self {
+            Self::Rigs(e) => e
+                .inject(actuator.can_id, fault)
+                .await
+                .map_err(|e| e.to_string()),
+            Self::Robot(r) => r
+                .inject(&actuator.joint, fault)
+                .await
+                .map_err(|e| e.to_string()),
+        }
+    }
+
+    async fn clear(&self, actuator: &GroupActuator, fault: MotorFault) -> Result<(), String> {
+        match self {
+            Self::Rigs(e) => e
+                .clear(actuator.can_id, fault)
+                .await
+                .map_err(|e| e.to_string()),
+            Self::Robot(r) => r
+                .clear(&actuator.joint, fault)
+                .await
+                .map_err(|e| e.to_string()),
+        }
+    }
+
+    async fn shutdown(self) {
+        match self {
+            Self::Rigs(e) => e.shutdown().await,
+            Self::Robot(r) => r.shutdown().await,
+        }
+    }
+}
+
+/// A robot started for an in-process run.
+pub(crate) struct SpawnedRobot {
+    /// The hosts' nodes, one per bus in the robot's order.
+    pub hosts: Vec<Arc<dyn CanBus>>,
+    /// The robot.
+    pub emulator: GroupEmulator,
+    /// Its buses, kept for the run.
+    pub buses: Vec<VirtualBus>,
+}
+
+/// A robot's buses for an in-process run: one virtual bus per robot bus, the robot attached
+/// to each.
+pub(crate) fn spawn_robot(
+    name: &str,
+    robot: &sim::robot::RobotConfig,
+) -> Result<SpawnedRobot, String> {
+    let buses: Vec<VirtualBus> = robot
+        .buses
+        .iter()
+        .map(|_| VirtualBus::new(VirtualBusConfig::default()))
+        .collect();
+    let nodes = buses
+        .iter()
+        .map(|b| Arc::new(b.attach(name)) as Arc<dyn CanBus>)
+        .collect();
+    let handle = RobotEmulator::spawn(robot.clone(), nodes).map_err(|e| e.to_string())?;
+    let hosts = buses
+        .iter()
+        .map(|b| Arc::new(b.attach(crate::bench::HOST_NODE)) as Arc<dyn CanBus>)
+        .collect();
+    Ok(SpawnedRobot {
+        hosts,
+        emulator: GroupEmulator::Robot(handle),
+        buses,
+    })
+}
 
 /// The emulator answering for the group (in-process runs only).
 pub(crate) fn spawn_emulator(
@@ -41,33 +125,45 @@ pub(crate) struct GroupDevice {
     settings: GroupSettings,
     /// One handle per actuator, in settings order.
     motors: Vec<Motor>,
-    /// Keeps the receive task alive while the handles are used.
-    _driver: RobstrideDriver,
-    emulator: Mutex<Option<RobstrideHandle>>,
+    /// One driver per bus; keeps the receive tasks alive while the handles are used.
+    _drivers: Vec<RobstrideDriver>,
+    emulator: Mutex<Option<GroupEmulator>>,
+    /// A robot's own buses, kept for the run.
+    _robot_buses: Vec<VirtualBus>,
 }
 
 impl GroupDevice {
-    /// The driver's handles on `host`, and the emulator when in-process.
+    /// The drivers' handles on `hosts` (one per bus of [`GroupSettings::buses`]), and the
+    /// emulator when in-process.
     pub(crate) fn start(
         name: &str,
         settings: &GroupSettings,
-        host: Arc<dyn CanBus>,
-        emulator: Option<RobstrideHandle>,
+        hosts: Vec<Arc<dyn CanBus>>,
+        emulator: Option<GroupEmulator>,
+        robot_buses: Vec<VirtualBus>,
         timeout: Duration,
     ) -> Result<Self, String> {
-        let driver = RobstrideDriver::new(
-            host,
-            DriverConfig {
-                timeout,
-                ..DriverConfig::default()
-            },
-        );
+        let drivers: Vec<RobstrideDriver> = hosts
+            .into_iter()
+            .map(|host| {
+                RobstrideDriver::new(
+                    host,
+                    DriverConfig {
+                        timeout,
+                        ..DriverConfig::default()
+                    },
+                )
+            })
+            .collect();
         let motors = settings
             .actuators
             .iter()
             .map(|a| {
                 let model = driver::robstride::Model::parse(a.model.name()).ok_or_else(|| {
                     format!("device `{name}`: no driver model {}", a.model.name())
+                })?;
+                let driver = drivers.get(a.bus).ok_or_else(|| {
+                    format!("device `{name}`: joint `{}`: no bus {}", a.joint, a.bus)
                 })?;
                 driver
                     .motor(a.can_id, model)
@@ -78,8 +174,9 @@ impl GroupDevice {
             name: name.to_owned(),
             settings: settings.clone(),
             motors,
-            _driver: driver,
+            _drivers: drivers,
             emulator: Mutex::new(emulator),
+            _robot_buses: robot_buses,
         })
     }
 
@@ -263,12 +360,12 @@ impl Device for GroupDevice {
 
     async fn inject(&self, fault: &DeviceFault) -> Result<(), DeviceError> {
         let f = self.group_fault(fault)?;
-        let can_id = self.settings.actuators[f.actuator].can_id;
+        let actuator = &self.settings.actuators[f.actuator];
         match self.emulator.lock().await.as_ref() {
             Some(emulator) => emulator
-                .inject(can_id, f.fault)
+                .inject(actuator, f.fault)
                 .await
-                .map_err(|e| DeviceError::unsupported(e.to_string())),
+                .map_err(DeviceError::unsupported),
             None => Err(DeviceError::unsupported(
                 "faults need the in-process emulator",
             )),
@@ -282,23 +379,23 @@ impl Device for GroupDevice {
                 "faults need the in-process emulator",
             ));
         };
-        let faults: Vec<(u8, sim::robstride::Fault)> = match fault {
+        let faults: Vec<(&GroupActuator, MotorFault)> = match fault {
             Some(fault) => {
                 let f = self.group_fault(fault)?;
-                vec![(self.settings.actuators[f.actuator].can_id, f.fault)]
+                vec![(&self.settings.actuators[f.actuator], f.fault)]
             }
             None => self
                 .settings
                 .actuators
                 .iter()
-                .flat_map(|a| sim::robstride::Fault::ALL.map(|f| (a.can_id, f)))
+                .flat_map(|a| MotorFault::ALL.map(|f| (a, f)))
                 .collect(),
         };
-        for (can_id, fault) in faults {
+        for (actuator, fault) in faults {
             emulator
-                .clear(can_id, fault)
+                .clear(actuator, fault)
                 .await
-                .map_err(|e| DeviceError::unsupported(e.to_string()))?;
+                .map_err(DeviceError::unsupported)?;
         }
         Ok(())
     }

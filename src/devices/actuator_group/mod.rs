@@ -96,21 +96,37 @@ impl KindSpec for Kind {
         settings: &Settings,
         wiring: &Wiring<'_>,
     ) -> Result<Arc<dyn Device>, String> {
-        let (host, emulator): (Arc<dyn CanBus>, _) = match (wiring.bus, wiring.clock) {
-            (Some(bus), _) => {
+        let (hosts, emulator, robot_buses) = match (&settings.robot, wiring.bus, wiring.clock) {
+            (Some(robot), Some(_), _) => {
+                let robot = device::spawn_robot(name, robot)
+                    .map_err(|e| format!("device `{name}`: robot: {e}"))?;
+                (robot.hosts, Some(robot.emulator), robot.buses)
+            }
+            (Some(_), None, _) => {
+                return Err(format!(
+                    "device `{name}`: a robot runs in process only (its buses are this run's own virtual buses)"
+                ))
+            }
+            (None, Some(bus), _) => {
                 let node: Arc<dyn CanBus> = Arc::new(bus.attach(name));
                 let emulator = device::spawn_emulator(node, settings, wiring.bitrate_bps)
                     .map_err(|e| format!("device `{name}`: emulator: {e}"))?;
-                (Arc::new(bus.attach(HOST_NODE)), Some(emulator))
+                let host: Arc<dyn CanBus> = Arc::new(bus.attach(HOST_NODE));
+                (
+                    vec![host],
+                    Some(device::GroupEmulator::Rigs(emulator)),
+                    Vec::new(),
+                )
             }
-            (None, Clock::Iface(link)) => (link.open("driver").await?, None),
-            (None, _) => return Err(format!("device `{name}`: no bus to attach to")),
+            (None, None, Clock::Iface(link)) => (vec![link.open("driver").await?], None, Vec::new()),
+            (None, None, _) => return Err(format!("device `{name}`: no bus to attach to")),
         };
         let device = GroupDevice::start(
             name,
             settings,
-            host,
+            hosts,
             emulator,
+            robot_buses,
             wiring.options.deadline(DRIVER_TIMEOUT),
         )?;
         Ok(Arc::new(device))

@@ -1,5 +1,6 @@
 //! The validated `actuator_group` vocabulary.
 
+use sim::robot::RobotConfig;
 use sim::robstride::{Fault as MotorFault, Load, Model};
 
 /// One actuator: the joint it drives and its motor.
@@ -11,15 +12,21 @@ pub struct GroupActuator {
     pub can_id: u8,
     /// The motor's model.
     pub model: Model,
-    /// What the shaft drives.
+    /// What the shaft drives (a robot's actuators drive its joints instead).
     pub load: Load,
+    /// Index of its bus in [`GroupSettings::buses`].
+    pub bus: usize,
 }
 
-/// A group's settings: its actuators in file order, one bus.
+/// A group's settings: its actuators in file order, on one bus or, for a robot, on its buses.
 #[derive(Debug, Clone, PartialEq)]
 pub struct GroupSettings {
     /// The actuators.
     pub actuators: Vec<GroupActuator>,
+    /// The buses' names (`bench` for a group without a robot: the bench's own bus).
+    pub buses: Vec<String>,
+    /// The robot the actuators belong to (one physics world), when the group is one.
+    pub robot: Option<RobotConfig>,
 }
 
 /// A joint target: the actuator's index in [`GroupSettings::actuators`] and an angle.

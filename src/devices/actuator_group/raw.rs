@@ -26,11 +26,14 @@ pub(crate) struct RawActuator {
     pub pendulum: Option<S<RawPendulum>>,
 }
 
-/// The group's settings (after `kind: actuator_group`).
+/// The group's settings (after `kind: actuator_group`): `actuators` or `robot`.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawSettings {
-    pub actuators: S<Vec<S<RawActuator>>>,
+    /// Actuators on one bus, each driving its own rig.
+    pub actuators: Option<S<Vec<S<RawActuator>>>>,
+    /// Or a whole robot: a robot file (`robots/*.yaml`), relative to the scenario.
+    pub robot: Option<S<String>>,
 }
 
 /// The `group:` step: `do:` names the command (`enable`, `disable`, `hold`).

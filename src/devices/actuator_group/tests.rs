@@ -90,3 +90,46 @@ fn an_unknown_fault_gets_the_emulators_message() {
         "{e}"
     );
 }
+
+/// The repository's `scenarios/robot/` folder, where the robot files' relative paths start.
+fn robot_scenario() -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/robot/x.yaml")
+}
+
+#[test]
+fn a_robot_group_takes_its_joints_and_buses_from_the_robot_file() {
+    let text = "bench:\n  devices:\n    arm:\n      kind: actuator_group\n      robot: ../../robots/robstride_arm6.yaml\nsteps:\n  - group: {do: hold, targets_rad: {flange_roll: 0.2}, kp: 5, kd: 0.1}\n";
+    let s = parse_scenario(&robot_scenario(), text).expect("valid");
+    let StepKind::Action {
+        action: Action::ActuatorGroup(GroupAction::Hold { targets, .. }),
+        ..
+    } = &s.steps[0].kind
+    else {
+        panic!("not a hold: {:?}", s.steps[0].kind);
+    };
+    // flange_roll is the sixth actuator of the robot file, on its second bus.
+    assert_eq!(
+        targets,
+        &[JointTarget {
+            actuator: 5,
+            angle_rad: 0.2
+        }]
+    );
+}
+
+#[test]
+fn a_robot_file_that_does_not_load_is_an_error_at_the_robot_key() {
+    let missing = "bench:\n  devices:\n    arm:\n      kind: actuator_group\n      robot: ../../robots/nope.yaml\nsteps: []\n";
+    let error = parse_scenario(&robot_scenario(), missing)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        error.contains("x.yaml:5:14: robot file `../../robots/nope.yaml`"),
+        "{error}"
+    );
+    let both = "bench:\n  devices:\n    arm:\n      kind: actuator_group\n      actuators: [{joint: a, can_id: 1, model: RS03}]\n      robot: ../../robots/robstride_arm6.yaml\nsteps: []\n";
+    let error = parse_scenario(&robot_scenario(), both)
+        .unwrap_err()
+        .to_string();
+    assert!(error.contains("x.yaml:6:14: give `actuators`"), "{error}");
+}

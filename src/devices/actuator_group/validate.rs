@@ -12,15 +12,29 @@ use crate::scenario::{pos, Ctx, DeviceStep, Pos, Res, S};
 const CAN_IDS: std::ops::RangeInclusive<i64> = 1..=127;
 
 /// The group's actuators: joints named once, CAN IDs distinct and in range, known models.
-pub(crate) fn settings(ctx: &Ctx<'_>, raw: &RawSettings, _at: Pos) -> Res<GroupSettings> {
-    if raw.actuators.value.is_empty() {
+pub(crate) fn settings(ctx: &Ctx<'_>, raw: &RawSettings, at: Pos) -> Res<GroupSettings> {
+    let list = match (&raw.actuators, &raw.robot) {
+        (Some(list), None) => list,
+        (None, Some(file)) => return robot_settings(ctx, file),
+        (Some(_), Some(file)) => {
+            return Err(ctx.err(
+                pos(file),
+                "give `actuators` (one bus, a rig each) or `robot` (a robot file), not both",
+            ))
+        }
+        (None, None) => return Err(ctx.err(
+            at,
+            "an actuator group needs `actuators` (one bus, a rig each) or `robot` (a robot file)",
+        )),
+    };
+    if list.value.is_empty() {
         return Err(ctx.err(
-            pos(&raw.actuators),
+            pos(list),
             "`actuators` is empty; a group needs at least one",
         ));
     }
     let mut actuators: Vec<GroupActuator> = Vec::new();
-    for entry in &raw.actuators.value {
+    for entry in &list.value {
         let a = &entry.value;
         if actuators.iter().any(|b| b.joint == a.joint.value) {
             return Err(ctx.err(
@@ -67,9 +81,45 @@ pub(crate) fn settings(ctx: &Ctx<'_>, raw: &RawSettings, _at: Pos) -> Res<GroupS
             can_id,
             model,
             load,
+            bus: 0,
         });
     }
-    Ok(GroupSettings { actuators })
+    Ok(GroupSettings {
+        actuators,
+        buses: vec!["bench".to_owned()],
+        robot: None,
+    })
+}
+
+/// `robot: FILE`: the robot file, relative to the scenario, loaded with its own errors (which
+/// name the robot file's line and column) reported at the `robot:` key.
+fn robot_settings(ctx: &Ctx<'_>, file: &S<String>) -> Res<GroupSettings> {
+    let dir = ctx.file.parent().unwrap_or(std::path::Path::new("."));
+    let path = dir.join(&file.value);
+    let loaded = crate::robots::load_robot_file(&path).map_err(|e| {
+        let shown = match &e {
+            crate::robots::RobotFileError::Invalid(inner) => inner.headline(),
+            other => other.to_string(),
+        };
+        ctx.err(pos(file), format!("robot file `{}`: {shown}", file.value))
+    })?;
+    let config = loaded.config;
+    let actuators = config
+        .actuators
+        .iter()
+        .map(|a| GroupActuator {
+            joint: a.joint.clone(),
+            can_id: a.motor.can_id,
+            model: a.motor.model,
+            load: Load::None,
+            bus: a.bus,
+        })
+        .collect();
+    Ok(GroupSettings {
+        actuators,
+        buses: config.buses.iter().map(|b| b.name.clone()).collect(),
+        robot: Some(config),
+    })
 }
 
 fn positive(ctx: &Ctx<'_>, value: &S<f64>, key: &str) -> Res<f64> {

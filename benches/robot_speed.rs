@@ -1,0 +1,286 @@
+//! Whole robots, printed (run: `cargo bench --bench robot_speed`).
+//!
+//! - Virtual time: how many times faster than real time the robot runs on one core (a
+//!   current-thread runtime under a paused clock, as `armhil run` does), for the 6-DoF arm,
+//!   the humanoid standing (every actuator enabled in operation control, its feet on the
+//!   ground), one and two humanoids in one process (20 and 40 actuators), and a one-actuator
+//!   robot (the arm with only its shoulder actuated is not a robot file; the arm with all six
+//!   is the smallest shipped).
+//! - Real time: the humanoid for a few wall seconds on a two-worker runtime (as `armhil sim
+//!   robot` runs it), with a host sending every actuator a 1 kHz operation-control stream on
+//!   its bus; the process's CPU time per wall second, and each bus's load against its
+//!   1 Mbit/s.
+
+use std::path::Path;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use bus::virtual_bus::{VirtualBus, VirtualBusConfig, VirtualNode};
+use bus::{CanBus, CanFrame};
+use sim::robot::{RobotConfig, RobotEmulator, RobotHandle};
+
+/// Emulated time per virtual-time run.
+const VIRTUAL_RUN: Duration = Duration::from_secs(5);
+/// Wall time of the real-time run.
+const REAL_RUN: Duration = Duration::from_secs(4);
+/// Host id the frames are sent from.
+const HOST: u32 = 0xFD;
+
+fn robot(name: &str) -> RobotConfig {
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("robots/{name}.yaml"));
+    armhil::robots::load_robot_file(&file)
+        .expect("a shipped robot loads")
+        .config
+}
+
+struct Running {
+    handle: RobotHandle,
+    hosts: Vec<VirtualNode>,
+    config: RobotConfig,
+    _buses: Vec<VirtualBus>,
+}
+
+fn spawn(config: RobotConfig, bus_config: VirtualBusConfig) -> Running {
+    let buses: Vec<VirtualBus> = config
+        .buses
+        .iter()
+        .map(|_| VirtualBus::new(bus_config.clone()))
+        .collect();
+    let nodes = buses
+        .iter()
+        .map(|b| Arc::new(b.attach("robot")) as Arc<dyn CanBus>)
+        .collect();
+    let hosts = buses.iter().map(|b| b.attach("host")).collect();
+    let handle = RobotEmulator::spawn(config.clone(), nodes).expect("the robot starts");
+    Running {
+        handle,
+        hosts,
+        config,
+        _buses: buses,
+    }
+}
+
+/// A type-1 operation-control frame holding `angle_rad` with kp/kd (manual scaling: angle
+/// ±4π, speed and torque at their midpoints = 0, kp 0..500 or 0..5000, kd 0..5 or 0..100;
+/// the models here use the first range for RS02 and the second for RS03/RS04).
+fn hold_frame(
+    motor: u8,
+    model: sim::robstride::Model,
+    angle_rad: f64,
+    kp: f64,
+    kd: f64,
+) -> CanFrame {
+    let big = !matches!(model, sim::robstride::Model::RS02);
+    let (kp_max, kd_max) = if big { (5000.0, 100.0) } else { (500.0, 5.0) };
+    let scale =
+        |v: f64, lo: f64, hi: f64| (((v - lo) / (hi - lo)).clamp(0.0, 1.0) * 65535.0) as u16;
+    let pi4 = 4.0 * std::f64::consts::PI;
+    let mut data = [0u8; 8];
+    data[0..2].copy_from_slice(&scale(angle_rad, -pi4, pi4).to_be_bytes());
+    data[2..4].copy_from_slice(&0x7FFFu16.to_be_bytes());
+    data[4..6].copy_from_slice(&scale(kp, 0.0, kp_max).to_be_bytes());
+    data[6..8].copy_from_slice(&scale(kd, 0.0, kd_max).to_be_bytes());
+    let torque_mid = 0x7FFFu32;
+    CanFrame::extended((1 << 24) | (torque_mid << 8) | u32::from(motor), &data).expect("a frame")
+}
+
+fn enable_frame(motor: u8) -> CanFrame {
+    CanFrame::extended((3 << 24) | (HOST << 8) | u32::from(motor), &[0; 8]).expect("a frame")
+}
+
+/// The hold frame of every actuator, with the bus it goes on.
+fn hold_frames(running: &Running, start: &sim::robot::RobotSnapshot) -> Vec<(usize, CanFrame)> {
+    running
+        .config
+        .actuators
+        .iter()
+        .zip(&start.joints)
+        .map(|(a, j)| {
+            let leg = a.motor.model != sim::robstride::Model::RS02 || j.joint.contains("ankle");
+            let (kp, kd) = if leg { (300.0, 5.0) } else { (50.0, 1.0) };
+            (
+                a.bus,
+                hold_frame(a.motor.can_id, a.motor.model, j.motor.angle_rad, kp, kd),
+            )
+        })
+        .collect()
+}
+
+async fn send(host: &VirtualNode, frame: CanFrame) {
+    while host.send(frame).await.is_err() {
+        tokio::time::sleep(Duration::from_micros(100)).await;
+    }
+}
+
+/// Enable every actuator and send it one hold command.
+async fn hold_all(running: &Running) {
+    let start = running.handle.snapshot().await.expect("a snapshot");
+    for a in &running.config.actuators {
+        send(&running.hosts[a.bus], enable_frame(a.motor.can_id)).await;
+    }
+    for (bus, frame) in hold_frames(running, &start) {
+        send(&running.hosts[bus], frame).await;
+    }
+}
+
+/// Drains every host's receive queue (the robot's replies), so no queue overflows.
+fn drain(hosts: &[VirtualNode]) -> Vec<tokio::task::JoinHandle<()>> {
+    hosts
+        .iter()
+        .map(|h| {
+            let h = h.clone();
+            tokio::spawn(async move { while h.recv().await.is_ok() {} })
+        })
+        .collect()
+}
+
+/// Emulated seconds per wall second for `count` copies of `name` in one process.
+fn virtual_speed(name: &str, count: usize) -> (f64, usize) {
+    let runtime = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .start_paused(true)
+        .build()
+        .expect("a runtime");
+    runtime.block_on(async {
+        let robots: Vec<Running> = (0..count)
+            .map(|_| spawn(robot(name), VirtualBusConfig::default()))
+            .collect();
+        let mut drains = Vec::new();
+        for r in &robots {
+            drains.extend(drain(&r.hosts));
+            hold_all(r).await;
+        }
+        let actuators = robots.iter().map(|r| r.config.actuators.len()).sum();
+        let wall = Instant::now();
+        tokio::time::sleep(VIRTUAL_RUN).await;
+        let speed = VIRTUAL_RUN.as_secs_f64() / wall.elapsed().as_secs_f64();
+        for r in &robots {
+            let s = r.handle.snapshot().await.expect("a snapshot");
+            assert!(s.base_position_m[2].is_finite());
+        }
+        for d in drains {
+            d.abort();
+        }
+        for r in robots {
+            r.handle.shutdown().await;
+        }
+        (speed, actuators)
+    })
+}
+
+/// CPU seconds this process has used.
+fn cpu_seconds() -> f64 {
+    // SAFETY: getrusage fills the struct it is given.
+    #[allow(unsafe_code)]
+    let usage = unsafe {
+        let mut usage: libc::rusage = std::mem::zeroed();
+        libc::getrusage(libc::RUSAGE_SELF, &mut usage);
+        usage
+    };
+    let t = |tv: libc::timeval| tv.tv_sec as f64 + tv.tv_usec as f64 * 1e-6;
+    t(usage.ru_utime) + t(usage.ru_stime)
+}
+
+/// Bits on the wire of an extended data frame with `bytes` data bytes, without stuffing
+/// (SOF, 29-bit id with SRR/IDE, RTR, r1/r0, DLC, data, CRC + delimiter, ACK, EOF, IFS).
+fn extended_frame_bits(bytes: usize) -> f64 {
+    (1 + 11 + 1 + 1 + 18 + 1 + 2 + 4 + 8 * bytes + 15 + 1 + 2 + 7 + 3) as f64
+}
+
+fn real_time_humanoid() {
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+        .expect("a runtime");
+    runtime.block_on(async {
+        let epoch = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .unwrap_or_default();
+        let running = spawn(
+            robot("humanoid"),
+            VirtualBusConfig {
+                epoch,
+                ..VirtualBusConfig::default()
+            },
+        );
+        let received: Vec<_> = running
+            .hosts
+            .iter()
+            .map(|h| {
+                let h = h.clone();
+                tokio::spawn(async move {
+                    let mut frames = 0u64;
+                    while h.recv().await.is_ok() {
+                        frames += 1;
+                    }
+                    frames
+                })
+            })
+            .collect();
+        hold_all(&running).await;
+        let start = running.handle.snapshot().await.expect("a snapshot");
+        let frames = hold_frames(&running, &start);
+        let cpu_before = cpu_seconds();
+        let wall = Instant::now();
+        let mut sent = vec![0u64; running.hosts.len()];
+        let mut ticks = tokio::time::interval(Duration::from_millis(1));
+        while wall.elapsed() < REAL_RUN {
+            ticks.tick().await;
+            for (bus, frame) in &frames {
+                if running.hosts[*bus].send(*frame).await.is_ok() {
+                    sent[*bus] += 1;
+                }
+            }
+        }
+        let elapsed = wall.elapsed().as_secs_f64();
+        let cpu = cpu_seconds() - cpu_before;
+        let snapshot = running.handle.snapshot().await.expect("a snapshot");
+        running.handle.shutdown().await;
+        let mut replies = Vec::new();
+        for r in received {
+            r.abort();
+            replies.push(r.await.unwrap_or(0));
+        }
+        println!(
+            "humanoid in real time, 1 kHz command streams: {:.0} % of one core (host and robot \
+             together), {:.2} s emulated in {elapsed:.2} s, pelvis at {:.3} m",
+            100.0 * cpu / elapsed,
+            snapshot.time_s,
+            snapshot.base_position_m[2]
+        );
+        let bits = extended_frame_bits(8);
+        for (k, bus) in running.config.buses.iter().enumerate() {
+            let per_s = sent[k] as f64 / elapsed;
+            // Replies: the emulator answers each command; the count the host read was
+            // aborted mid-run, so the load is given for one reply per command.
+            let load = 2.0 * per_s * bits / f64::from(bus.bitrate_bps);
+            println!(
+                "  {}: {:.0} commands/s + as many replies = {:.0} % of {} kbit/s (unstuffed; \
+                 bit stuffing adds up to ~20 %)",
+                bus.name,
+                per_s,
+                100.0 * load,
+                bus.bitrate_bps / 1000
+            );
+        }
+    });
+}
+
+fn main() {
+    if std::env::args().any(|a| a == "--list") {
+        return;
+    }
+    println!(
+        "virtual time ({} s emulated per run, one core):",
+        VIRTUAL_RUN.as_secs()
+    );
+    for (name, count) in [("robstride_arm6", 1), ("humanoid", 1), ("humanoid", 2)] {
+        let (speed, actuators) = virtual_speed(name, count);
+        println!(
+            "  {count} × {name}: {actuators} actuators, {speed:.1}× real time ({:.0} µs per 1 ms step)",
+            1000.0 / speed
+        );
+    }
+    real_time_humanoid();
+}
