@@ -33,6 +33,19 @@ enum Device {
     Robot(robot::Args),
 }
 
+/// The runtime every emulator of `armhil sim` runs on: two workers, made punctual (the clock's
+/// deadline thread wakes on time, and the step it prompts runs on a worker, which a busy core
+/// would otherwise keep waiting; `cargo bench --bench realtime_jitter` measures both).
+fn real_time_runtime() -> anyhow::Result<tokio::runtime::Runtime> {
+    use anyhow::Context as _;
+    tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .on_thread_start(sim::pacer::prefer_punctual_thread)
+        .enable_all()
+        .build()
+        .context("cannot start the tokio runtime")
+}
+
 /// `--socketcand` takes `HOST:PORT`; a bare port means loopback.
 fn socketcand_addr(text: &str) -> String {
     match text.parse::<u16>() {

@@ -58,14 +58,7 @@ pub struct Args {
 
 /// Run the emulator until Ctrl-C.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    let runtime = tokio::runtime::Builder::new_multi_thread()
-        .worker_threads(2)
-        // The clock's deadline thread wakes on time; the step it prompts runs on a worker.
-        .on_thread_start(sim::pacer::prefer_punctual_thread)
-        .enable_all()
-        .build()
-        .context("cannot start the tokio runtime")?;
-    runtime.block_on(serve(args))
+    super::real_time_runtime()?.block_on(serve(args))
 }
 
 async fn serve(args: Args) -> anyhow::Result<ExitCode> {

@@ -41,14 +41,7 @@ const MAX_IFACE_CHARS: usize = 15;
 
 /// Run the robot until Ctrl-C.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    let runtime = tokio::runtime::Builder::new_multi_thread()
-        .worker_threads(2)
-        // The clock's deadline thread wakes on time; the step it prompts runs on a worker.
-        .on_thread_start(sim::pacer::prefer_punctual_thread)
-        .enable_all()
-        .build()
-        .context("cannot start the tokio runtime")?;
-    runtime.block_on(serve(args))
+    super::real_time_runtime()?.block_on(serve(args))
 }
 
 /// Where the buses are served, and what has to be shut down with them.
