@@ -6,6 +6,7 @@
 //! keeps up), late wake-ups, overruns, the clock task's wake-up period p50/p99/max (nominal
 //! 1 ms or 5 ms: the pacer's own precision), and the send period p50/p99/max of 0x2A1 (200 Hz
 //! arm status) and 0x2A5 (200 Hz joint feedback) — nominal 5 ms. "error" is p99 − nominal.
+//! `ARMHIL_REALTIME_PRIORITY=1` measures with the runtime's workers at real-time priority.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
