@@ -10,8 +10,9 @@
 //! the pacer is tokio's `interval`, which the paused clock advances deterministically.
 //!
 //! A paused clock needs a current-thread runtime, so the flavour of the runtime decides: on a
-//! multi-thread runtime (`armhil sim`, real-time scenario runs) the thread, on a current-thread
-//! one tokio's interval. Missed deadlines are skipped, not bunched: the clock task works out
+//! multi-thread runtime (`armhil sim`, real-time scenario runs) the thread when
+//! `ARMHIL_REALTIME_PRIORITY=1` (see [`Pacer::new`] for why not by default), else and on a
+//! current-thread one tokio's interval. Missed deadlines are skipped, not bunched: the clock task works out
 //! how many steps are due from elapsed time, so a wake-up is a prompt, not a count.
 
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -53,15 +54,27 @@ impl Pacer {
     /// A pacer with `period` between wake-ups, the first one at once, chosen by the
     /// current runtime's flavour (see the module docs). `name` names the thread, for `top -H`
     /// and debuggers. Must be called inside a tokio runtime.
+    ///
+    /// The deadline thread is opt-in, with `ARMHIL_REALTIME_PRIORITY=1`
+    /// ([`REALTIME_PRIORITY_ENV`]): in the project's two-vCPU emulated (TCG) test VM the
+    /// emulators paced by it fell behind and their clients timed out, which tokio's timer
+    /// never did there; until that is understood, tokio's timer is the default everywhere.
     pub fn new(period: Duration, name: &str) -> Self {
         let multi_thread = tokio::runtime::Handle::try_current()
             .is_ok_and(|h| h.runtime_flavor() == RuntimeFlavor::MultiThread);
-        if multi_thread {
+        if multi_thread && realtime_priority_asked() {
             if let Some(pacer) = Self::deadline_thread(period, name) {
                 return pacer;
             }
         }
         Self::tokio_timer(period)
+    }
+
+    /// A pacer on its own deadline thread whatever the environment says (tests, benches);
+    /// tokio's timer if the thread cannot be started. Must be called inside a multi-thread
+    /// runtime to make sense.
+    pub fn on_deadline_thread(period: Duration, name: &str) -> Self {
+        Self::deadline_thread(period, name).unwrap_or_else(|| Self::tokio_timer(period))
     }
 
     /// A pacer on tokio's timer whatever the runtime.
@@ -135,8 +148,12 @@ pub const REALTIME_PRIORITY_ENV: &str = "ARMHIL_REALTIME_PRIORITY";
 /// step's real work take the CPU from every normal thread, and on a machine too slow for
 /// real time (a one-CPU VM) the emulator's clients starved and timed out.
 pub fn prefer_punctual_thread() {
-    let fifo = std::env::var(REALTIME_PRIORITY_ENV).is_ok_and(|v| v.trim() == "1");
-    deadline::prefer_punctual(fifo);
+    deadline::prefer_punctual(realtime_priority_asked());
+}
+
+/// Whether `ARMHIL_REALTIME_PRIORITY=1` is set.
+fn realtime_priority_asked() -> bool {
+    std::env::var(REALTIME_PRIORITY_ENV).is_ok_and(|v| v.trim() == "1")
 }
 
 /// The deadline thread's body: sleep to each deadline, notify, until `stop`.
@@ -341,7 +358,7 @@ mod tests {
             .build()
             .expect("runtime");
         rt.block_on(async {
-            let mut pacer = Pacer::new(Duration::from_millis(2), "test-pacer");
+            let mut pacer = Pacer::on_deadline_thread(Duration::from_millis(2), "test-pacer");
             assert_eq!(pacer.kind(), PacerKind::DeadlineThread);
             let t0 = std::time::Instant::now();
             for _ in 0..10 {
