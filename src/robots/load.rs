@@ -127,17 +127,8 @@ impl Checker<'_> {
                     ),
                 ));
             }
-            let model_name = Model::from_name(&a.model.value).ok_or_else(|| {
-                let known: Vec<&str> = Model::ALL.iter().map(|m| m.name()).collect();
-                self.err(
-                    pos(&a.model),
-                    format!(
-                        "unknown model `{}`; expected one of: {}",
-                        a.model.value,
-                        known.join(", ")
-                    ),
-                )
-            })?;
+            let model_name =
+                Model::named(&a.model.value).map_err(|e| self.err(pos(&a.model), e))?;
             if !(1..=0x7F).contains(&a.id.value) {
                 return Err(self.err(
                     pos(&a.id),

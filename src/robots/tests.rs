@@ -90,7 +90,7 @@ fn each_mistake_is_named_at_its_line_and_column() {
         ),
         (
             ARM.replace("model: RS04", "model: RS09"),
-            "8:36: unknown model `RS09`",
+            "8:36: unknown RobStride model `RS09`",
         ),
         (
             ARM.replace("direction: -1", "direction: 2"),

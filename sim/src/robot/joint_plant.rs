@@ -20,7 +20,7 @@
 
 use std::sync::{Arc, Mutex, MutexGuard};
 
-use crate::robstride::Plant;
+use crate::robstride::{finite_or_zero, Plant};
 
 /// What the robot's world and one actuator share about the joint between them.
 #[derive(Debug, Clone, PartialEq)]
@@ -131,12 +131,7 @@ impl Plant for JointPlant {
     /// Records the torque; the joint moves when the world steps.
     fn step(&mut self, torque_nm: f64, dt_s: f64) {
         let mut s = lock(&self.state);
-        let torque = if torque_nm.is_finite() {
-            torque_nm
-        } else {
-            0.0
-        };
-        s.torque_impulse_nm_s += torque * dt_s;
+        s.torque_impulse_nm_s += finite_or_zero(torque_nm) * dt_s;
         s.integrated_s += dt_s;
     }
 
@@ -153,11 +148,7 @@ impl Plant for JointPlant {
     }
 
     fn set_external_torque_nm(&mut self, torque_nm: f64) {
-        lock(&self.state).external_nm = if torque_nm.is_finite() {
-            torque_nm
-        } else {
-            0.0
-        };
+        lock(&self.state).external_nm = finite_or_zero(torque_nm);
     }
 }
 

@@ -336,15 +336,6 @@ struct Runner {
     state_path: Option<PathBuf>,
 }
 
-/// Why the runner stopped on its own.
-#[derive(Debug, thiserror::Error)]
-enum Stop {
-    #[error(transparent)]
-    StateFile(#[from] StateFileError),
-    #[error(transparent)]
-    Physics(#[from] PhysicsError),
-}
-
 impl Runner {
     async fn run(mut self, mut inbox: mpsc::Receiver<Request>) -> Result<(), String> {
         let (frames_tx, mut frames) = mpsc::channel::<(usize, CanFrame)>(RX_QUEUE_FRAMES);
@@ -408,7 +399,7 @@ impl Runner {
                         }
                     }
                     if let Some(error) = failed {
-                        break Err(Stop::from(error).to_string());
+                        break Err(error.to_string());
                     }
                 }
                 frame = frames.recv() => match frame {

@@ -44,7 +44,7 @@ pub use firmware::{
     ReportType, DEFAULT_HOST_ID,
 };
 pub use model::{Model, ModelSpec, RangeTable, Ranges};
-pub use rig::{Load, Plant, RigPlant, WorldPlant};
+pub use rig::{finite_or_zero, Load, Plant, RigPlant, WorldPlant};
 pub use runner::{
     RobstrideBus, RobstrideConfig, RobstrideError, RobstrideHandle, RobstrideMonitor,
 };

@@ -59,6 +59,18 @@ impl Model {
         name.trim().parse().ok()
     }
 
+    /// The model called `name`, or the message every file reader shows for a name it does not
+    /// know: "unknown RobStride model `X`; expected one of: RS00, …".
+    pub fn named(name: &str) -> Result<Self, String> {
+        Self::from_name(name).ok_or_else(|| {
+            let known: Vec<&str> = Self::ALL.iter().map(|m| m.name()).collect();
+            format!(
+                "unknown RobStride model `{name}`; expected one of: {}",
+                known.join(", ")
+            )
+        })
+    }
+
     /// The model's name as printed on the actuator.
     pub fn name(self) -> &'static str {
         self.into()

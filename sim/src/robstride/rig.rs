@@ -63,6 +63,16 @@ impl Load {
     }
 }
 
+/// `torque_nm`, or zero when it is not finite: a NaN torque from a broken command or a
+/// diverged model must not reach the physics.
+pub fn finite_or_zero(torque_nm: f64) -> f64 {
+    if torque_nm.is_finite() {
+        torque_nm
+    } else {
+        0.0
+    }
+}
+
 /// A single-axis plant the motor drives.
 pub trait Plant: Send + Sync {
     /// Advance by `dt_s` with the motor applying `torque_nm`.
@@ -139,11 +149,7 @@ impl Plant for RigPlant {
     }
 
     fn set_external_torque_nm(&mut self, torque_nm: f64) {
-        self.external_nm = if torque_nm.is_finite() {
-            torque_nm
-        } else {
-            0.0
-        };
+        self.external_nm = finite_or_zero(torque_nm);
     }
 }
 
@@ -284,11 +290,7 @@ impl Plant for WorldPlant {
     }
 
     fn set_external_torque_nm(&mut self, torque_nm: f64) {
-        self.external_nm = if torque_nm.is_finite() {
-            torque_nm
-        } else {
-            0.0
-        };
+        self.external_nm = finite_or_zero(torque_nm);
     }
 }
 

@@ -64,8 +64,7 @@ impl FromStr for MotorSpec {
             .split_once(':')
             .ok_or_else(|| format!("expected ID:MODEL (e.g. 1:RS03), got {text:?}"))?;
         let can_id = parse_id(id)?;
-        let model = Model::from_name(model)
-            .ok_or_else(|| format!("unknown model {model:?} (RS00..RS06, EL05)"))?;
+        let model = Model::named(model)?;
         Ok(Self { can_id, model })
     }
 }

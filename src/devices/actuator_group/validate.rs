@@ -58,17 +58,7 @@ pub(crate) fn settings(ctx: &Ctx<'_>, raw: &RawSettings, at: Pos) -> Res<GroupSe
                 ),
             ));
         }
-        let model = Model::from_name(&a.model.value).ok_or_else(|| {
-            let known: Vec<&str> = Model::ALL.iter().map(|m| m.name()).collect();
-            ctx.err(
-                pos(&a.model),
-                format!(
-                    "unknown model `{}`; expected one of: {}",
-                    a.model.value,
-                    known.join(", ")
-                ),
-            )
-        })?;
+        let model = Model::named(&a.model.value).map_err(|e| ctx.err(pos(&a.model), e))?;
         let load = match &a.pendulum {
             None => Load::default(),
             Some(p) => Load::Pendulum {

@@ -84,15 +84,8 @@ pub(crate) fn settings(ctx: &Ctx<'_>, d: &RawSettings, at: Pos) -> Res<Robstride
         if motors.iter().any(|other| other.can_id == id) {
             return Err(ctx.err(pos(&m.value.id), format!("duplicate motor id {id}")));
         }
-        let model = Model::from_name(&m.value.model.value).ok_or_else(|| {
-            ctx.err(
-                pos(&m.value.model),
-                format!(
-                    "`model`: unknown RobStride model `{}`; expected one of: RS00, RS01, RS02, RS03, RS04, RS05, RS06, EL05",
-                    m.value.model.value
-                ),
-            )
-        })?;
+        let model = Model::named(&m.value.model.value)
+            .map_err(|e| ctx.err(pos(&m.value.model), format!("`model`: {e}")))?;
         let mut config = MotorConfig::new(id, model);
         if let Some(load) = &m.value.load {
             config.load = match &load.value {
