@@ -123,6 +123,11 @@ impl<W: Write> CandumpWriter<W> {
         writeln!(self.out, "{}", format_line(&self.iface, received))
     }
 
+    /// Append one frame seen on `iface` (a log of several buses names each line's).
+    pub fn write_on(&mut self, iface: &str, received: &ReceivedFrame) -> io::Result<()> {
+        writeln!(self.out, "{}", format_line(iface, received))
+    }
+
     /// Push buffered lines to the underlying sink.
     pub fn flush(&mut self) -> io::Result<()> {
         self.out.flush()

@@ -14,8 +14,8 @@ use crate::scenario::onekey::OneKey;
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 
 pub mod contract;
-pub use contract::{Device, DeviceError, FrameDecoder, Reply, TraceColumn};
-pub(crate) use contract::{KindSpec, RawKindStep, Wiring};
+pub(crate) use contract::{named_bus, one_bus, KindSpec, RawKindStep, Wiring};
+pub use contract::{BusUse, Device, DeviceError, FrameDecoder, Reply, TraceColumn};
 
 pub mod actuator_group;
 pub mod arm;
@@ -88,6 +88,11 @@ macro_rules! device_kinds {
             /// The names of the device's parts that steps address (a group's joints).
             pub fn parts(&self) -> Vec<String> {
                 match self { $( Self::$variant(s) => <$module::Kind as KindSpec>::parts(s), )* }
+            }
+
+            /// The CAN buses the device sits on ([`KindSpec::buses`]); `at` is its entry.
+            pub fn buses(&self, at: Pos) -> Vec<BusUse> {
+                match self { $( Self::$variant(s) => <$module::Kind as KindSpec>::buses(s, at), )* }
             }
 
             /// The URDF the 3D views draw this device with, if it is a robot or arm.

@@ -17,15 +17,15 @@ pub use crate::bench::HOST_NODE;
 pub(crate) struct BuiltBench {
     /// Devices, in [`Scenario::bench`] order.
     pub devices: Vec<Arc<dyn Device>>,
-    /// The virtual bus (in-process runs).
-    pub bus: Option<VirtualBus>,
+    /// The virtual buses (in-process runs), in [`Bench::buses`](super::model::Bench) order.
+    pub buses: Vec<VirtualBus>,
     /// Records every frame.
     pub recorder: Recorder,
     /// Scenario time zero.
     pub t0: Instant,
 }
 
-/// Build the bench: in-process emulators on a virtual bus, or drivers on a real interface.
+/// Build the bench: in-process emulators on virtual buses, or drivers on a real interface.
 pub(crate) async fn build(
     scenario: &Scenario,
     clock: &Clock,
@@ -39,34 +39,70 @@ pub(crate) async fn build(
         options.recording_limit_bytes,
     )
     .map_err(|e| format!("cannot create a temporary file for the bus recording: {e}"))?;
-    let (bus, recorder) = match clock {
+    let (buses, recorder) = match clock {
         Clock::Virtual | Clock::Realtime => {
-            let bus = VirtualBus::new(VirtualBusConfig {
-                bitrate_bps: scenario.bench.bitrate_bps,
-                ..VirtualBusConfig::default()
-            });
-            let recorder = Recorder::from_tap(bus.tap(), spool);
-            (Some(bus), recorder)
+            let buses: Vec<VirtualBus> = scenario
+                .bench
+                .buses
+                .iter()
+                .map(|spec| {
+                    VirtualBus::new(VirtualBusConfig {
+                        bitrate_bps: spec.bitrate_bps,
+                        ..VirtualBusConfig::default()
+                    })
+                })
+                .collect();
+            let taps = scenario
+                .bench
+                .buses
+                .iter()
+                .zip(&buses)
+                .map(|(spec, bus)| (spec.name.clone(), bus.tap()))
+                .collect();
+            let recorder = Recorder::from_taps(taps, spool);
+            (buses, recorder)
         }
-        Clock::Iface(link) => (
-            None,
-            Recorder::from_bus(link.open("recorder").await?, spool),
-        ),
+        Clock::Iface(link) => {
+            if let [_, _, ..] = scenario.bench.buses.as_slice() {
+                let names: Vec<&str> = scenario
+                    .bench
+                    .buses
+                    .iter()
+                    .map(|b| b.name.as_str())
+                    .collect();
+                return Err(format!(
+                    "this bench has {} buses ({}); a run on a real interface serves one, so it runs in process only",
+                    names.len(),
+                    names.join(", ")
+                ));
+            }
+            (
+                Vec::new(),
+                Recorder::from_bus(link.open("recorder").await?, spool),
+            )
+        }
     };
     let t0 = Instant::now();
-    let wiring = Wiring {
-        bus: bus.as_ref(),
-        clock,
-        options,
-        bitrate_bps: scenario.bench.bitrate_bps,
-    };
     let mut devices: Vec<Arc<dyn Device>> = Vec::new();
     for spec in &scenario.bench.devices {
+        let device_buses: Vec<&VirtualBus> =
+            spec.buses.iter().filter_map(|&i| buses.get(i)).collect();
+        let wiring = Wiring {
+            bus: device_buses.first().copied(),
+            buses: device_buses,
+            clock,
+            options,
+            bitrate_bps: spec
+                .buses
+                .first()
+                .and_then(|&i| scenario.bench.buses.get(i))
+                .map_or(scenario.bench.bitrate_bps(), |b| b.bitrate_bps),
+        };
         devices.push(spec.kind.build(&spec.name, &wiring).await?);
     }
     Ok(BuiltBench {
         devices,
-        bus,
+        buses,
         recorder,
         t0,
     })

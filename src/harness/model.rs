@@ -73,15 +73,28 @@ impl Scenario {
     }
 }
 
-/// The bus and the devices on it.
+/// The buses and the devices on them.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Bench {
-    /// Bit rate of the virtual bus.
-    pub bitrate_bps: u32,
+    /// The CAN buses, never empty: [`DEFAULT_BUS`] alone unless the scenario names its buses
+    /// (`bench.buses`, or a device's `bus:`, or a robot's file).
+    pub buses: Vec<BusSpec>,
     /// Interface to use with `--iface` when the command line names none.
     pub interface: Option<String>,
     /// Devices, in file order (sorted by name: the file's mapping order is not kept).
     pub devices: Vec<DeviceSpec>,
+}
+
+/// The name of a bench's bus when the scenario names none (as candump logs have always said).
+pub const DEFAULT_BUS: &str = "vcan0";
+
+/// One CAN bus of a bench.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BusSpec {
+    /// Its name: in bus.log, in bus faults (`bus:`), and a robot's bus names.
+    pub name: String,
+    /// Its bit rate.
+    pub bitrate_bps: u32,
 }
 
 /// One device on the bench.
@@ -91,6 +104,16 @@ pub struct DeviceSpec {
     pub name: String,
     /// What it is and its settings.
     pub kind: DeviceKind,
+    /// Its buses, as indices into [`Bench::buses`] in the order its kind lists them (one for
+    /// a CAN device, a robot's several; none for a device that speaks no CAN).
+    pub buses: Vec<usize>,
+}
+
+impl Bench {
+    /// The bit rate of the first bus (the only one, on most benches).
+    pub fn bitrate_bps(&self) -> u32 {
+        self.buses.first().map_or(1_000_000, |b| b.bitrate_bps)
+    }
 }
 
 /// What a run records.
@@ -145,8 +168,13 @@ pub enum FaultSpec {
         /// The fault.
         fault: DeviceFault,
     },
-    /// Applied by the virtual bus.
-    Bus(BusFault),
+    /// Applied by a virtual bus.
+    Bus {
+        /// Index into [`Bench::buses`].
+        bus: usize,
+        /// The fault.
+        fault: BusFault,
+    },
 }
 
 impl FaultSpec {
@@ -154,7 +182,7 @@ impl FaultSpec {
     pub fn describe(&self) -> String {
         match self {
             Self::Emulator { fault, .. } => fault.describe(),
-            Self::Bus(fault) => fault.describe(),
+            Self::Bus { fault, .. } => fault.describe(),
         }
     }
 }

@@ -27,6 +27,8 @@ pub(crate) type RawMatrix = BTreeMap<String, S<Vec<S<String>>>>;
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawBench {
     pub bus: Option<S<RawBus>>,
+    /// Named buses (`{can0: {bitrate_bps: 1000000}, can1: {}}`).
+    pub buses: Option<S<BTreeMap<String, S<RawNamedBus>>>>,
     pub devices: S<BTreeMap<String, S<crate::devices::RawDevice>>>,
 }
 
@@ -35,6 +37,13 @@ pub(crate) struct RawBench {
 pub(crate) struct RawBus {
     pub bitrate_bps: Option<S<i64>>,
     pub interface: Option<S<String>>,
+}
+
+/// One of `bench.buses`.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawNamedBus {
+    pub bitrate_bps: Option<S<i64>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -57,6 +66,8 @@ pub(crate) struct RawFaultEntry {
     #[serde(alias = "for_ms")]
     pub duration_ms: Option<S<i64>>,
     pub device: Option<S<String>>,
+    /// The bus a bus fault acts on, on a bench of several.
+    pub bus: Option<S<String>>,
     pub fault: S<RawFault>,
 }
 
@@ -110,6 +121,8 @@ pub(crate) struct RawInject {
     pub device: Option<S<String>>,
     #[serde(alias = "for_ms")]
     pub duration_ms: Option<S<i64>>,
+    /// The bus a bus fault acts on, on a bench of several.
+    pub bus: Option<S<String>>,
     pub fault: S<RawFault>,
 }
 

@@ -89,10 +89,13 @@ fn schedule_after_a_step_resolves_the_step_index() {
     assert_eq!(s.faults[0].duration, Some(Duration::from_millis(100)));
     assert_eq!(
         s.faults[0].fault,
-        FaultSpec::Bus(BusFault::Drop {
-            frames: FrameSelector::Id(0x2A5),
-            probability: None
-        })
+        FaultSpec::Bus {
+            bus: 0,
+            fault: BusFault::Drop {
+                frames: FrameSelector::Id(0x2A5),
+                probability: None
+            }
+        }
     );
 }
 
@@ -307,5 +310,57 @@ fn a_diverging_emulator_fails_the_scenario_instead_of_passing() {
     assert_eq!(
         run_scenario(&scenario, &Clock::Virtual).verdict,
         Verdict::Passed
+    );
+}
+
+#[test]
+fn devices_on_named_buses_get_a_bus_each() {
+    let s = parse(
+        "bench:\n  devices:\n    left: {kind: piper, bus: can0}\n    right: {kind: piper, bus: can1}\nsteps:\n  - inject: {fault: {drop: {}}, bus: can1, duration_ms: 10}\n",
+    );
+    let names: Vec<&str> = s.bench.buses.iter().map(|b| b.name.as_str()).collect();
+    assert_eq!(names, ["can0", "can1"]);
+    assert_eq!(s.bench.devices[0].buses, [0]);
+    assert_eq!(s.bench.devices[1].buses, [1]);
+    let StepKind::Inject { fault, .. } = &s.steps[0].kind else {
+        panic!("inject expected");
+    };
+    assert!(matches!(fault, FaultSpec::Bus { bus: 1, .. }));
+    // One bus and no names: the default bus, as before.
+    assert_eq!(
+        parse(&format!("{BENCH}steps:\n  - estop\n")).bench.buses[0].name,
+        DEFAULT_BUS
+    );
+}
+
+#[test]
+fn bus_names_are_checked_where_they_are_written() {
+    assert_eq!(
+        error(
+            "bench:\n  buses: {can0: {}, can1: {bitrate_bps: 500000}}\n  devices:\n    left: {kind: piper, bus: can2}\nsteps:\n  - estop\n"
+        ),
+        "broken.yaml:4:30: device `left`: no bus `can2` in `bench.buses` (can0, can1); did you mean `can0`?"
+    );
+    assert_eq!(
+        error(
+            "bench:\n  buses: {can0: {}, can1: {}}\n  devices:\n    left: {kind: piper}\nsteps:\n  - estop\n"
+        ),
+        "broken.yaml:4:11: device `left`: the bench has buses can0, can1; say which it is on with `bus:`"
+    );
+    assert_eq!(
+        error(
+            "bench:\n  devices:\n    left: {kind: piper, bus: can0}\n    right: {kind: piper, bus: can1}\nsteps:\n  - inject: {fault: {drop: {}}, duration_ms: 10, device: left}\n"
+        ),
+        "broken.yaml:6:58: bus faults act on the bus, not on a device: select frames with `id:` or `node:` instead of `device:`"
+    );
+    assert_eq!(
+        error(
+            "bench:\n  devices:\n    left: {kind: piper, bus: can0}\n    right: {kind: piper, bus: can1}\nsteps:\n  - inject: {fault: {drop: {}}, duration_ms: 10}\n"
+        ),
+        "broken.yaml:6:5: the bench has buses can0, can1; say which this fault acts on with `bus:`"
+    );
+    assert_eq!(
+        error("bench:\n  devices:\n    left: {kind: piper, bus: 'can 0'}\nsteps:\n  - estop\n"),
+        "broken.yaml:3:30: bus name `can 0`: 1 to 15 letters, digits, `_`, `-` or `.` (an interface name)"
     );
 }

@@ -63,6 +63,7 @@ pub(crate) fn validate_with(
         .map(|d| (d.name.clone(), d.kind.name()))
         .collect();
     ctx.parts = bench.devices.iter().map(|d| d.kind.parts()).collect();
+    ctx.buses = bench.buses.iter().map(|b| b.name.clone()).collect();
     let record = record(ctx, raw.record.as_ref())?;
 
     if raw.steps.value.is_empty() {
@@ -220,16 +221,7 @@ fn bench(ctx: &Ctx<'_>, raw: &S<RawBench>) -> Res<Bench> {
     let mut interface = None;
     if let Some(bus) = &raw.value.bus {
         if let Some(rate) = &bus.value.bitrate_bps {
-            if !(10_000..=1_000_000).contains(&rate.value) {
-                return Err(ctx.err(
-                    pos(rate),
-                    format!(
-                        "`bitrate_bps` must be 10000..=1000000 (classic CAN), got {}",
-                        rate.value
-                    ),
-                ));
-            }
-            bitrate_bps = rate.value as u32;
+            bitrate_bps = bitrate(ctx, rate)?;
         }
         interface = bus.value.interface.as_ref().map(|i| i.value.clone());
     }
@@ -247,16 +239,135 @@ fn bench(ctx: &Ctx<'_>, raw: &S<RawBench>) -> Res<Bench> {
                 "`host` is reserved for the driver's bus node; pick another device name",
             ));
         }
-        devices.push(DeviceSpec {
-            name: name.clone(),
-            kind: devices::validate_settings(ctx, device)?,
+        devices.push((
+            pos(device),
+            DeviceSpec {
+                name: name.clone(),
+                kind: devices::validate_settings(ctx, device)?,
+                buses: Vec::new(),
+            },
+        ));
+    }
+    let mut buses = declared_buses(ctx, raw, bitrate_bps)?;
+    let declared = !buses.is_empty();
+    // Buses a device names but `bench.buses` does not declare are made for it (at the
+    // bit rate its settings need, else the bench's), unless the bench declares its buses.
+    for (at, device) in &devices {
+        for used in device.kind.buses(*at) {
+            let Some(name) = used.name else { continue };
+            match buses.iter().find(|b| b.name == name) {
+                Some(bus) => {
+                    if let Some(rate) = used.bitrate_bps.filter(|r| *r != bus.bitrate_bps) {
+                        return Err(ctx.err(
+                            used.at,
+                            format!(
+                                "device `{}` needs bus `{name}` at {rate} bit/s; the bench has it at {} bit/s",
+                                device.name, bus.bitrate_bps
+                            ),
+                        ));
+                    }
+                }
+                None if declared => {
+                    let names: Vec<&str> = buses.iter().map(|b| b.name.as_str()).collect();
+                    return Err(ctx.err(
+                        used.at,
+                        format!(
+                            "device `{}`: no bus `{name}` in `bench.buses` ({}){}",
+                            device.name,
+                            names.join(", "),
+                            crate::scenario::error::suggestion(&name, &names)
+                        ),
+                    ));
+                }
+                None => buses.push(BusSpec {
+                    name,
+                    bitrate_bps: used.bitrate_bps.unwrap_or(bitrate_bps),
+                }),
+            }
+        }
+    }
+    if buses.is_empty() {
+        buses.push(BusSpec {
+            name: DEFAULT_BUS.to_owned(),
+            bitrate_bps,
         });
     }
+    let mut placed = Vec::new();
+    for (at, mut device) in devices {
+        for used in device.kind.buses(at) {
+            let index = match &used.name {
+                Some(name) => buses.iter().position(|b| &b.name == name),
+                None if buses.len() == 1 => Some(0),
+                None => {
+                    let names: Vec<&str> = buses.iter().map(|b| b.name.as_str()).collect();
+                    return Err(ctx.err(
+                        at,
+                        format!(
+                            "device `{}`: the bench has buses {}; say which it is on with `bus:`",
+                            device.name,
+                            names.join(", ")
+                        ),
+                    ));
+                }
+            };
+            device.buses.extend(index);
+        }
+        placed.push(device);
+    }
     Ok(Bench {
-        bitrate_bps,
+        buses,
         interface,
-        devices,
+        devices: placed,
     })
+}
+
+/// `bench.buses`, in name order.
+fn declared_buses(ctx: &Ctx<'_>, raw: &S<RawBench>, default_bps: u32) -> Res<Vec<BusSpec>> {
+    let Some(declared) = &raw.value.buses else {
+        return Ok(Vec::new());
+    };
+    if raw
+        .value
+        .bus
+        .as_ref()
+        .is_some_and(|b| b.value.interface.is_some())
+    {
+        return Err(ctx.err(
+            pos(declared),
+            "`bench.buses` and `bench.bus.interface` do not mix: a run on a real interface has one bus",
+        ));
+    }
+    if declared.value.is_empty() {
+        return Err(ctx.err(pos(declared), "`buses` is empty; name at least one bus"));
+    }
+    let mut buses = Vec::new();
+    for (name, bus) in &declared.value {
+        let name = ctx.bus_name(&S {
+            value: name.clone(),
+            referenced: bus.referenced,
+            defined: bus.defined,
+        })?;
+        let bitrate_bps = match &bus.value.bitrate_bps {
+            Some(rate) => bitrate(ctx, rate)?,
+            None => default_bps,
+        };
+        buses.push(BusSpec { name, bitrate_bps });
+    }
+    Ok(buses)
+}
+
+/// A classic CAN bit rate.
+fn bitrate(ctx: &Ctx<'_>, rate: &S<i64>) -> Res<u32> {
+    if !(10_000..=1_000_000).contains(&rate.value) {
+        return Err(ctx.err(
+            pos(rate),
+            format!(
+                "`bitrate_bps` must be 10000..=1000000 (classic CAN), got {}",
+                rate.value
+            ),
+        ));
+    }
+    Ok(rate.value as u32)
 }
 
 fn record(ctx: &Ctx<'_>, raw: Option<&S<RawRecord>>) -> Res<Record> {
@@ -343,7 +454,7 @@ fn scheduled_fault(ctx: &Ctx<'_>, raw: &S<RawFaultEntry>) -> Res<ScheduledFault>
         }
     };
     let duration = duration(ctx, &e.duration_ms)?;
-    let fault = fault(ctx, &e.fault, &e.device, pos(raw))?;
+    let fault = fault(ctx, &e.fault, &e.device, &e.bus, pos(raw))?;
     check_duration(ctx, &fault, duration, pos(raw))?;
     Ok(ScheduledFault {
         line: pos(raw).line,
@@ -365,13 +476,50 @@ fn check_duration(
     duration: Option<Duration>,
     at: Pos,
 ) -> Res<()> {
-    if matches!(fault, FaultSpec::Bus(BusFault::BusOff { .. })) && duration.is_none() {
+    if matches!(
+        fault,
+        FaultSpec::Bus {
+            fault: BusFault::BusOff { .. },
+            ..
+        }
+    ) && duration.is_none()
+    {
         return Err(ctx.err(
             at,
             "`bus_off` needs `duration_ms` (the node recovers after it)",
         ));
     }
     Ok(())
+}
+
+/// The bench bus a bus fault acts on: the one named, or the bench's only bus.
+fn which_bus(ctx: &Ctx<'_>, name: &Option<S<String>>, at: Pos) -> Res<usize> {
+    match name {
+        Some(name) => ctx
+            .buses
+            .iter()
+            .position(|b| *b == name.value)
+            .ok_or_else(|| {
+                let names: Vec<&str> = ctx.buses.iter().map(String::as_str).collect();
+                ctx.err(
+                    pos(name),
+                    format!(
+                        "no bus `{}` on this bench (buses: {}){}",
+                        name.value,
+                        names.join(", "),
+                        crate::scenario::error::suggestion(&name.value, &names)
+                    ),
+                )
+            }),
+        None if ctx.buses.len() <= 1 => Ok(0),
+        None => Err(ctx.err(
+            at,
+            format!(
+                "the bench has buses {}; say which this fault acts on with `bus:`",
+                ctx.buses.join(", ")
+            ),
+        )),
+    }
 }
 
 fn node(ctx: &Ctx<'_>, raw: &S<String>) -> Res<String> {
@@ -442,16 +590,31 @@ fn reject_extra(
     Ok(())
 }
 
-fn fault(ctx: &Ctx<'_>, raw: &S<RawFault>, device: &Option<S<String>>, at: Pos) -> Res<FaultSpec> {
+fn fault(
+    ctx: &Ctx<'_>,
+    raw: &S<RawFault>,
+    device: &Option<S<String>>,
+    bus_name: &Option<S<String>>,
+    at: Pos,
+) -> Res<FaultSpec> {
     let fpos = pos(raw);
     let bus = |fault: BusFault| -> Res<FaultSpec> {
         if let Some(d) = device {
             return Err(ctx.err(pos(d), "bus faults act on the bus, not on a device: select frames with `id:` or `node:` instead of `device:`"));
         }
-        Ok(FaultSpec::Bus(fault))
+        Ok(FaultSpec::Bus {
+            bus: which_bus(ctx, bus_name, at)?,
+            fault,
+        })
     };
     match &raw.value {
         RawFault::Device(f) => {
+            if let Some(b) = bus_name {
+                return Err(ctx.err(
+                    pos(b),
+                    "`bus:` names the bus of a bus fault; a device's fault acts on the device",
+                ));
+            }
             let known_device = ctx.device(device, at).ok();
             let fault = devices::validate_fault(ctx, f, known_device, fpos)?;
             let device = ctx.device_of_kind(
@@ -553,7 +716,7 @@ fn step_kind(ctx: &Ctx<'_>, raw: &RawStep, at: Pos) -> Res<(&'static str, StepKi
             (label, kind)
         }
         RawStep::Inject(a) => {
-            let fault = fault(ctx, &a.fault, &a.device, at)?;
+            let fault = fault(ctx, &a.fault, &a.device, &a.bus, at)?;
             let duration = duration(ctx, &a.duration_ms)?;
             check_duration(ctx, &fault, duration, at)?;
             ("inject", StepKind::Inject { fault, duration })

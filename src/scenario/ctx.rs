@@ -28,6 +28,8 @@ pub(crate) struct Ctx<'a> {
     /// The parts of each device a step can address by name (a group's joints), in bench
     /// order; empty for kinds without named parts.
     pub(crate) parts: Vec<Vec<String>>,
+    /// The bench's bus names, in bench order.
+    pub(crate) buses: Vec<String>,
     /// Every step's `id:`, in step order.
     pub(crate) step_ids: Vec<Option<String>>,
     /// The variant being loaded: requested value, then (once checked against the file's
@@ -43,6 +45,7 @@ impl<'a> Ctx<'a> {
             text,
             devices: Vec::new(),
             parts: Vec::new(),
+            buses: Vec::new(),
             step_ids: Vec::new(),
             variant: None,
             matrix: None,
@@ -106,6 +109,26 @@ impl<'a> Ctx<'a> {
 
     pub(crate) fn err(&self, at: Pos, message: impl Into<String>) -> Box<ScenarioError> {
         Box::new(ScenarioError::new(self.file, at, message).with_source(self.text))
+    }
+
+    /// A bus name (`bus: can1`): what a SocketCAN interface may be called (1 to 15 letters,
+    /// digits, `_`, `-` or `.`), since a bench's bus names are the interfaces it stands for.
+    pub(crate) fn bus_name(&self, value: &S<String>) -> Res<String> {
+        let name = value.value.trim();
+        let fits = (1..=15).contains(&name.len())
+            && name
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'));
+        if !fits {
+            return Err(self.err(
+                pos(value),
+                format!(
+                    "bus name `{}`: 1 to 15 letters, digits, `_`, `-` or `.` (an interface name)",
+                    value.value
+                ),
+            ));
+        }
+        Ok(name.to_owned())
     }
 
     /// A duration key in milliseconds: 0 ..= [`MAX_MILLIS`] (one hour; longer is a typo that

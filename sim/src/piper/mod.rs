@@ -68,6 +68,6 @@ pub use config::{PiperConfig, PiperError, BUNDLED_URDF};
 pub use emulator::{PiperEmulator, PiperHandle, PiperMonitor};
 pub use faults::{build_fault, FaultError, FaultKind, FaultParam, NtcBoard, PiperFault};
 pub use firmware::Firmware;
-pub use flash::Flash;
+pub use flash::{Flash, LinkageRole};
 pub use profile::FirmwareProfile;
 pub use state::{ArmStatusSnapshot, PiperSimState};

@@ -136,6 +136,9 @@ pub struct RobotHandle {
 #[derive(Debug, Clone)]
 pub struct RobotMonitor {
     requests: mpsc::Sender<Request>,
+    /// The root link's position after the latest step (read without asking the runner, so a
+    /// scenario's synchronous checks can see it).
+    base_m: Arc<std::sync::Mutex<[f64; 3]>>,
 }
 
 impl RobotEmulator {
@@ -185,12 +188,14 @@ impl RobotEmulator {
             })
             .collect();
         let (requests, inbox) = mpsc::channel(REQUEST_QUEUE);
+        let base_m = Arc::new(std::sync::Mutex::new(base_position_m(&world)));
         let runner = Runner {
             ports,
             actuators,
             world,
             state,
             state_path: config.state_file,
+            base_m: Arc::clone(&base_m),
         };
         let (supervisor, death) = Supervisor::new();
         let task = supervisor.spawn(
@@ -199,7 +204,7 @@ impl RobotEmulator {
             runner.run(inbox),
         );
         Ok(RobotHandle {
-            view: RobotMonitor { requests },
+            view: RobotMonitor { requests, base_m },
             task: Some(task),
             death,
         })
@@ -207,6 +212,12 @@ impl RobotEmulator {
 }
 
 impl RobotMonitor {
+    /// Position of the URDF root link's origin in the world after the latest step (m): a
+    /// floating robot's pelvis height is its `[2]`.
+    pub fn base_position_m(&self) -> [f64; 3] {
+        *self.base_m.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
     async fn ask<T>(
         &self,
         make: impl FnOnce(oneshot::Sender<T>) -> Request,
@@ -334,6 +345,22 @@ struct Runner {
     world: RobotWorld,
     state: StateFile,
     state_path: Option<PathBuf>,
+    /// Shared with the monitors: the root link's position after the latest step.
+    base_m: Arc<std::sync::Mutex<[f64; 3]>>,
+}
+
+/// Position of the URDF root link's origin in the world (m).
+fn base_position_m(world: &RobotWorld) -> [f64; 3] {
+    let world = world.world();
+    world
+        .model()
+        .link_names()
+        .first()
+        .and_then(|root| world.link_pose(root))
+        .map_or([0.0; 3], |pose| {
+            let t = pose.translation.vector;
+            [t.x, t.y, t.z]
+        })
 }
 
 impl Runner {
@@ -497,15 +524,7 @@ impl Runner {
         let world = self.world.world();
         let q = world.joint_positions();
         let qd = world.joint_velocities();
-        let base_position_m = world
-            .model()
-            .link_names()
-            .first()
-            .and_then(|root| world.link_pose(root))
-            .map_or([0.0; 3], |pose| {
-                let t = pose.translation.vector;
-                [t.x, t.y, t.z]
-            });
+        let base_position_m = base_position_m(&self.world);
         let joints = self
             .actuators
             .iter()
@@ -554,6 +573,7 @@ impl Runner {
             out.extend(a.firmware.tick().into_iter().map(|f| (bus, f)));
         }
         self.world.step()?;
+        *self.base_m.lock().unwrap_or_else(|e| e.into_inner()) = base_position_m(&self.world);
         for (bus, frame) in out {
             self.send(bus, Some(frame)).await;
         }

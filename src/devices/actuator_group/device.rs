@@ -5,10 +5,10 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use async_trait::async_trait;
-use bus::virtual_bus::{VirtualBus, VirtualBusConfig};
+use bus::virtual_bus::VirtualBus;
 use bus::CanBus;
 use driver::robstride::{
-    DriverConfig, Motor, MotorMode, OpControl, RobstrideDriver, RobstrideError,
+    DriverConfig, Motor, MotorMode, OpControl, RobstrideDriver, RobstrideError, RunMode,
 };
 use sim::robot::{RobotEmulator, RobotHandle};
 use sim::robstride::{MotorConfig, RobstrideBus, RobstrideConfig, RobstrideHandle};
@@ -16,12 +16,15 @@ use tokio::sync::Mutex;
 
 use sim::robstride::Fault as MotorFault;
 
-use super::model::{GroupAction, GroupActuator, GroupCheck, GroupFault, GroupSettings};
+use super::model::{GroupAction, GroupActuator, GroupCheck, GroupFault, GroupMode, GroupSettings};
 use crate::devices::{Action, Check, Device, DeviceError, DeviceFault, Reply, TraceColumn};
 use crate::scenario::{ErrorClass, Signal};
 
 /// Quantum of traced angles (rad): a thousandth, so a wrong scale factor still shows.
 const RAD_Q: f64 = 0.001;
+
+/// Quantum of traced heights (m): a millimetre.
+const M_Q: f64 = 0.001;
 
 /// What answers for the group in an in-process run.
 pub(crate) enum GroupEmulator {
@@ -72,21 +75,22 @@ pub(crate) struct SpawnedRobot {
     pub hosts: Vec<Arc<dyn CanBus>>,
     /// The robot.
     pub emulator: GroupEmulator,
-    /// Its buses, kept for the run.
-    pub buses: Vec<VirtualBus>,
 }
 
-/// A robot's buses for an in-process run: one virtual bus per robot bus, the robot attached
-/// to each.
+/// A robot on the bench's virtual buses (one per robot bus, in the robot's order): the robot
+/// and the host attached to each.
 pub(crate) fn spawn_robot(
     name: &str,
     robot: &sim::robot::RobotConfig,
+    buses: &[&VirtualBus],
 ) -> Result<SpawnedRobot, String> {
-    let buses: Vec<VirtualBus> = robot
-        .buses
-        .iter()
-        .map(|_| VirtualBus::new(VirtualBusConfig::default()))
-        .collect();
+    if buses.len() != robot.buses.len() {
+        return Err(format!(
+            "the robot has {} buses, the bench gave it {}",
+            robot.buses.len(),
+            buses.len()
+        ));
+    }
     let nodes = buses
         .iter()
         .map(|b| Arc::new(b.attach(name)) as Arc<dyn CanBus>)
@@ -99,7 +103,6 @@ pub(crate) fn spawn_robot(
     Ok(SpawnedRobot {
         hosts,
         emulator: GroupEmulator::Robot(handle),
-        buses,
     })
 }
 
@@ -124,12 +127,14 @@ pub(crate) struct GroupDevice {
     name: String,
     settings: GroupSettings,
     /// One handle per actuator, in settings order.
-    motors: Vec<Motor>,
+    motors: Vec<Arc<Motor>>,
+    /// A robot's monitor (the base's position), when the group is a robot in process.
+    robot: Option<sim::robot::RobotMonitor>,
+    /// Each actuator's background command stream (`hold` with `every_ms`), if any.
+    streams: std::sync::Mutex<Vec<Option<tokio::task::JoinHandle<()>>>>,
     /// One driver per bus; keeps the receive tasks alive while the handles are used.
     _drivers: Vec<RobstrideDriver>,
     emulator: Mutex<Option<GroupEmulator>>,
-    /// A robot's own buses, kept for the run.
-    _robot_buses: Vec<VirtualBus>,
 }
 
 impl GroupDevice {
@@ -140,7 +145,6 @@ impl GroupDevice {
         settings: &GroupSettings,
         hosts: Vec<Arc<dyn CanBus>>,
         emulator: Option<GroupEmulator>,
-        robot_buses: Vec<VirtualBus>,
         timeout: Duration,
     ) -> Result<Self, String> {
         let drivers: Vec<RobstrideDriver> = hosts
@@ -167,17 +171,33 @@ impl GroupDevice {
                 })?;
                 driver
                     .motor(a.can_id, model)
+                    .map(Arc::new)
                     .map_err(|e| format!("device `{name}`: joint `{}`: {e}", a.joint))
             })
             .collect::<Result<Vec<_>, String>>()?;
         Ok(Self {
             name: name.to_owned(),
             settings: settings.clone(),
+            streams: std::sync::Mutex::new(motors.iter().map(|_| None).collect()),
+            robot: match &emulator {
+                Some(GroupEmulator::Robot(handle)) => Some(handle.monitor()),
+                _ => None,
+            },
             motors,
             _drivers: drivers,
             emulator: Mutex::new(emulator),
-            _robot_buses: robot_buses,
         })
+    }
+
+    /// The robot's monitor when the group is a robot whose base moves (a fixed base's height
+    /// would be a constant column).
+    fn floating_robot(&self) -> Option<&sim::robot::RobotMonitor> {
+        let floating = self
+            .settings
+            .robot
+            .as_ref()
+            .is_some_and(|r| matches!(r.base, sim::robot::Base::Floating { .. }));
+        self.robot.as_ref().filter(|_| floating)
     }
 
     fn joint(&self, index: usize) -> &str {
@@ -188,6 +208,35 @@ impl GroupDevice {
         self.motors[index]
             .last_feedback()
             .map(|f| f64::from(f.angle_rad))
+    }
+
+    /// Replace actuator `index`'s command stream by `command` sent every `period` (or by none).
+    /// A failed send is not the stream's to report: the watchdog, the feedback and the
+    /// scenario's checks see what a lost command did.
+    fn stream(&self, index: usize, command: Option<(OpControl, Duration)>) {
+        let mut streams = self.streams.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(old) = streams[index].take() {
+            old.abort();
+        }
+        if let Some((command, period)) = command {
+            let motor = Arc::clone(&self.motors[index]);
+            streams[index] = Some(tokio::spawn(async move {
+                let mut ticks = tokio::time::interval(period);
+                ticks.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Skip);
+                ticks.tick().await;
+                loop {
+                    ticks.tick().await;
+                    let _ = motor.op_control(command).await;
+                }
+            }));
+        }
+    }
+
+    /// Stop every actuator's command stream.
+    fn stop_streams(&self) {
+        for index in 0..self.motors.len() {
+            self.stream(index, None);
+        }
     }
 
     /// Runs `each` on every motor in order; the first failure names its joint.
@@ -236,6 +285,23 @@ impl GroupDevice {
                 }
                 Ok(())
             }
+            GroupCheck::BaseHeight {
+                height_m,
+                tolerance_m,
+            } => {
+                let Some(robot) = &self.robot else {
+                    return Err((
+                        check.describe(),
+                        "no robot: a base height is a robot's (`robot:`, in process)".to_owned(),
+                    ));
+                };
+                let actual = robot.base_position_m()[2];
+                if (actual - height_m).abs() <= *tolerance_m {
+                    Ok(())
+                } else {
+                    Err((check.describe(), format!("base height {actual:.3} m")))
+                }
+            }
             GroupCheck::EnabledJoints(want) => {
                 // In the file's order, whatever order the check lists them in.
                 let enabled: Vec<&str> = (0..self.motors.len())
@@ -271,6 +337,13 @@ impl GroupDevice {
     }
 }
 
+impl Drop for GroupDevice {
+    fn drop(&mut self) {
+        // A device dropped without `shutdown` (a failed bench build) leaves no stream behind.
+        self.stop_streams();
+    }
+}
+
 #[async_trait]
 impl Device for GroupDevice {
     fn name(&self) -> &str {
@@ -291,6 +364,7 @@ impl Device for GroupDevice {
         };
         match action {
             GroupAction::Enable => {
+                self.stop_streams();
                 self.on_every_motor(|m| async move {
                     m.enable().await?;
                     // The driver's view follows each motor between commands.
@@ -299,10 +373,42 @@ impl Device for GroupDevice {
                 .await?
             }
             GroupAction::Disable => {
+                self.stop_streams();
                 self.on_every_motor(|m| async move { m.disable(false).await.map(|_| ()) })
                     .await?
             }
-            GroupAction::Hold { targets, kp, kd } => {
+            GroupAction::Mode(mode) => {
+                self.stop_streams();
+                let mode = match mode {
+                    GroupMode::Mit => RunMode::OperationControl,
+                    GroupMode::Csp => RunMode::CyclicPosition,
+                };
+                self.on_every_motor(|m| async move { m.switch_mode(mode).await.map(|_| ()) })
+                    .await?
+            }
+            GroupAction::Move {
+                targets,
+                speed_rad_s,
+            } => {
+                for target in targets {
+                    self.stream(target.actuator, None);
+                    self.motors[target.actuator]
+                        .set_position(target.angle_rad as f32, *speed_rad_s as f32)
+                        .await
+                        .map_err(|e| self.error(target.actuator, e))?;
+                }
+            }
+            GroupAction::Watchdog { window } => {
+                let window = *window;
+                self.on_every_motor(|m| async move { m.set_can_timeout(window).await.map(|_| ()) })
+                    .await?
+            }
+            GroupAction::Hold {
+                targets,
+                kp,
+                kd,
+                every,
+            } => {
                 for target in targets {
                     let command = OpControl {
                         angle_rad: target.angle_rad as f32,
@@ -311,10 +417,12 @@ impl Device for GroupDevice {
                         kd: *kd as f32,
                         torque_nm: 0.0,
                     };
+                    self.stream(target.actuator, None);
                     self.motors[target.actuator]
                         .op_control(command)
                         .await
                         .map_err(|e| self.error(target.actuator, e))?;
+                    self.stream(target.actuator, every.map(|period| (command, period)));
                 }
             }
         }
@@ -340,7 +448,8 @@ impl Device for GroupDevice {
         if !signals.contains(&Signal::Joints) {
             return Vec::new();
         }
-        self.settings
+        let mut columns: Vec<TraceColumn> = self
+            .settings
             .actuators
             .iter()
             .map(|a| TraceColumn {
@@ -348,14 +457,26 @@ impl Device for GroupDevice {
                 quantum: RAD_Q,
                 group: "angles",
             })
-            .collect()
+            .collect();
+        if self.floating_robot().is_some() {
+            columns.push(TraceColumn {
+                name: "base_height_m".to_owned(),
+                quantum: M_Q,
+                group: "base",
+            });
+        }
+        columns
     }
 
     fn trace_row(&self, signals: &[Signal]) -> Vec<Option<f64>> {
         if !signals.contains(&Signal::Joints) {
             return Vec::new();
         }
-        (0..self.motors.len()).map(|i| self.angle_rad(i)).collect()
+        let mut row: Vec<Option<f64>> = (0..self.motors.len()).map(|i| self.angle_rad(i)).collect();
+        if let Some(robot) = self.floating_robot() {
+            row.push(Some(robot.base_position_m()[2]));
+        }
+        row
     }
 
     async fn inject(&self, fault: &DeviceFault) -> Result<(), DeviceError> {
@@ -401,6 +522,7 @@ impl Device for GroupDevice {
     }
 
     async fn shutdown(&self) {
+        self.stop_streams();
         if let Some(emulator) = self.emulator.lock().await.take() {
             emulator.shutdown().await;
         }

@@ -20,7 +20,7 @@ pub use model::{
     GroupAction as Action, GroupCheck as Check, GroupFault as Fault, GroupSettings as Settings,
 };
 
-use super::{Device, FrameDecoder, KindSpec, RawKindStep, Wiring};
+use super::{one_bus, BusUse, Device, FrameDecoder, KindSpec, RawKindStep, Wiring};
 use crate::bench::{Clock, HOST_NODE};
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 use device::GroupDevice;
@@ -96,15 +96,15 @@ impl KindSpec for Kind {
         settings: &Settings,
         wiring: &Wiring<'_>,
     ) -> Result<Arc<dyn Device>, String> {
-        let (hosts, emulator, robot_buses) = match (&settings.robot, wiring.bus, wiring.clock) {
+        let (hosts, emulator) = match (&settings.robot, wiring.bus, wiring.clock) {
             (Some(robot), Some(_), _) => {
-                let robot = device::spawn_robot(name, robot)
+                let robot = device::spawn_robot(name, robot, &wiring.buses)
                     .map_err(|e| format!("device `{name}`: robot: {e}"))?;
-                (robot.hosts, Some(robot.emulator), robot.buses)
+                (robot.hosts, Some(robot.emulator))
             }
             (Some(_), None, _) => {
                 return Err(format!(
-                    "device `{name}`: a robot runs in process only (its buses are this run's own virtual buses)"
+                    "device `{name}`: a robot runs in process only (on the bench's virtual buses)"
                 ))
             }
             (None, Some(bus), _) => {
@@ -112,13 +112,9 @@ impl KindSpec for Kind {
                 let emulator = device::spawn_emulator(node, settings, wiring.bitrate_bps)
                     .map_err(|e| format!("device `{name}`: emulator: {e}"))?;
                 let host: Arc<dyn CanBus> = Arc::new(bus.attach(HOST_NODE));
-                (
-                    vec![host],
-                    Some(device::GroupEmulator::Rigs(emulator)),
-                    Vec::new(),
-                )
+                (vec![host], Some(device::GroupEmulator::Rigs(emulator)))
             }
-            (None, None, Clock::Iface(link)) => (vec![link.open("driver").await?], None, Vec::new()),
+            (None, None, Clock::Iface(link)) => (vec![link.open("driver").await?], None),
             (None, None, _) => return Err(format!("device `{name}`: no bus to attach to")),
         };
         let device = GroupDevice::start(
@@ -126,7 +122,6 @@ impl KindSpec for Kind {
             settings,
             hosts,
             emulator,
-            robot_buses,
             wiring.options.deadline(DRIVER_TIMEOUT),
         )?;
         Ok(Arc::new(device))
@@ -134,6 +129,22 @@ impl KindSpec for Kind {
 
     fn parts(settings: &Settings) -> Vec<String> {
         settings.actuators.iter().map(|a| a.joint.clone()).collect()
+    }
+
+    fn buses(settings: &Settings, at: Pos) -> Vec<BusUse> {
+        match &settings.robot {
+            // A robot's buses are its file's, at their bit rates.
+            Some(robot) => robot
+                .buses
+                .iter()
+                .map(|b| BusUse {
+                    name: Some(b.name.clone()),
+                    bitrate_bps: Some(b.bitrate_bps),
+                    at,
+                })
+                .collect(),
+            None => one_bus(&None, at),
+        }
     }
 
     fn urdf(_settings: &Settings) -> Option<&'static str> {

@@ -1,5 +1,7 @@
 //! The validated `actuator_group` vocabulary.
 
+use std::time::Duration;
+
 use sim::robot::RobotConfig;
 use sim::robstride::{Fault as MotorFault, Load, Model};
 
@@ -53,7 +55,35 @@ pub enum GroupAction {
         kp: f64,
         /// Damping (N·m·s/rad).
         kd: f64,
+        /// Send the command again at this period, in the background, until the joint's next
+        /// `hold`, `enable` or `disable` (a host's control loop; what a CAN watchdog wants).
+        every: Option<Duration>,
     },
+    /// Switch every actuator to a run mode (disable, write run_mode, read it back, enable).
+    Mode(GroupMode),
+    /// Cyclic synchronous position (run mode CSP): each listed joint to its angle at most at
+    /// `speed_rad_s` (limit_spd, then loc_ref).
+    Move {
+        /// The joints and their angles.
+        targets: Vec<JointTarget>,
+        /// Speed limit (rad/s).
+        speed_rad_s: f64,
+    },
+    /// Arm every actuator's CAN watchdog (canTimeout): an actuator that receives no command
+    /// for `window` resets (torque off).
+    Watchdog {
+        /// The window.
+        window: Duration,
+    },
+}
+
+/// The run modes a group switches between.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum GroupMode {
+    /// Operation control (MIT): `hold`.
+    Mit,
+    /// Cyclic synchronous position: `move`.
+    Csp,
 }
 
 /// A condition on the group as the driver sees it.
@@ -68,6 +98,15 @@ pub enum GroupCheck {
     },
     /// Exactly these joints' actuators are enabled (running), the others not.
     EnabledJoints(Vec<String>),
+    /// A robot's root link (a humanoid's pelvis) within `tolerance_m` of `height_m` above the
+    /// ground: the emulator's truth, as a motion-capture system would see it (no actuator
+    /// reports it).
+    BaseHeight {
+        /// Height (m).
+        height_m: f64,
+        /// Allowed deviation (m).
+        tolerance_m: f64,
+    },
 }
 
 /// A RobStride emulator fault on one actuator.
@@ -94,6 +133,10 @@ impl GroupCheck {
                 .collect::<Vec<_>>()
                 .join(", "),
             Self::EnabledJoints(joints) => format!("enabled: [{}]", joints.join(", ")),
+            Self::BaseHeight {
+                height_m,
+                tolerance_m,
+            } => format!("base height {height_m:.3} ±{tolerance_m} m"),
         }
     }
 }

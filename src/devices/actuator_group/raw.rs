@@ -36,7 +36,8 @@ pub(crate) struct RawSettings {
     pub robot: Option<S<String>>,
 }
 
-/// The `group:` step: `do:` names the command (`enable`, `disable`, `hold`).
+/// The `group:` step: `do:` names the command (`enable`, `disable`, `hold`, `watchdog`,
+/// `mode`, `move`).
 #[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawGroupStep {
@@ -49,6 +50,10 @@ pub(crate) struct RawGroupStep {
     pub targets_rad: Option<S<BTreeMap<String, S<f64>>>>,
     pub kp: Option<S<f64>>,
     pub kd: Option<S<f64>>,
+    pub every_ms: Option<S<i64>>,
+    pub window_ms: Option<S<i64>>,
+    pub mode: Option<S<String>>,
+    pub speed_rad_s: Option<S<f64>>,
 }
 
 one_key_enum! {
@@ -74,10 +79,18 @@ pub(crate) struct RawConds {
     pub joints_rad: Option<S<BTreeMap<String, S<f64>>>>,
     pub tolerance_rad: Option<S<f64>>,
     pub enabled_joints: Option<S<Vec<S<String>>>>,
+    pub base_height_m: Option<S<f64>>,
+    pub tolerance_m: Option<S<f64>>,
 }
 
 /// The keys of [`RawConds`].
-pub(crate) const CONDITION_KEYS: [&str; 3] = ["joints_rad", "tolerance_rad", "enabled_joints"];
+pub(crate) const CONDITION_KEYS: [&str; 5] = [
+    "joints_rad",
+    "tolerance_rad",
+    "enabled_joints",
+    "base_height_m",
+    "tolerance_m",
+];
 
 /// `actuator_fault: {joint, fault}`: one of the RobStride emulator's faults on one actuator.
 #[derive(Debug, Deserialize)]

@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use super::model::{GroupAction, GroupCheck, JointTarget};
+use super::model::{GroupAction, GroupCheck, GroupMode, JointTarget};
 use crate::devices::{Action, Check, DeviceFault};
 use crate::harness::model::{FaultSpec, StepKind};
 use crate::harness::parse_scenario;
@@ -17,7 +17,13 @@ fn joints_are_resolved_by_name_to_their_actuators() {
     );
     let s = parse_scenario(Path::new("ok.yaml"), &text).expect("valid");
     let StepKind::Action {
-        action: Action::ActuatorGroup(GroupAction::Hold { targets, kp, kd }),
+        action:
+            Action::ActuatorGroup(GroupAction::Hold {
+                targets,
+                kp,
+                kd,
+                every: None,
+            }),
         ..
     } = &s.steps[0].kind
     else {
@@ -132,4 +138,66 @@ fn a_robot_file_that_does_not_load_is_an_error_at_the_robot_key() {
         .unwrap_err()
         .to_string();
     assert!(error.contains("x.yaml:6:14: give `actuators`"), "{error}");
+}
+
+#[test]
+fn streams_modes_moves_watchdogs_and_base_height_are_read_with_their_units() {
+    let text = format!(
+        "{BENCH}steps:\n  - group: {{do: hold, targets_rad: {{elbow: 0.1}}, kp: 40, kd: 2, every_ms: 10}}\n  - group: {{do: watchdog, window_ms: 100}}\n  - group: {{do: mode, mode: csp}}\n  - group: {{do: move, targets_rad: {{shoulder: 0.6}}, speed_rad_s: 0.5}}\n  - expect: {{base_height_m: 0.8, tolerance_m: 0.01}}\n"
+    );
+    let s = parse_scenario(Path::new("ok.yaml"), &text).expect("valid");
+    let action = |i: usize| match &s.steps[i].kind {
+        StepKind::Action {
+            action: Action::ActuatorGroup(a),
+            ..
+        } => a.clone(),
+        other => panic!("not a group action: {other:?}"),
+    };
+    assert!(matches!(
+        action(0),
+        GroupAction::Hold { every: Some(d), .. } if d == std::time::Duration::from_millis(10)
+    ));
+    assert_eq!(
+        action(1),
+        GroupAction::Watchdog {
+            window: std::time::Duration::from_millis(100)
+        }
+    );
+    assert_eq!(action(2), GroupAction::Mode(GroupMode::Csp));
+    assert_eq!(
+        action(3),
+        GroupAction::Move {
+            targets: vec![JointTarget {
+                actuator: 0,
+                angle_rad: 0.6
+            }],
+            speed_rad_s: 0.5
+        }
+    );
+    let StepKind::Expect { checks, .. } = &s.steps[4].kind else {
+        panic!("not an expect");
+    };
+    assert_eq!(
+        checks[0],
+        Check::ActuatorGroup(GroupCheck::BaseHeight {
+            height_m: 0.8,
+            tolerance_m: 0.01
+        })
+    );
+}
+
+#[test]
+fn a_command_refuses_the_arguments_of_another() {
+    assert_eq!(
+        error_of(&format!(
+            "{BENCH}steps:\n  - group: {{do: move, targets_rad: {{elbow: 0.1}}, speed_rad_s: 1, kp: 3}}\n"
+        )),
+        "broken.yaml:9:70: `kp` does not apply to `do: move`; it takes: targets_rad, speed_rad_s"
+    );
+    assert_eq!(
+        error_of(&format!(
+            "{BENCH}steps:\n  - expect: {{base_height_m: 0.8}}\n"
+        )),
+        "broken.yaml:9:29: `base_height_m` needs `tolerance_m`"
+    );
 }

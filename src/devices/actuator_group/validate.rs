@@ -3,7 +3,7 @@
 use sim::robstride::{Fault as MotorFault, Load, Model};
 
 use super::model::{
-    GroupAction, GroupActuator, GroupCheck, GroupFault, GroupSettings, JointTarget,
+    GroupAction, GroupActuator, GroupCheck, GroupFault, GroupMode, GroupSettings, JointTarget,
 };
 use super::raw::{RawConds, RawFault, RawSettings, RawStep};
 use crate::scenario::{pos, Ctx, DeviceStep, Pos, Res, S};
@@ -161,6 +161,10 @@ pub(crate) fn step(
         ("targets_rad", s.targets_rad.as_ref().map(pos)),
         ("kp", s.kp.as_ref().map(pos)),
         ("kd", s.kd.as_ref().map(pos)),
+        ("every_ms", s.every_ms.as_ref().map(pos)),
+        ("window_ms", s.window_ms.as_ref().map(pos)),
+        ("mode", s.mode.as_ref().map(pos)),
+        ("speed_rad_s", s.speed_rad_s.as_ref().map(pos)),
     ]
     .into_iter()
     .filter_map(|(k, p)| p.map(|p| (k, p)))
@@ -182,13 +186,68 @@ pub(crate) fn step(
                 .collect();
             let kp = ctx.non_negative(ctx.required(&s.kp, "kp", "do: hold", at)?, "kp")?;
             let kd = ctx.non_negative(ctx.required(&s.kd, "kd", "do: hold", at)?, "kd")?;
-            ("group hold", GroupAction::Hold { targets, kp, kd })
+            ctx.only_arguments(
+                &present,
+                &["targets_rad", "kp", "kd", "every_ms"],
+                "hold",
+                "targets_rad, kp, kd, every_ms",
+            )?;
+            let every = s
+                .every_ms
+                .as_ref()
+                .map(|ms| ctx.positive_millis(ms, "every_ms"))
+                .transpose()?;
+            (
+                "group hold",
+                GroupAction::Hold {
+                    targets,
+                    kp,
+                    kd,
+                    every,
+                },
+            )
+        }
+        "mode" => {
+            ctx.only_arguments(&present, &["mode"], "mode", "mode")?;
+            let mode = ctx.choice(
+                ctx.required(&s.mode, "mode", "do: mode", at)?,
+                "mode",
+                &[(GroupMode::Mit, "mit"), (GroupMode::Csp, "csp")],
+            )?;
+            ("group mode", GroupAction::Mode(mode))
+        }
+        "move" => {
+            ctx.only_arguments(
+                &present,
+                &["targets_rad", "speed_rad_s"],
+                "move",
+                "targets_rad, speed_rad_s",
+            )?;
+            let raw_targets = ctx.required(&s.targets_rad, "targets_rad", "do: move", at)?;
+            let targets = targets(ctx, device, raw_targets, "targets_rad")?
+                .into_iter()
+                .map(|(_, t)| t)
+                .collect();
+            let speed = ctx.required(&s.speed_rad_s, "speed_rad_s", "do: move", at)?;
+            let speed_rad_s = ctx.non_negative(speed, "speed_rad_s")?;
+            ("group move", GroupAction::Move {
+                targets,
+                speed_rad_s,
+            })
+        }
+        "watchdog" => {
+            ctx.only_arguments(&present, &["window_ms"], "watchdog", "window_ms")?;
+            let window = ctx.positive_millis(
+                ctx.required(&s.window_ms, "window_ms", "do: watchdog", at)?,
+                "window_ms",
+            )?;
+            ("group watchdog", GroupAction::Watchdog { window })
         }
         other => {
             return Err(ctx.err(
                 pos(command),
                 format!(
-                    "`do`: unknown group command `{other}`; expected one of: enable, disable, hold"
+                    "`do`: unknown group command `{other}`; expected one of: enable, disable, hold, watchdog, mode, move"
                 ),
             ))
         }
@@ -239,6 +298,19 @@ pub(crate) fn checks(
             names.push(joint.value.clone());
         }
         checks.push(GroupCheck::EnabledJoints(names));
+    }
+    match (&raw.base_height_m, &raw.tolerance_m) {
+        (Some(height), Some(tolerance)) => checks.push(GroupCheck::BaseHeight {
+            height_m: ctx.finite(height, "base_height_m")?,
+            tolerance_m: ctx.non_negative(tolerance, "tolerance_m")?,
+        }),
+        (Some(height), None) => {
+            return Err(ctx.err(pos(height), "`base_height_m` needs `tolerance_m`"))
+        }
+        (None, Some(tolerance)) => {
+            return Err(ctx.err(pos(tolerance), "`tolerance_m` needs `base_height_m`"))
+        }
+        (None, None) => {}
     }
     Ok(checks)
 }

@@ -16,7 +16,7 @@ pub use model::{
     ArmAction as Action, ArmCond as Check, ArmFault as Fault, ArmSettings as Settings,
 };
 
-use super::{Device, FrameDecoder, KindSpec, RawKindStep, Wiring};
+use super::{one_bus, BusUse, Device, FrameDecoder, KindSpec, RawKindStep, Wiring};
 use crate::bench::Clock;
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 use device::{ArmDevice, Emulator};
@@ -139,6 +139,13 @@ impl KindSpec for Kind {
             }
         };
         Ok(Arc::new(ArmDevice::new(name, arm, emulator)))
+    }
+
+    fn buses(settings: &Settings, at: Pos) -> Vec<BusUse> {
+        match settings.vendor {
+            Vendor::Piper => one_bus(&None, at),
+            Vendor::Realman => Vec::new(),
+        }
     }
 
     fn urdf(settings: &Settings) -> Option<&'static str> {

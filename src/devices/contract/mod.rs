@@ -30,16 +30,45 @@ use crate::scenario::onekey::OneKey;
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 
 /// What a kind's `build` gets: the scenario's clock and options, and, for CAN devices, the
-/// in-process virtual bus or the SocketCAN interface to open.
+/// in-process virtual buses or the SocketCAN interface to open.
 pub(crate) struct Wiring<'a> {
-    /// The in-process virtual bus (virtual and real-time clocks).
+    /// The device's first in-process virtual bus (virtual and real-time clocks).
     pub bus: Option<&'a bus::virtual_bus::VirtualBus>,
+    /// Every in-process bus of the device, in the order of [`KindSpec::buses`] (a robot's).
+    pub buses: Vec<&'a bus::virtual_bus::VirtualBus>,
     /// Clock of the run.
     pub clock: &'a Clock,
     /// Run options (deadline scaling).
     pub options: &'a RunOptions,
-    /// Bit rate of the bench's CAN bus.
+    /// Bit rate of the device's (first) CAN bus.
     pub bitrate_bps: u32,
+}
+
+/// A CAN bus a device sits on, as its settings name it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BusUse {
+    /// The bus's name (its `bus:` setting, a robot's bus), or `None` for the bench's only bus.
+    pub name: Option<String>,
+    /// The bit rate the device needs, when its settings fix one (a robot's file does).
+    pub bitrate_bps: Option<u32>,
+    /// Where the name is written, for errors.
+    pub at: Pos,
+}
+
+/// A CAN device's `bus:` setting, checked, with where it is written.
+pub(crate) fn named_bus(ctx: &Ctx<'_>, raw: &Option<S<String>>) -> Res<Option<(String, Pos)>> {
+    raw.as_ref()
+        .map(|name| Ok((ctx.bus_name(name)?, crate::scenario::pos(name))))
+        .transpose()
+}
+
+/// The one bus of a CAN device whose settings may name it (`bus:`).
+pub(crate) fn one_bus(named: &Option<(String, Pos)>, at: Pos) -> Vec<BusUse> {
+    vec![BusUse {
+        name: named.as_ref().map(|(name, _)| name.clone()),
+        bitrate_bps: None,
+        at: named.as_ref().map_or(at, |(_, p)| *p),
+    }]
 }
 
 /// A step as written in a kind's vocabulary: a one-key mapping that may carry an `id:`.
@@ -131,6 +160,10 @@ pub(crate) trait KindSpec: 'static {
         let _ = settings;
         Vec::new()
     }
+
+    /// The CAN buses the device sits on: one for a CAN device (named by its `bus:` or the
+    /// bench's only bus), a robot's several, none for a device that speaks no CAN.
+    fn buses(settings: &Self::Settings, at: Pos) -> Vec<BusUse>;
 
     /// The URDF the 3D views draw this device with, if it is a robot or arm.
     fn urdf(settings: &Self::Settings) -> Option<&'static str>;

@@ -22,7 +22,7 @@ pub use validate::DEFAULT_FIRMWARE;
 /// A Piper condition.
 pub type Check = model::Check;
 
-use super::{Device, FrameDecoder, KindSpec, RawKindStep, Wiring};
+use super::{one_bus, BusUse, Device, FrameDecoder, KindSpec, RawKindStep, Wiring};
 use crate::bench::{Clock, RunOptions, HOST_NODE};
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 use device::checks;
@@ -49,6 +49,8 @@ pub(crate) async fn spawn_default(
     bus: &bus::virtual_bus::VirtualBus,
 ) -> Result<(Box<dyn device::EmulatorControl>, driver::piper::Piper), String> {
     let settings = Settings {
+        bus: None,
+        role: model::Role::Follower,
         firmware: DEFAULT_FIRMWARE.to_owned(),
         urdf: None,
         initial_joints_deg: [0.0; model::PIPER_JOINTS],
@@ -194,6 +196,10 @@ impl KindSpec for Kind {
             }
             (None, _) => Err(format!("device `{name}`: no bus to attach to")),
         }
+    }
+
+    fn buses(settings: &Settings, at: Pos) -> Vec<BusUse> {
+        one_bus(&settings.bus, at)
     }
 
     fn urdf(_settings: &Settings) -> Option<&'static str> {

@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 
-use crate::scenario::Near;
+use crate::scenario::{Near, Pos};
 
 /// Number of joints of a Piper arm.
 pub const PIPER_JOINTS: usize = 6;
@@ -11,6 +11,10 @@ pub const PIPER_JOINTS: usize = 6;
 /// Settings of an emulated Piper.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PiperSettings {
+    /// The bench bus it is on (`bus:`) and where that is written; `None`: the only bus.
+    pub bus: Option<(String, Pos)>,
+    /// The leader/follower role in flash at power-on (`role:`; a leader starts teaching).
+    pub role: Role,
     /// Firmware version string the emulator reports and whose quirks it follows (`S-V1.8-8`).
     pub firmware: String,
     /// URDF to load (absolute, or relative to the working directory); `None` for the default.

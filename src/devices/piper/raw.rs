@@ -14,6 +14,8 @@ use crate::scenario::S;
 #[serde(deny_unknown_fields)]
 /// A Piper's settings (after `kind: piper`).
 pub(crate) struct RawSettings {
+    pub bus: Option<S<String>>,
+    pub role: Option<S<String>>,
     pub firmware: Option<S<String>>,
     pub urdf: Option<S<String>>,
     pub initial_joints_deg: Option<S<Vec<f64>>>,

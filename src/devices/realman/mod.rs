@@ -15,7 +15,7 @@ pub use model::{
 };
 pub use observe::Observation;
 
-use super::{Device, FrameDecoder, KindSpec, RawKindStep, Wiring};
+use super::{BusUse, Device, FrameDecoder, KindSpec, RawKindStep, Wiring};
 use crate::bench::Clock;
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 use device::RealmanDevice;
@@ -117,6 +117,11 @@ impl KindSpec for Kind {
             ));
         }
         Ok(Arc::new(RealmanDevice::start(name, settings).await?))
+    }
+
+    fn buses(_settings: &Settings, _at: Pos) -> Vec<BusUse> {
+        // JSON over TCP and UDP: no CAN bus.
+        Vec::new()
     }
 
     fn urdf(settings: &Settings) -> Option<&'static str> {

@@ -18,7 +18,7 @@ pub use model::{
 };
 pub use observe::{MotorObservation, Observation};
 
-use super::{Device, FrameDecoder, KindSpec, RawKindStep, Wiring};
+use super::{one_bus, BusUse, Device, FrameDecoder, KindSpec, RawKindStep, Wiring};
 use crate::bench::{Clock, HOST_NODE};
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 use device::RobstrideDevice;
@@ -116,6 +116,10 @@ impl KindSpec for Kind {
             wiring.bitrate_bps,
             wiring.options.deadline(DRIVER_TIMEOUT),
         )?))
+    }
+
+    fn buses(settings: &Settings, at: Pos) -> Vec<BusUse> {
+        one_bus(&settings.bus, at)
     }
 
     fn urdf(_settings: &Settings) -> Option<&'static str> {

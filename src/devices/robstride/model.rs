@@ -7,11 +7,13 @@ use std::time::Duration;
 use driver::robstride::{MitMode, OpControl, Param, Protocol, RunMode};
 use sim::robstride::{Fault, MotorConfig};
 
-use crate::scenario::Near;
+use crate::scenario::{Near, Pos};
 
 /// Settings of a `robstride` bench device: the motors on its bus.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RobstrideSettings {
+    /// The bench bus it is on (`bus:`) and where that is written; `None`: the only bus.
+    pub bus: Option<(String, Pos)>,
     /// The emulated motors (CAN ID, model, load), in file order.
     pub motors: Vec<MotorConfig>,
 }

@@ -106,6 +106,7 @@ pub(crate) struct RawMotorConds {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawSettings {
+    pub bus: Option<S<String>>,
     pub motors: Option<S<Vec<S<RawRsMotor>>>>,
 }
 

@@ -15,7 +15,8 @@ use crate::harness::result::FaultEvent;
 /// Applies faults to devices and the bus, and logs every change.
 pub(crate) struct FaultControl {
     devices: Vec<Arc<dyn Device>>,
-    bus: Option<FaultHandle>,
+    /// Each virtual bus's name and fault handle, in bench order (none with `--iface`).
+    buses: Vec<(String, FaultHandle)>,
     t0: Instant,
     events: Mutex<Vec<FaultEvent>>,
     timers: Mutex<Vec<JoinHandle<()>>>,
@@ -39,17 +40,21 @@ fn filter(frames: &FrameSelector) -> Result<FrameFilter, String> {
 
 /// What must be undone when a fault's duration ends.
 enum Undo {
-    Bus(FaultId),
+    Bus(usize, FaultId),
     Emulator(usize),
     /// Bus-off recovers by itself; only the event is logged.
     Nothing,
 }
 
 impl FaultControl {
-    pub fn new(devices: Vec<Arc<dyn Device>>, bus: Option<FaultHandle>, t0: Instant) -> Self {
+    pub fn new(
+        devices: Vec<Arc<dyn Device>>,
+        buses: Vec<(String, FaultHandle)>,
+        t0: Instant,
+    ) -> Self {
         Self {
             devices,
-            bus,
+            buses,
             t0,
             events: Mutex::new(Vec::new()),
             timers: Mutex::new(Vec::new()),
@@ -63,7 +68,11 @@ impl FaultControl {
                 .devices
                 .get(*device)
                 .map_or_else(|| "?".to_owned(), |d| d.name().to_owned()),
-            FaultSpec::Bus(_) => "bus".to_owned(),
+            // A bench of one bus says just "bus"; of several, which.
+            FaultSpec::Bus { bus, .. } => match (self.buses.len(), self.buses.get(*bus)) {
+                (2.., Some((name, _))) => format!("bus {name}"),
+                _ => "bus".to_owned(),
+            },
         };
         lock(&self.events).push(FaultEvent {
             at: self.t0.elapsed(),
@@ -88,8 +97,12 @@ impl FaultControl {
                 dev.inject(f).await.map_err(|e| e.to_string())?;
                 Undo::Emulator(*device)
             }
-            FaultSpec::Bus(bus_fault) => {
-                let handle = self.bus.as_ref().ok_or_else(|| {
+            FaultSpec::Bus {
+                bus,
+                fault: bus_fault,
+            } => {
+                let bus = *bus;
+                let (_, handle) = self.buses.get(bus).ok_or_else(|| {
                     "bus faults need the in-process virtual bus (not available with --iface)"
                         .to_owned()
                 })?;
@@ -103,18 +116,18 @@ impl FaultControl {
                             Some((p, seed)) => Fault::drop_with_probability(f, *p, *seed),
                             None => Fault::drop(f),
                         };
-                        Undo::Bus(handle.inject(fault))
+                        Undo::Bus(bus, handle.inject(fault))
                     }
                     BusFault::Delay { frames, delay } => {
-                        Undo::Bus(handle.inject(Fault::delay(filter(frames)?, *delay)))
+                        Undo::Bus(bus, handle.inject(Fault::delay(filter(frames)?, *delay)))
                     }
                     BusFault::Corrupt { frames } => {
-                        Undo::Bus(handle.inject(Fault::corrupt(filter(frames)?)))
+                        Undo::Bus(bus, handle.inject(Fault::corrupt(filter(frames)?)))
                     }
                     BusFault::Duplicate { frames } => {
-                        Undo::Bus(handle.inject(Fault::duplicate(filter(frames)?)))
+                        Undo::Bus(bus, handle.inject(Fault::duplicate(filter(frames)?)))
                     }
-                    BusFault::Silence { node } => Undo::Bus(handle.silence_node(node)),
+                    BusFault::Silence { node } => Undo::Bus(bus, handle.silence_node(node)),
                     BusFault::BusOff { node } => {
                         let Some(duration) = duration else {
                             return Err("bus_off needs a duration".to_owned());
@@ -142,8 +155,8 @@ impl FaultControl {
 
     async fn undo(&self, undo: Undo, fault: &FaultSpec) {
         match undo {
-            Undo::Bus(id) => {
-                if let Some(handle) = &self.bus {
+            Undo::Bus(bus, id) => {
+                if let Some((_, handle)) = self.buses.get(bus) {
                     handle.remove(id);
                 }
             }
@@ -183,7 +196,7 @@ impl FaultControl {
         if let Some(dev) = self.devices.get(device) {
             dev.clear(None).await.map_err(|e| e.to_string())?;
         }
-        if let Some(handle) = &self.bus {
+        for (_, handle) in &self.buses {
             handle.clear();
         }
         lock(&self.events).push(FaultEvent {

@@ -105,13 +105,19 @@ async fn run_async(scenario: &Scenario, clock: &Clock, options: &RunOptions) -> 
     };
     let BuiltBench {
         devices,
-        bus,
+        buses,
         recorder,
         t0,
     } = built;
     let faults = Arc::new(FaultControl::new(
         devices.clone(),
-        bus.as_ref().map(bus::virtual_bus::VirtualBus::faults),
+        scenario
+            .bench
+            .buses
+            .iter()
+            .zip(&buses)
+            .map(|(spec, bus)| (spec.name.clone(), bus.faults()))
+            .collect(),
         t0,
     ));
     let sampler = Sampler::start(&scenario.record, devices.clone(), t0);
@@ -202,7 +208,10 @@ async fn run_async(scenario: &Scenario, clock: &Clock, options: &RunOptions) -> 
     for dev in &devices {
         dev.shutdown().await;
     }
-    let stats = bus.as_ref().map(bus::virtual_bus::VirtualBus::stats);
+    let stats: Vec<_> = buses
+        .iter()
+        .map(bus::virtual_bus::VirtualBus::stats)
+        .collect();
     let (capture, missed) = recorder.finish().await;
     if missed > 0 {
         tracing::warn!(
@@ -215,9 +224,10 @@ async fn run_async(scenario: &Scenario, clock: &Clock, options: &RunOptions) -> 
     let summary = BusSummary {
         frames: capture.count,
         frames_by_id: capture.by_id,
-        load_percent: stats.as_ref().map(|s| s.load_percent),
-        errors: stats.as_ref().map_or(0, |s| s.errors),
-        dropped: stats.as_ref().map_or(0, |s| s.dropped),
+        // The busiest bus's load: the one that would saturate first.
+        load_percent: stats.iter().map(|s| s.load_percent).reduce(f64::max),
+        errors: stats.iter().map(|s| s.errors).sum(),
+        dropped: stats.iter().map(|s| s.dropped).sum(),
         recorder_missed: missed,
     };
     let verdict = if let Some(why) = interrupted {

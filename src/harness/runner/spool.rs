@@ -13,8 +13,7 @@ use bus::pcap::PcapWriter;
 use bus::ReceivedFrame;
 use tempfile::TempPath;
 
-/// Interface name written in the candump log (`vcan0` so can-utils replays it as is).
-const LOG_IFACE: &str = "vcan0";
+use crate::harness::model::DEFAULT_BUS;
 
 /// Start of every spool file's name, so a file left by a killed process is recognisable.
 const SPOOL_PREFIX: &str = ".armhil-spool-";
@@ -167,7 +166,7 @@ impl Segment {
     fn create(candump: bool, pcap: bool) -> io::Result<Self> {
         let candump = if candump {
             let (file, path) = spool_file(".log")?;
-            Some((CandumpWriter::new(sink(file), LOG_IFACE), path))
+            Some((CandumpWriter::new(sink(file), DEFAULT_BUS), path))
         } else {
             None
         };
@@ -186,9 +185,9 @@ impl Segment {
         })
     }
 
-    fn write(&mut self, frame: &ReceivedFrame) -> io::Result<()> {
+    fn write(&mut self, frame: &ReceivedFrame, bus: &str) -> io::Result<()> {
         if let Some((writer, _)) = &mut self.candump {
-            writer.write(frame)?;
+            writer.write_on(bus, frame)?;
         }
         if let Some((writer, _)) = &mut self.pcap {
             writer.write(frame)?;
@@ -271,20 +270,21 @@ impl Spool {
         self.formats.0 || self.formats.1
     }
 
-    /// Append one frame to every file; after the first error, writing stops and the error is
-    /// kept for the report.
-    pub fn write(&mut self, frame: &ReceivedFrame) {
+    /// Append one frame seen on `bus` to every file (the candump log names the bus; the pcap
+    /// holds every bus's frames in one capture); after the first error, writing stops and the
+    /// error is kept for the report.
+    pub fn write(&mut self, frame: &ReceivedFrame, bus: &str) {
         if self.error.is_some() || !self.is_recording() {
             return;
         }
-        if let Err(e) = self.write_frame(frame) {
+        if let Err(e) = self.write_frame(frame, bus) {
             self.error = Some(format!("cannot write the bus recording: {e}"));
         }
     }
 
-    fn write_frame(&mut self, frame: &ReceivedFrame) -> io::Result<()> {
+    fn write_frame(&mut self, frame: &ReceivedFrame, bus: &str) -> io::Result<()> {
         if let Some(head) = &mut self.head {
-            head.write(frame)?;
+            head.write(frame, bus)?;
             if head.bytes() >= self.limit_bytes / 2 {
                 let head = self.head.take().map(Segment::finish).transpose()?;
                 self.head_written = head;
@@ -297,7 +297,7 @@ impl Spool {
                 .tail
                 .insert(Segment::create(self.formats.0, self.formats.1)?),
         };
-        tail.write(frame)?;
+        tail.write(frame, bus)?;
         if tail.bytes() >= self.limit_bytes / 4 {
             let full = self.tail.take().map(Segment::finish).transpose()?;
             // The older of the two finished segments goes (its files are deleted with it).
@@ -403,7 +403,7 @@ mod tests {
     fn both_formats_hold_every_frame_and_read_back() {
         let mut spool = Spool::create(true, true, UNLIMITED).unwrap();
         for i in 0..500 {
-            spool.write(&frame(i));
+            spool.write(&frame(i), DEFAULT_BUS);
         }
         let recording = spool.finish();
         assert_eq!(recording.error, None);
@@ -426,7 +426,7 @@ mod tests {
         let n: u16 = 5000;
         let mut spool = Spool::create(true, true, LIMIT).unwrap();
         for i in 0..n {
-            spool.write(&frame(i));
+            spool.write(&frame(i), DEFAULT_BUS);
         }
         let recording = spool.finish();
         assert_eq!(recording.error, None);
@@ -470,7 +470,7 @@ mod tests {
         // Head full and an end segment started, but nothing dropped yet.
         let mut spool = Spool::create(true, true, 64 * 1024).unwrap();
         for i in 0..1200 {
-            spool.write(&frame(i));
+            spool.write(&frame(i), DEFAULT_BUS);
         }
         let recording = spool.finish();
         assert_eq!(recording.omitted, None);
@@ -487,7 +487,7 @@ mod tests {
     #[test]
     fn the_files_go_away_with_the_last_result() {
         let mut spool = Spool::create(true, false, UNLIMITED).unwrap();
-        spool.write(&frame(1));
+        spool.write(&frame(1), DEFAULT_BUS);
         let recording = spool.finish();
         let path = recording.candump.as_deref().unwrap().to_path_buf();
         let copy = recording.clone();
@@ -503,7 +503,7 @@ mod tests {
     #[test]
     fn spool_files_can_be_removed_on_the_way_out() {
         let mut spool = Spool::create(true, true, UNLIMITED).unwrap();
-        spool.write(&frame(1));
+        spool.write(&frame(1), DEFAULT_BUS);
         let head = spool.head.as_ref().unwrap();
         let candump = head.candump.as_ref().unwrap().1.to_path_buf();
         let pcap = head.pcap.as_ref().unwrap().1.to_path_buf();

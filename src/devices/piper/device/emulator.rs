@@ -6,11 +6,12 @@ use async_trait::async_trait;
 use bus::CanBus;
 use sim::physics::ObstacleShape as SimShape;
 use sim::piper::{
-    FirmwareProfile, Flash, PiperConfig, PiperEmulator, PiperFault, PiperHandle, PiperSimState,
+    FirmwareProfile, Flash, LinkageRole, PiperConfig, PiperEmulator, PiperFault, PiperHandle,
+    PiperSimState,
 };
 
 use super::EmulatorControl;
-use crate::devices::piper::model::{ObstacleShape, PiperSettings};
+use crate::devices::piper::model::{ObstacleShape, PiperSettings, Role};
 
 /// A running in-process Piper emulator.
 pub(crate) struct PiperSim {
@@ -30,6 +31,10 @@ impl PiperSim {
         if let Some(levels) = settings.collision_levels {
             flash.collision_levels = levels;
         }
+        flash.linkage_role = match settings.role {
+            Role::Leader => LinkageRole::Leader,
+            Role::Follower => LinkageRole::Follower,
+        };
         let config = PiperConfig {
             firmware,
             initial_joints_rad: settings.initial_joints_deg.map(f64::to_radians),

@@ -17,6 +17,7 @@ use std::path::PathBuf;
 
 use super::model::*;
 use super::raw::*;
+use crate::devices::named_bus;
 use crate::scenario::error::Pos;
 use crate::scenario::Near;
 use crate::scenario::S;
@@ -231,6 +232,15 @@ pub(crate) fn settings(ctx: &Ctx<'_>, d: &RawSettings, _at: Pos) -> Res<PiperSet
         });
     }
     Ok(PiperSettings {
+        bus: named_bus(ctx, &d.bus)?,
+        role: match &d.role {
+            Some(r) => ctx.choice(
+                r,
+                "role",
+                &[(Role::Leader, "leader"), (Role::Follower, "follower")],
+            )?,
+            None => Role::Follower,
+        },
         firmware,
         urdf,
         initial_joints_deg,

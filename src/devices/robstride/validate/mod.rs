@@ -5,6 +5,7 @@ use sim::robstride::{Load, Model, MotorConfig};
 
 use super::model::RobstrideSettings;
 use super::raw::{RawRsLoad, RawSettings};
+use crate::devices::named_bus;
 use crate::scenario::error::Pos;
 use crate::scenario::S;
 use crate::scenario::{pos, Ctx, Res};
@@ -117,5 +118,8 @@ pub(crate) fn settings(ctx: &Ctx<'_>, d: &RawSettings, at: Pos) -> Res<Robstride
         }
         motors.push(config);
     }
-    Ok(RobstrideSettings { motors })
+    Ok(RobstrideSettings {
+        bus: named_bus(ctx, &d.bus)?,
+        motors,
+    })
 }
