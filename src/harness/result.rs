@@ -120,6 +120,20 @@ pub struct BusSummary {
     /// Frames the recorder missed (its queue overflowed): the recording and `frames` are
     /// incomplete by this many.
     pub recorder_missed: u64,
+    /// Each bus's frames and load, in bench order, when the bench has several (empty with
+    /// one: the totals above are its own).
+    pub per_bus: Vec<BusLoad>,
+}
+
+/// One bus's share of a several-bus bench, to hold against its bit rate.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct BusLoad {
+    /// The bus's name.
+    pub name: String,
+    /// Frames seen on it.
+    pub frames: u64,
+    /// Its load in percent over the run.
+    pub load_percent: f64,
 }
 
 /// The verdict of a scenario.

@@ -120,6 +120,20 @@ pub fn snapshot_yaml(result: &ScenarioResult) -> String {
     }
     let _ = writeln!(out, "  crc_errors: {}", result.bus.errors);
     let _ = writeln!(out, "  dropped: {}", result.bus.dropped);
+    // Only for a bench of several buses: each one's frames and load against its bit rate.
+    if !result.bus.per_bus.is_empty() {
+        out.push_str("  per_bus:\n");
+        for bus in &result.bus.per_bus {
+            let tenths = (bus.load_percent * 10.0).round() as i64;
+            let _ = writeln!(
+                out,
+                "    - {{name: {}, frames: {}, load_percent: {}}}",
+                quote(&bus.name),
+                bus.frames,
+                fixed(tenths, 1)
+            );
+        }
+    }
     // Only when it happened, so that complete recordings keep their snapshots.
     if result.bus.recorder_missed > 0 {
         let _ = writeln!(out, "  recorder_missed: {}", result.bus.recorder_missed);

@@ -20,7 +20,7 @@ pub use spool::{Omitted, Recording};
 
 use super::bench::{self, BuiltBench};
 use super::model::{FaultTrigger, Scenario, Step, StepKind};
-use super::result::{BusSummary, Outcome, ScenarioResult, StepResult, Verdict};
+use super::result::{BusLoad, BusSummary, Outcome, ScenarioResult, StepResult, Verdict};
 use crate::devices::Device;
 use faults::FaultControl;
 use trace::Sampler;
@@ -229,6 +229,21 @@ async fn run_async(scenario: &Scenario, clock: &Clock, options: &RunOptions) -> 
         errors: stats.iter().map(|s| s.errors).sum(),
         dropped: stats.iter().map(|s| s.dropped).sum(),
         recorder_missed: missed,
+        per_bus: if buses.len() > 1 {
+            scenario
+                .bench
+                .buses
+                .iter()
+                .zip(&stats)
+                .map(|(spec, s)| BusLoad {
+                    name: spec.name.clone(),
+                    frames: capture.by_bus.get(&spec.name).copied().unwrap_or(0),
+                    load_percent: s.load_percent,
+                })
+                .collect()
+        } else {
+            Vec::new()
+        },
     };
     let verdict = if let Some(why) = interrupted {
         failed = true;

@@ -25,6 +25,8 @@ pub(crate) struct Capture {
     pub count: u64,
     /// Frames seen per CAN ID.
     pub by_id: BTreeMap<u32, u64>,
+    /// Frames seen per bus name.
+    pub by_bus: BTreeMap<String, u64>,
 }
 
 impl Capture {
@@ -38,6 +40,12 @@ impl Capture {
     fn push(&mut self, frame: ReceivedFrame, bus: &str) {
         self.count += 1;
         *self.by_id.entry(frame.frame.raw_id()).or_insert(0) += 1;
+        match self.by_bus.get_mut(bus) {
+            Some(count) => *count += 1,
+            None => {
+                self.by_bus.insert(bus.to_owned(), 1);
+            }
+        }
         if let Some(spool) = &mut self.spool {
             spool.write(&frame, bus);
         }
