@@ -88,7 +88,6 @@ pub(crate) async fn build(
         let device_buses: Vec<&VirtualBus> =
             spec.buses.iter().filter_map(|&i| buses.get(i)).collect();
         let wiring = Wiring {
-            bus: device_buses.first().copied(),
             buses: device_buses,
             clock,
             options,

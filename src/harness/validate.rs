@@ -239,11 +239,14 @@ fn bench(ctx: &Ctx<'_>, raw: &S<RawBench>) -> Res<Bench> {
                 "`host` is reserved for the driver's bus node; pick another device name",
             ));
         }
+        let kind = devices::validate_settings(ctx, device)?;
+        let uses = kind.buses(pos(device));
         devices.push((
             pos(device),
+            uses,
             DeviceSpec {
                 name: name.clone(),
-                kind: devices::validate_settings(ctx, device)?,
+                kind,
                 buses: Vec::new(),
             },
         ));
@@ -252,9 +255,11 @@ fn bench(ctx: &Ctx<'_>, raw: &S<RawBench>) -> Res<Bench> {
     let declared = !buses.is_empty();
     // Buses a device names but `bench.buses` does not declare are made for it (at the
     // bit rate its settings need, else the bench's), unless the bench declares its buses.
-    for (at, device) in &devices {
-        for used in device.kind.buses(*at) {
-            let Some(name) = used.name else { continue };
+    for (_, uses, device) in &devices {
+        for used in uses {
+            let Some(name) = used.name.clone() else {
+                continue;
+            };
             match buses.iter().find(|b| b.name == name) {
                 Some(bus) => {
                     if let Some(rate) = used.bitrate_bps.filter(|r| *r != bus.bitrate_bps) {
@@ -293,8 +298,8 @@ fn bench(ctx: &Ctx<'_>, raw: &S<RawBench>) -> Res<Bench> {
         });
     }
     let mut placed = Vec::new();
-    for (at, mut device) in devices {
-        for used in device.kind.buses(at) {
+    for (at, uses, mut device) in devices {
+        for used in uses {
             let index = match &used.name {
                 Some(name) => buses.iter().position(|b| &b.name == name),
                 None if buses.len() == 1 => Some(0),

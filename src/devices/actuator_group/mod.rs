@@ -96,7 +96,7 @@ impl KindSpec for Kind {
         settings: &Settings,
         wiring: &Wiring<'_>,
     ) -> Result<Arc<dyn Device>, String> {
-        let (hosts, emulator) = match (&settings.robot, wiring.bus, wiring.clock) {
+        let (hosts, emulator) = match (&settings.robot, wiring.bus(), wiring.clock) {
             (Some(robot), Some(_), _) => {
                 let robot = device::spawn_robot(name, robot, &wiring.buses)
                     .map_err(|e| format!("device `{name}`: robot: {e}"))?;

@@ -5,7 +5,7 @@ use sim::robstride::{Fault as MotorFault, Load, Model};
 use super::model::{
     GroupAction, GroupActuator, GroupCheck, GroupFault, GroupMode, GroupSettings, JointTarget,
 };
-use super::raw::{RawConds, RawFault, RawSettings, RawStep};
+use super::raw::{RawConds, RawFault, RawGroupStep, RawSettings, RawStep};
 use crate::scenario::{pos, Ctx, DeviceStep, Pos, Res, S};
 
 /// The CAN IDs a RobStride motor takes (the firmware's range).
@@ -179,11 +179,7 @@ pub(crate) fn step(
             ("group disable", GroupAction::Disable)
         }
         "hold" => {
-            let raw_targets = ctx.required(&s.targets_rad, "targets_rad", "do: hold", at)?;
-            let targets = targets(ctx, device, raw_targets, "targets_rad")?
-                .into_iter()
-                .map(|(_, t)| t)
-                .collect();
+            let targets = step_targets(ctx, device, s, "do: hold", at)?;
             let kp = ctx.non_negative(ctx.required(&s.kp, "kp", "do: hold", at)?, "kp")?;
             let kd = ctx.non_negative(ctx.required(&s.kd, "kd", "do: hold", at)?, "kd")?;
             ctx.only_arguments(
@@ -223,11 +219,7 @@ pub(crate) fn step(
                 "move",
                 "targets_rad, speed_rad_s",
             )?;
-            let raw_targets = ctx.required(&s.targets_rad, "targets_rad", "do: move", at)?;
-            let targets = targets(ctx, device, raw_targets, "targets_rad")?
-                .into_iter()
-                .map(|(_, t)| t)
-                .collect();
+            let targets = step_targets(ctx, device, s, "do: move", at)?;
             let speed = ctx.required(&s.speed_rad_s, "speed_rad_s", "do: move", at)?;
             let speed_rad_s = ctx.non_negative(speed, "speed_rad_s")?;
             ("group move", GroupAction::Move {
@@ -261,6 +253,21 @@ pub(crate) fn step(
             expect_error: ctx.expect_error(&s.expect_error)?,
         },
     ))
+}
+
+/// A step's required `targets_rad`, each joint resolved to its actuator.
+fn step_targets(
+    ctx: &Ctx<'_>,
+    device: usize,
+    s: &RawGroupStep,
+    command: &str,
+    at: Pos,
+) -> Res<Vec<JointTarget>> {
+    let raw = ctx.required(&s.targets_rad, "targets_rad", command, at)?;
+    Ok(targets(ctx, device, raw, "targets_rad")?
+        .into_iter()
+        .map(|(_, t)| t)
+        .collect())
 }
 
 /// The group's conditions.

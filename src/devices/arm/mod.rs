@@ -106,7 +106,7 @@ impl KindSpec for Kind {
         let (arm, emulator): (Arc<dyn ArmInterface>, Emulator) = match settings.vendor {
             Vendor::Piper => {
                 let bus = wiring
-                    .bus
+                    .bus()
                     .ok_or_else(|| format!("device `{name}`: no bus to attach the Piper to"))?;
                 let (sim, piper) = super::piper::spawn_default(name, bus).await?;
                 let arm = PiperArm::from_client(name, piper, PiperArmOptions::default());

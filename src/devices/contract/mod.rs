@@ -32,8 +32,6 @@ use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 /// What a kind's `build` gets: the scenario's clock and options, and, for CAN devices, the
 /// in-process virtual buses or the SocketCAN interface to open.
 pub(crate) struct Wiring<'a> {
-    /// The device's first in-process virtual bus (virtual and real-time clocks).
-    pub bus: Option<&'a bus::virtual_bus::VirtualBus>,
     /// Every in-process bus of the device, in the order of [`KindSpec::buses`] (a robot's).
     pub buses: Vec<&'a bus::virtual_bus::VirtualBus>,
     /// Clock of the run.
@@ -42,6 +40,13 @@ pub(crate) struct Wiring<'a> {
     pub options: &'a RunOptions,
     /// Bit rate of the device's (first) CAN bus.
     pub bitrate_bps: u32,
+}
+
+impl<'a> Wiring<'a> {
+    /// The device's (first) in-process virtual bus (virtual and real-time clocks).
+    pub fn bus(&self) -> Option<&'a bus::virtual_bus::VirtualBus> {
+        self.buses.first().copied()
+    }
 }
 
 /// A CAN bus a device sits on, as its settings name it.

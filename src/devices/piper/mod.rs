@@ -158,7 +158,7 @@ impl KindSpec for Kind {
         settings: &Settings,
         wiring: &Wiring<'_>,
     ) -> Result<Arc<dyn Device>, String> {
-        match (wiring.bus, wiring.clock) {
+        match (wiring.bus(), wiring.clock) {
             (Some(bus), _) => {
                 let node: Arc<dyn CanBus> = Arc::new(bus.attach(name));
                 let sim = PiperSim::spawn(node, settings)

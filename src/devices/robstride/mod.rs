@@ -103,7 +103,7 @@ impl KindSpec for Kind {
         settings: &Settings,
         wiring: &Wiring<'_>,
     ) -> Result<Arc<dyn Device>, String> {
-        let host: Arc<dyn CanBus> = match (wiring.bus, wiring.clock) {
+        let host: Arc<dyn CanBus> = match (wiring.bus(), wiring.clock) {
             (Some(bus), _) => Arc::new(bus.attach(HOST_NODE)),
             (None, Clock::Iface(link)) => link.open("driver").await?,
             (None, _) => return Err(format!("device `{name}`: no bus to attach to")),
@@ -112,7 +112,7 @@ impl KindSpec for Kind {
             name,
             settings,
             host,
-            wiring.bus,
+            wiring.bus(),
             wiring.bitrate_bps,
             wiring.options.deadline(DRIVER_TIMEOUT),
         )?))

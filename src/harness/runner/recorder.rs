@@ -194,9 +194,16 @@ async fn record_merged(
                             Err(broadcast::error::RecvError::Closed) => break,
                         },
                         _ = stop.recv() => {
-                            while let Ok(frame) = tap.try_recv() {
-                                if tx.send((index, frame)).await.is_err() {
-                                    break;
+                            // Drain what is already in the tap, as `drain` does for one bus.
+                            loop {
+                                match tap.try_recv() {
+                                    Ok(frame) => {
+                                        if tx.send((index, frame)).await.is_err() {
+                                            break;
+                                        }
+                                    }
+                                    Err(broadcast::error::TryRecvError::Lagged(n)) => missed += n,
+                                    Err(_) => break,
                                 }
                             }
                             break;
