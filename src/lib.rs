@@ -5,12 +5,14 @@
 //! contract, built on [`bench`]: clock, links, run options), [`harness`] (loading whole scenarios, the runner, reports).
 //!
 //! The CLI (`armhil run`, `armhil check`) is a thin layer over this library; [`ui`] is the live
-//! web view of `armhil sim ... --ui`; [`robots`] reads robot files for `armhil sim robot`.
+//! web view of `armhil sim ... --ui`; [`robots`] reads robot files for `armhil sim robot`,
+//! [`rigs`] bench files for `armhil sim bench`.
 
 pub mod bench;
 pub mod devices;
 pub mod harness;
 pub mod interop;
+pub mod rigs;
 pub mod robots;
 pub mod scenario;
 pub mod ui;

@@ -110,3 +110,52 @@ fn outputs_that_cannot_be_written_fail_the_run_naming_the_path() {
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains(blocker.to_str().unwrap()), "{stdout}");
 }
+
+#[test]
+fn a_bench_file_s_mistakes_are_named_at_the_device_s_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("bench.yaml");
+    std::fs::write(
+        &file,
+        "devices:\n  left: {kind: realman, port: 1}\n  right: {kind: piper, ifac: can0}\n",
+    )
+    .unwrap();
+    let out = armhil(&["sim", "bench", file.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains(
+            "bench.yaml:3:10: device `right` (piper): unexpected argument `ifac:` found; tip: a \
+             similar argument exists: `iface:`"
+        ),
+        "{}",
+        stderr(&out)
+    );
+}
+
+#[test]
+fn a_bench_whose_device_cannot_start_stops_the_others_and_says_which() {
+    let taken = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let port = taken.local_addr().unwrap().port();
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("bench.yaml");
+    let free = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    std::fs::write(
+        &file,
+        format!("devices:\n  a: {{kind: realman, port: {free}}}\n  b: {{kind: realman, port: {port}}}\n"),
+    )
+    .unwrap();
+    let out = armhil(&["sim", "bench", file.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains(&format!(
+            "1 of 2 devices of {} failed:\n  device `b` (realman): cannot start the Realman emulator on 127.0.0.1:{port}",
+            file.display()
+        )),
+        "{}",
+        stderr(&out)
+    );
+}

@@ -8,6 +8,7 @@ use sim::supervise::{DeathWatch, EmulatorDied};
 
 use super::signals::StopSignals;
 
+pub mod bench;
 pub mod piper;
 pub mod realman;
 pub mod robot;
@@ -31,6 +32,9 @@ enum Device {
     Robstride(robstride::Args),
     /// A whole robot from its robot file: one physics world, every bus served at once.
     Robot(robot::Args),
+    /// Several devices in one process from a bench file (`rigs/`): two Piper arms on two
+    /// interfaces, Realman controllers on several ports, robots; stopped together.
+    Bench(bench::Args),
 }
 
 /// The runtime every emulator of `armhil sim` runs on: two workers, made punctual (the clock's
@@ -132,18 +136,48 @@ fn create_vxcan(iface: &str, peer: &str) -> anyhow::Result<()> {
 /// How `armhil sim` came to stop.
 #[derive(Debug)]
 pub(crate) enum Stopped {
-    /// Ctrl-C or SIGTERM.
+    /// Ctrl-C or SIGTERM (or the bench's stop request).
     Signal(&'static str),
     /// The emulator stopped serving on its own.
     Died(EmulatorDied),
 }
 
-/// Wait for Ctrl-C / SIGTERM, or for the emulator to die on its own (a task panicked, its
-/// state file could not be written), whichever comes first. Waiting for the signal alone
-/// kept the port open on a dead bus and exited 0 (D4).
-pub(crate) async fn until_stopped(signals: &mut StopSignals, death: &mut DeathWatch) -> Stopped {
+/// What tells a served device to stop: the process's own signals when it runs alone, or the
+/// bench it is part of (`armhil sim bench`), which listens for the signals once and stops
+/// every device together.
+pub(crate) enum StopSource {
+    /// SIGINT / SIGTERM. Listened for before the emulator starts: a signal that arrived
+    /// earlier would kill the process with its recording or state file unfinished.
+    Signals(StopSignals),
+    /// The bench's stop request: the name of the signal (or reason) once it is sent.
+    Bench(tokio::sync::watch::Receiver<Option<&'static str>>),
+}
+
+impl StopSource {
+    /// Listen for the process's signals (needs the runtime).
+    pub(crate) fn signals() -> anyhow::Result<Self> {
+        Ok(Self::Signals(StopSignals::listen()?))
+    }
+
+    /// Wait for the stop request and name it.
+    pub(crate) async fn next(&mut self) -> &'static str {
+        match self {
+            Self::Signals(signals) => signals.next().await,
+            Self::Bench(request) => match request.wait_for(Option::is_some).await {
+                Ok(reason) => reason.unwrap_or("stop"),
+                // The bench is gone: nobody is left to serve.
+                Err(_) => "stop",
+            },
+        }
+    }
+}
+
+/// Wait for a stop request (Ctrl-C / SIGTERM, or the bench's), or for the emulator to die on
+/// its own (a task panicked, its state file could not be written), whichever comes first.
+/// Waiting for the signal alone kept the port open on a dead bus and exited 0 (D4).
+pub(crate) async fn until_stopped(stop: &mut StopSource, death: &mut DeathWatch) -> Stopped {
     let stopped = tokio::select! {
-        signal = signals.next() => Stopped::Signal(signal),
+        signal = stop.next() => Stopped::Signal(signal),
         died = death.died() => Stopped::Died(died),
     };
     match &stopped {
@@ -201,6 +235,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         Device::Realman(args) => realman::run(args),
         Device::Robstride(args) => robstride::run(args),
         Device::Robot(args) => robot::run(args),
+        Device::Bench(args) => bench::run(args),
     }
 }
 

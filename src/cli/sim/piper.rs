@@ -9,7 +9,7 @@ use anyhow::Context;
 use armhil::ui::bus_tap::BusTap;
 use armhil::ui::piper::PiperLive;
 use bus::CanBus;
-use sim::piper::{FirmwareProfile, PiperConfig, PiperEmulator};
+use sim::piper::{FirmwareProfile, Flash, LinkageRole, PiperConfig, PiperEmulator};
 
 use super::served_bus::{ServeArgs, ServedBus};
 
@@ -29,6 +29,11 @@ pub struct Args {
     /// across runs; created on the first change.
     #[arg(long)]
     pub state_file: Option<PathBuf>,
+    /// Leader/follower role in flash at power-on (a leader is a teach-input arm that sends
+    /// its joints as commands for a follower on its bus). A state file that exists keeps
+    /// the role it holds.
+    #[arg(long, value_enum)]
+    pub role: Option<Role>,
     /// URDF to simulate instead of the bundled urdf/piper.urdf.
     #[arg(long)]
     pub urdf: Option<PathBuf>,
@@ -54,9 +59,18 @@ pub struct Args {
     pub ui: Option<String>,
 }
 
+/// `--role`: the arm's leader/follower role in flash.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Role {
+    /// Teach-input arm.
+    Leader,
+    /// Motion-output arm (the factory setting).
+    Follower,
+}
+
 /// Run the emulator until Ctrl-C.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    super::real_time_runtime()?.block_on(serve(args))
+    super::real_time_runtime()?.block_on(async { serve(args, super::StopSource::signals()?).await })
 }
 
 fn initial_joints_rad(args: &Args) -> anyhow::Result<[f64; 6]> {
@@ -70,7 +84,8 @@ fn initial_joints_rad(args: &Args) -> anyhow::Result<[f64; 6]> {
     Ok(arr.map(f64::to_radians))
 }
 
-async fn serve(args: Args) -> anyhow::Result<ExitCode> {
+/// Serve until `stop` asks (a signal, or the bench this device is part of stopping).
+pub(crate) async fn serve(args: Args, mut stop: super::StopSource) -> anyhow::Result<ExitCode> {
     let config = PiperConfig {
         firmware: args.firmware,
         initial_joints_rad: initial_joints_rad(&args)?,
@@ -78,6 +93,13 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
         urdf_path: args.urdf.clone(),
         ticks_per_wake: args.ticks_per_wake,
         max_catch_up_steps: args.max_catch_up_ms,
+        flash: args.role.map(|role| Flash {
+            linkage_role: match role {
+                Role::Leader => LinkageRole::Leader,
+                Role::Follower => LinkageRole::Follower,
+            },
+            ..Flash::default()
+        }),
         ..PiperConfig::default()
     };
     let served = ServedBus::open(&args.bus).await?;
@@ -102,9 +124,6 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
             .with_context(|| format!("cannot read URDF {}", path.display()))?,
         None => sim::piper::BUNDLED_URDF.to_owned(),
     };
-    // Listen before the emulator runs: a signal that arrives earlier would otherwise kill the
-    // process with the recording unfinished.
-    let mut stop_signals = super::super::signals::StopSignals::listen()?;
     let emu = PiperEmulator::spawn(Arc::clone(&bus), config)
         .with_context(|| format!("cannot start the Piper emulator on {place}"))?;
     let ui = match &args.ui {
@@ -128,7 +147,7 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
         args.firmware
     );
     let mut death = emu.death_watch();
-    let stopped = super::until_stopped(&mut stop_signals, &mut death).await;
+    let stopped = super::until_stopped(&mut stop, &mut death).await;
     // Frames per ID per second, feedback periods and overruns: whether the emulator kept up.
     if let Some(ui) = ui {
         ui.shutdown().await;

@@ -58,10 +58,11 @@ pub struct Args {
 
 /// Run the emulator until Ctrl-C.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    super::real_time_runtime()?.block_on(serve(args))
+    super::real_time_runtime()?.block_on(async { serve(args, super::StopSource::signals()?).await })
 }
 
-async fn serve(args: Args) -> anyhow::Result<ExitCode> {
+/// Serve until `stop` asks (a signal, or the bench this device is part of stopping).
+pub(crate) async fn serve(args: Args, mut stop: super::StopSource) -> anyhow::Result<ExitCode> {
     let model = ArmModel::from_product(&args.model)
         .with_context(|| format!("unknown Realman model {:?} (try RM65-B)", args.model))?;
     let urdf = sim::realman::plant::urdf_for(&model);
@@ -79,9 +80,6 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
     config.idle_timeout =
         (args.idle_timeout_s > 0).then(|| Duration::from_secs(args.idle_timeout_s));
     let addr = SocketAddr::new(args.bind, args.port);
-    // Listen before the emulator runs: a signal that arrives earlier would otherwise kill
-    // the process without saving the state file.
-    let mut stop_signals = super::super::signals::StopSignals::listen()?;
     let emu = RealmanEmulator::spawn(config, Transport::Tcp(addr))
         .await
         .with_context(|| format!("cannot start the Realman emulator on {addr}"))?;
@@ -113,7 +111,7 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
         (None, _) => None,
     };
     let mut death = emu.death_watch();
-    let stopped = super::until_stopped(&mut stop_signals, &mut death).await;
+    let stopped = super::until_stopped(&mut stop, &mut death).await;
     if let Some(ui) = ui {
         ui.shutdown().await;
     }

@@ -41,7 +41,7 @@ const MAX_IFACE_CHARS: usize = 15;
 
 /// Run the robot until Ctrl-C.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    super::real_time_runtime()?.block_on(serve(args))
+    super::real_time_runtime()?.block_on(async { serve(args, super::StopSource::signals()?).await })
 }
 
 /// Where the buses are served, and what has to be shut down with them.
@@ -103,7 +103,8 @@ async fn open_buses(args: &Args, config: &RobotConfig) -> anyhow::Result<Served>
     })
 }
 
-async fn serve(args: Args) -> anyhow::Result<ExitCode> {
+/// Serve until `stop` asks (a signal, or the bench this device is part of stopping).
+pub(crate) async fn serve(args: Args, mut stop: super::StopSource) -> anyhow::Result<ExitCode> {
     let loaded = load_robot_file(&args.file)?;
     for warning in &loaded.warnings {
         eprintln!("warning: {warning}");
@@ -114,7 +115,6 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
     let summary = summary(&config);
     let served = open_buses(&args, &config).await?;
     let nodes = served.nodes.clone();
-    let mut stop_signals = super::super::signals::StopSignals::listen()?;
     let robot = RobotEmulator::spawn(config, served.nodes)
         .with_context(|| format!("cannot start the robot of {}", args.file.display()))?;
     tracing::info!(on = %served.place, "robot emulator running; Ctrl-C to stop");
@@ -123,7 +123,7 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
         served.place
     );
     let mut death = robot.death_watch();
-    let stopped = super::until_stopped(&mut stop_signals, &mut death).await;
+    let stopped = super::until_stopped(&mut stop, &mut death).await;
     robot.shutdown().await;
     for node in nodes {
         node.close().await;

@@ -114,7 +114,7 @@ impl FromStr for LoadSpec {
 
 /// Run the emulator until Ctrl-C.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    super::real_time_runtime()?.block_on(serve(args))
+    super::real_time_runtime()?.block_on(async { serve(args, super::StopSource::signals()?).await })
 }
 
 fn config(args: &Args) -> anyhow::Result<RobstrideConfig> {
@@ -148,7 +148,8 @@ fn config(args: &Args) -> anyhow::Result<RobstrideConfig> {
     Ok(config)
 }
 
-async fn serve(args: Args) -> anyhow::Result<ExitCode> {
+/// Serve until `stop` asks (a signal, or the bench this device is part of stopping).
+pub(crate) async fn serve(args: Args, mut stop: super::StopSource) -> anyhow::Result<ExitCode> {
     let config = config(&args)?;
     let served = ServedBus::open(&args.bus).await?;
     let place = served.place();
@@ -161,7 +162,6 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
         .iter()
         .map(|m| format!("{}:{}", m.can_id, m.model.name()))
         .collect();
-    let mut stop_signals = super::super::signals::StopSignals::listen()?;
     let emulator = RobstrideBus::spawn(Arc::clone(&bus), config)
         .with_context(|| format!("cannot start the RobStride emulator on {place}"))?;
     let ui = match &args.ui {
@@ -181,7 +181,7 @@ async fn serve(args: Args) -> anyhow::Result<ExitCode> {
         motors.join(", "),
     );
     let mut death = emulator.death_watch();
-    let stopped = super::until_stopped(&mut stop_signals, &mut death).await;
+    let stopped = super::until_stopped(&mut stop, &mut death).await;
     if let Some(ui) = ui {
         ui.shutdown().await;
     }

@@ -1,0 +1,224 @@
+//! `armhil sim bench FILE`: several devices in one process from a bench file — two Piper arms
+//! on two interfaces, Realman controllers on several ports, robots — each served as its own
+//! `armhil sim KIND` would serve it, all stopped together.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::Context;
+use armhil::rigs::{load_bench_file, BenchDevice, BenchFile, SimKind};
+use clap::Parser;
+use tokio::sync::watch;
+use tokio::task::JoinSet;
+
+use super::StopSource;
+
+/// Arguments of `armhil sim bench`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The bench file (`rigs/bimanual_piper.yaml`, grammar in `rigs/README.md`).
+    pub file: PathBuf,
+}
+
+/// One device's options, parsed by its own subcommand's parser.
+#[derive(Debug)]
+enum DeviceArgs {
+    Piper(super::piper::Args),
+    Realman(super::realman::Args),
+    Robstride(super::robstride::Args),
+    Robot(super::robot::Args),
+}
+
+/// `armhil sim KIND` alone: what a bench entry's options are parsed with, so they take what
+/// the command line takes and fail with its messages.
+#[derive(Debug, Parser)]
+#[command(no_binary_name = true, disable_help_flag = true)]
+struct Entry<T: clap::Args> {
+    #[command(flatten)]
+    args: T,
+}
+
+fn parse<T: clap::Args>(device: &BenchDevice) -> anyhow::Result<T> {
+    Entry::<T>::try_parse_from(&device.args)
+        .map(|entry| entry.args)
+        .map_err(|e| anyhow::anyhow!("{}", device.error(clap_message(&e))))
+}
+
+/// clap's message without its usage block, with its `--option` words as the file's keys
+/// (`'--ifac'` → `ifac:`).
+fn clap_message(error: &clap::Error) -> String {
+    let rendered = error.render().to_string();
+    let message: Vec<&str> = rendered
+        .lines()
+        .take_while(|line| !line.starts_with("Usage:") && !line.starts_with("For more information"))
+        .map(str::trim)
+        .filter(|line| !line.is_empty())
+        .collect();
+    // A line ending in ':' introduces the next ("not provided:" <FILE>).
+    let mut text = String::new();
+    for line in message {
+        if !text.is_empty() {
+            text.push_str(if text.ends_with(':') { " " } else { "; " });
+        }
+        text.push_str(line);
+    }
+    let text = text.strip_prefix("error: ").unwrap_or(&text);
+    as_keys(text)
+}
+
+/// `'--state-file <STATE_FILE>'` → `state_file:` wherever clap names an option, and a
+/// missing positional (`<FILE>`) → `file:`.
+fn as_keys(text: &str) -> String {
+    let text = positional_as_key(text);
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text.as_str();
+    while let Some(start) = rest.find("'--") {
+        out.push_str(&rest[..start]);
+        let after = &rest[start + 3..];
+        let end = after.find('\'').unwrap_or(after.len());
+        let option = after[..end].split([' ', '=']).next().unwrap_or("");
+        out.push_str(&format!("`{}:`", option.replace('-', "_")));
+        rest = after.get(end + 1..).unwrap_or("");
+    }
+    out.push_str(rest);
+    out
+}
+
+/// clap names a missing positional argument `<FILE>` on a line of its own.
+fn positional_as_key(text: &str) -> String {
+    match text.rsplit_once(' ') {
+        Some((head, last)) if last.starts_with('<') && last.ends_with('>') => {
+            format!("{head} `{}:`", last[1..last.len() - 1].to_lowercase())
+        }
+        _ => text.to_owned(),
+    }
+}
+
+impl DeviceArgs {
+    /// Parse a device's options and resolve its paths against the bench file's folder.
+    fn parse(device: &BenchDevice, dir: &Path) -> anyhow::Result<Self> {
+        let mut args = match device.kind {
+            SimKind::Piper => Self::Piper(parse(device)?),
+            SimKind::Realman => Self::Realman(parse(device)?),
+            SimKind::Robstride => Self::Robstride(parse(device)?),
+            SimKind::Robot => Self::Robot(parse(device)?),
+        };
+        for path in args.paths_mut() {
+            if path.is_relative() {
+                *path = dir.join(&*path);
+            }
+        }
+        Ok(args)
+    }
+
+    /// Every file the options name (relative to the bench file, as a robot file's URDF is
+    /// relative to the robot file).
+    fn paths_mut(&mut self) -> Vec<&mut PathBuf> {
+        match self {
+            Self::Piper(a) => [&mut a.state_file, &mut a.urdf, &mut a.record]
+                .into_iter()
+                .flatten()
+                .collect(),
+            Self::Realman(a) => a.state_file.iter_mut().collect(),
+            Self::Robstride(a) => a.state_file.iter_mut().collect(),
+            Self::Robot(a) => std::iter::once(&mut a.file)
+                .chain(a.state_file.iter_mut())
+                .collect(),
+        }
+    }
+
+    async fn serve(self, stop: StopSource) -> anyhow::Result<ExitCode> {
+        match self {
+            Self::Piper(a) => super::piper::serve(a, stop).await,
+            Self::Realman(a) => super::realman::serve(a, stop).await,
+            Self::Robstride(a) => super::robstride::serve(a, stop).await,
+            Self::Robot(a) => super::robot::serve(a, stop).await,
+        }
+    }
+}
+
+/// Serve every device of the bench file until Ctrl-C, or until one of them stops on its own
+/// (it could not start, or it died), which stops the others.
+pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+    let bench = load_bench_file(&args.file)?;
+    let devices = bench
+        .devices
+        .iter()
+        .map(|d| Ok((d.name.clone(), d.kind, DeviceArgs::parse(d, bench.dir())?)))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    super::real_time_runtime()?.block_on(serve(&bench, devices))
+}
+
+async fn serve(
+    bench: &BenchFile,
+    devices: Vec<(String, SimKind, DeviceArgs)>,
+) -> anyhow::Result<ExitCode> {
+    let mut signals = StopSource::signals()?;
+    let (stop, stop_request) = watch::channel(None);
+    let mut running = JoinSet::new();
+    let count = devices.len();
+    for (name, kind, args) in devices {
+        let stop = StopSource::Bench(stop_request.clone());
+        running.spawn(async move { (name, kind, args.serve(stop).await) });
+    }
+    eprintln!(
+        "armhil sim bench: {count} devices from {} (Ctrl-C to stop them all)",
+        bench.file.display()
+    );
+    let mut failures = Vec::new();
+    let mut record = |joined: Result<(String, SimKind, anyhow::Result<ExitCode>), _>| match joined {
+        Ok((_, _, Ok(_))) => {}
+        Ok((name, kind, Err(e))) => failures.push(format!(
+            "device `{name}` ({}): {}",
+            kind.name(),
+            super::super::error_text(&e)
+        )),
+        Err(e) => failures.push(format!("a device's task failed: {e}")),
+    };
+    // The first of: a stop signal, or a device ending by itself (which nothing asked for).
+    tokio::select! {
+        signal = signals.next() => {
+            let _ = stop.send(Some(signal));
+        }
+        Some(joined) = running.join_next() => {
+            record(joined);
+            let _ = stop.send(Some("a device stopped"));
+        }
+    }
+    while let Some(joined) = running.join_next().await {
+        record(joined);
+    }
+    if failures.is_empty() {
+        return Ok(ExitCode::SUCCESS);
+    }
+    Err(anyhow::anyhow!(
+        "{} of {count} devices of {} failed:\n  {}",
+        failures.len(),
+        bench.file.display(),
+        failures.join("\n  ")
+    ))
+    .context("the bench stopped")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn clap_words_become_the_file_s_keys() {
+        assert_eq!(
+            as_keys(
+                "unexpected argument '--ifac' found; tip: a similar argument exists: '--iface'"
+            ),
+            "unexpected argument `ifac:` found; tip: a similar argument exists: `iface:`"
+        );
+        assert_eq!(
+            as_keys("invalid value 'x' for '--state-file <STATE_FILE>'"),
+            "invalid value 'x' for `state_file:`"
+        );
+        assert_eq!(
+            as_keys("the following required arguments were not provided: <FILE>"),
+            "the following required arguments were not provided: `file:`"
+        );
+    }
+}

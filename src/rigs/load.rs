@@ -1,0 +1,303 @@
+//! Reading a bench file into one `armhil sim KIND` option list per device.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+use sim::bounded_read::{read_regular_file, BoundedReadError};
+
+use crate::scenario::error::{from_yaml_error, suggestion};
+use crate::scenario::{pos, Pos, ScenarioError, S};
+
+/// Largest bench file read (bytes); a bench of dozens of devices is a few KB.
+const MAX_BENCH_FILE_BYTES: u64 = 1024 * 1024;
+/// Most devices one bench serves: each is an emulator with its own tasks, sockets and
+/// physics, and one process on a developer's machine should not be asked for more.
+pub const MAX_DEVICES: usize = 64;
+/// Longest device name (it appears in every message about the device).
+const MAX_NAME_CHARS: usize = 64;
+
+/// The `armhil sim` subcommands a bench can hold.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SimKind {
+    /// `armhil sim piper`.
+    Piper,
+    /// `armhil sim realman`.
+    Realman,
+    /// `armhil sim robstride`.
+    Robstride,
+    /// `armhil sim robot FILE` (the robot file is the `file:` key).
+    Robot,
+}
+
+impl SimKind {
+    /// Every kind, in the order messages list them.
+    pub const ALL: [SimKind; 4] = [Self::Piper, Self::Realman, Self::Robstride, Self::Robot];
+
+    /// The subcommand's name (`kind:` in the file).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Piper => "piper",
+            Self::Realman => "realman",
+            Self::Robstride => "robstride",
+            Self::Robot => "robot",
+        }
+    }
+
+    /// The keys written as positional arguments rather than options (`file:` of a robot).
+    fn positional_keys(self) -> &'static [&'static str] {
+        match self {
+            Self::Robot => &["file"],
+            _ => &[],
+        }
+    }
+}
+
+/// A bench file that loaded.
+#[derive(Debug, Clone)]
+pub struct BenchFile {
+    /// The file.
+    pub file: PathBuf,
+    /// Every device, by name (the order they start and stop in).
+    pub devices: Vec<BenchDevice>,
+}
+
+impl BenchFile {
+    /// The folder relative paths in the file are resolved against.
+    pub fn dir(&self) -> &Path {
+        self.file.parent().unwrap_or(Path::new("."))
+    }
+}
+
+/// One device of a bench: its `armhil sim KIND` command line.
+#[derive(Debug, Clone)]
+pub struct BenchDevice {
+    /// Its name in the file.
+    pub name: String,
+    /// Which emulator.
+    pub kind: SimKind,
+    /// The options and arguments after `armhil sim KIND`, as the command line would have them
+    /// (`--iface=can0`, `--`, `robots/humanoid.yaml`).
+    pub args: Vec<String>,
+    file: PathBuf,
+    at: Pos,
+    source_line: Option<String>,
+}
+
+impl BenchDevice {
+    /// A problem with this device, at its entry in the bench file.
+    pub fn error(&self, message: impl std::fmt::Display) -> ScenarioError {
+        let mut error = ScenarioError::new(
+            &self.file,
+            self.at,
+            format!("device `{}` ({}): {message}", self.name, self.kind.name()),
+        );
+        error.source_line = self.source_line.clone();
+        error
+    }
+}
+
+/// Why a bench file could not be loaded.
+#[derive(Debug, thiserror::Error)]
+pub enum BenchFileError {
+    /// The file could not be read (missing, not a regular file, too large).
+    #[error("{}: {message}", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        message: String,
+    },
+    /// The file was read but is not a valid bench file.
+    #[error("{0}")]
+    Invalid(#[from] Box<ScenarioError>),
+}
+
+/// One device entry as written: key → value (`kind` among them).
+type Entry = BTreeMap<String, S<RawValue>>;
+
+/// The whole file as written.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawBench {
+    /// Device name → its entry.
+    devices: S<BTreeMap<String, S<Entry>>>,
+}
+
+/// One option's value: a flag, a number, a word, or a list (the option given once per item).
+#[derive(Debug, Deserialize)]
+#[serde(untagged)]
+enum RawValue {
+    Flag(bool),
+    Integer(i64),
+    Number(f64),
+    Text(String),
+    List(Vec<RawItem>),
+}
+
+/// One item of a list value.
+#[derive(Debug, Deserialize)]
+#[serde(untagged)]
+enum RawItem {
+    Integer(i64),
+    Number(f64),
+    Text(String),
+}
+
+impl RawItem {
+    fn text(&self) -> String {
+        match self {
+            Self::Integer(i) => i.to_string(),
+            Self::Number(x) => x.to_string(),
+            Self::Text(t) => t.clone(),
+        }
+    }
+}
+
+/// Loads the bench file `path`: every device's kind and option list, every problem named at
+/// its line. Whether the options themselves are right is the command's to say (the CLI
+/// parses them and reports through [`BenchDevice::error`]).
+pub fn load_bench_file(path: &Path) -> Result<BenchFile, BenchFileError> {
+    let bytes = read_regular_file(path, MAX_BENCH_FILE_BYTES).map_err(|error| {
+        let message = match error {
+            BoundedReadError::NotAFile => "not a regular file".to_owned(),
+            BoundedReadError::TooLarge { .. } => {
+                "larger than 1 MiB, the limit for a bench file (is it one?)".to_owned()
+            }
+            BoundedReadError::Io(e) => format!("cannot read: {e}"),
+        };
+        BenchFileError::Read {
+            path: path.to_owned(),
+            message,
+        }
+    })?;
+    let text = String::from_utf8(bytes).map_err(|_| BenchFileError::Read {
+        path: path.to_owned(),
+        message: "not UTF-8 text".into(),
+    })?;
+    let raw: RawBench = serde_saphyr::from_str(&text).map_err(|e| {
+        let mut error = from_yaml_error(path, &text, &e);
+        if error.message.contains("untagged enum") {
+            // serde's words for "none of the value shapes fit".
+            error.message = "an option's value is a word, a number, true/false or a list of \
+                             words and numbers (quote a word YAML reads as something else, \
+                             such as `y` or `no`)"
+                .into();
+        }
+        Box::new(error)
+    })?;
+    let err = |at: Pos, message: String| {
+        Box::new(ScenarioError::new(path, at, message).with_source(&text))
+    };
+    if raw.devices.value.is_empty() {
+        return Err(err(
+            pos(&raw.devices),
+            "a bench needs at least one device".into(),
+        )
+        .into());
+    }
+    if raw.devices.value.len() > MAX_DEVICES {
+        return Err(err(
+            pos(&raw.devices),
+            format!(
+                "{} devices; one bench serves at most {MAX_DEVICES}",
+                raw.devices.value.len()
+            ),
+        )
+        .into());
+    }
+    let mut devices = Vec::with_capacity(raw.devices.value.len());
+    for (name, entry) in &raw.devices.value {
+        let at = pos(entry);
+        check_name(name).map_err(|message| err(at, message))?;
+        let device_err = |at: Pos, message: String| err(at, format!("device `{name}`: {message}"));
+        let kind = kind_of(&entry.value, at).map_err(|(at, m)| device_err(at, m))?;
+        let args = command_line(kind, &entry.value).map_err(|(at, m)| device_err(at, m))?;
+        let line = usize::try_from(at.line.saturating_sub(1)).unwrap_or(usize::MAX);
+        devices.push(BenchDevice {
+            name: name.clone(),
+            kind,
+            args,
+            file: path.to_owned(),
+            at,
+            source_line: text.lines().nth(line).map(str::to_owned),
+        });
+    }
+    Ok(BenchFile {
+        file: path.to_owned(),
+        devices,
+    })
+}
+
+fn check_name(name: &str) -> Result<(), String> {
+    let fine = |c: char| c.is_ascii_alphanumeric() || c == '_' || c == '-';
+    if name.is_empty() || name.chars().count() > MAX_NAME_CHARS || !name.chars().all(fine) {
+        return Err(format!(
+            "device name `{name}`: use 1 to {MAX_NAME_CHARS} letters, digits, `_` or `-`"
+        ));
+    }
+    Ok(())
+}
+
+fn kind_of(entry: &Entry, at: Pos) -> Result<SimKind, (Pos, String)> {
+    let names: Vec<&str> = SimKind::ALL.iter().map(|k| k.name()).collect();
+    let Some(value) = entry.get("kind") else {
+        return Err((at, format!("no `kind:` (one of {})", names.join(", "))));
+    };
+    let word = match &value.value {
+        RawValue::Text(word) => word.as_str(),
+        _ => "",
+    };
+    SimKind::ALL
+        .into_iter()
+        .find(|k| k.name() == word)
+        .ok_or_else(|| {
+            (
+                pos(value),
+                format!(
+                    "unknown kind `{word}`{}; a bench holds {}",
+                    suggestion(word, &names),
+                    names.join(", ")
+                ),
+            )
+        })
+}
+
+/// The command line of one entry: each key an option (`state_file` → `--state-file=…`), `true`
+/// a bare flag, `false` left out, a list the option once per item; the kind's positional keys
+/// last, after `--`.
+fn command_line(kind: SimKind, entry: &Entry) -> Result<Vec<String>, (Pos, String)> {
+    let mut options = Vec::new();
+    let mut positional = Vec::new();
+    for (key, value) in entry.iter().filter(|(k, _)| k.as_str() != "kind") {
+        let option = format!("--{}", key.replace('_', "-"));
+        let words: Vec<String> = match &value.value {
+            RawValue::Flag(set) => {
+                if kind.positional_keys().contains(&key.as_str()) {
+                    return Err((pos(value), format!("`{key}:` takes a value, not {set}")));
+                }
+                if *set {
+                    options.push(option);
+                }
+                continue;
+            }
+            RawValue::Integer(i) => vec![i.to_string()],
+            RawValue::Number(x) => vec![x.to_string()],
+            RawValue::Text(t) => vec![t.clone()],
+            RawValue::List(items) => items.iter().map(RawItem::text).collect(),
+        };
+        if kind.positional_keys().contains(&key.as_str()) {
+            if words.len() != 1 {
+                return Err((pos(value), format!("`{key}:` takes one value, not a list")));
+            }
+            positional.extend(words);
+        } else {
+            options.extend(words.iter().map(|w| format!("{option}={w}")));
+        }
+    }
+    if !positional.is_empty() {
+        options.push("--".to_owned());
+        options.extend(positional);
+    }
+    Ok(options)
+}

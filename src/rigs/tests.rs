@@ -1,0 +1,117 @@
+//! Bench files: entries become command lines, and each mistake is named at its place.
+
+use std::path::PathBuf;
+
+use super::*;
+
+fn write(text: &str) -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("bench.yaml");
+    std::fs::write(&file, text).unwrap();
+    (dir, file)
+}
+
+fn load(text: &str) -> Result<BenchFile, String> {
+    let (_dir, file) = write(text);
+    load_bench_file(&file).map_err(|e| match e {
+        BenchFileError::Invalid(e) => e.headline().rsplit_once(".yaml:").unwrap().1.to_owned(),
+        other => other.to_string(),
+    })
+}
+
+#[test]
+fn each_entry_becomes_its_command_line() {
+    let bench = load(
+        "devices:
+  right: {kind: piper, iface: can_right, initial_joints_deg: [0, -10.5, 20], ui: 8001}
+  left:
+    kind: robot
+    file: ../robots/humanoid.yaml
+    create_vxcan: true
+    state_file: left.json
+  controller: {kind: realman, port: 8081, no_gripper: false}
+",
+    )
+    .unwrap();
+    let lines: Vec<(&str, SimKind, Vec<&str>)> = bench
+        .devices
+        .iter()
+        .map(|d| {
+            (
+                d.name.as_str(),
+                d.kind,
+                d.args.iter().map(String::as_str).collect(),
+            )
+        })
+        .collect();
+    assert_eq!(
+        lines,
+        [
+            ("controller", SimKind::Realman, vec!["--port=8081"]),
+            (
+                "left",
+                SimKind::Robot,
+                vec![
+                    "--create-vxcan",
+                    "--state-file=left.json",
+                    "--",
+                    "../robots/humanoid.yaml"
+                ]
+            ),
+            (
+                "right",
+                SimKind::Piper,
+                vec![
+                    "--iface=can_right",
+                    "--initial-joints-deg=0",
+                    "--initial-joints-deg=-10.5",
+                    "--initial-joints-deg=20",
+                    "--ui=8001"
+                ]
+            ),
+        ]
+    );
+}
+
+#[test]
+fn mistakes_are_named_at_their_line() {
+    let cases = [
+        ("devices:\n  a: {iface: can0}\n", "2:6: device `a`: no `kind:` (one of piper, realman, robstride, robot)"),
+        ("devices:\n  a: {kind: pipr}\n", "2:13: device `a`: unknown kind `pipr`; did you mean `piper`?; a bench holds piper, realman, robstride, robot"),
+        ("devices:\n  a: {kind: robot, file: [x1, x2]}\n", "2:26: device `a`: `file:` takes one value, not a list"),
+        ("devices:\n  a: {kind: robstride, motor: [1:RS03, y]}\n", "2:31: an option's value is a word, a number, true/false or a list of words and numbers (quote a word YAML reads as something else, such as `y` or `no`)"),
+        ("devices:\n  a: {kind: piper, ui: {port: 1}}\n", "2:24: an option's value is a word, a number, true/false or a list of words and numbers (quote a word YAML reads as something else, such as `y` or `no`)"),
+        ("devices:\n  a: {kind: robot, file: true}\n", "2:26: device `a`: `file:` takes a value, not true"),
+        ("devices:\n  a b: {kind: piper}\n", "2:8: device name `a b`: use 1 to 64 letters, digits, `_` or `-`"),
+        ("devices: {}\n", "1:10: a bench needs at least one device"),
+        ("device:\n  a: {kind: piper}\n", "1:1: unknown key `device`, expected one of devices; did you mean `devices`?"),
+    ];
+    for (text, want) in cases {
+        let got = load(text).unwrap_err();
+        assert_eq!(got, want, "{text}");
+    }
+}
+
+#[test]
+fn a_device_error_names_the_device_at_its_entry() {
+    let (_dir, file) = write("devices:\n  left: {kind: piper, ifac: can0}\n");
+    let bench = load_bench_file(&file).unwrap();
+    let error = bench.devices[0].error("unexpected argument '--ifac'");
+    assert!(
+        error
+            .headline()
+            .ends_with(":2:9: device `left` (piper): unexpected argument '--ifac'"),
+        "{}",
+        error.headline()
+    );
+    assert_eq!(
+        error.source_line.as_deref(),
+        Some("  left: {kind: piper, ifac: can0}")
+    );
+}
+
+#[test]
+fn a_file_that_is_not_one_is_refused_without_reading_it_all() {
+    let error = load_bench_file(std::path::Path::new("/dev/zero")).unwrap_err();
+    assert!(error.to_string().contains("not a regular file"), "{error}");
+}
