@@ -6,25 +6,37 @@ them. Each is a context manager (the emulator stops at the end of the ``with`` b
 
 Faults use each emulator's own names: ``emu.inject("reply_delay", delay_ms=600)`` on the
 Realman, ``emu.inject("comm_loss", joint=3)`` on the Piper, then ``emu.clear(...)``.
+
+A whole robot from its robot file, every bus a channel of one socketcand server:
+
+    with armhil.sim.robot("robots/humanoid.yaml") as robot:
+        bus = can.Bus(interface="socketcand", host=robot.host, port=robot.port, channel="can2")
+        robot.inject("over_temperature", joint="left_knee")
+        robot.bus_lost("can0")
 """
 
-from typing import List, Optional, Sequence
+import os
+from typing import List, Optional, Sequence, Union
 
 from armhil._armhil import (
     PiperEmulator,
     RealmanEmulator,
+    RobotEmulator,
     RobstrideEmulator,
     sim_piper as _piper,
     sim_realman as _realman,
+    sim_robot as _robot,
     sim_robstride as _robstride,
 )
 
 __all__ = [
     "PiperEmulator",
     "RealmanEmulator",
+    "RobotEmulator",
     "RobstrideEmulator",
     "piper",
     "realman",
+    "robot",
     "robstride",
 ]
 
@@ -62,3 +74,23 @@ def robstride(
     """RobStride actuators (``motors``: "ID:MODEL" strings, default ``["127:RS03"]``) on
     SocketCAN ``iface`` or (default) behind a socketcand server."""
     return _robstride(motors, iface, socketcand)
+
+
+def robot(
+    file: Union[str, "os.PathLike[str]"],
+    socketcand: str = "127.0.0.1:0",
+    interfaces: bool = False,
+    state_file: Optional[Union[str, "os.PathLike[str]"]] = None,
+) -> RobotEmulator:
+    """A whole robot from its robot file (``armhil sim robot FILE``): one physics world, a
+    RobStride actuator per actuated joint, every bus served at once — as channels of one
+    socketcand server on ``socketcand`` (HOST:PORT, port 0 = a free port; see ``emu.host`` /
+    ``emu.port``, channels ``emu.buses``), or with ``interfaces=True`` each on the SocketCAN
+    interface of its name. A bad robot file raises ``ValueError`` naming file:line:column;
+    one that cannot be read, ``OSError``."""
+    return _robot(
+        os.fspath(file),
+        socketcand,
+        interfaces,
+        None if state_file is None else os.fspath(state_file),
+    )

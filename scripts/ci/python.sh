@@ -17,9 +17,11 @@ start=$(date +%s)
 export CARGO_TARGET_DIR=${CARGO_TARGET_DIR:-$root/target}
 PYTHON=${PYTHON:-python3}
 venv=${ARMHIL_PY_VENV:-$root/target/python-venv}
-# Pinned build and test tools (pytest as in .ci/run).
+# Pinned build and test tools (pytest and python-can as in .ci/run; python-can is the client
+# of the robot tests, python/tests/test_robot.py).
 MATURIN_VERSION=1.16.0
 PYTEST_VERSION=8.3.4
+PYTHON_CAN_VERSION=4.6.1
 
 step() { printf '\n---- %s (%ss)\n' "$*" "$(( $(date +%s) - start ))"; }
 
@@ -39,7 +41,7 @@ if [[ ! -x $venv/bin/python ]]; then
 fi
 "$venv/bin/python" --version
 "$venv/bin/python" -m pip install -q --disable-pip-version-check \
-    "maturin==$MATURIN_VERSION" "pytest==$PYTEST_VERSION"
+    "maturin==$MATURIN_VERSION" "pytest==$PYTEST_VERSION" "python-can==$PYTHON_CAN_VERSION"
 
 step "cargo fmt --check (python/)"
 (cd python && cargo fmt --check)

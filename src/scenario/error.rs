@@ -201,7 +201,13 @@ pub(crate) fn from_yaml_error(
         Some(cut) => raw[..cut].to_owned(),
         None => raw,
     };
-    ScenarioError::new(file, pos, suggest(&friendlier(&message))).with_source(text)
+    ScenarioError::new(file, pos, rephrase_yaml_message(&message)).with_source(text)
+}
+
+/// The YAML reader's message in a scenario author's words ("unknown key `x`; did you mean
+/// `y`?" rather than "unknown field"), for files read outside this crate too (robot files).
+pub(crate) fn rephrase_yaml_message(message: &str) -> String {
+    suggest(&friendlier(message))
 }
 
 /// Append "did you mean `x`?" to an unknown-key message when one expected key is close.
@@ -226,15 +232,9 @@ fn suggest(message: &str) -> String {
     }
 }
 
-/// `; did you mean `x`?` when one of `candidates` is within two edits of `word`, else empty.
-pub(crate) fn suggestion(word: &str, candidates: &[&str]) -> String {
-    candidates
-        .iter()
-        .map(|c| (strsim::levenshtein(word, c), *c))
-        .filter(|(d, c)| *d <= 2 && *d < c.len())
-        .min()
-        .map_or_else(String::new, |(_, c)| format!("; did you mean `{c}`?"))
-}
+/// `; did you mean `x`?` when one of `candidates` is within two edits of `word`, else empty
+/// (the emulators' robot files say it the same way).
+pub(crate) use sim::robot::file::suggestion;
 
 /// serde's type errors name Rust types; say what the scenario author should write instead.
 fn friendlier(message: &str) -> String {

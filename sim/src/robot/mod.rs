@@ -2,8 +2,8 @@
 //! RobStride actuator, each actuator answering on its own bus.
 //!
 //! - [`RobotConfig`]: the URDF, a fixed or floating [`Base`], the buses, and per actuated
-//!   joint the motor, bus, direction and zero offset (robot files are read into it by the
-//!   `armhil` crate).
+//!   joint the motor, bus, direction and zero offset; [`file::load_robot_file`] reads a
+//!   robot file (YAML) into it.
 //! - [`RobotWorld`]: the physics; how the actuators' 10 kHz control loops meet a 1 kHz world
 //!   step is explained in [`joint_plant`].
 //! - [`RobotEmulator::spawn`]: every bus served at once by one task (1 ms steps on absolute
@@ -11,6 +11,7 @@
 //!   joint and per bus, snapshots and shutdown. A state file keeps every actuator's flash.
 
 mod config;
+pub mod file;
 pub mod joint_plant;
 mod runner;
 mod world;

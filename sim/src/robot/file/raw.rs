@@ -2,12 +2,13 @@
 
 use serde::Deserialize;
 
-use crate::scenario::S;
+/// A value with its place in the file.
+pub(super) type S<T> = serde_saphyr::Spanned<T>;
 
 /// The whole file.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub(crate) struct RawRobot {
+pub(super) struct RawRobot {
     /// The robot's name.
     pub robot: S<String>,
     /// The URDF, relative to the robot file.
@@ -27,7 +28,7 @@ pub(crate) struct RawRobot {
 /// One bus.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub(crate) struct RawBus {
+pub(super) struct RawBus {
     /// `can0` …: also the SocketCAN interface and the socketcand channel it is served on.
     pub name: S<String>,
     /// Bit rate (bit/s); 1 Mbit/s when left out.
@@ -37,7 +38,7 @@ pub(crate) struct RawBus {
 /// One actuated joint.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub(crate) struct RawActuator {
+pub(super) struct RawActuator {
     /// The URDF joint.
     pub joint: S<String>,
     /// RobStride model (`RS03` …).
@@ -55,7 +56,7 @@ pub(crate) struct RawActuator {
 /// One start position: `{joint: knee, rad: 0.3}`.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub(crate) struct RawStart {
+pub(super) struct RawStart {
     /// The URDF joint.
     pub joint: S<String>,
     /// Its position (rad).

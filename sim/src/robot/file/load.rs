@@ -3,14 +3,16 @@
 
 use std::path::{Path, PathBuf};
 
-use sim::bounded_read::{read_regular_file, BoundedReadError};
-use sim::physics::{ArmModel, JointKind};
-use sim::robot::{Base, BusConfig, JointActuator, RobotConfig};
-use sim::robstride::{baud_code_bps, Model, MotorConfig, DEFAULT_HOST_ID};
+use super::error::{suggestion, FileError, Position as Pos};
+use super::raw::{RawRobot, S};
+use crate::bounded_read::{read_regular_file, BoundedReadError};
+use crate::physics::{ArmModel, JointKind};
+use crate::robot::{Base, BusConfig, JointActuator, RobotConfig};
+use crate::robstride::{baud_code_bps, Model, MotorConfig, DEFAULT_HOST_ID};
 
-use super::raw::RawRobot;
-use crate::scenario::error::{from_yaml_error, suggestion};
-use crate::scenario::{pos, Pos, ScenarioError, S};
+fn pos<T>(value: &S<T>) -> Pos {
+    Pos::of(value)
+}
 
 /// Largest robot file read (bytes). The humanoid's is under 4 KB.
 const MAX_ROBOT_FILE_BYTES: u64 = 1024 * 1024;
@@ -26,7 +28,7 @@ pub struct LoadedRobot {
     pub urdf_path: PathBuf,
     /// Choices that run but are probably wrong (an actuator weaker than its joint's URDF
     /// effort), each at its place in the file.
-    pub warnings: Vec<ScenarioError>,
+    pub warnings: Vec<FileError>,
 }
 
 /// Why a robot file could not be loaded.
@@ -42,7 +44,7 @@ pub enum RobotFileError {
     },
     /// The file was read but is not a valid robot file.
     #[error("{0}")]
-    Invalid(#[from] Box<ScenarioError>),
+    Invalid(#[from] Box<FileError>),
 }
 
 /// Loads and checks the robot file `path` and the URDF it names.
@@ -65,7 +67,7 @@ pub fn load_robot_file(path: &Path) -> Result<LoadedRobot, RobotFileError> {
         message: "not UTF-8 text".into(),
     })?;
     let raw: RawRobot =
-        serde_saphyr::from_str(&text).map_err(|e| Box::new(from_yaml_error(path, &text, &e)))?;
+        serde_saphyr::from_str(&text).map_err(|e| Box::new(FileError::from_yaml(path, &text, &e)))?;
     let checker = Checker {
         file: path,
         text: &text,
@@ -78,11 +80,11 @@ struct Checker<'a> {
     text: &'a str,
 }
 
-type Res<T> = Result<T, Box<ScenarioError>>;
+type Res<T> = Result<T, Box<FileError>>;
 
 impl Checker<'_> {
-    fn err(&self, at: Pos, message: impl Into<String>) -> Box<ScenarioError> {
-        Box::new(ScenarioError::new(self.file, at, message).with_source(self.text))
+    fn err(&self, at: Pos, message: impl Into<String>) -> Box<FileError> {
+        Box::new(FileError::new(self.file, self.text, at, message))
     }
 
     fn check(&self, raw: RawRobot) -> Res<LoadedRobot> {

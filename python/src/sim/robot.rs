@@ -1,0 +1,297 @@
+//! A whole robot under Python control: its robot file, one physics world, every bus served
+//! at once — as channels of one socketcand server (default), or each on the SocketCAN
+//! interface of its name.
+
+use std::collections::BTreeMap;
+use std::net::SocketAddr;
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
+
+use bus::socketcand::SocketcandServer;
+use bus::CanBus;
+use pyo3::exceptions::PyRuntimeError;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyTuple};
+use sim::robot::file::{load_robot_file, RobotFileError};
+use sim::robot::{RobotEmulator as Emulator, RobotError, RobotHandle, RobotSnapshot};
+use sim::robstride::Fault;
+
+use super::{exit_false, lock, value_err};
+use crate::{block_on, sim_runtime};
+
+/// What serves the robot's buses.
+struct Served {
+    nodes: Vec<Arc<dyn CanBus>>,
+    server: Option<SocketcandServer>,
+}
+
+impl Served {
+    async fn close(self) {
+        for node in self.nodes {
+            node.close().await;
+        }
+        if let Some(server) = self.server {
+            server.shutdown().await;
+        }
+    }
+}
+
+/// A whole robot from its robot file (`armhil sim robot FILE` in this process).
+#[pyclass(module = "armhil.sim", frozen)]
+pub struct RobotEmulator {
+    running: Mutex<Option<(RobotHandle, Served)>>,
+    name: String,
+    buses: Vec<String>,
+    /// Per actuated joint: its bus and CAN id.
+    joints: Vec<(String, String, u8)>,
+    addr: Option<SocketAddr>,
+}
+
+fn robot_err(e: RobotError) -> PyErr {
+    match e {
+        RobotError::Stopped => PyRuntimeError::new_err(e.to_string()),
+        other => value_err(other),
+    }
+}
+
+impl RobotEmulator {
+    fn handle<R: Send>(
+        &self,
+        py: Python<'_>,
+        f: impl for<'a> FnOnce(
+            &'a RobotHandle,
+        ) -> std::pin::Pin<
+            Box<dyn std::future::Future<Output = Result<R, RobotError>> + Send + 'a>,
+        >,
+    ) -> PyResult<R> {
+        let guard = lock(&self.running);
+        let (h, _) = guard
+            .as_ref()
+            .ok_or_else(|| PyRuntimeError::new_err("the robot emulator is stopped"))?;
+        block_on(py, sim_runtime(), f(h)).map_err(robot_err)
+    }
+}
+
+fn snapshot_dict<'py>(py: Python<'py>, s: &RobotSnapshot) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("time_s", s.time_s)?;
+    d.set_item("base_position_m", s.base_position_m.to_vec())?;
+    d.set_item("lost_buses", s.lost_buses.clone())?;
+    let joints = PyDict::new(py);
+    for j in &s.joints {
+        let m = &j.motor;
+        let jd = PyDict::new(py);
+        jd.set_item("bus", &j.bus)?;
+        jd.set_item("can_id", m.can_id)?;
+        jd.set_item("model", m.model.name())?;
+        jd.set_item("position_rad", j.position_rad)?;
+        jd.set_item("velocity_rad_s", j.velocity_rad_s)?;
+        jd.set_item("mode", format!("{:?}", m.mode).to_lowercase())?;
+        jd.set_item("run_mode", m.run_mode)?;
+        jd.set_item("angle_rad", m.angle_rad)?;
+        jd.set_item("torque_nm", m.torque_nm)?;
+        jd.set_item("temperature_c", m.temperature_c)?;
+        jd.set_item("fault_word", m.fault_word)?;
+        joints.set_item(&j.joint, jd)?;
+    }
+    d.set_item("joints", joints)?;
+    Ok(d)
+}
+
+#[pymethods]
+impl RobotEmulator {
+    /// The robot's name (its file's `robot:`).
+    #[getter]
+    fn name(&self) -> String {
+        self.name.clone()
+    }
+
+    /// Its buses' names, in file order (the socketcand channels, or the interfaces).
+    #[getter]
+    fn buses(&self) -> Vec<String> {
+        self.buses.clone()
+    }
+
+    /// Per actuated joint: `{"bus": ..., "can_id": ...}`.
+    #[getter]
+    fn actuators(&self) -> BTreeMap<String, (String, u8)> {
+        self.joints
+            .iter()
+            .map(|(j, b, id)| (j.clone(), (b.clone(), *id)))
+            .collect()
+    }
+
+    /// Host of the socketcand server (`None` on SocketCAN interfaces).
+    #[getter]
+    fn host(&self) -> Option<String> {
+        self.addr.map(|a| a.ip().to_string())
+    }
+
+    /// Port of the socketcand server (`None` on SocketCAN interfaces).
+    #[getter]
+    fn port(&self) -> Option<u16> {
+        self.addr.map(|a| a.port())
+    }
+
+    /// Injects a RobStride fault on the actuator of `joint`: over_temperature,
+    /// under_voltage, over_voltage, phase_a/b/c_over_current, encoder_not_calibrated,
+    /// stall_overload, gate_driver.
+    fn inject(&self, py: Python<'_>, name: &str, joint: String) -> PyResult<()> {
+        let fault = Fault::named(name).map_err(value_err)?;
+        self.handle(py, move |h| {
+            Box::pin(async move { h.inject(&joint, fault).await })
+        })
+    }
+
+    /// Removes a fault's cause on the actuator of `joint`.
+    fn clear(&self, py: Python<'_>, name: &str, joint: String) -> PyResult<()> {
+        let fault = Fault::named(name).map_err(value_err)?;
+        self.handle(py, move |h| {
+            Box::pin(async move { h.clear(&joint, fault).await })
+        })
+    }
+
+    /// Sets the winding temperature of `joint`'s actuator (°C); its thermal model goes on
+    /// from there.
+    fn set_temperature(&self, py: Python<'_>, joint: String, celsius: f64) -> PyResult<()> {
+        self.handle(py, move |h| {
+            Box::pin(async move { h.set_temperature(&joint, celsius).await })
+        })
+    }
+
+    /// Pushes on `joint` with a torque from outside (N·m; 0 stops pushing).
+    fn set_external_torque(&self, py: Python<'_>, joint: String, torque_nm: f64) -> PyResult<()> {
+        self.handle(py, move |h| {
+            Box::pin(async move { h.set_external_torque(&joint, torque_nm).await })
+        })
+    }
+
+    /// Cuts bus `bus` off (`lost=True`: no frame reaches or leaves its actuators) or
+    /// reconnects it.
+    #[pyo3(signature = (bus, lost=true))]
+    fn bus_lost(&self, py: Python<'_>, bus: String, lost: bool) -> PyResult<()> {
+        self.handle(py, move |h| {
+            Box::pin(async move { h.set_bus_lost(&bus, lost).await })
+        })
+    }
+
+    /// The robot's state: `time_s`, `base_position_m`, `lost_buses` and `joints` (by URDF
+    /// joint name: bus, CAN id, model, world position and speed, the actuator's mode, shaft
+    /// angle, torque, temperature, fault word).
+    fn state<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let snapshot = self.handle(py, |h| Box::pin(h.snapshot()))?;
+        snapshot_dict(py, &snapshot)
+    }
+
+    /// Whether it is running.
+    #[getter]
+    fn running(&self) -> bool {
+        lock(&self.running).is_some()
+    }
+
+    /// Stops the robot and its servers (idempotent).
+    fn stop(&self, py: Python<'_>) {
+        let running = lock(&self.running).take();
+        if let Some((h, served)) = running {
+            block_on(py, sim_runtime(), async move {
+                h.shutdown().await;
+                served.close().await;
+            });
+        }
+    }
+
+    fn __enter__(slf: Py<Self>) -> Py<Self> {
+        slf
+    }
+
+    #[pyo3(signature = (*_args))]
+    fn __exit__(&self, py: Python<'_>, _args: &Bound<'_, PyTuple>) -> bool {
+        self.stop(py);
+        exit_false()
+    }
+}
+
+async fn serve_buses(
+    names: &[String],
+    interfaces: bool,
+    socketcand: &str,
+) -> Result<Served, String> {
+    if interfaces {
+        #[cfg(target_os = "linux")]
+        {
+            let nodes = names
+                .iter()
+                .map(|iface| {
+                    bus::socketcan_bus::SocketCanBus::open(iface)
+                        .map(|socket| Arc::new(socket) as Arc<dyn CanBus>)
+                        .map_err(|e| format!("cannot open SocketCAN interface {iface}: {e}"))
+                })
+                .collect::<Result<Vec<_>, _>>()?;
+            return Ok(Served {
+                nodes,
+                server: None,
+            });
+        }
+        #[cfg(not(target_os = "linux"))]
+        return Err("SocketCAN interfaces are Linux only; use socketcand".into());
+    }
+    let (buses, server) = SocketcandServer::bind_realtime_channels(socketcand, names)
+        .await
+        .map_err(|e| format!("cannot serve socketcand on {socketcand}: {e}"))?;
+    let nodes = buses
+        .iter()
+        .map(|b| Arc::new(b.attach("robot")) as Arc<dyn CanBus>)
+        .collect();
+    Ok(Served {
+        nodes,
+        server: Some(server),
+    })
+}
+
+/// Starts the robot of robot file `file`: its buses as channels of a socketcand server on
+/// `socketcand` (default, port 0 = a free port), or with `interfaces=True` each on the
+/// SocketCAN interface of its name.
+#[pyfunction]
+#[pyo3(signature = (file, socketcand="127.0.0.1:0", interfaces=false, state_file=None))]
+pub(super) fn robot(
+    py: Python<'_>,
+    file: PathBuf,
+    socketcand: &str,
+    interfaces: bool,
+    state_file: Option<PathBuf>,
+) -> PyResult<RobotEmulator> {
+    let loaded = load_robot_file(&file).map_err(|e| match e {
+        RobotFileError::Read { .. } => PyErr::new::<pyo3::exceptions::PyOSError, _>(e.to_string()),
+        RobotFileError::Invalid(_) => value_err(e),
+    })?;
+    let mut config = loaded.config;
+    config.state_file = state_file;
+    let names: Vec<String> = config.buses.iter().map(|b| b.name.clone()).collect();
+    let joints = config
+        .actuators
+        .iter()
+        .map(|a| (a.joint.clone(), names[a.bus].clone(), a.motor.can_id))
+        .collect();
+    let name = config.name.clone();
+    let socketcand = socketcand.to_owned();
+    let bus_names = names.clone();
+    let (handle, served, addr) = block_on(py, sim_runtime(), async move {
+        let served = serve_buses(&bus_names, interfaces, &socketcand).await?;
+        let addr = served.server.as_ref().map(SocketcandServer::local_addr);
+        match Emulator::spawn(config, served.nodes.clone()) {
+            Ok(handle) => Ok((handle, served, addr)),
+            Err(e) => {
+                served.close().await;
+                Err(format!("cannot start the robot: {e}"))
+            }
+        }
+    })
+    .map_err(PyRuntimeError::new_err)?;
+    Ok(RobotEmulator {
+        running: Mutex::new(Some((handle, served))),
+        name,
+        buses: names,
+        joints,
+        addr,
+    })
+}
