@@ -24,6 +24,7 @@ mod fault_args;
 mod listener;
 pub mod piper;
 pub mod realman;
+pub mod robot;
 pub mod robstride;
 
 use std::net::SocketAddr;

@@ -96,12 +96,14 @@
     return out;
   }
 
-  // Frame of every link in the base frame for joint values by name (missing ones are 0).
-  function linkFrames(model, values) {
+  // Frame of every link for joint values by name (missing ones are 0): in the base frame, or in
+  // the world when `base` (the root link's pose, 16 numbers by rows) is given — a floating
+  // robot's root moves.
+  function linkFrames(model, values, base) {
     const q = resolveMimic(model, values || {});
     const frames = {};
     const rootName = model.joints.length ? model.joints[0].parent : model.root;
-    frames[rootName] = IDENTITY.slice();
+    frames[rootName] = Array.isArray(base) && base.length === 16 ? base.slice() : IDENTITY.slice();
     for (const j of model.joints) {
       const parent = frames[j.parent] || IDENTITY;
       let m = mul(parent, fromXyzRpy(j.xyz, j.rpy));
@@ -161,8 +163,8 @@
   const LINK_COLORS = ["#4a5568", "#2b6cb0", "#2f855a", "#c05621", "#6b46c1", "#b83280", "#2c7a7b", "#975a16"];
 
   // Segments to draw for joint values: each joint links its parent's origin to its own.
-  function segments(model, values) {
-    const frames = linkFrames(model, values);
+  function segments(model, values, base) {
+    const frames = linkFrames(model, values, base);
     const segs = [];
     model.joints.forEach((j, i) => {
       const a = origin(frames[j.parent] || IDENTITY);
@@ -178,14 +180,14 @@
     return { frames, segs };
   }
 
-  // A view of `model` on `canvas`. Drag to orbit, wheel to zoom. `set(anglesDeg, gripperM)`
-  // changes the pose; `renderedDeg()` returns the angles last drawn (tests read it).
+  // A view of `model` on `canvas`. Drag to orbit, wheel to zoom. `set(anglesDeg, gripperM,
+  // base)` changes the pose (`base`: the root link's pose in the world, for a floating robot); `renderedDeg()` returns the angles last drawn (tests read it).
   function createArmView(canvas, model) {
     const ctx = canvas.getContext("2d");
     // Frame the arm whatever its pose: its size is bounded by the sum of the joint offsets.
     const size = Math.max(0.3, model.joints.reduce((sum, j) => sum + Math.hypot(...(j.xyz || [0, 0, 0])), 0));
     const cam = { yaw: 0.9, pitch: 0.4, distance: 1.3 * size, target: [0, 0, 0.3 * size] };
-    let pose = { deg: [], gripperM: undefined };
+    let pose = { deg: [], gripperM: undefined, base: undefined };
     let drawn = [];
     let dirty = true;
     let frames = 0;
@@ -222,7 +224,7 @@
         }
       }
       const values = valuesFromDeg(model, pose.deg, pose.gripperM);
-      const { frames: fr, segs } = segments(model, values);
+      const { frames: fr, segs } = segments(model, values, pose.base);
       const items = segs.map((s) => {
         const a = proj(s.a), b = proj(s.b);
         return { s, a, b, depth: (a[2] + b[2]) / 2 };
@@ -258,8 +260,8 @@
     requestAnimationFrame(loop);
 
     return {
-      set(anglesDeg, gripperM) {
-        pose = { deg: anglesDeg.slice(), gripperM };
+      set(anglesDeg, gripperM, base) {
+        pose = { deg: anglesDeg.slice(), gripperM, base };
         dirty = true;
       },
       renderedDeg: () => drawn.slice(),

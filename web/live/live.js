@@ -68,7 +68,7 @@
         params.appendChild(el("label", { for: "fault-arg-" + p.name, text: p.name + (p.required ? " *" : "") }));
         params.appendChild(el("input", { id: "fault-arg-" + p.name, "data-param": p.name, title: p.description,
           placeholder: p.default === null ? "" : String(p.default),
-          value: p.name === "joint" ? "1" : p.required && p.default !== null ? String(p.default) : "" }));
+          value: p.required && p.default !== null ? String(p.default) : p.name === "joint" ? "1" : "" }));
       }
     }
     function send(type) {
@@ -117,6 +117,8 @@
     } else {
       names = [];
     }
+    // A robot's strips are its actuators (the 3D view sets every joint of its URDF).
+    if (h.strip_names) names = h.strip_names;
     if (view) {
       live.renderedDeg = () => view.renderedDeg();
       live.framesDrawn = () => view.framesDrawn();
@@ -136,7 +138,7 @@
   function onState(s) {
     live.state = s;
     live.states++;
-    if (view) view.set(s.physical_deg || s.joints_deg, s.gripper_mm === undefined ? undefined : s.gripper_mm / 1000);
+    if (view) view.set(s.physical_deg || s.joints_deg, s.gripper_mm === undefined ? undefined : s.gripper_mm / 1000, s.base_pose);
     pushHistory(s);
     const now = performance.now();
     if (now - panelsAt < PANEL_PERIOD_MS) return;

@@ -97,6 +97,9 @@ pub struct RobotSnapshot {
     pub time_s: f64,
     /// Position of the URDF root link's origin in the world (m).
     pub base_position_m: [f64; 3],
+    /// Orientation of the URDF root link in the world, a rotation matrix by rows (identity
+    /// for a fixed base; a fallen humanoid's is far from it).
+    pub base_rotation: [[f64; 3]; 3],
     /// Every actuated joint, in configuration order.
     pub joints: Vec<JointSnapshot>,
     /// The buses currently cut off (a `bus_lost` fault).
@@ -363,6 +366,21 @@ fn base_position_m(world: &RobotWorld) -> [f64; 3] {
         })
 }
 
+/// Orientation of the URDF root link in the world (rotation matrix, by rows).
+fn base_rotation(world: &RobotWorld) -> [[f64; 3]; 3] {
+    let world = world.world();
+    let rotation = world
+        .model()
+        .link_names()
+        .first()
+        .and_then(|root| world.link_pose(root))
+        .map(|pose| pose.rotation.to_rotation_matrix().into_inner());
+    match rotation {
+        Some(m) => std::array::from_fn(|r| std::array::from_fn(|c| m[(r, c)])),
+        None => [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+    }
+}
+
 impl Runner {
     async fn run(mut self, mut inbox: mpsc::Receiver<Request>) -> Result<(), String> {
         let (frames_tx, mut frames) = mpsc::channel::<(usize, CanFrame)>(RX_QUEUE_FRAMES);
@@ -543,6 +561,7 @@ impl Runner {
         RobotSnapshot {
             time_s: world.time_s(),
             base_position_m,
+            base_rotation: base_rotation(&self.world),
             joints,
             lost_buses: self
                 .ports

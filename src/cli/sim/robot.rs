@@ -8,6 +8,8 @@ use std::sync::Arc;
 
 use anyhow::Context;
 use armhil::robots::load_robot_file;
+use armhil::ui::bus_tap::BusTap;
+use armhil::ui::robot::RobotLive;
 use bus::socketcand::SocketcandServer;
 use bus::CanBus;
 use sim::robot::{RobotConfig, RobotEmulator};
@@ -32,6 +34,11 @@ pub struct Args {
     /// JSON file keeping every actuator's saved parameters, CAN id and zero across runs.
     #[arg(long)]
     pub state_file: Option<PathBuf>,
+    /// Serve a live web view (the whole robot in 3D from its URDF, a strip per actuator, each
+    /// actuator's state, every bus's load, faults per actuator and per bus) on HOST:PORT,
+    /// e.g. `127.0.0.1:8000` (a bare port means 127.0.0.1).
+    #[arg(long, value_name = "HOST:PORT")]
+    pub ui: Option<String>,
 }
 
 /// The prefix of the emulator's end of a vxcan pair.
@@ -49,6 +56,22 @@ struct Served {
     nodes: Vec<Arc<dyn CanBus>>,
     place: String,
     server: Option<SocketcandServer>,
+    /// The socketcand channels' buses (empty on SocketCAN).
+    channels: Vec<bus::virtual_bus::VirtualBus>,
+    /// The SocketCAN interfaces (empty on socketcand).
+    ifaces: Vec<String>,
+}
+
+impl Served {
+    /// Another node on bus `k` (a channel's silent node, or a second socket on the
+    /// interface): it receives every frame of the bus, the robot's and the clients'.
+    fn tap(&self, k: usize) -> anyhow::Result<Arc<dyn CanBus>> {
+        match (self.channels.get(k), self.ifaces.get(k)) {
+            (Some(bus), _) => Ok(Arc::new(bus.attach("ui"))),
+            (None, Some(iface)) => super::served_bus::open_socketcan(iface),
+            (None, None) => anyhow::bail!("no bus {k} to tap"),
+        }
+    }
 }
 
 async fn open_buses(args: &Args, config: &RobotConfig) -> anyhow::Result<Served> {
@@ -77,6 +100,8 @@ async fn open_buses(args: &Args, config: &RobotConfig) -> anyhow::Result<Served>
                 names.join(", ")
             ),
             server: Some(server),
+            channels: buses,
+            ifaces: Vec::new(),
         });
     }
     let mut nodes = Vec::with_capacity(names.len());
@@ -100,6 +125,8 @@ async fn open_buses(args: &Args, config: &RobotConfig) -> anyhow::Result<Served>
         nodes,
         place: ifaces.join(", "),
         server: None,
+        channels: Vec::new(),
+        ifaces,
     })
 }
 
@@ -114,9 +141,35 @@ pub(crate) async fn serve(args: Args, mut stop: super::StopSource) -> anyhow::Re
     config.state_file = args.state_file.clone();
     let summary = summary(&config);
     let served = open_buses(&args, &config).await?;
-    let nodes = served.nodes.clone();
-    let robot = RobotEmulator::spawn(config, served.nodes)
+    let mut nodes = served.nodes.clone();
+    let ui_taps = match &args.ui {
+        Some(_) => config
+            .buses
+            .iter()
+            .enumerate()
+            .map(|(k, b)| Ok((b.name.clone(), served.tap(k)?, b.bitrate_bps)))
+            .collect::<anyhow::Result<Vec<_>>>()?,
+        None => Vec::new(),
+    };
+    nodes.extend(ui_taps.iter().map(|(_, node, _)| Arc::clone(node)));
+    let joints: Vec<String> = config.actuators.iter().map(|a| a.joint.clone()).collect();
+    let urdf = config.urdf.clone();
+    let robot = RobotEmulator::spawn(config, served.nodes.clone())
         .with_context(|| format!("cannot start the robot of {}", args.file.display()))?;
+    let ui = match &args.ui {
+        Some(addr) => {
+            let taps = ui_taps
+                .into_iter()
+                .map(|(name, node, bitrate)| (name, BusTap::spawn(node, bitrate)))
+                .collect();
+            let title = format!("{summary} on {}", served.place);
+            let live = RobotLive::new(robot.monitor(), &urdf, &joints, taps, &title);
+            let server = armhil::ui::serve(addr, Arc::new(live)).await?;
+            super::announce_ui("robot", &server);
+            Some(server)
+        }
+        None => None,
+    };
     tracing::info!(on = %served.place, "robot emulator running; Ctrl-C to stop");
     eprintln!(
         "armhil sim robot: {summary} on {} (Ctrl-C to stop)",
@@ -124,6 +177,9 @@ pub(crate) async fn serve(args: Args, mut stop: super::StopSource) -> anyhow::Re
     );
     let mut death = robot.death_watch();
     let stopped = super::until_stopped(&mut stop, &mut death).await;
+    if let Some(ui) = ui {
+        ui.shutdown().await;
+    }
     robot.shutdown().await;
     for node in nodes {
         node.close().await;

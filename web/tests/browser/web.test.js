@@ -184,6 +184,43 @@ test("the RobStride live view shows each motor's dial and reports an injected fa
     && window.armhilLive.state.motors.find((x) => x.id === 2).bus_voltage_v > 20), 5000);
 });
 
+test("the robot live view draws the fallen humanoid at its base pose and cuts a bus from the panel", async (t) => {
+  const can = await freePort();
+  const ui = await freePort();
+  let err = "";
+  const sim = spawn(BIN, ["sim", "robot", path.join(ROOT, "robots", "humanoid.yaml"),
+    "--socketcand", `127.0.0.1:${can}`, "--ui", `127.0.0.1:${ui}`], { stdio: ["ignore", "ignore", "pipe"] });
+  sim.stderr.on("data", (d) => { err += d; });
+  t.after(() => sim.kill("SIGINT"));
+  await until("the web view to start", () => {
+    if (sim.exitCode !== null) throw new Error("armhil sim exited: " + err);
+    return err.includes("web view on http://");
+  }, 30000);
+  const { context, profile } = await browser();
+  t.after(async () => {
+    await context.close();
+    fs.rmSync(profile, { recursive: true, force: true });
+  });
+  const page = await context.newPage();
+  await page.goto(`http://127.0.0.1:${ui}/`);
+  await page.waitForFunction(() => window.armhilLive && window.armhilLive.ready && window.armhilLive.state, null, { timeout: 10000 });
+  // Never enabled, the humanoid falls: its pelvis ends near the ground, and the page draws
+  // the root where the emulator says (the base pose's z is the pelvis height).
+  await until("the humanoid to fall", () => page.evaluate(() => window.armhilLive.state.base_position_m[2] < 0.5), 10000);
+  const pose = await page.evaluate(() => window.armhilLive.state.base_pose);
+  assert.equal(pose.length, 16);
+  const strips = await page.evaluate(() => window.armhilLive.hello.strip_names.length);
+  assert.equal(strips, 20, "a strip per actuator");
+  await page.selectOption("#fault-kind", "bus_lost");
+  await page.fill("#fault-arg-bus", "can2");
+  await page.click("#fault-inject");
+  await until("can2 to be cut off", async () => /bus can2[^]*LOST/.test(await page.textContent("#status")), 3000);
+  await page.evaluate(() => window.scrollTo(0, 0));
+  await page.screenshot({ path: path.join(SHOTS, "live_robot.png") });
+  await page.click("#fault-clear");
+  await until("can2 back", () => page.evaluate(() => window.armhilLive.state.faults.length === 0), 3000);
+});
+
 test("the Realman live view follows a movej, lists its TCP client and reports a joint error", async (t) => {
   const tcp = await freePort();
   const ui = await freePort();

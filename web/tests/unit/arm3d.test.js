@@ -32,6 +32,23 @@ test("a two-link planar arm reaches where trigonometry says", () => {
   assert.deepEqual(A.armJoints(model).map((j) => j.name), ["a", "b"]);
 });
 
+test("a floating robot's links move with its root pose", () => {
+  const model = {
+    joints: [
+      { name: "hip", type: "revolute", parent: "pelvis", child: "thigh", xyz: [0, 0, -0.1], rpy: [0, 0, 0], axis: [0, 1, 0] },
+      { name: "knee", type: "revolute", parent: "thigh", child: "shin", xyz: [0, 0, -0.4], rpy: [0, 0, 0], axis: [0, 1, 0] },
+    ],
+  };
+  // The pelvis lying on its side at 0.2 m: rotated +90 degrees about x, raised 0.2 m.
+  const base = [1, 0, 0, 0.5, 0, 0, -1, 0, 0, 1, 0, 0.2, 0, 0, 0, 1];
+  const frames = A.linkFrames(model, {}, base);
+  close(A.origin(frames.pelvis), [0.5, 0, 0.2], 1e-12, "the root where the base says");
+  // Down the leg (-z in the pelvis) is +y in the world once the pelvis is on its side.
+  close(A.origin(frames.shin), [0.5, 0.5, 0.2], 1e-12, "the knee follows the root");
+  // Without a base pose the root stays at the origin (arms on a fixed base).
+  close(A.origin(A.linkFrames(model, {}).shin), [0, 0, -0.5], 1e-12, "fixed base");
+});
+
 test("mimic joints follow their leader", () => {
   const model = {
     joints: [

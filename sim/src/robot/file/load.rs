@@ -66,8 +66,8 @@ pub fn load_robot_file(path: &Path) -> Result<LoadedRobot, RobotFileError> {
         path: path.to_owned(),
         message: "not UTF-8 text".into(),
     })?;
-    let raw: RawRobot =
-        serde_saphyr::from_str(&text).map_err(|e| Box::new(FileError::from_yaml(path, &text, &e)))?;
+    let raw: RawRobot = serde_saphyr::from_str(&text)
+        .map_err(|e| Box::new(FileError::from_yaml(path, &text, &e)))?;
     let checker = Checker {
         file: path,
         text: &text,

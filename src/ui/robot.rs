@@ -1,0 +1,410 @@
+//! A whole robot's live source: the robot drawn from its URDF, a strip per actuator, each
+//! actuator's state, and faults per actuator (RobStride's fault table, addressed by URDF
+//! joint name), a push on a joint, and a bus cut off.
+
+use std::sync::{Mutex, PoisonError};
+
+use serde_json::{json, Value};
+use sim::fault_args::FaultArgValue;
+use sim::robot::{RobotMonitor, RobotSnapshot};
+use sim::robstride::{Fault, ModeState};
+
+use super::bus_tap::BusTap;
+use super::fault_args::fault_args;
+use super::{Command, LiveSource};
+use crate::harness::report::html::arm_model;
+
+/// The bus fault's name on the page.
+const BUS_LOST: &str = "bus_lost";
+/// The push's name on the page.
+const EXTERNAL_TORQUE: &str = "external_torque";
+
+/// A robot as the web view sees it.
+#[derive(Debug)]
+pub struct RobotLive {
+    monitor: RobotMonitor,
+    /// Per bus: its name and its tap.
+    taps: Vec<(String, BusTap)>,
+    /// The joints the 3D view sets, in the model's order (revolute, not mimic).
+    drawn: Vec<String>,
+    hello: Value,
+    /// Faults injected from the page and not cleared, as shown.
+    active: Mutex<Vec<String>>,
+}
+
+/// What the page can do to the robot.
+enum Action {
+    Fault { joint: String, fault: Fault },
+    Push { joint: String, torque_nm: f64 },
+    BusLost { bus: String },
+}
+
+impl RobotLive {
+    /// A source for `monitor`: `urdf` is the robot's, `joints` its actuated joints (strips,
+    /// in configuration order), `taps` a tap per bus by name.
+    pub fn new(
+        monitor: RobotMonitor,
+        urdf: &str,
+        joints: &[String],
+        taps: Vec<(String, BusTap)>,
+        title: &str,
+    ) -> Self {
+        let model = arm_model(urdf)
+            .inspect_err(|e| tracing::warn!("the web view cannot draw the robot: {e}"))
+            .ok();
+        let drawn = model.as_ref().map_or_else(Vec::new, |m| {
+            m.joints
+                .iter()
+                .filter(|j| matches!(j.kind, "revolute" | "continuous") && j.mimic.is_none())
+                .map(|j| j.name.clone())
+                .collect()
+        });
+        let first_joint = joints.first().cloned();
+        let first_bus = taps.first().map(|(name, _)| name.clone());
+        let joint_param = |what: &str| {
+            json!({"name": "joint", "description": format!("URDF joint {what}"),
+                   "required": true, "default": first_joint})
+        };
+        let mut faults: Vec<Value> = Fault::ALL
+            .iter()
+            .map(|f| {
+                json!({"name": f.name(),
+                       "description": format!("sets fault word bit 0x{:08X} of the joint's actuator; clear removes the cause", f.word_bit()),
+                       "params": [joint_param("whose actuator faults")]})
+            })
+            .collect();
+        faults.push(json!({"name": EXTERNAL_TORQUE,
+            "description": "a torque from outside on the joint (N·m); clear stops pushing",
+            "params": [joint_param("pushed"),
+                       {"name": "torque_nm", "description": "N·m", "required": true, "default": 5.0}]}));
+        faults.push(json!({"name": BUS_LOST,
+            "description": "the bus cut off: no frame reaches or leaves its actuators",
+            "params": [{"name": "bus", "description": "bus name", "required": true, "default": first_bus}]}));
+        let hello = json!({"type": "hello", "device": "robot", "title": title, "model": model,
+                           "strip_names": joints, "faults": faults});
+        Self {
+            monitor,
+            taps,
+            drawn,
+            hello,
+            active: Mutex::new(Vec::new()),
+        }
+    }
+
+    fn bus_json(&self) -> Value {
+        let mut load: Option<f64> = None;
+        let mut ids = Vec::new();
+        for (name, tap) in &self.taps {
+            let figures = tap.to_json();
+            if let Some(l) = figures["load_percent"].as_f64() {
+                load = Some(load.map_or(l, |m: f64| m.max(l)));
+            }
+            for row in figures["ids"].as_array().into_iter().flatten() {
+                let mut row = row.clone();
+                row[0] = json!(format!("{name} {}", row[0].as_str().unwrap_or("")));
+                ids.push(row);
+            }
+        }
+        json!({"load_percent": load, "ids": ids})
+    }
+
+    fn panel(&self, s: &RobotSnapshot) -> Vec<Value> {
+        let mut panel = vec![json!([
+            "base",
+            format!(
+                "x {:.3} y {:.3} z {:.3} m",
+                s.base_position_m[0], s.base_position_m[1], s.base_position_m[2]
+            )
+        ])];
+        for (name, tap) in &self.taps {
+            let load = tap.to_json()["load_percent"].as_f64();
+            let lost = s.lost_buses.contains(name);
+            panel.push(json!([
+                format!("bus {name}"),
+                format!(
+                    "{}{}",
+                    load.map_or("load –".to_owned(), |l| format!("load {l:.1} %")),
+                    if lost { ", LOST" } else { "" }
+                )
+            ]));
+        }
+        for j in &s.joints {
+            let m = &j.motor;
+            panel.push(json!([
+                format!(
+                    "{} ({} id {} on {})",
+                    j.joint,
+                    m.model.name(),
+                    m.can_id,
+                    j.bus
+                ),
+                format!(
+                    "{}, {:.1} °C, faults: {}",
+                    mode_name(m.mode),
+                    m.temperature_c,
+                    fault_names(m.fault_word)
+                )
+            ]));
+        }
+        panel
+    }
+
+    fn action(command: &Command) -> Result<Action, String> {
+        let args = fault_args(&command.args);
+        let text = |name: &str| match args.get(name) {
+            Some(FaultArgValue::Text(t)) => Ok(t.clone()),
+            Some(FaultArgValue::Number(x)) => Ok(x.to_string()),
+            None => Err(format!("`{}` needs `{name}`", command.fault)),
+        };
+        match command.fault.as_str() {
+            BUS_LOST => Ok(Action::BusLost { bus: text("bus")? }),
+            EXTERNAL_TORQUE => {
+                let torque_nm = match args.get("torque_nm") {
+                    Some(FaultArgValue::Number(x)) => *x,
+                    None if command.action != "inject" => 0.0,
+                    _ => return Err("`torque_nm` must be a number (N·m)".into()),
+                };
+                Ok(Action::Push {
+                    joint: text("joint")?,
+                    torque_nm,
+                })
+            }
+            name => Ok(Action::Fault {
+                joint: text("joint")?,
+                fault: Fault::named(name).map_err(|e| e.message)?,
+            }),
+        }
+    }
+}
+
+fn mode_name(mode: ModeState) -> &'static str {
+    match mode {
+        ModeState::Reset => "reset",
+        ModeState::Calibration => "calibration",
+        ModeState::Run => "run",
+    }
+}
+
+fn fault_names(word: u32) -> String {
+    let names: Vec<&str> = Fault::ALL
+        .iter()
+        .filter(|f| word & f.word_bit() != 0)
+        .map(|f| f.name())
+        .collect();
+    if names.is_empty() {
+        "none".into()
+    } else {
+        names.join(",")
+    }
+}
+
+/// The root link's pose as the 3D view takes it: a 4×4 transform by rows.
+fn base_pose(s: &RobotSnapshot) -> Vec<f64> {
+    let (r, t) = (&s.base_rotation, &s.base_position_m);
+    let mut pose = Vec::with_capacity(16);
+    for row in 0..3 {
+        pose.extend(r[row].map(round4));
+        pose.push(round4(t[row]));
+    }
+    pose.extend([0.0, 0.0, 0.0, 1.0]);
+    pose
+}
+
+fn round4(v: f64) -> f64 {
+    (v * 10_000.0).round() / 10_000.0
+}
+
+fn round3(v: f64) -> f64 {
+    (v * 1000.0).round() / 1000.0
+}
+
+#[async_trait::async_trait]
+impl LiveSource for RobotLive {
+    fn hello(&self) -> Value {
+        self.hello.clone()
+    }
+
+    async fn state(&self) -> Value {
+        let Ok(s) = self.monitor.snapshot().await else {
+            return json!({"type": "state", "t": 0.0, "faults": ["the robot has stopped"]});
+        };
+        let per = |f: &dyn Fn(&sim::robot::JointSnapshot) -> f64| -> Vec<f64> {
+            s.joints.iter().map(|j| round3(f(j))).collect()
+        };
+        // The 3D view's angles in the model's joint order; a passive joint is drawn at 0.
+        let physical: Vec<Option<f64>> = self
+            .drawn
+            .iter()
+            .map(|name| s.joint(name).map(|j| round3(j.position_rad.to_degrees())))
+            .collect();
+        let active = self
+            .active
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .clone();
+        json!({
+            "type": "state",
+            "t": round3(s.time_s),
+            "physical_deg": physical,
+            "base_position_m": s.base_position_m.map(round3),
+            "base_pose": base_pose(&s),
+            "joints_deg": per(&|j| j.position_rad.to_degrees()),
+            "velocity_deg_s": per(&|j| j.velocity_rad_s.to_degrees()),
+            "torque_nm": per(&|j| j.motor.torque_nm),
+            "temperature_c": per(&|j| j.motor.temperature_c),
+            "panel": self.panel(&s),
+            "bus": self.bus_json(),
+            "faults": active,
+        })
+    }
+
+    async fn command(&self, command: &Command) -> Result<String, String> {
+        let inject = command.action == "inject";
+        let (shown, done) = match Self::action(command)? {
+            Action::Fault { joint, fault } => {
+                let done = if inject {
+                    self.monitor.inject(&joint, fault).await
+                } else {
+                    self.monitor.clear(&joint, fault).await
+                };
+                (format!("{} on {joint}", fault.name()), done)
+            }
+            Action::Push { joint, torque_nm } => {
+                let torque = if inject { torque_nm } else { 0.0 };
+                let done = self.monitor.set_external_torque(&joint, torque).await;
+                (format!("{EXTERNAL_TORQUE} on {joint}"), done)
+            }
+            Action::BusLost { bus } => {
+                let done = self.monitor.set_bus_lost(&bus, inject).await;
+                (format!("{BUS_LOST} {bus}"), done)
+            }
+        };
+        done.map_err(|e| e.to_string())?;
+        let mut active = self.active.lock().unwrap_or_else(PoisonError::into_inner);
+        active.retain(|a| *a != shown);
+        if inject {
+            active.push(shown.clone());
+            Ok(format!("injected {shown}"))
+        } else {
+            Ok(format!("cleared {shown}"))
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::Arc;
+
+    use bus::virtual_bus::{VirtualBus, VirtualBusConfig};
+    use bus::CanBus;
+    use sim::robot::RobotEmulator;
+
+    use super::*;
+
+    fn command(action: &str, fault: &str, args: Value) -> Command {
+        serde_json::from_value(json!({"type": action, "fault": fault, "args": args})).unwrap()
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn the_page_faults_an_actuator_pushes_a_joint_and_cuts_a_bus() {
+        let file =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("robots/robstride_arm6.yaml");
+        let config = crate::robots::load_robot_file(&file).unwrap().config;
+        let buses: Vec<VirtualBus> = config
+            .buses
+            .iter()
+            .map(|_| VirtualBus::new(VirtualBusConfig::default()))
+            .collect();
+        let nodes = buses
+            .iter()
+            .map(|b| Arc::new(b.attach("robot")) as Arc<dyn CanBus>)
+            .collect();
+        let taps = config
+            .buses
+            .iter()
+            .zip(&buses)
+            .map(|(c, b)| {
+                (
+                    c.name.clone(),
+                    BusTap::spawn(Arc::new(b.attach("ui")), c.bitrate_bps),
+                )
+            })
+            .collect();
+        let joints: Vec<String> = config.actuators.iter().map(|a| a.joint.clone()).collect();
+        let urdf = config.urdf.clone();
+        let robot = RobotEmulator::spawn(config, nodes).unwrap();
+        let live = RobotLive::new(robot.monitor(), &urdf, &joints, taps, "arm6");
+
+        let hello = live.hello();
+        assert_eq!(hello["strip_names"][3], "wrist_roll");
+        assert!(hello["model"]["joints"]
+            .as_array()
+            .is_some_and(|j| j.len() >= 6));
+        let bus_lost = hello["faults"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|f| f["name"] == BUS_LOST);
+        assert_eq!(bus_lost.unwrap()["params"][0]["default"], "can0");
+
+        let ack = live
+            .command(&command(
+                "inject",
+                "over_temperature",
+                json!({"joint": "elbow_pitch"}),
+            ))
+            .await
+            .unwrap();
+        assert_eq!(ack, "injected over_temperature on elbow_pitch");
+        live.command(&command("inject", "bus_lost", json!({"bus": "can1"})))
+            .await
+            .unwrap();
+        live.command(&command(
+            "inject",
+            "external_torque",
+            json!({"joint": "shoulder_yaw", "torque_nm": "8"}),
+        ))
+        .await
+        .unwrap();
+        tokio::time::sleep(std::time::Duration::from_millis(300)).await;
+        let state = live.state().await;
+        assert_eq!(
+            state["faults"],
+            json!([
+                "over_temperature on elbow_pitch",
+                "bus_lost can1",
+                "external_torque on shoulder_yaw"
+            ])
+        );
+        let panel = state["panel"].to_string();
+        assert!(
+            panel.contains("LOST") && panel.contains("over_temperature"),
+            "{panel}"
+        );
+        // The push turned the shoulder, and the 3D view sees it in the model's joint order.
+        assert!(state["joints_deg"][0].as_f64().unwrap() > 1.0, "{state}");
+        assert_eq!(state["physical_deg"][0], state["joints_deg"][0]);
+        assert_eq!(state["base_pose"].as_array().unwrap().len(), 16);
+
+        let cleared = live
+            .command(&command("clear", "bus_lost", json!({"bus": "can1"})))
+            .await
+            .unwrap();
+        assert_eq!(cleared, "cleared bus_lost can1");
+        let unknown = live
+            .command(&command(
+                "inject",
+                "over_temperature",
+                json!({"joint": "elbo"}),
+            ))
+            .await
+            .unwrap_err();
+        assert!(unknown.contains("elbo"), "{unknown}");
+        let no_fault = live
+            .command(&command("inject", "melt", json!({"joint": "elbow_pitch"})))
+            .await
+            .unwrap_err();
+        assert!(no_fault.contains("no RobStride fault `melt`"), "{no_fault}");
+        robot.shutdown().await;
+    }
+}
