@@ -41,3 +41,22 @@ pub fn read_regular_file(path: &Path, limit_bytes: u64) -> Result<Vec<u8>, Bound
     }
     Ok(bytes)
 }
+
+/// The text of `path` ([`read_regular_file`]), or why not in words for a user: `what` names
+/// the kind of file in the message about its size ("larger than 1 MiB, the limit for a robot
+/// file (is it one?)").
+pub fn read_text_file(path: &Path, limit_bytes: u64, what: &str) -> Result<String, String> {
+    let bytes = read_regular_file(path, limit_bytes).map_err(|error| match error {
+        BoundedReadError::NotAFile => "not a regular file".to_owned(),
+        BoundedReadError::TooLarge { limit_bytes } => {
+            let limit = if limit_bytes % (1024 * 1024) == 0 {
+                format!("{} MiB", limit_bytes / (1024 * 1024))
+            } else {
+                format!("{limit_bytes} bytes")
+            };
+            format!("larger than {limit}, the limit for a {what} (is it one?)")
+        }
+        BoundedReadError::Io(e) => format!("cannot read: {e}"),
+    })?;
+    String::from_utf8(bytes).map_err(|_| "not UTF-8 text".to_owned())
+}

@@ -4,7 +4,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
-use sim::bounded_read::{read_regular_file, BoundedReadError};
+use sim::bounded_read::read_text_file;
 
 use crate::scenario::error::{from_yaml_error, suggestion};
 use crate::scenario::{pos, Pos, ScenarioError, S};
@@ -158,22 +158,11 @@ impl RawItem {
 /// its line. Whether the options themselves are right is the command's to say (the CLI
 /// parses them and reports through [`BenchDevice::error`]).
 pub fn load_bench_file(path: &Path) -> Result<BenchFile, BenchFileError> {
-    let bytes = read_regular_file(path, MAX_BENCH_FILE_BYTES).map_err(|error| {
-        let message = match error {
-            BoundedReadError::NotAFile => "not a regular file".to_owned(),
-            BoundedReadError::TooLarge { .. } => {
-                "larger than 1 MiB, the limit for a bench file (is it one?)".to_owned()
-            }
-            BoundedReadError::Io(e) => format!("cannot read: {e}"),
-        };
+    let text = read_text_file(path, MAX_BENCH_FILE_BYTES, "bench file").map_err(|message| {
         BenchFileError::Read {
             path: path.to_owned(),
             message,
         }
-    })?;
-    let text = String::from_utf8(bytes).map_err(|_| BenchFileError::Read {
-        path: path.to_owned(),
-        message: "not UTF-8 text".into(),
     })?;
     let raw: RawBench = serde_saphyr::from_str(&text).map_err(|e| {
         let mut error = from_yaml_error(path, &text, &e);

@@ -40,7 +40,7 @@ fn error_of(text: &str) -> String {
     let (_dir, file) = write(text);
     match load_robot_file(&file) {
         Err(RobotFileError::Invalid(e)) => {
-            format!("{}:{}: {}", e.pos.line, e.pos.column, e.message)
+            format!("{}:{}: {}", e.at.line, e.at.column, e.message)
         }
         other => panic!("expected an invalid file, got {other:?}"),
     }
@@ -129,7 +129,7 @@ fn an_actuator_weaker_than_its_joints_urdf_effort_is_a_warning() {
     let robot = load_robot_file(&file).unwrap();
     assert_eq!(robot.warnings.len(), 1);
     assert_eq!(
-        robot.warnings[0].headline(),
+        robot.warnings[0].to_string(),
         format!(
             "{}:8:36: RS03 peaks at 60 N·m, below joint `shoulder_pitch`'s URDF effort of 120 N·m",
             file.display()

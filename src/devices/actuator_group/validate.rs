@@ -88,7 +88,7 @@ fn robot_settings(ctx: &Ctx<'_>, file: &S<String>) -> Res<GroupSettings> {
     let path = dir.join(&file.value);
     let loaded = crate::robots::load_robot_file(&path).map_err(|e| {
         let shown = match &e {
-            crate::robots::RobotFileError::Invalid(inner) => inner.headline(),
+            crate::robots::RobotFileError::Invalid(inner) => inner.to_string(),
             other => other.to_string(),
         };
         ctx.err(pos(file), format!("robot file `{}`: {shown}", file.value))

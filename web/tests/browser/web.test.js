@@ -54,19 +54,17 @@ async function until(what, check, timeoutMs) {
   throw new Error(`timed out waiting for ${what}`);
 }
 
-test("the live view follows a MOVE J and injects and clears a fault", async (t) => {
-  const can = await freePort();
-  const ui = await freePort();
+// `armhil sim ARGS --ui 127.0.0.1:UI` until its web view is up, and a Chromium page on it with
+// the first state received; both are stopped when the test ends.
+async function livePage(t, args, ui) {
   let err = "";
-  const sim = spawn(BIN, ["sim", "piper", "--socketcand", `127.0.0.1:${can}`, "--ui", `127.0.0.1:${ui}`],
-    { stdio: ["ignore", "ignore", "pipe"] });
+  const sim = spawn(BIN, ["sim", ...args, "--ui", `127.0.0.1:${ui}`], { stdio: ["ignore", "ignore", "pipe"] });
   sim.stderr.on("data", (d) => { err += d; });
   t.after(() => sim.kill("SIGINT"));
   await until("the web view to start", () => {
     if (sim.exitCode !== null) throw new Error("armhil sim exited: " + err);
     return err.includes("web view on http://");
   }, 30000);
-
   const { context, profile } = await browser();
   t.after(async () => {
     await context.close();
@@ -75,6 +73,13 @@ test("the live view follows a MOVE J and injects and clears a fault", async (t) 
   const page = await context.newPage();
   await page.goto(`http://127.0.0.1:${ui}/`);
   await page.waitForFunction(() => window.armhilLive && window.armhilLive.ready && window.armhilLive.state, null, { timeout: 10000 });
+  return page;
+}
+
+test("the live view follows a MOVE J and injects and clears a fault", async (t) => {
+  const can = await freePort();
+  const ui = await freePort();
+  const page = await livePage(t, ["piper", "--socketcand", `127.0.0.1:${can}`], ui);
   // Before any command the drawn arm is where the emulator's physics has it (a disabled arm
   // sags under gravity).
   const before = await until("the drawn angles", () => page.evaluate(() => {
@@ -150,23 +155,7 @@ test("the live view follows a MOVE J and injects and clears a fault", async (t) 
 test("the RobStride live view shows each motor's dial and reports an injected fault", async (t) => {
   const can = await freePort();
   const ui = await freePort();
-  let err = "";
-  const sim = spawn(BIN, ["sim", "robstride", "--socketcand", `127.0.0.1:${can}`, "--ui", `127.0.0.1:${ui}`,
-    "--motor", "1:RS03", "--motor", "2:RS00"], { stdio: ["ignore", "ignore", "pipe"] });
-  sim.stderr.on("data", (d) => { err += d; });
-  t.after(() => sim.kill("SIGINT"));
-  await until("the web view to start", () => {
-    if (sim.exitCode !== null) throw new Error("armhil sim exited: " + err);
-    return err.includes("web view on http://");
-  }, 30000);
-  const { context, profile } = await browser();
-  t.after(async () => {
-    await context.close();
-    fs.rmSync(profile, { recursive: true, force: true });
-  });
-  const page = await context.newPage();
-  await page.goto(`http://127.0.0.1:${ui}/`);
-  await page.waitForFunction(() => window.armhilLive && window.armhilLive.ready && window.armhilLive.state, null, { timeout: 10000 });
+  const page = await livePage(t, ["robstride", "--socketcand", `127.0.0.1:${can}`, "--motor", "1:RS03", "--motor", "2:RS00"], ui);
   await until("two dials drawn", async () => ((await page.getAttribute("#arm-view", "data-angles")) || "").split(",").length === 2, 5000);
   await page.selectOption("#fault-kind", "under_voltage");
   await page.fill("#fault-arg-motor", "2");
@@ -187,23 +176,7 @@ test("the RobStride live view shows each motor's dial and reports an injected fa
 test("the robot live view draws the fallen humanoid at its base pose and cuts a bus from the panel", async (t) => {
   const can = await freePort();
   const ui = await freePort();
-  let err = "";
-  const sim = spawn(BIN, ["sim", "robot", path.join(ROOT, "robots", "humanoid.yaml"),
-    "--socketcand", `127.0.0.1:${can}`, "--ui", `127.0.0.1:${ui}`], { stdio: ["ignore", "ignore", "pipe"] });
-  sim.stderr.on("data", (d) => { err += d; });
-  t.after(() => sim.kill("SIGINT"));
-  await until("the web view to start", () => {
-    if (sim.exitCode !== null) throw new Error("armhil sim exited: " + err);
-    return err.includes("web view on http://");
-  }, 30000);
-  const { context, profile } = await browser();
-  t.after(async () => {
-    await context.close();
-    fs.rmSync(profile, { recursive: true, force: true });
-  });
-  const page = await context.newPage();
-  await page.goto(`http://127.0.0.1:${ui}/`);
-  await page.waitForFunction(() => window.armhilLive && window.armhilLive.ready && window.armhilLive.state, null, { timeout: 10000 });
+  const page = await livePage(t, ["robot", path.join(ROOT, "robots", "humanoid.yaml"), "--socketcand", `127.0.0.1:${can}`], ui);
   // Never enabled, the humanoid falls: its pelvis ends near the ground, and the page draws
   // the root where the emulator says (the base pose's z is the pelvis height).
   await until("the humanoid to fall", () => page.evaluate(() => window.armhilLive.state.base_position_m[2] < 0.5), 10000);
@@ -224,22 +197,7 @@ test("the robot live view draws the fallen humanoid at its base pose and cuts a 
 test("the Realman live view follows a movej, lists its TCP client and reports a joint error", async (t) => {
   const tcp = await freePort();
   const ui = await freePort();
-  let err = "";
-  const sim = spawn(BIN, ["sim", "realman", "--port", String(tcp), "--ui", `127.0.0.1:${ui}`], { stdio: ["ignore", "ignore", "pipe"] });
-  sim.stderr.on("data", (d) => { err += d; });
-  t.after(() => sim.kill("SIGINT"));
-  await until("the web view to start", () => {
-    if (sim.exitCode !== null) throw new Error("armhil sim exited: " + err);
-    return err.includes("web view on http://");
-  }, 30000);
-  const { context, profile } = await browser();
-  t.after(async () => {
-    await context.close();
-    fs.rmSync(profile, { recursive: true, force: true });
-  });
-  const page = await context.newPage();
-  await page.goto(`http://127.0.0.1:${ui}/`);
-  await page.waitForFunction(() => window.armhilLive && window.armhilLive.ready && window.armhilLive.state, null, { timeout: 10000 });
+  const page = await livePage(t, ["realman", "--port", String(tcp)], ui);
   // A client of the JSON protocol: joints in 0.001°.
   const client = net.connect(tcp, "127.0.0.1");
   t.after(() => client.destroy());

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use super::error::{suggestion, FileError, Position as Pos};
 use super::raw::{RawRobot, S};
-use crate::bounded_read::{read_regular_file, BoundedReadError};
+use crate::bounded_read::read_text_file;
 use crate::physics::{ArmModel, JointKind};
 use crate::robot::{Base, BusConfig, JointActuator, RobotConfig};
 use crate::robstride::{baud_code_bps, Model, MotorConfig, DEFAULT_HOST_ID};
@@ -49,22 +49,11 @@ pub enum RobotFileError {
 
 /// Loads and checks the robot file `path` and the URDF it names.
 pub fn load_robot_file(path: &Path) -> Result<LoadedRobot, RobotFileError> {
-    let bytes = read_regular_file(path, MAX_ROBOT_FILE_BYTES).map_err(|error| {
-        let message = match error {
-            BoundedReadError::NotAFile => "not a regular file".to_owned(),
-            BoundedReadError::TooLarge { .. } => {
-                "larger than 1 MiB, the limit for a robot file (is it one?)".to_owned()
-            }
-            BoundedReadError::Io(e) => format!("cannot read: {e}"),
-        };
+    let text = read_text_file(path, MAX_ROBOT_FILE_BYTES, "robot file").map_err(|message| {
         RobotFileError::Read {
             path: path.to_owned(),
             message,
         }
-    })?;
-    let text = String::from_utf8(bytes).map_err(|_| RobotFileError::Read {
-        path: path.to_owned(),
-        message: "not UTF-8 text".into(),
     })?;
     let raw: RawRobot = serde_saphyr::from_str(&text)
         .map_err(|e| Box::new(FileError::from_yaml(path, &text, &e)))?;
