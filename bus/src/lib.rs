@@ -15,6 +15,7 @@ mod error;
 mod frame;
 mod iface;
 pub mod pcap;
+pub mod pcapng;
 pub mod recorder;
 #[cfg(target_os = "linux")]
 pub mod socketcan_bus;

@@ -164,7 +164,8 @@ pub fn parse_capture(bytes: &[u8]) -> Result<Vec<ReceivedFrame>, PcapError> {
     Ok(frames)
 }
 
-fn decode_packet(packet: &[u8]) -> Option<CanFrame> {
+/// The frame of a 16-byte SocketCAN packet, if it is one.
+pub(crate) fn decode_packet(packet: &[u8]) -> Option<CanFrame> {
     if packet.len() != PACKET_LEN {
         return None;
     }

@@ -209,3 +209,35 @@ fn pcap_opens_in_tshark_with_the_right_ids_and_data() {
     }
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+#[test]
+fn pcapng_of_several_buses_names_each_frame_s_bus_in_tshark() {
+    if !require("pcapng_of_several_buses", &[TSHARK]) {
+        return;
+    }
+    let dir = scratch_dir("pcapng");
+    let path = dir.join("buses.pcapng");
+    let frames = sample_frames();
+    let mut writer = bus::pcapng::PcapngWriter::new(Vec::new(), &["can0", "can3"]).unwrap();
+    for (k, frame) in frames.iter().enumerate() {
+        let received = ReceivedFrame {
+            frame: *frame,
+            timestamp: Duration::from_secs(EPOCH_S) + Duration::from_millis(k as u64),
+        };
+        writer.write((k % 2) as u32, &received).unwrap();
+    }
+    std::fs::write(&path, writer.finish().unwrap()).unwrap();
+    let fields = run(Command::new("tshark")
+        .arg("-r")
+        .arg(&path)
+        .args(["-T", "fields"])
+        .args(["-e", "frame.interface_name", "-e", "can.id"]));
+    let rows: Vec<&str> = fields.lines().collect();
+    let expected: Vec<String> = frames
+        .iter()
+        .enumerate()
+        // tshark prints can.id in decimal.
+        .map(|(k, f)| format!("{}\t{}", ["can0", "can3"][k % 2], f.id().raw()))
+        .collect();
+    assert_eq!(rows, expected);
+}

@@ -57,9 +57,9 @@ pub struct Args {
     /// the multi-second stalls of an emulated VM. Ignored in virtual time.
     #[arg(long, value_name = "MS", default_value_t = 0, value_parser = Short(parse_slack_ms))]
     deadline_slack_ms: u64,
-    /// Size limit of each bus recording (bus.log, bus.pcap) per scenario, in MiB, 1 to
-    /// 16384. A longer recording keeps its first half and its last; the report says which
-    /// stretch of the bus was left out.
+    /// Size limit of each bus recording (bus.log, bus.pcap or bus.pcapng) per scenario, in
+    /// MiB, 1 to 16384. A longer recording keeps its first half and its last; the report
+    /// says which stretch of the bus was left out.
     #[arg(long, value_name = "MIB", default_value_t = DEFAULT_RECORDING_LIMIT_MIB,
           value_parser = Short(parse_recording_limit_mib))]
     max_recording_mib: u64,
@@ -455,7 +455,7 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
             secs(wall)
         );
         println!(
-            "outputs: {}/<scenario path>/{{result.yaml, bus.log, bus.pcap, plot.svg, report.html}}, {}/index.html",
+            "outputs: {}/<scenario path>/{{result.yaml, bus.log, bus.pcap or .pcapng, plot.svg, report.html}}, {}/index.html",
             args.out.display(),
             args.out.display()
         );

@@ -33,10 +33,17 @@ pub(crate) async fn build(
 ) -> Result<BuiltBench, String> {
     // Frames are written to the candump / pcap spool files only when asked; counts are kept
     // either way.
+    let bus_names: Vec<String> = scenario
+        .bench
+        .buses
+        .iter()
+        .map(|b| b.name.clone())
+        .collect();
     let spool = Spool::create(
         scenario.record.candump,
         scenario.record.pcap,
         options.recording_limit_bytes,
+        &bus_names,
     )
     .map_err(|e| format!("cannot create a temporary file for the bus recording: {e}"))?;
     let (buses, recorder) = match clock {

@@ -126,7 +126,7 @@ pub struct Written {
     pub snapshot: Option<PathBuf>,
     /// The candump log (`bus.log`).
     pub candump: Option<PathBuf>,
-    /// The pcap (`bus.pcap`).
+    /// The capture (`bus.pcap`, or `bus.pcapng` on a bench of several buses).
     pub pcap: Option<PathBuf>,
     /// The plot (`plot.svg`).
     pub plot: Option<PathBuf>,
@@ -158,7 +158,13 @@ pub fn write_outputs(
         written.candump = Some(path);
     }
     if let Some(spooled) = result.recording.pcap.as_deref().filter(|_| record.pcap) {
-        let path = dir.join("bus.pcap");
+        // A bench of several buses is a pcapng: classic pcap cannot say a frame's bus.
+        let name = if result.recording.pcapng {
+            "bus.pcapng"
+        } else {
+            "bus.pcap"
+        };
+        let path = dir.join(name);
         copy_atomic(spooled, &path)?;
         written.pcap = Some(path);
     }

@@ -294,7 +294,7 @@ mod tests {
         let (tx, rx) = broadcast::channel(4096);
         let recorder = Recorder::from_taps(
             vec![(DEFAULT_BUS.to_owned(), rx)],
-            Spool::create(keep, false, u64::MAX).unwrap(),
+            Spool::create(keep, false, u64::MAX, &[DEFAULT_BUS.to_owned()]).unwrap(),
         );
         for i in 0..1000u16 {
             let frame = CanFrame::standard(0x100 + i % 3, &[]).unwrap();
@@ -331,7 +331,7 @@ mod tests {
         let (tx1, rx1) = broadcast::channel(64);
         let recorder = Recorder::from_taps(
             vec![("can0".to_owned(), rx0), ("can1".to_owned(), rx1)],
-            Spool::create(true, false, u64::MAX).unwrap(),
+            Spool::create(true, false, u64::MAX, &[DEFAULT_BUS.to_owned()]).unwrap(),
         );
         let at = |ms: u64, id: u16| ReceivedFrame {
             frame: CanFrame::standard(id, &[]).unwrap(),

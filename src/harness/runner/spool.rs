@@ -10,6 +10,7 @@ use std::time::Duration;
 
 use bus::candump::CandumpWriter;
 use bus::pcap::PcapWriter;
+use bus::pcapng::PcapngWriter;
 use bus::ReceivedFrame;
 use tempfile::TempPath;
 
@@ -49,8 +50,12 @@ fn spool_file(suffix: &str) -> io::Result<(File, TempPath)> {
 pub struct Recording {
     /// The candump `-L` log, when one was asked for.
     pub candump: Option<Arc<TempPath>>,
-    /// The pcap (LINKTYPE_CAN_SOCKETCAN), when one was asked for.
+    /// The capture (LINKTYPE_CAN_SOCKETCAN), when one was asked for: classic pcap on a bench
+    /// of one bus, pcapng with an interface per bus on a bench of several
+    /// ([`Recording::pcapng`]).
     pub pcap: Option<Arc<TempPath>>,
+    /// Whether [`Recording::pcap`] is a pcapng file (a bench of several buses).
+    pub pcapng: bool,
     /// The first write error, if any: the files are then incomplete and the run reports it.
     pub error: Option<String>,
     /// Frames left out of the files because the recording reached its size limit.
@@ -143,10 +148,72 @@ fn flushed(finished: io::Result<Sink>) -> io::Result<()> {
     })
 }
 
+/// The capture being written: classic pcap for one bus, pcapng for several, where each frame
+/// names its bus (classic pcap has no interface column).
+enum CaptureWriter {
+    Pcap(PcapWriter<Sink>),
+    Pcapng {
+        writer: PcapngWriter<Sink>,
+        buses: Arc<[String]>,
+    },
+}
+
+impl CaptureWriter {
+    fn create(buses: &Arc<[String]>) -> io::Result<(Self, TempPath)> {
+        if buses.len() > 1 {
+            let (file, path) = spool_file(".pcapng")?;
+            let names: Vec<&str> = buses.iter().map(String::as_str).collect();
+            let writer = PcapngWriter::new(sink(file), &names)?;
+            let buses = Arc::clone(buses);
+            Ok((Self::Pcapng { writer, buses }, path))
+        } else {
+            let (file, path) = spool_file(".pcap")?;
+            Ok((Self::Pcap(PcapWriter::new(sink(file))?), path))
+        }
+    }
+
+    fn write(&mut self, frame: &ReceivedFrame, bus: &str) -> io::Result<()> {
+        match self {
+            Self::Pcap(writer) => writer.write(frame),
+            Self::Pcapng { writer, buses } => {
+                // A bench has a handful of buses: a scan is cheaper than a map.
+                let index = buses.iter().position(|b| b == bus).ok_or_else(|| {
+                    io::Error::other(format!("a frame of bus `{bus}`, which the bench has not"))
+                })?;
+                writer.write(u32::try_from(index).unwrap_or(u32::MAX), frame)
+            }
+        }
+    }
+
+    fn bytes(&self) -> u64 {
+        match self {
+            Self::Pcap(writer) => writer.get_ref().bytes,
+            Self::Pcapng { writer, .. } => writer.get_ref().bytes,
+        }
+    }
+
+    fn finish(self) -> io::Result<()> {
+        match self {
+            Self::Pcap(writer) => flushed(writer.finish()),
+            Self::Pcapng { writer, .. } => flushed(writer.finish()),
+        }
+    }
+}
+
+/// Bytes at the start of every capture file that a joined capture keeps only once.
+fn capture_header_len(buses: &[String]) -> u64 {
+    if buses.len() > 1 {
+        let names: Vec<&str> = buses.iter().map(String::as_str).collect();
+        bus::pcapng::header_len(&names) as u64
+    } else {
+        bus::pcap::GLOBAL_HEADER_LEN as u64
+    }
+}
+
 /// One stretch of the recording in every format asked for: the same frames in each file.
 struct Segment {
     candump: Option<(CandumpWriter<Sink>, TempPath)>,
-    pcap: Option<(PcapWriter<Sink>, TempPath)>,
+    pcap: Option<(CaptureWriter, TempPath)>,
     /// Frames written, and the bus time of the first and the last.
     frames: u64,
     first: Duration,
@@ -163,19 +230,14 @@ struct Written {
 }
 
 impl Segment {
-    fn create(candump: bool, pcap: bool) -> io::Result<Self> {
+    fn create(candump: bool, pcap: bool, buses: &Arc<[String]>) -> io::Result<Self> {
         let candump = if candump {
             let (file, path) = spool_file(".log")?;
             Some((CandumpWriter::new(sink(file), DEFAULT_BUS), path))
         } else {
             None
         };
-        let pcap = if pcap {
-            let (file, path) = spool_file(".pcap")?;
-            Some((PcapWriter::new(sink(file))?, path))
-        } else {
-            None
-        };
+        let pcap = pcap.then(|| CaptureWriter::create(buses)).transpose()?;
         Ok(Self {
             candump,
             pcap,
@@ -190,7 +252,7 @@ impl Segment {
             writer.write_on(bus, frame)?;
         }
         if let Some((writer, _)) = &mut self.pcap {
-            writer.write(frame)?;
+            writer.write(frame, bus)?;
         }
         if self.frames == 0 {
             self.first = frame.timestamp;
@@ -203,7 +265,7 @@ impl Segment {
     /// The size of the larger of its files.
     fn bytes(&self) -> u64 {
         let candump = self.candump.as_ref().map_or(0, |(w, _)| w.get_ref().bytes);
-        let pcap = self.pcap.as_ref().map_or(0, |(w, _)| w.get_ref().bytes);
+        let pcap = self.pcap.as_ref().map_or(0, |(w, _)| w.bytes());
         candump.max(pcap)
     }
 
@@ -213,7 +275,7 @@ impl Segment {
             None => None,
         };
         let pcap = match self.pcap {
-            Some((writer, path)) => flushed(writer.finish()).map(|()| Some(path))?,
+            Some((writer, path)) => writer.finish().map(|()| Some(path))?,
             None => None,
         };
         Ok(Written {
@@ -236,6 +298,8 @@ impl Segment {
 /// limit per format while the run lasts, and memory stays flat.
 pub(crate) struct Spool {
     formats: (bool, bool),
+    /// The bench's buses, by name (the capture's interfaces when there are several).
+    buses: Arc<[String]>,
     limit_bytes: u64,
     /// The run's beginning, until it holds half the limit.
     head: Option<Segment>,
@@ -248,13 +312,21 @@ pub(crate) struct Spool {
 }
 
 impl Spool {
-    /// Open temporary files for the formats asked for, each held to `limit_bytes`.
-    pub fn create(candump: bool, pcap: bool, limit_bytes: u64) -> io::Result<Self> {
+    /// Open temporary files for the formats asked for, each held to `limit_bytes`, for a
+    /// bench of `buses` (the names the frames come with).
+    pub fn create(
+        candump: bool,
+        pcap: bool,
+        limit_bytes: u64,
+        buses: &[String],
+    ) -> io::Result<Self> {
+        let buses: Arc<[String]> = buses.into();
         let head = (candump || pcap)
-            .then(|| Segment::create(candump, pcap))
+            .then(|| Segment::create(candump, pcap, &buses))
             .transpose()?;
         Ok(Self {
             formats: (candump, pcap),
+            buses,
             limit_bytes,
             head,
             head_written: None,
@@ -270,9 +342,9 @@ impl Spool {
         self.formats.0 || self.formats.1
     }
 
-    /// Append one frame seen on `bus` to every file (the candump log names the bus; the pcap
-    /// holds every bus's frames in one capture); after the first error, writing stops and the
-    /// error is kept for the report.
+    /// Append one frame seen on `bus` to every file (the candump log names the bus, and so
+    /// does the pcapng of a bench of several buses); after the first error, writing stops and
+    /// the error is kept for the report.
     pub fn write(&mut self, frame: &ReceivedFrame, bus: &str) {
         if self.error.is_some() || !self.is_recording() {
             return;
@@ -293,9 +365,11 @@ impl Spool {
         }
         let tail = match &mut self.tail {
             Some(tail) => tail,
-            None => self
-                .tail
-                .insert(Segment::create(self.formats.0, self.formats.1)?),
+            None => self.tail.insert(Segment::create(
+                self.formats.0,
+                self.formats.1,
+                &self.buses,
+            )?),
         };
         tail.write(frame, bus)?;
         if tail.bytes() >= self.limit_bytes / 4 {
@@ -338,8 +412,10 @@ impl Spool {
             candumps.extend(written.candump);
             pcaps.extend(written.pcap);
         }
+        let pcapng = self.buses.len() > 1;
+        let suffix = if pcapng { ".pcapng" } else { ".pcap" };
         let joined = join_files(candumps, ".log", 0).and_then(|candump| {
-            let pcap = join_files(pcaps, ".pcap", bus::pcap::GLOBAL_HEADER_LEN as u64)?;
+            let pcap = join_files(pcaps, suffix, capture_header_len(&self.buses))?;
             Ok((candump, pcap))
         });
         let (candump, pcap) = match joined {
@@ -352,6 +428,7 @@ impl Spool {
         Recording {
             candump: candump.map(Arc::new),
             pcap: pcap.map(Arc::new),
+            pcapng,
             error,
             omitted: self.omitted,
         }
@@ -359,7 +436,7 @@ impl Spool {
 }
 
 /// One file of the segments `parts` (in order), leaving out the first `header_bytes` of every
-/// part but the first (a pcap's global header); a single part is handed over as it is. The
+/// part but the first (a capture's headers); a single part is handed over as it is. The
 /// parts are deleted when they go out of scope here.
 fn join_files(
     mut parts: Vec<TempPath>,
@@ -392,6 +469,10 @@ mod tests {
 
     const UNLIMITED: u64 = u64::MAX;
 
+    fn one_bus() -> Vec<String> {
+        vec![DEFAULT_BUS.to_owned()]
+    }
+
     fn frame(i: u16) -> ReceivedFrame {
         ReceivedFrame {
             frame: CanFrame::standard(0x2A1 + i % 2, &[i as u8, 0xAB]).unwrap(),
@@ -401,7 +482,7 @@ mod tests {
 
     #[test]
     fn both_formats_hold_every_frame_and_read_back() {
-        let mut spool = Spool::create(true, true, UNLIMITED).unwrap();
+        let mut spool = Spool::create(true, true, UNLIMITED, &one_bus()).unwrap();
         for i in 0..500 {
             spool.write(&frame(i), DEFAULT_BUS);
         }
@@ -424,7 +505,7 @@ mod tests {
     fn a_recording_past_its_limit_keeps_the_beginning_and_the_end() {
         const LIMIT: u64 = 8 * 1024;
         let n: u16 = 5000;
-        let mut spool = Spool::create(true, true, LIMIT).unwrap();
+        let mut spool = Spool::create(true, true, LIMIT, &one_bus()).unwrap();
         for i in 0..n {
             spool.write(&frame(i), DEFAULT_BUS);
         }
@@ -466,9 +547,35 @@ mod tests {
     }
 
     #[test]
+    fn several_buses_make_one_pcapng_naming_each_frame_s_bus_across_segments() {
+        let buses = vec!["can0".to_owned(), "can1".to_owned(), "can3".to_owned()];
+        // Small enough that the capture is written in several segments and joined.
+        let mut spool = Spool::create(false, true, 16 * 1024, &buses).unwrap();
+        for i in 0..2000u16 {
+            spool.write(&frame(i), &buses[usize::from(i) % 3]);
+        }
+        let recording = spool.finish();
+        assert!(recording.pcapng);
+        let omitted = recording.omitted.expect("the limit was reached");
+        let bytes = std::fs::read(recording.pcap.as_deref().unwrap()).unwrap();
+        let capture = bus::pcapng::parse_capture(&bytes).unwrap();
+        // One set of interfaces however many segments were joined.
+        assert_eq!(capture.interfaces, buses);
+        assert_eq!(capture.frames.len() as u64 + omitted.frames, 2000);
+        for (interface, received) in &capture.frames {
+            let i = (received.timestamp.as_micros() / 1500) as u16;
+            assert_eq!(*received, frame(i));
+            assert_eq!(*interface, u32::from(i % 3), "frame {i}");
+        }
+        let mut spool = Spool::create(false, true, UNLIMITED, &buses).unwrap();
+        spool.write(&frame(1), "can9");
+        assert!(spool.finish().error.unwrap().contains("bus `can9`"));
+    }
+
+    #[test]
     fn a_recording_within_its_limit_keeps_every_frame_in_one_piece() {
         // Head full and an end segment started, but nothing dropped yet.
-        let mut spool = Spool::create(true, true, 64 * 1024).unwrap();
+        let mut spool = Spool::create(true, true, 64 * 1024, &one_bus()).unwrap();
         for i in 0..1200 {
             spool.write(&frame(i), DEFAULT_BUS);
         }
@@ -486,7 +593,7 @@ mod tests {
 
     #[test]
     fn the_files_go_away_with_the_last_result() {
-        let mut spool = Spool::create(true, false, UNLIMITED).unwrap();
+        let mut spool = Spool::create(true, false, UNLIMITED, &one_bus()).unwrap();
         spool.write(&frame(1), DEFAULT_BUS);
         let recording = spool.finish();
         let path = recording.candump.as_deref().unwrap().to_path_buf();
@@ -496,13 +603,13 @@ mod tests {
         drop(copy);
         assert!(!path.exists(), "temporary file left behind");
         assert!(recording_is_empty(
-            &Spool::create(false, false, UNLIMITED).unwrap()
+            &Spool::create(false, false, UNLIMITED, &one_bus()).unwrap()
         ));
     }
 
     #[test]
     fn spool_files_can_be_removed_on_the_way_out() {
-        let mut spool = Spool::create(true, true, UNLIMITED).unwrap();
+        let mut spool = Spool::create(true, true, UNLIMITED, &one_bus()).unwrap();
         spool.write(&frame(1), DEFAULT_BUS);
         let head = spool.head.as_ref().unwrap();
         let candump = head.candump.as_ref().unwrap().1.to_path_buf();
