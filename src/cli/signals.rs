@@ -81,8 +81,8 @@ pub fn interrupt_on_signals(trigger: armhil::harness::InterruptTrigger) -> anyho
 /// a hidden temporary name (`.bus.log.tmp<pid>`) until they are complete and renamed. Both
 /// are listed by the code that creates them, so this works on every platform.
 fn remove_unfinished_files() {
-    let spooled = armhil::harness::Recording::remove_spool_files();
-    let unfinished = armhil::harness::report::remove_unfinished_outputs();
+    let spooled = armhil::harness::Recording::remove_spool_files_before_exit();
+    let unfinished = armhil::harness::report::remove_unfinished_outputs_before_exit();
     tracing::debug!(
         spooled,
         unfinished,

@@ -57,9 +57,8 @@ fn write_atomic_with(
         .file_name()
         .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
     let tmp = path.with_file_name(format!(".{file_name}.tmp{}", std::process::id()));
-    let unfinished = Unfinished::list(tmp.clone());
+    let (unfinished, mut file) = Unfinished::create(tmp.clone())?;
     let result = (|| {
-        let mut file = std::fs::File::create(&tmp)?;
         fill(&mut file)?;
         file.sync_all()?;
         std::fs::rename(&tmp, path)
@@ -72,16 +71,21 @@ fn write_atomic_with(
 }
 
 /// The temporary files of outputs being written at this moment, for
-/// [`remove_unfinished_outputs`].
+/// [`remove_unfinished_outputs_before_exit`].
 static UNFINISHED: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 
 /// An entry of [`UNFINISHED`] for as long as it lives.
 struct Unfinished(PathBuf);
 
 impl Unfinished {
-    fn list(path: PathBuf) -> Self {
-        lock_unfinished().push(path.clone());
-        Self(path)
+    /// Create the temporary file and list it, both under the list's lock: a quitting process
+    /// ([`remove_unfinished_outputs_before_exit`]) then finds every file that exists, and
+    /// none is created after it has looked.
+    fn create(path: PathBuf) -> std::io::Result<(Self, std::fs::File)> {
+        let mut listed = lock_unfinished();
+        let file = std::fs::File::create(&path)?;
+        listed.push(path.clone());
+        Ok((Self(path), file))
     }
 }
 
@@ -101,11 +105,23 @@ fn lock_unfinished() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
 /// Delete the temporary files of the outputs being written right now (each exists under a
 /// hidden name, `.bus.log.tmp<pid>`, until it is complete and renamed), for a process about
 /// to quit without finishing them (a second Ctrl-C). Returns how many were deleted.
-pub fn remove_unfinished_outputs() -> usize {
-    remove_unfinished_where(|_| true)
+///
+/// The list stays locked afterwards, so no output starts between this and the exit (one that
+/// did was left behind, 2 ms after a first Ctrl-C): call it only on the way out.
+pub fn remove_unfinished_outputs_before_exit() -> usize {
+    let mut listed = lock_unfinished();
+    let removed = std::mem::take(&mut *listed)
+        .iter()
+        .filter(|path| std::fs::remove_file(path).is_ok())
+        .count();
+    // Held until the process ends (a writer waiting for it never runs again).
+    std::mem::forget(listed);
+    removed
 }
 
-/// [`remove_unfinished_outputs`] for the listed files `pick` chooses (the others stay listed).
+/// Remove the listed files `pick` chooses (the others stay listed), as the quit-time
+/// cleanup does, without keeping the list locked (tests).
+#[cfg(test)]
 fn remove_unfinished_where(pick: impl Fn(&Path) -> bool) -> usize {
     let mut listed = lock_unfinished();
     let (picked, kept): (Vec<PathBuf>, Vec<PathBuf>) = std::mem::take(&mut *listed)

@@ -21,19 +21,21 @@ const SPOOL_PREFIX: &str = ".armhil-spool-";
 
 /// Every spool file this process created. The files are deleted when their [`TempPath`] is
 /// dropped, but a process that ends with `std::process::exit` (a second Ctrl-C) runs no
-/// destructors: [`Recording::remove_spool_files`] deletes them from this list instead.
+/// destructors: [`Recording::remove_spool_files_before_exit`] deletes them from this list instead.
 static SPOOL_FILES: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 
 /// A new spool file in the temporary folder, remembered in [`SPOOL_FILES`].
 fn spool_file(suffix: &str) -> io::Result<(File, TempPath)> {
+    // Created and listed under the lock: a quitting process (`Recording::remove_spool_files_before_exit`) finds
+    // every spool file there is, and none is created after it has looked.
+    let mut listed = SPOOL_FILES
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner());
     let (file, path) = tempfile::Builder::new()
         .prefix(SPOOL_PREFIX)
         .suffix(suffix)
         .tempfile()?
         .into_parts();
-    let mut listed = SPOOL_FILES
-        .lock()
-        .unwrap_or_else(|poisoned| poisoned.into_inner());
     // Forget the files already deleted now and then (amortised: at each power of two), so a
     // process that runs thousands of scenarios keeps a short list.
     if listed.len() >= 64 && listed.len().is_power_of_two() {
@@ -94,17 +96,23 @@ impl Recording {
     /// Delete every spool file this process has created and not yet deleted, whichever run
     /// it belongs to, for a process about to end without running destructors (a second
     /// Ctrl-C quits with `std::process::exit`, which would leave them in the temporary
-    /// folder). Recordings still held become unreadable: call it only on the way out.
+    /// folder). Recordings still held become unreadable, and the list stays locked so no
+    /// spool file is created between this and the exit: call it only on the way out.
     /// Returns how many files it deleted.
-    pub fn remove_spool_files() -> usize {
-        remove_listed(&SPOOL_FILES)
+    pub fn remove_spool_files_before_exit() -> usize {
+        let mut listed = SPOOL_FILES
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner());
+        let removed = remove_all(&mut listed);
+        // Held until the process ends (a run waiting for it never records again).
+        std::mem::forget(listed);
+        removed
     }
 }
 
-/// Delete the files in `list` and empty it; how many were deleted (some may be gone already).
-fn remove_listed(list: &Mutex<Vec<PathBuf>>) -> usize {
-    let paths = std::mem::take(&mut *list.lock().unwrap_or_else(|poisoned| poisoned.into_inner()));
-    paths
+/// Delete the files in `listed` and empty it; how many were deleted (some may be gone already).
+fn remove_all(listed: &mut Vec<PathBuf>) -> usize {
+    std::mem::take(listed)
         .iter()
         .filter(|path| std::fs::remove_file(path).is_ok())
         .count()
@@ -625,7 +633,7 @@ mod tests {
         // What a second Ctrl-C does before `process::exit` (no destructor runs then), on a
         // list of this test's files only: other tests' spools run in this process too.
         let mine = Mutex::new(vec![candump.clone(), pcap.clone()]);
-        assert_eq!(remove_listed(&mine), 2);
+        assert_eq!(remove_all(&mut mine.lock().unwrap()), 2);
         assert!(
             !candump.exists() && !pcap.exists(),
             "spool files left behind"
