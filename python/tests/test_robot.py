@@ -104,5 +104,10 @@ def test_a_bad_robot_file_is_named_with_its_line(tmp_path):
     with pytest.raises(ValueError, match=r"robot\.yaml:\d+:\d+: the URDF has no movable joint "
                                          r"`elbo_pitch`; did you mean `elbow_pitch`\?"):
         armhil.sim.robot(bad)
+    # The YAML reader's complaints are worded as everywhere else in armhil.
+    typo = tmp_path / "typo.yaml"
+    typo.write_text(bad.read_text().replace("base: fixed", "bsae: fixed"))
+    with pytest.raises(ValueError, match=r"typo\.yaml:\d+:\d+: unknown key `bsae`.*did you mean `base`\?"):
+        armhil.sim.robot(typo)
     with pytest.raises(OSError, match="nosuch.yaml"):
         armhil.sim.robot(tmp_path / "nosuch.yaml")

@@ -14,6 +14,8 @@
 //! - [`state_file`]: what the emulators' state files share (kind and format header, atomic
 //!   write).
 //! - [`supervise`]: an emulator task's panic or failure, made observable ([`supervise::DeathWatch`]).
+//! - [`robot`]: whole robots (one world, an actuator per joint, several buses) and robot files.
+//! - [`yaml_words`]: the YAML reader's errors in a file author's words.
 
 pub mod bounded_read;
 pub mod cpu_budget;
@@ -28,3 +30,4 @@ pub mod robot;
 pub mod robstride;
 pub mod state_file;
 pub mod supervise;
+pub mod yaml_words;

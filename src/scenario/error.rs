@@ -195,88 +195,9 @@ pub(crate) fn from_yaml_error(
         .location()
         .map(|location| Pos::from_location(&location))
         .unwrap_or_default();
-    let raw = error.without_snippet().to_string();
-    // The plain rendering ends with " at line L, column C"; we print the position ourselves.
-    let message = match raw.rfind(" at line ") {
-        Some(cut) => raw[..cut].to_owned(),
-        None => raw,
-    };
-    ScenarioError::new(file, pos, rephrase_yaml_message(&message)).with_source(text)
-}
-
-/// The YAML reader's message in a scenario author's words ("unknown key `x`; did you mean
-/// `y`?" rather than "unknown field"), for files read outside this crate too (robot files).
-pub(crate) fn rephrase_yaml_message(message: &str) -> String {
-    suggest(&friendlier(message))
-}
-
-/// Append "did you mean `x`?" to an unknown-key message when one expected key is close.
-fn suggest(message: &str) -> String {
-    let Some(rest) = message.strip_prefix("unknown key `") else {
-        return message.to_owned();
-    };
-    let Some((key, tail)) = rest.split_once('`') else {
-        return message.to_owned();
-    };
-    let Some(list) = tail.strip_prefix(", expected one of ") else {
-        return message.to_owned();
-    };
-    let best = list
-        .split(", ")
-        .map(|c| (strsim::levenshtein(key, c), c))
-        .filter(|(d, c)| *d <= 2 && *d < c.len())
-        .min();
-    match best {
-        Some((_, candidate)) => format!("{message}; did you mean `{candidate}`?"),
-        None => message.to_owned(),
-    }
+    ScenarioError::new(file, pos, sim::yaml_words::message(error)).with_source(text)
 }
 
 /// `; did you mean `x`?` when one of `candidates` is within two edits of `word`, else empty
-/// (the emulators' robot files say it the same way).
-pub(crate) use sim::robot::file::suggestion;
-
-/// serde's type errors name Rust types; say what the scenario author should write instead.
-fn friendlier(message: &str) -> String {
-    let replacements: [(&str, &str); 12] = [
-        ("invalid u64", "expected a whole number >= 0"),
-        ("invalid u32", "expected a whole number >= 0"),
-        ("invalid u16", "expected a whole number >= 0"),
-        ("invalid u8", "expected a whole number >= 0"),
-        ("invalid i64", "expected a whole number"),
-        ("invalid i32", "expected a whole number"),
-        ("invalid floating point", "expected a number"),
-        ("invalid f64", "expected a number"),
-        ("invalid bool", "expected true or false"),
-        ("expected sequence start", "expected a list ([a, b, ...])"),
-        ("expected mapping start", "expected a mapping (key: value)"),
-        ("unknown field", "unknown key"),
-    ];
-    for (from, to) in replacements {
-        if let Some(rest) = message.strip_prefix(from) {
-            return format!("{to}{rest}");
-        }
-    }
-    if let Some(breach) = message.strip_prefix("budget breached: ") {
-        return budget_words(breach);
-    }
-    message.to_owned()
-}
-
-/// The YAML parser's resource-limit error, which it renders as Rust debug text
-/// (`Aliases { aliases: 50001 }`), in plain words.
-fn budget_words(breach: &str) -> String {
-    let name = breach.split([' ', '{']).next().unwrap_or(breach);
-    let mut words = String::new();
-    for c in name.chars() {
-        if c.is_uppercase() && !words.is_empty() {
-            words.push(' ');
-        }
-        words.extend(c.to_lowercase());
-    }
-    let count = breach
-        .split(|c: char| !c.is_ascii_digit())
-        .find(|part| !part.is_empty());
-    let reached = count.map_or_else(String::new, |n| format!(" (reached {n})"));
-    format!("the file exceeds the YAML reader's limit on {words}{reached}")
-}
+/// (every file the project reads says it the same way).
+pub(crate) use sim::yaml_words::suggestion;

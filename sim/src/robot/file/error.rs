@@ -37,9 +37,6 @@ pub struct FileError {
     pub message: String,
     /// The line `at` points into, for display under the message.
     pub source_line: Option<String>,
-    /// Whether the YAML reader found it (its words, which a caller may rephrase), rather than
-    /// the robot file's own checks.
-    pub from_yaml_reader: bool,
 }
 
 impl FileError {
@@ -52,25 +49,16 @@ impl FileError {
             source_line: (at.line > 0)
                 .then(|| text.lines().nth(line).map(str::to_owned))
                 .flatten(),
-            from_yaml_reader: false,
         }
     }
 
-    /// The YAML reader's error, without the position its message repeats.
+    /// The YAML reader's error, in a file author's words ([`crate::yaml_words`]).
     pub(super) fn from_yaml(file: &Path, text: &str, error: &serde_saphyr::Error) -> Self {
         let at = error
             .location()
             .map(|l| Position::from_location(&l))
             .unwrap_or_default();
-        let raw = error.without_snippet().to_string();
-        let message = match raw.rfind(" at line ") {
-            Some(cut) => raw[..cut].to_owned(),
-            None => raw,
-        };
-        Self {
-            from_yaml_reader: true,
-            ..Self::new(file, text, at, message)
-        }
+        Self::new(file, text, at, crate::yaml_words::message(error))
     }
 }
 
@@ -88,13 +76,3 @@ impl fmt::Display for FileError {
 }
 
 impl std::error::Error for FileError {}
-
-/// `; did you mean `x`?` when one of `candidates` is within two edits of `word`, else empty.
-pub fn suggestion(word: &str, candidates: &[&str]) -> String {
-    candidates
-        .iter()
-        .map(|c| (strsim::levenshtein(word, c), *c))
-        .filter(|(d, c)| *d <= 2 && *d < c.len())
-        .min()
-        .map_or_else(String::new, |(_, c)| format!("; did you mean `{c}`?"))
-}

@@ -3,12 +3,13 @@
 
 use std::path::{Path, PathBuf};
 
-use super::error::{suggestion, FileError, Position as Pos};
+use super::error::{FileError, Position as Pos};
 use super::raw::{RawRobot, S};
 use crate::bounded_read::read_text_file;
 use crate::physics::{ArmModel, JointKind};
 use crate::robot::{Base, BusConfig, JointActuator, RobotConfig};
 use crate::robstride::{baud_code_bps, Model, MotorConfig, DEFAULT_HOST_ID};
+use crate::yaml_words::suggestion;
 
 fn pos<T>(value: &S<T>) -> Pos {
     Pos::of(value)

@@ -7,5 +7,5 @@ mod error;
 mod load;
 mod raw;
 
-pub use error::{suggestion, FileError, Position};
+pub use error::{FileError, Position};
 pub use load::{load_robot_file, LoadedRobot, RobotFileError};
