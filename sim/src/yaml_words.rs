@@ -1,6 +1,51 @@
 //! The YAML reader's errors in the words of someone writing the file: "unknown key `x`; did
 //! you mean `y`?" rather than "unknown field", "expected a number" rather than "invalid f64".
-//! Every YAML file the project reads (scenarios, robot files, bench files) says it this way.
+//! Every YAML file the project reads (scenarios, robot files, bench files) says it this way,
+//! and shows the line and long values of an error the same way.
+
+/// Longest source line shown under an error, in bytes.
+const MAX_SOURCE_LINE: usize = 240;
+/// Longest run of non-blank characters an error message shows whole; longer ones (a 10 MB bad
+/// token) are cut to their first [`ELIDED_KEEP`] characters and "…".
+const LONGEST_TOKEN: usize = 80;
+/// How many characters of an over-long token an error message keeps.
+const ELIDED_KEEP: usize = 40;
+
+/// `text` with every token (run of non-blank characters) longer than 80 characters cut to its
+/// first 40 and "…", so a huge bad value is not echoed whole.
+pub fn elide_long_tokens(text: &str) -> String {
+    let mut out = String::with_capacity(text.len().min(4096));
+    let mut token = String::new();
+    let flush = |token: &mut String, out: &mut String| {
+        if token.chars().count() > LONGEST_TOKEN {
+            out.extend(token.chars().take(ELIDED_KEEP));
+            out.push('…');
+        } else {
+            out.push_str(token);
+        }
+        token.clear();
+    };
+    for c in text.chars() {
+        if c.is_whitespace() {
+            flush(&mut token, &mut out);
+            out.push(c);
+        } else {
+            token.push(c);
+        }
+    }
+    flush(&mut token, &mut out);
+    out
+}
+
+/// Line `line` (1-based) of `text`, to show under an error at it; `None` for line 0 (unknown)
+/// and for a line too long to read on a terminal (the headline already says where).
+pub fn source_line(text: &str, line: u64) -> Option<String> {
+    let index = usize::try_from(line.checked_sub(1)?).unwrap_or(usize::MAX);
+    text.lines()
+        .nth(index)
+        .filter(|shown| shown.len() <= MAX_SOURCE_LINE)
+        .map(str::to_owned)
+}
 
 /// The reader's error as a message, without the position and the source snippet its own
 /// rendering carries (callers print the position and the line themselves).

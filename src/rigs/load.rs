@@ -79,20 +79,19 @@ pub struct BenchDevice {
     /// The options and arguments after `armhil sim KIND`, as the command line would have them
     /// (`--iface=can0`, `--`, `robots/humanoid.yaml`).
     pub args: Vec<String>,
-    file: PathBuf,
-    at: Pos,
-    source_line: Option<String>,
+    /// Its entry's place in the file, with the line to show (the message is the error's).
+    entry: ScenarioError,
 }
 
 impl BenchDevice {
     /// A problem with this device, at its entry in the bench file.
     pub fn error(&self, message: impl std::fmt::Display) -> ScenarioError {
         let mut error = ScenarioError::new(
-            &self.file,
-            self.at,
+            &self.entry.file,
+            self.entry.pos,
             format!("device `{}` ({}): {message}", self.name, self.kind.name()),
         );
-        error.source_line = self.source_line.clone();
+        error.source_line = self.entry.source_line.clone();
         error
     }
 }
@@ -202,14 +201,11 @@ pub fn load_bench_file(path: &Path) -> Result<BenchFile, BenchFileError> {
         let device_err = |at: Pos, message: String| err(at, format!("device `{name}`: {message}"));
         let kind = kind_of(&entry.value, at).map_err(|(at, m)| device_err(at, m))?;
         let args = command_line(kind, &entry.value).map_err(|(at, m)| device_err(at, m))?;
-        let line = usize::try_from(at.line.saturating_sub(1)).unwrap_or(usize::MAX);
         devices.push(BenchDevice {
             name: name.clone(),
             kind,
             args,
-            file: path.to_owned(),
-            at,
-            source_line: text.lines().nth(line).map(str::to_owned),
+            entry: ScenarioError::new(path, at, "").with_source(&text),
         });
     }
     Ok(BenchFile {

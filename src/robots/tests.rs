@@ -168,3 +168,19 @@ fn every_shipped_robot_loads_without_warnings() {
     }
     assert!(found >= 1);
 }
+
+#[test]
+fn a_huge_bad_value_is_cut_short_in_the_message_and_its_line_not_shown() {
+    let name = "j".repeat(500);
+    let (_dir, file) = write(&ARM.replace("joint: elbow_pitch", &format!("joint: {name}")));
+    let Err(RobotFileError::Invalid(e)) = load_robot_file(&file) else {
+        panic!("expected an invalid file");
+    };
+    assert!(
+        e.message.contains(&format!("`{}…", "j".repeat(39))),
+        "{}",
+        e.message
+    );
+    assert!(!e.message.contains(&"j".repeat(41)), "{}", e.message);
+    assert_eq!(e.source_line, None, "a 500-character line is not shown");
+}

@@ -22,39 +22,9 @@ impl Pos {
     }
 }
 
-/// Longest source line shown under an error, in bytes.
-const MAX_SOURCE_LINE: usize = 240;
-/// Longest run of non-blank characters an error message shows whole; longer ones (a 10 MB bad
-/// token) are cut to their first [`ELIDED_KEEP`] characters and "…".
-const LONGEST_TOKEN: usize = 80;
-/// How many characters of an over-long token an error message keeps.
-const ELIDED_KEEP: usize = 40;
-
-/// `text` with every token (run of non-blank characters) longer than 80 characters cut to its
-/// first 40 and "…", so a huge bad value is not echoed whole.
-pub fn elide_long_tokens(text: &str) -> String {
-    let mut out = String::with_capacity(text.len().min(4096));
-    let mut token = String::new();
-    let flush = |token: &mut String, out: &mut String| {
-        if token.chars().count() > LONGEST_TOKEN {
-            out.extend(token.chars().take(ELIDED_KEEP));
-            out.push('…');
-        } else {
-            out.push_str(token);
-        }
-        token.clear();
-    };
-    for c in text.chars() {
-        if c.is_whitespace() {
-            flush(&mut token, &mut out);
-            out.push(c);
-        } else {
-            token.push(c);
-        }
-    }
-    flush(&mut token, &mut out);
-    out
-}
+/// `text` with every over-long token cut short, so a huge bad value is not echoed whole (the
+/// same rule for every file error the project reports).
+pub use sim::yaml_words::elide_long_tokens;
 
 /// One problem in a scenario file, with where it is and what was expected.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -83,14 +53,7 @@ impl ScenarioError {
     /// Attach the source line the position points into, for display. A line too long to read
     /// on a terminal is left out: the headline already says where the problem is.
     pub(crate) fn with_source(mut self, text: &str) -> Self {
-        if self.pos.line > 0 {
-            let index = usize::try_from(self.pos.line - 1).unwrap_or(usize::MAX);
-            self.source_line = text
-                .lines()
-                .nth(index)
-                .filter(|line| line.len() <= MAX_SOURCE_LINE)
-                .map(str::to_owned);
-        }
+        self.source_line = sim::yaml_words::source_line(text, self.pos.line);
         self
     }
 

@@ -326,6 +326,11 @@ async fn send(socket: &mut WebSocket, value: &Value) -> Result<(), axum::Error> 
     socket.send(Message::Text(value.to_string().into())).await
 }
 
+/// A value as the page shows it: to a thousandth (of a degree, a volt, a second …).
+fn round3(v: f64) -> f64 {
+    (v * 1000.0).round() / 1000.0
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

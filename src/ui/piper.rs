@@ -9,7 +9,7 @@ use sim::piper::{FaultKind, PiperFault, PiperMonitor};
 
 use super::bus_tap::BusTap;
 use super::fault_args::fault_args;
-use super::{Command, LiveSource};
+use super::{round3, Command, LiveSource};
 use crate::harness::report::html::arm_model;
 
 /// A running Piper emulator as the web view sees it.
@@ -70,10 +70,6 @@ pub fn piper_fault_to_clear(name: &str, args: &Map<String, Value>) -> Result<Pip
 
 fn deg(values: &[f64; 6]) -> Vec<f64> {
     values.iter().map(|v| round3(v.to_degrees())).collect()
-}
-
-fn round3(v: f64) -> f64 {
-    (v * 1000.0).round() / 1000.0
 }
 
 fn name_or_code(name: Option<&'static str>, code: u8) -> String {

@@ -8,7 +8,7 @@ use serde_json::{json, Map, Value};
 use sim::realman::{RealmanFault, RealmanFaultKind, RealmanMonitor};
 
 use super::fault_args::fault_args;
-use super::{Command, LiveSource};
+use super::{round3, Command, LiveSource};
 use crate::harness::elide_long_tokens;
 use crate::harness::report::html::arm_model;
 
@@ -60,10 +60,6 @@ impl RealmanLive {
             active: Mutex::new(Vec::new()),
         }
     }
-}
-
-fn round3(v: f64) -> f64 {
-    (v * 1000.0).round() / 1000.0
 }
 
 #[async_trait::async_trait]

@@ -7,11 +7,12 @@ use std::sync::{Mutex, PoisonError};
 use serde_json::{json, Value};
 use sim::fault_args::FaultArgValue;
 use sim::robot::{RobotMonitor, RobotSnapshot};
-use sim::robstride::{Fault, ModeState};
+use sim::robstride::Fault;
 
 use super::bus_tap::BusTap;
 use super::fault_args::fault_args;
-use super::{Command, LiveSource};
+use super::robstride::{fault_names, mode_name};
+use super::{round3, Command, LiveSource};
 use crate::harness::report::html::arm_model;
 
 /// The bus fault's name on the page.
@@ -142,7 +143,10 @@ impl RobotLive {
                     "{}, {:.1} °C, faults: {}",
                     mode_name(m.mode),
                     m.temperature_c,
-                    fault_names(m.fault_word)
+                    match fault_names(m.fault_word) {
+                        names if names.is_empty() => "none".to_owned(),
+                        names => names.join(","),
+                    }
                 )
             ]));
         }
@@ -177,27 +181,6 @@ impl RobotLive {
     }
 }
 
-fn mode_name(mode: ModeState) -> &'static str {
-    match mode {
-        ModeState::Reset => "reset",
-        ModeState::Calibration => "calibration",
-        ModeState::Run => "run",
-    }
-}
-
-fn fault_names(word: u32) -> String {
-    let names: Vec<&str> = Fault::ALL
-        .iter()
-        .filter(|f| word & f.word_bit() != 0)
-        .map(|f| f.name())
-        .collect();
-    if names.is_empty() {
-        "none".into()
-    } else {
-        names.join(",")
-    }
-}
-
 /// The root link's pose as the 3D view takes it: a 4×4 transform by rows.
 fn base_pose(s: &RobotSnapshot) -> Vec<f64> {
     let (r, t) = (&s.base_rotation, &s.base_position_m);
@@ -212,10 +195,6 @@ fn base_pose(s: &RobotSnapshot) -> Vec<f64> {
 
 fn round4(v: f64) -> f64 {
     (v * 10_000.0).round() / 10_000.0
-}
-
-fn round3(v: f64) -> f64 {
-    (v * 1000.0).round() / 1000.0
 }
 
 #[async_trait::async_trait]

@@ -9,7 +9,7 @@ use sim::robstride::{Fault, ModeState, MotorFault, MotorSnapshot, RobstrideMonit
 
 use super::bus_tap::BusTap;
 use super::fault_args::fault_args;
-use super::{Command, LiveSource};
+use super::{round3, Command, LiveSource};
 
 /// RobStride actuators on one bus as the web view sees them.
 #[derive(Debug)]
@@ -48,7 +48,8 @@ impl RobstrideLive {
     }
 }
 
-fn mode_name(mode: ModeState) -> &'static str {
+/// The mode's name on the page (also a robot's actuators').
+pub(super) fn mode_name(mode: ModeState) -> &'static str {
     match mode {
         ModeState::Reset => "reset",
         ModeState::Calibration => "calibration",
@@ -56,17 +57,13 @@ fn mode_name(mode: ModeState) -> &'static str {
     }
 }
 
-/// Names of the injectable faults whose bit is set in `word`.
-fn fault_names(word: u32) -> Vec<&'static str> {
+/// Names of the injectable faults whose bit is set in `word` (also a robot's actuators').
+pub(super) fn fault_names(word: u32) -> Vec<&'static str> {
     Fault::ALL
         .iter()
         .filter(|f| word & f.word_bit() != 0)
         .map(|f| f.name())
         .collect()
-}
-
-fn round3(v: f64) -> f64 {
-    (v * 1000.0).round() / 1000.0
 }
 
 fn motor_json(m: &MotorSnapshot) -> Value {

@@ -41,14 +41,11 @@ pub struct FileError {
 
 impl FileError {
     pub(super) fn new(file: &Path, text: &str, at: Position, message: impl Into<String>) -> Self {
-        let line = usize::try_from(at.line.saturating_sub(1)).unwrap_or(usize::MAX);
         Self {
             file: file.to_owned(),
             at,
-            message: message.into(),
-            source_line: (at.line > 0)
-                .then(|| text.lines().nth(line).map(str::to_owned))
-                .flatten(),
+            message: crate::yaml_words::elide_long_tokens(&message.into()),
+            source_line: crate::yaml_words::source_line(text, at.line),
         }
     }
 
