@@ -15,7 +15,10 @@ use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 
 pub mod contract;
 pub(crate) use contract::{named_bus, one_bus, KindSpec, RawKindStep, Wiring};
-pub use contract::{BusUse, Device, DeviceError, FrameDecoder, Reply, TraceColumn};
+pub use contract::{
+    BaseColumns, BusUse, Device, DeviceError, Drawing, FrameDecoder, JointColumn, Posing, Reply,
+    TraceColumn,
+};
 
 pub mod actuator_group;
 pub mod arm;
@@ -95,9 +98,9 @@ macro_rules! device_kinds {
                 match self { $( Self::$variant(s) => <$module::Kind as KindSpec>::buses(s, at), )* }
             }
 
-            /// The URDF the 3D views draw this device with, if it is a robot or arm.
-            pub fn urdf(&self) -> Option<&'static str> {
-                match self { $( Self::$variant(s) => <$module::Kind as KindSpec>::urdf(s), )* }
+            /// How the 3D views draw this device ([`KindSpec::drawing`]).
+            pub fn drawing(&self) -> Option<Drawing> {
+                match self { $( Self::$variant(s) => <$module::Kind as KindSpec>::drawing(s), )* }
             }
 
             /// A decoder of this device's CAN frames for reports, if it speaks CAN.

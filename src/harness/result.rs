@@ -170,8 +170,8 @@ impl Verdict {
 /// snapshots).
 #[derive(Clone, Default)]
 pub struct BenchInfo {
-    /// URDF of the arm the scenario drives, to draw it.
-    pub arm_urdf: Option<&'static str>,
+    /// How to draw the arm or robot the scenario drives (its URDF, the columns that pose it).
+    pub drawing: Option<crate::devices::Drawing>,
     /// Each CAN device's frame decoder, in bench order: a frame is named by the first that
     /// knows it.
     pub frame_decoders: Vec<std::sync::Arc<dyn crate::devices::FrameDecoder>>,
@@ -180,7 +180,7 @@ pub struct BenchInfo {
 impl std::fmt::Debug for BenchInfo {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("BenchInfo")
-            .field("arm_urdf", &self.arm_urdf.map(|u| u.len()))
+            .field("urdf_bytes", &self.drawing.as_ref().map(|d| d.urdf.len()))
             .field("frame_decoders", &self.frame_decoders.len())
             .finish()
     }

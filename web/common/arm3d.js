@@ -131,6 +131,29 @@
     return values;
   }
 
+  // A robot's pose from its trace, as a report's `pose` document maps the columns: `read(name)`
+  // gives a column's value at the cursor (null when not traced yet). Each joint is
+  // direction · value + offset (rad); the root link is placed from the base columns (any
+  // missing count as 0). Returns the angles for `set` (degrees, armJoints order; NaN where
+  // unknown) and the root pose (16 numbers by rows, or undefined for a fixed base).
+  function poseFromColumns(model, pose, read) {
+    const rad = {};
+    for (const j of pose.joints) {
+      const v = read(j.column);
+      if (typeof v === "number" && isFinite(v)) rad[j.joint] = j.direction * v + j.offset;
+    }
+    const deg = armJoints(model).map((j) => (j.name in rad ? (rad[j.name] * 180) / Math.PI : NaN));
+    let base;
+    if (pose.base) {
+      const value = (name) => {
+        const v = read(name);
+        return typeof v === "number" && isFinite(v) ? v : 0;
+      };
+      base = fromXyzRpy(pose.base.position.map(value), pose.base.rpy.map(value));
+    }
+    return { deg, base };
+  }
+
   // A camera orbiting `target`: yaw/pitch in rad, distance in m. Returns a projector from world
   // points to [x, y, depth] in canvas pixels.
   function projector(cam, width, height) {
@@ -181,13 +204,21 @@
   }
 
   // A view of `model` on `canvas`. Drag to orbit, wheel to zoom. `set(anglesDeg, gripperM,
-  // base)` changes the pose (`base`: the root link's pose in the world, for a floating robot); `renderedDeg()` returns the angles last drawn (tests read it).
+  // base)` changes the pose (`base`: the root link's pose in the world, for a floating robot); `renderedDeg()` returns the angles last drawn; the canvas's data-angles and data-root
+  // attributes hold them and the root link's position (tests read them).
   function createArmView(canvas, model) {
     const ctx = canvas.getContext("2d");
-    // Frame the arm whatever its pose: its size is bounded by the sum of the joint offsets.
-    const size = Math.max(0.3, model.joints.reduce((sum, j) => sum + Math.hypot(...(j.xyz || [0, 0, 0])), 0));
+    // Frame the model whatever its pose: no link is further from the root than the longest
+    // chain of joint offsets (a tree's branches, a humanoid's limbs, are not added up).
+    const reach = {};
+    let size = 0.3;
+    for (const j of model.joints) {
+      reach[j.child] = (reach[j.parent] || 0) + Math.hypot(...(j.xyz || [0, 0, 0]));
+      size = Math.max(size, reach[j.child]);
+    }
     const cam = { yaw: 0.9, pitch: 0.4, distance: 1.3 * size, target: [0, 0, 0.3 * size] };
     let pose = { deg: [], gripperM: undefined, base: undefined };
+    let framedOnBase = false;
     let drawn = [];
     let dirty = true;
     let frames = 0;
@@ -250,6 +281,8 @@
       drawn = armJoints(model).map((j) => ((values[j.name] || 0) * 180) / Math.PI);
       frames++;
       canvas.dataset.angles = drawn.map((a) => a.toFixed(2)).join(",");
+      const root = fr[model.joints.length ? model.joints[0].parent : model.root];
+      if (root) canvas.dataset.root = origin(root).map((v) => v.toFixed(3)).join(",");
       canvas.dataset.frames = String(frames);
     }
 
@@ -261,6 +294,13 @@
 
     return {
       set(anglesDeg, gripperM, base) {
+        if (base && !framedOnBase) {
+          // A floating robot: look at its root where it first stands, from far enough that
+          // the limbs above and below it (the longest chain each way) fit.
+          framedOnBase = true;
+          cam.target = [base[3], base[7], base[11]];
+          cam.distance = 2.8 * size;
+        }
         pose = { deg: anglesDeg.slice(), gripperM, base };
         dirty = true;
       },
@@ -314,6 +354,6 @@
   return {
     createDialsView,
     mul, fromXyzRpy, rotation, translation, apply, origin,
-    linkFrames, valuesFromDeg, armJoints, actuatedJoints, projector, segments, createArmView,
+    linkFrames, valuesFromDeg, poseFromColumns, armJoints, actuatedJoints, projector, segments, createArmView,
   };
 });

@@ -69,7 +69,17 @@
   const timeLabel = el("span", { id: "time-label", text: "0.000 s" });
   replay.appendChild(el("h2", { text: "Replay" }));
   let view = null;
-  if (data.model && jointCols.length) {
+  // A robot names the columns that pose it (joints by URDF name, a floating root's pose).
+  const posed = data.model && data.pose ? data.pose : null;
+  if (posed) {
+    const canvas = el("canvas", { class: "arm", id: "arm-view" });
+    replay.appendChild(canvas);
+    requestAnimationFrame(() => {
+      fitCanvas(canvas);
+      view = A.createArmView(canvas, data.model);
+      poseAt(cursorT);
+    });
+  } else if (data.model && jointCols.length) {
     const canvas = el("canvas", { class: "arm", id: "arm-view" });
     replay.appendChild(canvas);
     requestAnimationFrame(() => {
@@ -94,6 +104,11 @@
     timeLabel.textContent = t.toFixed(3) + " s";
     if (!view || !ts.length) return;
     const i = A.nearestIndex(ts, t);
+    if (posed) {
+      const p = A.poseFromColumns(data.model, posed, (name) => (cols[name] ? cols[name].values[i] : null));
+      view.set(p.deg, undefined, p.base);
+      return;
+    }
     if (!jointCols.length) {
       view.set(motorCols.map((n) => (cols[n].values[i] === null ? NaN : (cols[n].values[i] * 180) / Math.PI)));
       return;

@@ -10,12 +10,14 @@
 //!   deadlines in real time, or under a paused clock), with a [`RobotHandle`] for faults per
 //!   joint and per bus, snapshots and shutdown. A state file keeps every actuator's flash.
 
+mod base_pose;
 mod config;
 pub mod file;
 pub mod joint_plant;
 mod runner;
 mod world;
 
+pub use base_pose::BasePose;
 pub use config::{Base, BusConfig, JointActuator, RobotConfig, RobotConfigError};
 pub use runner::{
     JointSnapshot, RobotEmulator, RobotError, RobotHandle, RobotMonitor, RobotSnapshot,

@@ -10,6 +10,7 @@ use tokio::sync::{mpsc, oneshot};
 use tokio::task::JoinHandle;
 use tokio::time::{sleep, Instant};
 
+use super::base_pose::BasePose;
 use super::config::{RobotConfig, RobotConfigError};
 use super::world::{RobotWorld, RobotWorldError};
 use crate::pacer::Pacer;
@@ -139,9 +140,9 @@ pub struct RobotHandle {
 #[derive(Debug, Clone)]
 pub struct RobotMonitor {
     requests: mpsc::Sender<Request>,
-    /// The root link's position after the latest step (read without asking the runner, so a
-    /// scenario's synchronous checks can see it).
-    base_m: Arc<std::sync::Mutex<[f64; 3]>>,
+    /// The root link's pose after the latest step (read without asking the runner, so a
+    /// scenario's synchronous checks and its trace can see it).
+    base: Arc<std::sync::Mutex<BasePose>>,
 }
 
 impl RobotEmulator {
@@ -191,14 +192,14 @@ impl RobotEmulator {
             })
             .collect();
         let (requests, inbox) = mpsc::channel(REQUEST_QUEUE);
-        let base_m = Arc::new(std::sync::Mutex::new(base_position_m(&world)));
+        let base = Arc::new(std::sync::Mutex::new(base_pose(&world)));
         let runner = Runner {
             ports,
             actuators,
             world,
             state,
             state_path: config.state_file,
-            base_m: Arc::clone(&base_m),
+            base: Arc::clone(&base),
         };
         let (supervisor, death) = Supervisor::new();
         let task = supervisor.spawn(
@@ -207,7 +208,7 @@ impl RobotEmulator {
             runner.run(inbox),
         );
         Ok(RobotHandle {
-            view: RobotMonitor { requests, base_m },
+            view: RobotMonitor { requests, base },
             task: Some(task),
             death,
         })
@@ -218,7 +219,12 @@ impl RobotMonitor {
     /// Position of the URDF root link's origin in the world after the latest step (m): a
     /// floating robot's pelvis height is its `[2]`.
     pub fn base_position_m(&self) -> [f64; 3] {
-        *self.base_m.lock().unwrap_or_else(|e| e.into_inner())
+        self.base_pose().position_m
+    }
+
+    /// Pose of the URDF root link in the world after the latest step.
+    pub fn base_pose(&self) -> BasePose {
+        *self.base.lock().unwrap_or_else(|e| e.into_inner())
     }
 
     async fn ask<T>(
@@ -348,22 +354,19 @@ struct Runner {
     world: RobotWorld,
     state: StateFile,
     state_path: Option<PathBuf>,
-    /// Shared with the monitors: the root link's position after the latest step.
-    base_m: Arc<std::sync::Mutex<[f64; 3]>>,
+    /// Shared with the monitors: the root link's pose after the latest step.
+    base: Arc<std::sync::Mutex<BasePose>>,
 }
 
-/// Position of the URDF root link's origin in the world (m).
-fn base_position_m(world: &RobotWorld) -> [f64; 3] {
+/// Pose of the URDF root link in the world.
+fn base_pose(world: &RobotWorld) -> BasePose {
     let world = world.world();
     world
         .model()
         .link_names()
         .first()
         .and_then(|root| world.link_pose(root))
-        .map_or([0.0; 3], |pose| {
-            let t = pose.translation.vector;
-            [t.x, t.y, t.z]
-        })
+        .map_or_else(BasePose::default, |pose| BasePose::of(&pose))
 }
 
 /// Orientation of the URDF root link in the world (rotation matrix, by rows).
@@ -542,7 +545,7 @@ impl Runner {
         let world = self.world.world();
         let q = world.joint_positions();
         let qd = world.joint_velocities();
-        let base_position_m = base_position_m(&self.world);
+        let base_position_m = base_pose(&self.world).position_m;
         let joints = self
             .actuators
             .iter()
@@ -592,7 +595,7 @@ impl Runner {
             out.extend(a.firmware.tick().into_iter().map(|f| (bus, f)));
         }
         self.world.step()?;
-        *self.base_m.lock().unwrap_or_else(|e| e.into_inner()) = base_position_m(&self.world);
+        *self.base.lock().unwrap_or_else(|e| e.into_inner()) = base_pose(&self.world);
         for (bus, frame) in out {
             self.send(bus, Some(frame)).await;
         }

@@ -23,8 +23,57 @@ use crate::scenario::{ErrorClass, Signal};
 /// Quantum of traced angles (rad): a thousandth, so a wrong scale factor still shows.
 const RAD_Q: f64 = 0.001;
 
-/// Quantum of traced heights (m): a millimetre.
+/// Quantum of traced heights and positions (m): a millimetre.
 const M_Q: f64 = 0.001;
+
+/// The trace columns of a floating robot's root link pose (see `base_columns`); the report's
+/// replay reads them by these names.
+pub(crate) const BASE_X: &str = "base_x_m";
+/// See [`BASE_X`].
+pub(crate) const BASE_Y: &str = "base_y_m";
+/// See [`BASE_X`].
+pub(crate) const BASE_HEIGHT: &str = "base_height_m";
+/// See [`BASE_X`].
+pub(crate) const BASE_ROLL: &str = "base_roll_rad";
+/// See [`BASE_X`].
+pub(crate) const BASE_PITCH: &str = "base_pitch_rad";
+/// See [`BASE_X`].
+pub(crate) const BASE_YAW: &str = "base_yaw_rad";
+
+/// The trace column of joint `joint`'s angle (its actuator's shaft angle).
+pub(crate) fn joint_column(joint: &str) -> String {
+    format!("{joint}_rad")
+}
+
+/// A floating robot's base columns: `joints` traces its height (what a fall shows), `pose`
+/// where it is and how it lies, which the report's replay draws. Names and quanta.
+fn base_columns(signals: &[Signal]) -> Vec<(&'static str, f64)> {
+    let joints = signals.contains(&Signal::Joints);
+    let pose = signals.contains(&Signal::Pose);
+    let mut columns = Vec::new();
+    if pose {
+        columns.extend([(BASE_X, M_Q), (BASE_Y, M_Q)]);
+    }
+    if joints || pose {
+        columns.push((BASE_HEIGHT, M_Q));
+    }
+    if pose {
+        columns.extend([(BASE_ROLL, RAD_Q), (BASE_PITCH, RAD_Q), (BASE_YAW, RAD_Q)]);
+    }
+    columns
+}
+
+/// The value of base column `name` (one of [`base_columns`]'s) in `pose`.
+fn base_value(pose: &sim::robot::BasePose, name: &str) -> f64 {
+    match name {
+        BASE_X => pose.position_m[0],
+        BASE_Y => pose.position_m[1],
+        BASE_HEIGHT => pose.position_m[2],
+        BASE_ROLL => pose.rpy_rad[0],
+        BASE_PITCH => pose.rpy_rad[1],
+        _ => pose.rpy_rad[2],
+    }
+}
 
 /// What answers for the group in an in-process run.
 pub(crate) enum GroupEmulator {
@@ -132,6 +181,9 @@ pub(crate) struct GroupDevice {
     robot: Option<sim::robot::RobotMonitor>,
     /// Each actuator's background command stream (`hold` with `every_ms`), if any.
     streams: std::sync::Mutex<Vec<Option<tokio::task::JoinHandle<()>>>>,
+    /// The base's roll, pitch, yaw in the last trace row (rad), which the next row's angles
+    /// stay near.
+    last_rpy_rad: std::sync::Mutex<Option<[f64; 3]>>,
     /// One driver per bus; keeps the receive tasks alive while the handles are used.
     _drivers: Vec<RobstrideDriver>,
     emulator: Mutex<Option<GroupEmulator>>,
@@ -179,6 +231,7 @@ impl GroupDevice {
             name: name.to_owned(),
             settings: settings.clone(),
             streams: std::sync::Mutex::new(motors.iter().map(|_| None).collect()),
+            last_rpy_rad: std::sync::Mutex::new(None),
             robot: match &emulator {
                 Some(GroupEmulator::Robot(handle)) => Some(handle.monitor()),
                 _ => None,
@@ -445,36 +498,44 @@ impl Device for GroupDevice {
     }
 
     fn trace_columns(&self, signals: &[Signal]) -> Vec<TraceColumn> {
-        if !signals.contains(&Signal::Joints) {
-            return Vec::new();
-        }
-        let mut columns: Vec<TraceColumn> = self
-            .settings
-            .actuators
-            .iter()
-            .map(|a| TraceColumn {
-                name: format!("{}_rad", a.joint),
+        let mut columns: Vec<TraceColumn> = Vec::new();
+        if signals.contains(&Signal::Joints) {
+            columns.extend(self.settings.actuators.iter().map(|a| TraceColumn {
+                name: joint_column(&a.joint),
                 quantum: RAD_Q,
                 group: "angles",
-            })
-            .collect();
+            }));
+        }
         if self.floating_robot().is_some() {
-            columns.push(TraceColumn {
-                name: "base_height_m".to_owned(),
-                quantum: M_Q,
-                group: "base",
-            });
+            columns.extend(
+                base_columns(signals)
+                    .into_iter()
+                    .map(|(name, quantum)| TraceColumn {
+                        name: name.to_owned(),
+                        quantum,
+                        group: "base",
+                    }),
+            );
         }
         columns
     }
 
     fn trace_row(&self, signals: &[Signal]) -> Vec<Option<f64>> {
-        if !signals.contains(&Signal::Joints) {
-            return Vec::new();
+        let mut row: Vec<Option<f64>> = Vec::new();
+        if signals.contains(&Signal::Joints) {
+            row.extend((0..self.motors.len()).map(|i| self.angle_rad(i)));
         }
-        let mut row: Vec<Option<f64>> = (0..self.motors.len()).map(|i| self.angle_rad(i)).collect();
         if let Some(robot) = self.floating_robot() {
-            row.push(Some(robot.base_position_m()[2]));
+            let mut pose = robot.base_pose();
+            // Angles that run on through a fall instead of jumping by π or a turn.
+            let mut last = self.last_rpy_rad.lock().unwrap_or_else(|e| e.into_inner());
+            pose.rpy_rad = pose.rpy_near(last.unwrap_or([0.0; 3]));
+            *last = Some(pose.rpy_rad);
+            row.extend(
+                base_columns(signals)
+                    .into_iter()
+                    .map(|(name, _)| Some(base_value(&pose, name))),
+            );
         }
         row
     }

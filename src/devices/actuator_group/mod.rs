@@ -20,7 +20,10 @@ pub use model::{
     GroupAction as Action, GroupCheck as Check, GroupFault as Fault, GroupSettings as Settings,
 };
 
-use super::{one_bus, BusUse, Device, FrameDecoder, KindSpec, RawKindStep, Wiring};
+use super::{
+    one_bus, BaseColumns, BusUse, Device, Drawing, FrameDecoder, JointColumn, KindSpec, Posing,
+    RawKindStep, Wiring,
+};
 use crate::bench::{Clock, HOST_NODE};
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 use device::GroupDevice;
@@ -147,9 +150,27 @@ impl KindSpec for Kind {
         }
     }
 
-    fn urdf(_settings: &Settings) -> Option<&'static str> {
-        // A group is a set of actuators, not a robot: there is nothing to draw.
-        None
+    fn drawing(settings: &Settings) -> Option<Drawing> {
+        // A group without a robot is a set of rigs: there is no model to draw.
+        let robot = settings.robot.as_ref()?;
+        let joints = robot
+            .actuators
+            .iter()
+            .map(|a| JointColumn {
+                column: device::joint_column(&a.joint),
+                joint: a.joint.clone(),
+                direction: if a.direction < 0.0 { -1.0 } else { 1.0 },
+                offset_rad: a.zero_offset_rad,
+            })
+            .collect();
+        let base = matches!(robot.base, sim::robot::Base::Floating { .. }).then_some(BaseColumns {
+            position_m: [device::BASE_X, device::BASE_Y, device::BASE_HEIGHT],
+            rpy_rad: [device::BASE_ROLL, device::BASE_PITCH, device::BASE_YAW],
+        });
+        Some(Drawing {
+            urdf: robot.urdf.clone().into(),
+            posed_by: Posing::Joints { joints, base },
+        })
     }
 
     fn frame_decoder(_settings: &Settings) -> Option<Arc<dyn FrameDecoder>> {

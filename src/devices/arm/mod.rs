@@ -16,7 +16,7 @@ pub use model::{
     ArmAction as Action, ArmCond as Check, ArmFault as Fault, ArmSettings as Settings,
 };
 
-use super::{one_bus, BusUse, Device, FrameDecoder, KindSpec, RawKindStep, Wiring};
+use super::{one_bus, BusUse, Device, Drawing, FrameDecoder, KindSpec, RawKindStep, Wiring};
 use crate::bench::Clock;
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 use device::{ArmDevice, Emulator};
@@ -148,11 +148,11 @@ impl KindSpec for Kind {
         }
     }
 
-    fn urdf(settings: &Settings) -> Option<&'static str> {
-        Some(match settings.vendor {
+    fn drawing(settings: &Settings) -> Option<Drawing> {
+        Some(Drawing::arm(match settings.vendor {
             driver::arm::Vendor::Piper => sim::piper::BUNDLED_URDF,
             driver::arm::Vendor::Realman => sim::realman::plant::RM65B_URDF,
-        })
+        }))
     }
 
     fn frame_decoder(settings: &Settings) -> Option<Arc<dyn FrameDecoder>> {

@@ -10,11 +10,12 @@
 //!   the grammar core in [`crate::scenario`];
 //! - **how to build it on a bench** ([`KindSpec::build`]): emulator (in-process runs) and
 //!   driver, on the transport the device speaks;
-//! - what the **views** need: the URDF to draw ([`KindSpec::urdf`]) and a decoder for its
+//! - what the **views** need: the URDF to draw and the trace columns that pose it ([`KindSpec::drawing`]) and a decoder for its
 //!   frames in reports ([`KindSpec::frame_decoder`]);
 //! - its **trace columns**, observations and fault injection, through [`Device`].
 
 mod device;
+mod drawing;
 
 use std::fmt::Debug;
 use std::sync::Arc;
@@ -23,6 +24,7 @@ use async_trait::async_trait;
 use bus::CanFrame;
 
 pub use device::{Device, DeviceError, Reply, TraceColumn};
+pub use drawing::{BaseColumns, Drawing, JointColumn, Posing};
 
 use crate::bench::{Clock, RunOptions};
 use crate::interop::DecodedFrame;
@@ -170,8 +172,9 @@ pub(crate) trait KindSpec: 'static {
     /// bench's only bus), a robot's several, none for a device that speaks no CAN.
     fn buses(settings: &Self::Settings, at: Pos) -> Vec<BusUse>;
 
-    /// The URDF the 3D views draw this device with, if it is a robot or arm.
-    fn urdf(settings: &Self::Settings) -> Option<&'static str>;
+    /// How the 3D views draw this device (its URDF, the trace columns that pose it), if it
+    /// is a robot or arm.
+    fn drawing(settings: &Self::Settings) -> Option<Drawing>;
 
     /// A decoder of this device's CAN frames for reports, if it speaks CAN.
     fn frame_decoder(settings: &Self::Settings) -> Option<Arc<dyn FrameDecoder>>;

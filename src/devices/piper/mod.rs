@@ -22,7 +22,7 @@ pub use validate::DEFAULT_FIRMWARE;
 /// A Piper condition.
 pub type Check = model::Check;
 
-use super::{one_bus, BusUse, Device, FrameDecoder, KindSpec, RawKindStep, Wiring};
+use super::{one_bus, BusUse, Device, Drawing, FrameDecoder, KindSpec, RawKindStep, Wiring};
 use crate::bench::{Clock, RunOptions, HOST_NODE};
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 use device::checks;
@@ -202,8 +202,8 @@ impl KindSpec for Kind {
         one_bus(&settings.bus, at)
     }
 
-    fn urdf(_settings: &Settings) -> Option<&'static str> {
-        Some(sim::piper::BUNDLED_URDF)
+    fn drawing(_settings: &Settings) -> Option<Drawing> {
+        Some(Drawing::arm(sim::piper::BUNDLED_URDF))
     }
 
     fn frame_decoder(_settings: &Settings) -> Option<Arc<dyn FrameDecoder>> {

@@ -15,7 +15,7 @@ pub use model::{
 };
 pub use observe::Observation;
 
-use super::{BusUse, Device, FrameDecoder, KindSpec, RawKindStep, Wiring};
+use super::{BusUse, Device, Drawing, FrameDecoder, KindSpec, RawKindStep, Wiring};
 use crate::bench::Clock;
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 use device::RealmanDevice;
@@ -124,12 +124,12 @@ impl KindSpec for Kind {
         Vec::new()
     }
 
-    fn urdf(settings: &Settings) -> Option<&'static str> {
-        Some(if settings.model.starts_with("RM75") {
+    fn drawing(settings: &Settings) -> Option<Drawing> {
+        Some(Drawing::arm(if settings.model.starts_with("RM75") {
             sim::realman::plant::RM75B_URDF
         } else {
             sim::realman::plant::RM65B_URDF
-        })
+        }))
     }
 
     fn frame_decoder(_settings: &Settings) -> Option<Arc<dyn FrameDecoder>> {

@@ -18,7 +18,7 @@ pub use model::{
 };
 pub use observe::{MotorObservation, Observation};
 
-use super::{one_bus, BusUse, Device, FrameDecoder, KindSpec, RawKindStep, Wiring};
+use super::{one_bus, BusUse, Device, Drawing, FrameDecoder, KindSpec, RawKindStep, Wiring};
 use crate::bench::{Clock, HOST_NODE};
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 use device::RobstrideDevice;
@@ -122,7 +122,8 @@ impl KindSpec for Kind {
         one_bus(&settings.bus, at)
     }
 
-    fn urdf(_settings: &Settings) -> Option<&'static str> {
+    fn drawing(_settings: &Settings) -> Option<Drawing> {
+        // A test rig of motors, drawn as dials from their angle columns.
         None
     }
 

@@ -23,8 +23,8 @@ use super::Scenario;
 pub fn bench_info(scenario: &Scenario) -> BenchInfo {
     let kinds = || scenario.bench.devices.iter().map(|d| &d.kind);
     BenchInfo {
-        // The first device that is drawn: the arm the scenario drives.
-        arm_urdf: kinds().find_map(|k| k.urdf()),
+        // The first device that is drawn: the arm or robot the scenario drives.
+        drawing: kinds().find_map(|k| k.drawing()),
         frame_decoders: kinds().filter_map(|k| k.frame_decoder()).collect(),
     }
 }

@@ -220,6 +220,44 @@ test("the Realman live view follows a movej, lists its TCP client and reports a 
   await page.screenshot({ path: path.join(SHOTS, "live_realman.png") });
 });
 
+test("a robot's report replays the whole humanoid at its base pose as it falls", async (t) => {
+  const out = fs.mkdtempSync(path.join(os.tmpdir(), "armhil-report-"));
+  // Stands, then every actuator is stopped and it falls (its joints keep answering).
+  const scenario = path.join(ROOT, "scenarios", "robot", "humanoid_estop.yaml");
+  const r = spawnSync(BIN, ["run", "--out", out, scenario], { encoding: "utf8" });
+  assert.equal(r.status, 0, "the scenario passes: " + r.stdout + r.stderr);
+  const { context, profile } = await browser();
+  t.after(async () => {
+    await context.close();
+    fs.rmSync(profile, { recursive: true, force: true });
+    fs.rmSync(out, { recursive: true, force: true });
+  });
+  const page = await context.newPage();
+  const errors = [];
+  page.on("pageerror", (e) => errors.push(String(e)));
+  await page.goto("file://" + path.join(out, "humanoid_estop", "report.html"));
+  await page.waitForFunction(() => document.getElementById("arm-view") && document.getElementById("arm-view").dataset.root);
+  // The whole URDF is drawn: every one of the 20 actuated joints.
+  assert.equal(await page.evaluate(() => window.ArmHil.armJoints(window.armhilReport.data.model).length), 20);
+  const root = async () => (await page.getAttribute("#arm-view", "data-root")).split(",").map(Number);
+  // Standing at power-on: the pelvis 0.81 m up, where the trace's base columns say.
+  await page.fill("#time-slider", "0");
+  await until("the replay at 0 s", async () => Math.abs((await root())[2] - 0.81) < 0.002, 3000);
+  // At the end it lies where the emulator left it: the drawn root is the traced base pose.
+  const end = await page.evaluate(() => window.armhilReport.data.duration);
+  await page.fill("#time-slider", String(end));
+  const traced = await page.evaluate((t) => {
+    const d = window.armhilReport.data;
+    const i = window.ArmHil.nearestIndex(d.trace.t, t);
+    const value = (n) => { const c = d.trace.columns.find((x) => x.name === n); return c.values[i] * c.quantum; };
+    return ["base_x_m", "base_y_m", "base_height_m"].map(value);
+  }, end);
+  assert.ok(traced[2] < 0.5, `fallen: ${traced}`);
+  await until("the replay at the end", async () => (await root()).every((v, k) => Math.abs(v - traced[k]) < 0.002), 3000);
+  assert.deepEqual(errors, []);
+  await page.screenshot({ path: path.join(SHOTS, "report_robot.png"), fullPage: false });
+});
+
 test("a failing scenario's report.html shows the failure and replays with the slider", async (t) => {
   const out = fs.mkdtempSync(path.join(os.tmpdir(), "armhil-report-"));
   const r = spawnSync(BIN, ["run", "--out", out, path.join(FIXTURES, "report_failing.yaml")], { encoding: "utf8" });

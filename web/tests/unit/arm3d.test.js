@@ -49,6 +49,36 @@ test("a floating robot's links move with its root pose", () => {
   close(A.origin(A.linkFrames(model, {}).shin), [0, 0, -0.5], 1e-12, "fixed base");
 });
 
+test("a report's pose document places a robot from its trace columns", () => {
+  const model = {
+    joints: [
+      { name: "hip", type: "revolute", parent: "pelvis", child: "thigh", xyz: [0, 0, -0.1], rpy: [0, 0, 0], axis: [0, 1, 0] },
+      { name: "knee", type: "revolute", parent: "thigh", child: "shin", xyz: [0, 0, -0.4], rpy: [0, 0, 0], axis: [0, 1, 0] },
+    ],
+  };
+  const pose = {
+    // The knee's actuator is mounted backwards and zeroed at 0.1 rad.
+    joints: [
+      { column: "hip_rad", joint: "hip", direction: 1, offset: 0 },
+      { column: "knee_rad", joint: "knee", direction: -1, offset: 0.1 },
+    ],
+    base: { position: ["bx", "by", "bz"], rpy: ["roll", "pitch", "yaw"] },
+  };
+  const trace = { hip_rad: 0.5, knee_rad: 0.2, bx: 1, bz: 0.3, pitch: -Math.PI / 2 };
+  const read = (name) => (name in trace ? trace[name] : null);
+  const p = A.poseFromColumns(model, pose, read);
+  assert.ok(Math.abs(p.deg[0] - (0.5 * 180) / Math.PI) < 1e-9, `hip ${p.deg}`);
+  assert.ok(Math.abs(p.deg[1] - (-0.1 * 180) / Math.PI) < 1e-9, `knee -0.2 + 0.1 rad: ${p.deg}`);
+  // Pitched -90° (no y column: 0): the body's up (z) points to -x, so down the leg is +x.
+  const frames = A.linkFrames(model, { hip: 0, knee: 0 }, p.base);
+  close(A.origin(frames.pelvis), [1, 0, 0.3], 1e-12, "the root from the base columns");
+  close(A.origin(frames.thigh), [1.1, 0, 0.3], 1e-12, "the hip below the pelvis, lying down");
+  // A joint not traced yet is unknown (NaN), and a fixed base gives no root pose.
+  const early = A.poseFromColumns(model, { joints: pose.joints, base: null }, () => null);
+  assert.ok(early.deg.every((d) => Number.isNaN(d)));
+  assert.equal(early.base, undefined);
+});
+
 test("mimic joints follow their leader", () => {
   const model = {
     joints: [

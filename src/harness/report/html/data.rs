@@ -9,6 +9,7 @@ use bus::ReceivedFrame;
 use serde_json::{json, Value};
 
 use super::super::svg::fault_windows;
+use crate::devices::Posing;
 use crate::harness::result::{BenchInfo, Outcome, ScenarioResult, StepResult};
 use crate::interop::DecodedFrame;
 
@@ -174,6 +175,20 @@ fn frames_json(result: &ScenarioResult) -> Value {
     json!({"total": n, "rows": rows})
 }
 
+/// Which trace columns pose the drawn model, for a model posed by named joints (an arm's
+/// `j1_deg`… columns are the page's default and need no document).
+fn posing_json(posing: &Posing) -> Option<Value> {
+    let Posing::Joints { joints, base } = posing else {
+        return None;
+    };
+    Some(json!({
+        "joints": joints.iter().map(|j| json!({
+            "column": j.column, "joint": j.joint, "direction": j.direction, "offset": j.offset_rad,
+        })).collect::<Vec<_>>(),
+        "base": base.as_ref().map(|b| json!({"position": b.position_m, "rpy": b.rpy_rad})),
+    }))
+}
+
 fn verdict_reason(result: &ScenarioResult) -> Option<&str> {
     match &result.verdict {
         crate::harness::Verdict::Skipped(r) | crate::harness::Verdict::Error(r) => Some(r),
@@ -213,6 +228,14 @@ pub fn report_json(result: &ScenarioResult, model: Option<Value>) -> Value {
         "frames": frames_json(result),
         "model": model,
     });
+    if let Some(pose) = result
+        .bench_info
+        .drawing
+        .as_ref()
+        .and_then(|d| posing_json(&d.posed_by))
+    {
+        document["pose"] = pose;
+    }
     // Only for a recording cut at its size limit, so other reports stay as they were.
     if let Some(omitted) = &result.recording.omitted {
         document["bus"]["recording_omitted"] = json!(omitted.describe());

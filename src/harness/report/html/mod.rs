@@ -9,6 +9,7 @@
 pub mod arm;
 mod data;
 
+use std::borrow::Cow;
 use std::fmt::Write as _;
 
 pub use arm::{arm_model, ArmModelError, ArmModelJson};
@@ -136,22 +137,23 @@ pub fn live_page(title: &str, script: &str) -> String {
     )
 }
 
-/// The model JSON of the arm a run drove, if it has one that can be read.
+/// The model JSON of the arm or robot a run drove, if it has one that can be read.
 fn model_value(result: &ScenarioResult) -> Option<serde_json::Value> {
-    // The bundled URDFs are few and every report of a suite draws one of them: parse each once.
-    static MODELS: std::sync::Mutex<Vec<(&'static str, Option<serde_json::Value>)>> =
+    // Every report of a suite draws one of a few URDFs (the bundled ones, a robot's): parse
+    // each once. Keyed by the text, which a robot file's scenarios each hold a copy of.
+    static MODELS: std::sync::Mutex<Vec<(Cow<'static, str>, Option<serde_json::Value>)>> =
         std::sync::Mutex::new(Vec::new());
-    let urdf = result.bench_info.arm_urdf?;
+    let urdf = &result.bench_info.drawing.as_ref()?.urdf;
     let mut models = MODELS
         .lock()
         .unwrap_or_else(std::sync::PoisonError::into_inner);
-    if let Some((_, model)) = models.iter().find(|(u, _)| std::ptr::eq(*u, urdf)) {
+    if let Some((_, model)) = models.iter().find(|(u, _)| u == urdf) {
         return model.clone();
     }
     let model = arm_model(urdf)
         .ok()
         .and_then(|m| serde_json::to_value(m).ok());
-    models.push((urdf, model.clone()));
+    models.push((urdf.clone(), model.clone()));
     model
 }
 

@@ -12,7 +12,7 @@ fn failed_run() -> ScenarioResult {
     );
     r.duration = Duration::from_millis(800);
     r.bench_info = BenchInfo {
-        arm_urdf: Some(sim::piper::BUNDLED_URDF),
+        drawing: Some(crate::devices::Drawing::arm(sim::piper::BUNDLED_URDF)),
         // A Piper's bench: its frames are named by the Piper's decoder.
         frame_decoders: vec![std::sync::Arc::new(
             crate::devices::piper::decode::PiperFrames,
@@ -98,4 +98,35 @@ fn index_links_every_report_and_counts_verdicts() {
     assert!(html.contains("2 scenarios: 1 passed, 1 failed, 0 errors, 0 skipped"));
     assert!(html.contains("href=\"piper/demo/report.html\""));
     assert!(html.contains("step 1 `wait_until` (line 9) timed out"));
+}
+
+#[test]
+fn a_robot_report_draws_its_own_urdf_posed_by_named_columns() {
+    // The humanoid's drawing, as the actuator_group kind gives it for its robot file.
+    let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("robots/humanoid.yaml");
+    let robot = sim::robot::file::load_robot_file(&file).unwrap().config;
+    let settings = crate::devices::actuator_group::model::GroupSettings {
+        actuators: Vec::new(),
+        buses: Vec::new(),
+        robot: Some(robot),
+    };
+    let drawing = crate::devices::DeviceKind::ActuatorGroup(settings)
+        .drawing()
+        .unwrap();
+    let mut run = failed_run();
+    run.bench_info.drawing = Some(drawing);
+    let data = embedded_json(&report_html(&run));
+    // The model is the robot file's URDF: 20 movable joints from its root link.
+    assert_eq!(data["model"]["root"], "trunk");
+    let joints = data["pose"]["joints"].as_array().unwrap();
+    assert_eq!(joints.len(), 20);
+    let knee = joints.iter().find(|j| j["joint"] == "left_knee").unwrap();
+    assert_eq!(knee["column"], "left_knee_rad");
+    assert!(knee["direction"].as_f64().unwrap().abs() == 1.0);
+    assert_eq!(data["pose"]["base"]["position"][2], "base_height_m");
+    assert_eq!(data["pose"]["base"]["rpy"][1], "base_pitch_rad");
+    // An arm's report keeps the page's own j1_deg... convention: no pose document.
+    assert!(embedded_json(&report_html(&failed_run()))
+        .get("pose")
+        .is_none());
 }
