@@ -36,6 +36,8 @@ mod model;
 mod obstacle;
 mod world;
 
+pub mod articulated;
+
 pub use error::PhysicsError;
 pub use friction::KineticFriction;
 pub use model::{

@@ -87,23 +87,31 @@ pub struct LinkInertial {
     pub inertia_kg_m2: Matrix3<f64>,
 }
 
+/// How a joint of the tree moves its child link.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum TreeJointKind {
+pub(crate) enum TreeJointKind {
+    /// Not at all.
     Fixed,
+    /// About its axis.
     Revolute,
+    /// Along its axis.
     Prismatic,
 }
 
 /// A joint of the tree, actuated or fixed.
 #[derive(Debug, Clone)]
-struct TreeJoint {
-    kind: TreeJointKind,
-    parent: usize,
-    child: usize,
-    origin: Isometry3<f64>,
-    axis: Vector3<f64>,
+pub(crate) struct TreeJoint {
+    pub(crate) kind: TreeJointKind,
+    /// Parent link (URDF link index).
+    pub(crate) parent: usize,
+    /// Child link (URDF link index).
+    pub(crate) child: usize,
+    /// The joint frame in the parent link's frame (URDF `<origin>`).
+    pub(crate) origin: Isometry3<f64>,
+    /// Unit axis in the joint frame.
+    pub(crate) axis: Vector3<f64>,
     /// Index into the actuated joints, `None` for fixed joints.
-    actuated: Option<usize>,
+    pub(crate) actuated: Option<usize>,
 }
 
 /// A URDF tree: links, joints and inertials, read once from urdf-rs into owned `f64` data.
@@ -350,6 +358,16 @@ impl ArmModel {
             urdf_joint_index,
             ancestors,
         })
+    }
+
+    /// The joints from the root to the leaves (a parent link's joint before its children's).
+    pub(crate) fn tree(&self) -> &[TreeJoint] {
+        &self.tree
+    }
+
+    /// The root link (URDF link index).
+    pub(crate) fn root_link(&self) -> usize {
+        self.root
     }
 
     /// The robot's name (`<robot name>`).

@@ -1,0 +1,249 @@
+//! The articulated-body solver against independent references: the model's own mass matrix
+//! and gravity torques (Jacobians, no recursion), free fall, conservation of momentum and
+//! energy, and a robot coming to rest on the ground.
+
+use nalgebra::{DVector, Point3, Vector3};
+
+use super::{ArticulatedConfig, ArticulatedWorld};
+
+const HUMANOID: &str = include_str!("../../../../urdf/humanoid.urdf");
+const ARM6: &str = include_str!("../../../../urdf/robstride_arm6.urdf");
+
+fn fixed(urdf: &str) -> ArticulatedWorld {
+    ArticulatedWorld::from_urdf_str(urdf, ArticulatedConfig::default()).unwrap()
+}
+
+fn floating(urdf: &str, height_m: f64, gravity: [f64; 3]) -> ArticulatedWorld {
+    let config = ArticulatedConfig {
+        floating_base_height_m: Some(height_m),
+        gravity_m_s2: gravity,
+        ..ArticulatedConfig::default()
+    };
+    ArticulatedWorld::from_urdf_str(urdf, config).unwrap()
+}
+
+/// `urdf` with no damping, no friction and limits so far out that no joint reaches a stop
+/// (stops are inelastic): a conservative system.
+fn conservative(urdf: &str) -> String {
+    let mut out = urdf
+        .replace("damping=", "data-damping=")
+        .replace("friction=", "data-friction=");
+    for (attribute, value) in [("lower=\"", "-100"), ("upper=\"", "100")] {
+        let mut rest = out.as_str();
+        let mut done = String::with_capacity(out.len());
+        while let Some(at) = rest.find(attribute) {
+            let start = at + attribute.len();
+            let end = start + rest[start..].find('"').unwrap();
+            done.push_str(&rest[..start]);
+            done.push_str(value);
+            rest = &rest[end..];
+        }
+        done.push_str(rest);
+        out = done;
+    }
+    out
+}
+
+/// A pose inside every joint's limits, different per joint.
+fn pose(world: &ArticulatedWorld) -> Vec<f64> {
+    world
+        .joints()
+        .iter()
+        .enumerate()
+        .map(|(i, j)| {
+            let t = ((i * 7 % 11) as f64 / 10.0) * 0.8 + 0.1;
+            let (lo, hi) = (j.lower.max(-3.0), j.upper.min(3.0));
+            lo + (hi - lo) * t
+        })
+        .collect()
+}
+
+/// Centre of mass of every link together, in the world.
+fn centre_of_mass(world: &ArticulatedWorld) -> Vector3<f64> {
+    let poses = world.link_poses();
+    let mut sum = Vector3::zeros();
+    let mut mass = 0.0;
+    for (pose, inertial) in poses.iter().zip(world.model().inertials()) {
+        sum += (pose * Point3::from(inertial.com_m)).coords * inertial.mass_kg;
+        mass += inertial.mass_kg;
+    }
+    sum / mass
+}
+
+#[test]
+fn fixed_base_accelerations_are_the_mass_matrix_solution() {
+    for urdf in [ARM6, HUMANOID] {
+        let mut world = fixed(urdf);
+        for (i, _) in world.model().joints().to_vec().iter().enumerate() {
+            world.set_armature(i, 0.001 * (i + 1) as f64);
+        }
+        let q = pose(&world);
+        world.set_joint_positions(&q).unwrap();
+        let tau: Vec<f64> = (0..q.len()).map(|i| (i as f64 - 3.0) * 0.7).collect();
+        // M·q̈ = τ − (torque that holds the arm against gravity), at rest.
+        let m = world.model().mass_matrix(&q).unwrap();
+        let hold = world
+            .model()
+            .gravity_torques(&q, crate::physics::DEFAULT_GRAVITY_M_S2)
+            .unwrap();
+        let rhs = DVector::from_iterator(q.len(), tau.iter().zip(&hold).map(|(t, h)| t - h));
+        let expected = m.lu().solve(&rhs).unwrap();
+        let (qdd, _) = world.accelerations(&tau, 0.0);
+        for (i, (got, want)) in qdd.iter().zip(expected.iter()).enumerate() {
+            assert!(
+                (got - want).abs() < 1e-6 * (1.0 + want.abs()),
+                "joint {i}: {got} vs {want}"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_free_robot_far_above_the_ground_falls_at_g_without_moving_its_joints() {
+    let mut world = floating(HUMANOID, 100.0, crate::physics::DEFAULT_GRAVITY_M_S2);
+    let q = pose(&world);
+    world.set_joint_positions(&q).unwrap();
+    let start = centre_of_mass(&world);
+    for _ in 0..100 {
+        world.step(&[]);
+    }
+    let fallen = start.z - centre_of_mass(&world).z;
+    // Semi-implicit Euler over 200 substeps of 0.5 ms: g·t²/2 plus half a substep's worth.
+    let t = 0.1;
+    let exact = 9.81 * t * t / 2.0;
+    assert!(
+        (fallen - exact).abs() < 9.81 * t * 0.0005,
+        "{fallen} vs {exact}"
+    );
+    for (got, want) in world.joint_positions().iter().zip(&q) {
+        assert!(
+            (got - want).abs() < 1e-6,
+            "a joint moved in free fall: {got} vs {want}"
+        );
+    }
+}
+
+#[test]
+fn joint_torques_in_space_do_not_move_the_centre_of_mass() {
+    let mut world = floating(HUMANOID, 100.0, [0.0; 3]);
+    let start = centre_of_mass(&world);
+    let n = world.joints().len();
+    let shoulder = world.joint_index("left_shoulder_pitch").unwrap();
+    let mut tau = vec![0.0; n];
+    tau[shoulder] = 5.0;
+    for _ in 0..300 {
+        world.step(&tau);
+    }
+    assert!(
+        world.joint_velocities()[shoulder].abs() > 1.0,
+        "the torque turns the shoulder"
+    );
+    let moved = (centre_of_mass(&world) - start).norm();
+    // Semi-implicit Euler on a spinning body leaves a little error: 0.03 mm in 0.3 s.
+    assert!(moved < 1e-4, "the centre of mass moved {moved} m");
+}
+
+#[test]
+fn a_swinging_arm_keeps_its_energy_without_damping() {
+    // The arm's shoulder, raised 1 rad and let go.
+    let mut world = fixed(&conservative(ARM6));
+    let mut q = vec![0.0; world.joints().len()];
+    q[1] = 1.0;
+    world.set_joint_positions(&q).unwrap();
+    let mass: f64 = world.model().inertials().iter().map(|i| i.mass_kg).sum();
+    let energy = |w: &ArticulatedWorld| {
+        let q = w.joint_positions();
+        let qd = DVector::from_vec(w.joint_velocities());
+        let kinetic = 0.5 * qd.dot(&(w.model().mass_matrix(&q).unwrap() * &qd));
+        kinetic + 9.81 * mass * centre_of_mass(w).z
+    };
+    let start = energy(&world);
+    let (mut swing, mut peak_kinetic, mut drift) = (0.0_f64, 0.0_f64, 0.0_f64);
+    for _ in 0..500 {
+        world.step(&[]);
+        swing = swing.max(world.joint_velocities()[1].abs());
+        peak_kinetic = peak_kinetic.max(world.kinetic_energy_j());
+        drift = drift.max((energy(&world) - start).abs());
+    }
+    assert!(swing > 1.0, "it swings: {swing} rad/s");
+    // Semi-implicit Euler keeps energy within a band that shrinks with the step.
+    assert!(
+        drift < 0.01 * peak_kinetic,
+        "energy drifted by up to {drift} J of {peak_kinetic} J in motion"
+    );
+}
+
+#[test]
+fn an_unpowered_humanoid_falls_and_comes_to_rest_on_the_ground() {
+    let mut world = floating(HUMANOID, 0.81, crate::physics::DEFAULT_GRAVITY_M_S2);
+    let mut q = vec![0.0; world.joints().len()];
+    for (name, value) in [
+        ("left_knee", 0.2),
+        ("right_knee", 0.2),
+        ("left_hip_pitch", -0.1),
+        ("right_hip_pitch", -0.1),
+        ("left_ankle", -0.1),
+        ("right_ankle", -0.1),
+    ] {
+        q[world.joint_index(name).unwrap()] = value;
+    }
+    world.set_joint_positions(&q).unwrap();
+    let height = |w: &ArticulatedWorld| {
+        w.link_poses()[w.model().link_index("trunk").unwrap()]
+            .translation
+            .z
+    };
+    for _ in 0..3000 {
+        world.step(&[]);
+    }
+    world.check_finite().unwrap();
+    let resting = height(&world);
+    assert!(resting < 0.6 && resting > 0.05, "trunk at {resting} m");
+    let speed: f64 = world
+        .joint_velocities()
+        .iter()
+        .map(|v| v.abs())
+        .fold(0.0, f64::max);
+    assert!(speed < 0.05, "still moving at {speed} rad/s");
+    for _ in 0..2000 {
+        world.step(&[]);
+    }
+    let creep = (height(&world) - resting).abs();
+    assert!(creep < 0.002, "it crept {creep} m in 2 s at rest");
+    // Nothing sank through the ground: every link origin stays above it (within a spring's
+    // give).
+    for pose in world.link_poses() {
+        assert!(
+            pose.translation.z > -0.01,
+            "a link at {} m",
+            pose.translation.z
+        );
+    }
+}
+
+#[test]
+fn a_free_robot_in_space_keeps_its_kinetic_energy() {
+    let mut world = floating(&conservative(HUMANOID), 100.0, [0.0; 3]);
+    let n = world.joints().len();
+    let mut tau = vec![0.0; n];
+    for (i, t) in tau.iter_mut().enumerate() {
+        *t = if i % 3 == 0 { 2.0 } else { -1.0 };
+    }
+    for _ in 0..20 {
+        world.step(&tau);
+    }
+    let start = world.kinetic_energy_j();
+    let mut energies = Vec::new();
+    for _ in 0..200 {
+        world.step(&[]);
+        energies.push(world.kinetic_energy_j());
+    }
+    let worst = energies
+        .iter()
+        .map(|e| (e - start).abs())
+        .fold(0.0, f64::max);
+    assert!(
+        worst < 0.01 * start,
+        "energy {start} J changed by up to {worst} J"
+    );
+}
