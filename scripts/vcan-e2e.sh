@@ -19,6 +19,7 @@
 #   ARMHIL_E2E_MAX_CATCH_UP_MS  `armhil sim piper --max-catch-up-ms` for the scenarios (default
 #                         5; empty: none, only the emulator's CPU budget bounds catch-up)
 #   ARMHIL_E2E_HOOKS      folder of hook scripts (default scripts/e2e)
+#   ARMHIL_REALTIME_PRIORITY  passed on to the emulators (1: deadline-thread pacing)
 set -euo pipefail
 
 repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -90,6 +91,8 @@ inner_env=(
     "ARMHIL_E2E_TEST_TIMEOUT_S=${ARMHIL_E2E_TEST_TIMEOUT_S:-600}"
     "ARMHIL_E2E_HOOK_TIMEOUT_S=${ARMHIL_E2E_HOOK_TIMEOUT_S:-300}"
     "RUST_BACKTRACE=1"
+    # Real-time pacing of the emulators under test (sim::pacer), off unless asked for.
+    "ARMHIL_REALTIME_PRIORITY=${ARMHIL_REALTIME_PRIORITY:-}"
 )
 inner="$repo/scripts/vcan-e2e-inner.sh"
 

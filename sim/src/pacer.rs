@@ -2,17 +2,22 @@
 //!
 //! tokio's timer wheel has a 1 ms resolution and rounds every sleep up to the next tick, so an
 //! `interval` of 1 ms or 5 ms wakes up to a millisecond late and unevenly: the Piper's 200 Hz
-//! feedback had a p99 period error of +0.7 to +1.8 ms (`cargo bench --bench realtime_jitter`).
-//! In real time a [`Pacer`] instead runs one small thread that sleeps until each absolute
-//! deadline (`clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME)` on Linux: the deadline does not
-//! drift with the time the loop itself takes) and wakes the clock task through a
-//! [`Notify`]. Under a paused tokio clock (virtual time, tests) there is no wall clock to keep:
-//! the pacer is tokio's `interval`, which the paused clock advances deterministically.
+//! feedback had a p99 period error of +0.4 ms idle and +0.8 to +2.2 ms with every core busy
+//! (`cargo bench --bench realtime_jitter`). In real time a [`Pacer`] instead runs one small
+//! thread that sleeps until each absolute deadline (`clock_nanosleep(CLOCK_MONOTONIC,
+//! TIMER_ABSTIME)` on Linux, 1 ns timer slack: the deadline does not drift with the time the
+//! loop itself takes) and wakes the clock task through a [`Notify`]: +0.05 ms idle. Under a
+//! paused tokio clock (virtual time, tests) there is no wall clock to keep: the pacer is
+//! tokio's `interval`, which the paused clock advances deterministically.
 //!
 //! A paused clock needs a current-thread runtime, so the flavour of the runtime decides: on a
-//! multi-thread runtime (`armhil sim`, real-time scenario runs) the thread when
-//! `ARMHIL_REALTIME_PRIORITY=1` (see [`Pacer::new`] for why not by default), else and on a
-//! current-thread one tokio's interval. Missed deadlines are skipped, not bunched: the clock task works out
+//! multi-thread runtime (`armhil sim`, real-time scenario runs) the deadline thread, in the
+//! normal scheduling class (`ARMHIL_PACER=tokio` goes back to tokio's timer), else tokio's
+//! interval. With every core busy the thread still wakes on time (it barely runs, so the
+//! scheduler lets it in at once) but the step runs on a worker that waits its turn: p99 +0.5
+//! to +2.3 ms; `ARMHIL_REALTIME_PRIORITY=1` gives the thread and the workers a low real-time
+//! priority, which keeps a loaded machine under 0.2 ms (see [`prefer_punctual_thread`] for
+//! why not by default). Missed deadlines are skipped, not bunched: the clock task works out
 //! how many steps are due from elapsed time, so a wake-up is a prompt, not a count.
 
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -55,14 +60,13 @@ impl Pacer {
     /// current runtime's flavour (see the module docs). `name` names the thread, for `top -H`
     /// and debuggers. Must be called inside a tokio runtime.
     ///
-    /// The deadline thread is opt-in, with `ARMHIL_REALTIME_PRIORITY=1`
-    /// ([`REALTIME_PRIORITY_ENV`]): in the project's two-vCPU emulated (TCG) test VM the
-    /// emulators paced by it fell behind and their clients timed out, which tokio's timer
-    /// never did there; until that is understood, tokio's timer is the default everywhere.
+    /// On a multi-thread runtime the deadline thread unless `ARMHIL_PACER=tokio`
+    /// ([`PACER_ENV`]); its scheduling class follows `ARMHIL_REALTIME_PRIORITY`
+    /// ([`REALTIME_PRIORITY_ENV`]).
     pub fn new(period: Duration, name: &str) -> Self {
         let multi_thread = tokio::runtime::Handle::try_current()
             .is_ok_and(|h| h.runtime_flavor() == RuntimeFlavor::MultiThread);
-        if multi_thread && realtime_priority_asked() {
+        if multi_thread && !tokio_timer_asked() {
             if let Some(pacer) = Self::deadline_thread(period, name) {
                 return pacer;
             }
@@ -121,7 +125,16 @@ impl Pacer {
             Inner::Tokio(ticks) => {
                 ticks.tick().await;
             }
-            Inner::Thread { woken, .. } => woken.notified().await,
+            Inner::Thread { woken, .. } => {
+                // A wake-up that came while the owner was busy is kept as a permit, and then
+                // `notified()` is ready at once, without giving the worker back: an owner
+                // slower than its period (a machine too slow for real time) would loop
+                // forever, and the tasks it wakes (its transmitter, parked in the worker's
+                // slot that other workers cannot steal from) would never run. Found in the
+                // TCG test VM, where the Piper's clients then never got a frame.
+                tokio::task::yield_now().await;
+                woken.notified().await;
+            }
         }
     }
 }
@@ -135,18 +148,19 @@ impl Drop for Pacer {
     }
 }
 
-/// The environment variable that lets an emulator's runtime workers take a real-time
-/// priority (`1`): see [`prefer_punctual_thread`].
+/// The environment variable that lets an emulator's deadline thread and runtime workers take
+/// a real-time priority (`1`): see [`prefer_punctual_thread`].
 pub const REALTIME_PRIORITY_ENV: &str = "ARMHIL_REALTIME_PRIORITY";
 
 /// Asks the kernel to run the calling thread on time, for the worker threads of a real-time
 /// emulator's runtime (`Builder::on_thread_start`): the deadline thread wakes on time, but the
 /// step it prompts runs on a worker, which a busy core makes wait for its turn. Always: 1 ns
 /// timer slack. With `ARMHIL_REALTIME_PRIORITY=1` (and the privilege), also the low FIFO
-/// priority the deadline thread takes: loaded p99 period errors fall from +1..3 ms to under
-/// 0.2 ms (`cargo bench --bench realtime_jitter`). Not by default: FIFO workers doing a
-/// step's real work take the CPU from every normal thread, and on a machine too slow for
-/// real time (a one-CPU VM) the emulator's clients starved and timed out.
+/// priority the deadline thread then takes too: loaded p99 period errors fall from +0.5..2.3
+/// ms to under 0.2 ms (`cargo bench --bench realtime_jitter`). Not by default: FIFO workers
+/// doing a step's real work take the CPU from every normal thread, and on a machine too slow
+/// for real time (the project's two-vCPU emulated test VM) the emulator's clients starved
+/// and timed out.
 pub fn prefer_punctual_thread() {
     deadline::prefer_punctual(realtime_priority_asked());
 }
@@ -156,9 +170,18 @@ fn realtime_priority_asked() -> bool {
     std::env::var(REALTIME_PRIORITY_ENV).is_ok_and(|v| v.trim() == "1")
 }
 
+/// The environment variable that paces real-time emulators by tokio's 1 ms timer instead of
+/// a deadline thread (`tokio`).
+pub const PACER_ENV: &str = "ARMHIL_PACER";
+
+/// Whether `ARMHIL_PACER=tokio` is set.
+fn tokio_timer_asked() -> bool {
+    std::env::var(PACER_ENV).is_ok_and(|v| v.trim() == "tokio")
+}
+
 /// The deadline thread's body: sleep to each deadline, notify, until `stop`.
 fn deadline_loop(period: Duration, woken: &Notify, stop: &AtomicBool) {
-    deadline::prefer_this_thread();
+    deadline::prefer_punctual(realtime_priority_asked());
     let mut clock = deadline::Clock::start();
     // The first wake-up at once, as tokio's `interval` fires its first tick at once.
     woken.notify_one();
@@ -219,14 +242,6 @@ mod deadline {
                 }
             }
         }
-    }
-
-    /// Asks the kernel to wake this thread on time: a timer slack of 1 ns instead of the
-    /// default 50 µs, and the real-time FIFO class at a low priority so that a busy core
-    /// yields to it at once. Both are best effort: without the privilege (CAP_SYS_NICE or an
-    /// rtprio limit) the thread stays in the normal class, which is merely less punctual.
-    pub(super) fn prefer_this_thread() {
-        prefer_punctual(true);
     }
 
     /// 1 ns timer slack, and with `fifo` the low real-time priority (best effort).
@@ -308,9 +323,6 @@ mod deadline {
     }
 
     /// No priority hints off Linux.
-    pub(super) fn prefer_this_thread() {}
-
-    /// No priority hints off Linux.
     pub(super) fn prefer_punctual(_fifo: bool) {}
 
     impl Clock {
@@ -334,6 +346,44 @@ mod deadline {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_owner_slower_than_its_period_still_lets_the_tasks_it_wakes_run() {
+        use std::sync::atomic::AtomicUsize;
+        let rt = tokio::runtime::Builder::new_multi_thread()
+            .worker_threads(1)
+            .enable_all()
+            .build()
+            .expect("runtime");
+        let wake_ups = rt.block_on(async {
+            let seen = Arc::new(AtomicUsize::new(0));
+            let (tx, mut rx) = tokio::sync::mpsc::unbounded_channel::<()>();
+            let counted = Arc::clone(&seen);
+            tokio::spawn(async move {
+                while rx.recv().await.is_some() {
+                    counted.fetch_add(1, Ordering::Relaxed);
+                }
+            });
+            let clock = tokio::spawn(async move {
+                let mut pacer = Pacer::on_deadline_thread(Duration::from_millis(1), "test-slow");
+                // Until the woken task has seen ten messages, or 200 wake-ups if it never runs.
+                let mut wake_ups = 0;
+                while wake_ups < 200 && seen.load(Ordering::Relaxed) < 10 {
+                    pacer.tick().await;
+                    wake_ups += 1;
+                    // Each wake-up's work takes three periods, as a step does in a slow VM.
+                    std::thread::sleep(Duration::from_millis(3));
+                    let _ = tx.send(());
+                }
+                wake_ups
+            });
+            clock.await.expect("the clock task ends")
+        });
+        assert!(
+            wake_ups < 30,
+            "the woken task ran alongside: its tenth message after {wake_ups} wake-ups"
+        );
+    }
 
     #[test]
     fn a_paused_clock_gets_tokio_timer_and_real_time_a_deadline_thread() {
