@@ -71,15 +71,7 @@
   let view = null;
   // A robot names the columns that pose it (joints by URDF name, a floating root's pose).
   const posed = data.model && data.pose ? data.pose : null;
-  if (posed) {
-    const canvas = el("canvas", { class: "arm", id: "arm-view" });
-    replay.appendChild(canvas);
-    requestAnimationFrame(() => {
-      fitCanvas(canvas);
-      view = A.createArmView(canvas, data.model);
-      poseAt(cursorT);
-    });
-  } else if (data.model && jointCols.length) {
+  if (data.model && (posed || jointCols.length)) {
     const canvas = el("canvas", { class: "arm", id: "arm-view" });
     replay.appendChild(canvas);
     requestAnimationFrame(() => {

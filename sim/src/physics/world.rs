@@ -16,7 +16,8 @@ use super::friction::KineticFriction;
 use super::model::{ArmModel, JointInfo, JointKind, DEFAULT_GRAVITY_M_S2};
 use super::obstacle::{Contact, ObstacleId, ObstacleShape};
 
-/// Configuration of an [`ArmWorld`].
+/// Configuration of an [`ArmWorld`] (and of the articulated-body solver's world,
+/// [`super::articulated::ArticulatedWorld`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct WorldConfig {
     /// Length of one [`ArmWorld::step`], s. Default 0.001 (1 kHz).
@@ -25,7 +26,8 @@ pub struct WorldConfig {
     pub gravity_m_s2: [f64; 3],
     /// `None` (default): the URDF root link is fixed to the world at the origin. `Some(h)`:
     /// the root link is a free body whose origin starts `h` m above the world origin (a
-    /// legged robot; give it ground to stand on with [`ArmWorld::add_obstacle`]).
+    /// legged robot; give an `ArmWorld` ground to stand on with [`ArmWorld::add_obstacle`],
+    /// an `ArticulatedWorld` has the plane z = 0).
     pub floating_base_height_m: Option<f64>,
 }
 

@@ -1,7 +1,7 @@
 //! One physics world for a whole robot, its actuated joints bound to the actuators' plants.
 
-use crate::physics::articulated::{ArticulatedConfig, ArticulatedWorld};
-use crate::physics::PhysicsError;
+use crate::physics::articulated::ArticulatedWorld;
+use crate::physics::{PhysicsError, WorldConfig};
 
 use super::config::{Base, RobotConfig};
 use super::joint_plant::{joint_pair, JointLink, JointPlant};
@@ -53,12 +53,12 @@ impl RobotWorld {
         // Our articulated-body solver rather than rapier's multibody: a humanoid's 26 degrees
         // of freedom cost rapier a dense mass matrix per substep (~460 µs per step), the
         // solver walks the tree (see `physics::articulated`).
-        let world_config = ArticulatedConfig {
+        let world_config = WorldConfig {
             floating_base_height_m: match config.base {
                 Base::Fixed => None,
                 Base::Floating { start_height_m } => Some(start_height_m),
             },
-            ..ArticulatedConfig::default()
+            ..WorldConfig::default()
         };
         let mut world = ArticulatedWorld::from_urdf_str(&config.urdf, world_config)?;
         let index_of = |name: &str| {

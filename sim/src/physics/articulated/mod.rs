@@ -12,7 +12,7 @@ mod contact;
 mod spatial;
 mod world;
 
-pub use world::{ArticulatedConfig, ArticulatedWorld};
+pub use world::{ArticulatedWorld, SUBSTEPS};
 
 #[cfg(test)]
 mod tests;

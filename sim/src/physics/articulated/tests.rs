@@ -4,20 +4,21 @@
 
 use nalgebra::{DVector, Point3, Vector3};
 
-use super::{ArticulatedConfig, ArticulatedWorld};
+use super::ArticulatedWorld;
+use crate::physics::WorldConfig;
 
 const HUMANOID: &str = include_str!("../../../../urdf/humanoid.urdf");
 const ARM6: &str = include_str!("../../../../urdf/robstride_arm6.urdf");
 
 fn fixed(urdf: &str) -> ArticulatedWorld {
-    ArticulatedWorld::from_urdf_str(urdf, ArticulatedConfig::default()).unwrap()
+    ArticulatedWorld::from_urdf_str(urdf, WorldConfig::default()).unwrap()
 }
 
 fn floating(urdf: &str, height_m: f64, gravity: [f64; 3]) -> ArticulatedWorld {
-    let config = ArticulatedConfig {
+    let config = WorldConfig {
         floating_base_height_m: Some(height_m),
         gravity_m_s2: gravity,
-        ..ArticulatedConfig::default()
+        ..WorldConfig::default()
     };
     ArticulatedWorld::from_urdf_str(urdf, config).unwrap()
 }

@@ -7,7 +7,7 @@ use super::spatial::{
     angular, cross_force, cross_motion, linear, motion_transform, spatial, spatial_inertia,
 };
 use crate::physics::model::{TreeJoint, TreeJointKind};
-use crate::physics::{ArmModel, JointInfo, PhysicsError, DEFAULT_GRAVITY_M_S2};
+use crate::physics::{ArmModel, JointInfo, PhysicsError, WorldConfig};
 
 /// Stiffness of a joint's stop past its limit (N·m/rad, N/m): the stop is a spring treated
 /// implicitly (stable however stiff). Not a projection back onto the limit: zeroing a joint's
@@ -21,30 +21,9 @@ const FRICTION_STICK_SPEED: f64 = 0.01;
 /// Friction coefficient between every link and the ground (rapier's default for both).
 const GROUND_FRICTION: f64 = 0.5;
 
-/// Configuration of an [`ArticulatedWorld`].
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ArticulatedConfig {
-    /// Length of one [`ArticulatedWorld::step`], s.
-    pub step_s: f64,
-    /// Substeps per step: contacts are explicit springs and need short substeps.
-    pub substeps: u32,
-    /// Gravity in the world, m/s².
-    pub gravity_m_s2: [f64; 3],
-    /// `None`: the root link is fixed at the origin. `Some(h)`: it is free and starts `h` m
-    /// above the ground (the plane z = 0, which its collision primitives touch).
-    pub floating_base_height_m: Option<f64>,
-}
-
-impl Default for ArticulatedConfig {
-    fn default() -> Self {
-        Self {
-            step_s: 0.001,
-            substeps: 4,
-            gravity_m_s2: DEFAULT_GRAVITY_M_S2,
-            floating_base_height_m: None,
-        }
-    }
-}
+/// Substeps per step: contacts are explicit springs and need short substeps (0.25 ms; at
+/// 0.5 ms a light link's contact damping is near the edge of stability).
+pub const SUBSTEPS: u32 = 4;
 
 /// Per tree joint, what one pass of the algorithm keeps.
 #[derive(Debug, Clone, Copy)]
@@ -89,7 +68,7 @@ impl Default for JointPass {
 /// Semi-implicit Euler on positions, velocities and the root's pose; deterministic.
 pub struct ArticulatedWorld {
     model: ArmModel,
-    config: ArticulatedConfig,
+    config: WorldConfig,
     /// Spatial inertia of every link about its origin (link order).
     inertia: Vec<Matrix6<f64>>,
     contacts: GroundContacts,
@@ -141,8 +120,9 @@ fn child_in_parent(joint: &TreeJoint, q: f64) -> Isometry3<f64> {
 }
 
 impl ArticulatedWorld {
-    /// Loads URDF text (primitive collision shapes only; meshes are not read).
-    pub fn from_urdf_str(xml: &str, config: ArticulatedConfig) -> Result<Self, PhysicsError> {
+    /// Loads URDF text (primitive collision shapes only; meshes are not read). A floating
+    /// base (`config.floating_base_height_m`) stands on the ground, the plane z = 0.
+    pub fn from_urdf_str(xml: &str, config: WorldConfig) -> Result<Self, PhysicsError> {
         let robot = urdf_rs::read_from_string(xml).map_err(|e| PhysicsError::Parse {
             message: e.to_string(),
         })?;
@@ -216,7 +196,7 @@ impl ArticulatedWorld {
 
     /// One step of `config.step_s` with motor torques `joint_torques` (missing entries 0).
     pub fn step(&mut self, joint_torques: &[f64]) {
-        let substeps = self.config.substeps.max(1);
+        let substeps = SUBSTEPS;
         let dt = self.config.step_s / f64::from(substeps);
         let tau: Vec<f64> = (0..self.q.len())
             .map(|i| {
