@@ -18,6 +18,7 @@
 //! - [`yaml_words`]: the YAML reader's errors in a file author's words.
 
 pub mod bounded_read;
+pub mod can_runner;
 pub mod cpu_budget;
 pub mod fault_args;
 pub mod kinematics;

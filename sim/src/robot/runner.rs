@@ -8,11 +8,12 @@ use std::time::Duration;
 use bus::{BusError, CanBus, CanFrame};
 use tokio::sync::{mpsc, oneshot};
 use tokio::task::JoinHandle;
-use tokio::time::{sleep, Instant};
+use tokio::time::sleep;
 
 use super::base_pose::BasePose;
 use super::config::{RobotConfig, RobotConfigError};
 use super::world::{RobotWorld, RobotWorldError};
+use crate::can_runner::{receive_frames, StepClock, STEP};
 use crate::pacer::Pacer;
 use crate::physics::PhysicsError;
 use crate::robstride::faults::{check_external_torque_nm, check_temperature_c, ValueError};
@@ -20,14 +21,6 @@ use crate::robstride::state_file::{uid_key, StateFile, StateFileError};
 use crate::robstride::{Actuator, Fault, MotorSnapshot};
 use crate::supervise::{DeathWatch, Supervisor};
 
-/// The actuators' control step and the world's step.
-const STEP: Duration = Duration::from_millis(1);
-/// Most steps one late wake-up catches up (100 ms of emulated time); a longer stall of the
-/// machine is lost time, as for the single-device emulators.
-const MAX_CATCH_UP_STEPS: u64 = 100;
-/// Frames received from all buses and not yet handled; a full queue holds the receivers
-/// back, and each bus's own receive queue then decides what is dropped.
-const RX_QUEUE_FRAMES: usize = 4096;
 /// Harness requests waiting for the runner.
 const REQUEST_QUEUE: usize = 64;
 
@@ -386,38 +379,14 @@ fn base_rotation(world: &RobotWorld) -> [[f64; 3]; 3] {
 
 impl Runner {
     async fn run(mut self, mut inbox: mpsc::Receiver<Request>) -> Result<(), String> {
-        let (frames_tx, mut frames) = mpsc::channel::<(usize, CanFrame)>(RX_QUEUE_FRAMES);
-        // One receiving task per bus keeps `recv` out of `select!` (never cancelled mid-frame).
-        let receivers: Vec<_> = self
+        let buses = self
             .ports
             .iter()
-            .enumerate()
-            .map(|(index, port)| {
-                let bus = Arc::clone(&port.bus);
-                let tx = frames_tx.clone();
-                let name = port.name.clone();
-                tokio::spawn(async move {
-                    loop {
-                        match bus.recv().await {
-                            Ok(received) => {
-                                if tx.send((index, received.frame)).await.is_err() {
-                                    break;
-                                }
-                            }
-                            Err(BusError::Closed) => break,
-                            Err(error) => {
-                                tracing::warn!(bus = %name, %error, "robot emulator: receive error");
-                                sleep(Duration::from_millis(1)).await;
-                            }
-                        }
-                    }
-                })
-            })
+            .map(|port| (Arc::clone(&port.bus), port.name.clone()))
             .collect();
-        drop(frames_tx);
+        let (mut frames, receivers) = receive_frames(buses, "robot");
         let mut tick = Pacer::new(STEP, "robot-clock");
-        let started = Instant::now();
-        let mut steps_done: u64 = 0;
+        let mut clock = StepClock::start();
         let outcome = loop {
             tokio::select! {
                 biased;
@@ -432,15 +401,12 @@ impl Runner {
                 // Time before frames: a host flooding the buses must not stop the clock
                 // (frames arriving faster than they are handled would starve the tick).
                 _ = tick.tick() => {
-                    let due = (started.elapsed().as_nanos() / STEP.as_nanos()) as u64 + 1;
-                    let owed = due.saturating_sub(steps_done);
-                    let run = owed.min(MAX_CATCH_UP_STEPS);
-                    if run < owed {
-                        tracing::debug!(dropped = owed - run, "robot emulator: steps dropped behind the wall clock");
+                    let steps = clock.due();
+                    if steps.dropped > 0 {
+                        tracing::debug!(dropped = steps.dropped, "robot emulator: steps dropped behind the wall clock");
                     }
-                    steps_done = due;
                     let mut failed = None;
-                    for _ in 0..run {
+                    for _ in 0..steps.run {
                         if let Err(error) = self.on_tick().await {
                             failed = Some(error);
                             break;

@@ -8,8 +8,9 @@ use std::time::Duration;
 use bus::{BusError, CanBus, CanFrame};
 use tokio::sync::{mpsc, oneshot};
 use tokio::task::JoinHandle;
-use tokio::time::{sleep, Instant};
+use tokio::time::sleep;
 
+use crate::can_runner::{receive_frames, StepClock, STEP};
 use crate::pacer::Pacer;
 use crate::robstride::faults::{
     check_bus_voltage_v, check_external_torque_nm, check_temperature_c, Fault, ValueError,
@@ -17,12 +18,6 @@ use crate::robstride::faults::{
 use crate::robstride::firmware::{Actuator, MotorConfig, MotorSnapshot, DEFAULT_HOST_ID};
 use crate::robstride::state_file::{uid_key, StateFile, StateFileError};
 use crate::supervise::{DeathWatch, Supervisor};
-
-/// The actuators' control step.
-const STEP: Duration = Duration::from_millis(1);
-/// Most steps one late wake-up catches up (100 ms of emulated time); a longer stall of the
-/// machine is lost time, as for the Piper emulator.
-const MAX_CATCH_UP_STEPS: u64 = 100;
 
 /// Configuration of an emulated RobStride bus.
 #[derive(Debug, Clone, PartialEq)]
@@ -288,31 +283,13 @@ struct Runner {
 impl Runner {
     /// Serve until shut down; an `Err` (the state file could not be written) ends it early.
     async fn run(mut self, mut inbox: mpsc::UnboundedReceiver<Request>) -> Result<(), String> {
-        // Receiving in its own task keeps `recv` out of `select!` (never cancelled mid-frame).
-        let (frames_tx, mut frames) = mpsc::unbounded_channel();
-        let receiver_bus = Arc::clone(&self.bus);
-        let receiver = tokio::spawn(async move {
-            loop {
-                match receiver_bus.recv().await {
-                    Ok(received) => {
-                        if frames_tx.send(received.frame).is_err() {
-                            break;
-                        }
-                    }
-                    Err(BusError::Closed) => break,
-                    Err(error) => {
-                        tracing::warn!(%error, "robstride emulator: receive error");
-                        sleep(Duration::from_millis(1)).await;
-                    }
-                }
-            }
-        });
+        let (mut frames, receivers) =
+            receive_frames(vec![(Arc::clone(&self.bus), "bus".to_owned())], "robstride");
         // 1 ms control steps; the pacer (absolute deadlines in real time) only prompts them.
         // Every step the clock owes runs, so a late wake-up catches up as the firmware's own
         // clock would, up to MAX_CATCH_UP_STEPS (a stalled machine drops the rest).
         let mut tick = Pacer::new(STEP, "robstride-clock");
-        let started = Instant::now();
-        let mut steps_done: u64 = 0;
+        let mut clock = StepClock::start();
         let outcome = loop {
             tokio::select! {
                 biased;
@@ -325,7 +302,7 @@ impl Runner {
                     None => break Ok(()),
                 },
                 frame = frames.recv() => match frame {
-                    Some(frame) => {
+                    Some((_, frame)) => {
                         // A motor told to keep something that cannot be kept: stop, rather
                         // than let the host believe it was saved.
                         if let Err(error) = self.on_frame(&frame).await {
@@ -335,21 +312,19 @@ impl Runner {
                     None => break Ok(()),
                 },
                 _ = tick.tick() => {
-                    // Steps at 0, 1, 2 … ms: by elapsed time t, floor(t / 1 ms) + 1 are due.
-                    let due = (started.elapsed().as_nanos() / STEP.as_nanos()) as u64 + 1;
-                    let owed = due.saturating_sub(steps_done);
-                    let run = owed.min(MAX_CATCH_UP_STEPS);
-                    if run < owed {
-                        tracing::debug!(dropped = owed - run, "robstride emulator: steps dropped behind the wall clock");
+                    let steps = clock.due();
+                    if steps.dropped > 0 {
+                        tracing::debug!(dropped = steps.dropped, "robstride emulator: steps dropped behind the wall clock");
                     }
-                    steps_done = due;
-                    for _ in 0..run {
+                    for _ in 0..steps.run {
                         self.on_tick().await;
                     }
                 }
             }
         };
-        receiver.abort();
+        for receiver in receivers {
+            receiver.abort();
+        }
         outcome
     }
 
