@@ -248,3 +248,34 @@ fn a_free_robot_in_space_keeps_its_kinetic_energy() {
         "energy {start} J changed by up to {worst} J"
     );
 }
+
+#[test]
+fn absurd_torques_never_panic_and_a_diverged_world_says_which_joint() {
+    let mut world = floating(HUMANOID, 0.81, crate::physics::DEFAULT_GRAVITY_M_S2);
+    let n = world.joints().len();
+    // Alternating torques far beyond any actuator, then values no motor produces.
+    for k in 0..200 {
+        let tau: Vec<f64> = (0..n)
+            .map(|i| if (i + k) % 2 == 0 { 1.0e6 } else { -1.0e6 })
+            .collect();
+        world.step(&tau);
+    }
+    world.step(&vec![f64::MAX; n]);
+    world.step(&vec![f64::NAN; n]);
+    match world.check_finite() {
+        Ok(()) => {
+            assert!(world.joint_positions().iter().all(|q| q.is_finite()));
+            assert!(world.link_poses().iter().all(|p| p
+                .translation
+                .vector
+                .iter()
+                .all(|v| v.is_finite())));
+        }
+        Err(crate::physics::PhysicsError::Diverged { joint, .. }) => {
+            let known = world.model().joints().iter().any(|j| j.name == joint)
+                || world.model().link_names().contains(&joint);
+            assert!(known, "names a joint or the root: {joint}");
+        }
+        Err(other) => panic!("unexpected error {other}"),
+    }
+}
