@@ -11,6 +11,7 @@ use std::sync::Arc;
 use serde::de::{Deserialize, Deserializer, Error as _, MapAccess, Visitor};
 
 use crate::scenario::onekey::OneKey;
+use crate::scenario::read_in::KindSet;
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 
 pub mod contract;
@@ -182,22 +183,23 @@ macro_rules! device_kinds {
         }
 
         impl OneKey for RawDeviceStep {
-            fn keys() -> Vec<&'static str> {
+            const WHAT: &'static str = "step";
+            fn keys(kinds: KindSet) -> Vec<&'static str> {
                 let mut keys = Vec::new();
-                $( if on_bench($name) { keys.extend(<<$module::Kind as KindSpec>::RawStep as OneKey>::keys()); } )*
+                $( if on_bench($name, kinds) { keys.extend(<<$module::Kind as KindSpec>::RawStep as OneKey>::keys(kinds)); } )*
                 keys
             }
-            fn bare<E: serde::de::Error>(key: &str) -> Option<Result<Self, E>> {
-                $( if let Some(key) = for_kind($name, key) {
-                    if let Some(r) = <<$module::Kind as KindSpec>::RawStep as OneKey>::bare(key) {
+            fn bare<E: serde::de::Error>(key: &str, kinds: KindSet) -> Option<Result<Self, E>> {
+                $( if let Some(key) = for_kind($name, key, kinds) {
+                    if let Some(r) = <<$module::Kind as KindSpec>::RawStep as OneKey>::bare(key, kinds) {
                         return Some(r.map(|v| Self::$variant(Box::new(v))));
                     }
                 } )*
                 None
             }
-            fn entry<'de, A: MapAccess<'de>>(key: &str, map: &mut A) -> Option<Result<Self, A::Error>> {
-                $( if let Some(key) = for_kind($name, key) {
-                    if let Some(r) = <<$module::Kind as KindSpec>::RawStep as OneKey>::entry(key, map) {
+            fn entry<'de, A: MapAccess<'de>>(key: &str, map: &mut A, kinds: KindSet) -> Option<Result<Self, A::Error>> {
+                $( if let Some(key) = for_kind($name, key, kinds) {
+                    if let Some(r) = <<$module::Kind as KindSpec>::RawStep as OneKey>::entry(key, map, kinds) {
                         return Some(r.map(|v| Self::$variant(Box::new(v))));
                     }
                 } )*
@@ -219,22 +221,23 @@ macro_rules! device_kinds {
         }
 
         impl OneKey for RawDeviceFault {
-            fn keys() -> Vec<&'static str> {
+            const WHAT: &'static str = "fault";
+            fn keys(kinds: KindSet) -> Vec<&'static str> {
                 let mut keys = Vec::new();
-                $( if on_bench($name) { keys.extend(<<$module::Kind as KindSpec>::RawFault as OneKey>::keys()); } )*
+                $( if on_bench($name, kinds) { keys.extend(<<$module::Kind as KindSpec>::RawFault as OneKey>::keys(kinds)); } )*
                 keys
             }
-            fn bare<E: serde::de::Error>(key: &str) -> Option<Result<Self, E>> {
-                $( if let Some(key) = for_kind($name, key) {
-                    if let Some(r) = <<$module::Kind as KindSpec>::RawFault as OneKey>::bare(key) {
+            fn bare<E: serde::de::Error>(key: &str, kinds: KindSet) -> Option<Result<Self, E>> {
+                $( if let Some(key) = for_kind($name, key, kinds) {
+                    if let Some(r) = <<$module::Kind as KindSpec>::RawFault as OneKey>::bare(key, kinds) {
                         return Some(r.map(|v| Self::$variant(Box::new(v))));
                     }
                 } )*
                 None
             }
-            fn entry<'de, A: MapAccess<'de>>(key: &str, map: &mut A) -> Option<Result<Self, A::Error>> {
-                $( if let Some(key) = for_kind($name, key) {
-                    if let Some(r) = <<$module::Kind as KindSpec>::RawFault as OneKey>::entry(key, map) {
+            fn entry<'de, A: MapAccess<'de>>(key: &str, map: &mut A, kinds: KindSet) -> Option<Result<Self, A::Error>> {
+                $( if let Some(key) = for_kind($name, key, kinds) {
+                    if let Some(r) = <<$module::Kind as KindSpec>::RawFault as OneKey>::entry(key, map, kinds) {
                         return Some(r.map(|v| Self::$variant(Box::new(v))));
                     }
                 } )*
@@ -253,19 +256,19 @@ macro_rules! device_kinds {
         pub(crate) struct KindIndex(usize);
 
         impl RawDeviceConds {
-            /// Every condition key of every kind.
-            pub(crate) fn keys() -> Vec<&'static str> {
+            /// Every condition key of the kinds in `kinds`.
+            pub(crate) fn keys(kinds: KindSet) -> Vec<&'static str> {
                 let mut keys = Vec::new();
-                $( if on_bench($name) { keys.extend(<$module::Kind as KindSpec>::CONDITION_KEYS); } )*
+                $( if on_bench($name, kinds) { keys.extend(<$module::Kind as KindSpec>::CONDITION_KEYS); } )*
                 keys
             }
 
-            /// The first kind whose conditions include `key`.
-            pub(crate) fn kind_of_key(key: &str) -> Option<KindIndex> {
+            /// The first kind among `kinds` whose conditions include `key`.
+            pub(crate) fn kind_of_key(key: &str, kinds: KindSet) -> Option<KindIndex> {
                 let tables: &[(&str, &[&str])] = &[$( ($name, <$module::Kind as KindSpec>::CONDITION_KEYS) ),*];
                 tables
                     .iter()
-                    .position(|(kind, keys)| on_bench(kind) && keys.contains(&key))
+                    .position(|(kind, keys)| on_bench(kind, kinds) && keys.contains(&key))
                     .map(KindIndex)
             }
 
@@ -334,37 +337,31 @@ const fn same_text(a: &str, b: &str) -> bool {
     true
 }
 
-thread_local! {
-    /// The kinds on the bench of the scenario being parsed (`None`: every kind).
-    static ON_BENCH: std::cell::RefCell<Option<Vec<&'static str>>> =
-        const { std::cell::RefCell::new(None) };
+/// The kinds named `names` (the kinds on a bench), for reading its steps, faults and
+/// conditions: keys two kinds share (`under_voltage`, `enable`) then go to the one on the bench.
+pub(crate) fn kinds_named<'a>(names: impl IntoIterator<Item = &'a str>) -> KindSet {
+    KindSet::of(
+        names
+            .into_iter()
+            .filter_map(|name| KIND_NAMES.iter().position(|k| *k == name)),
+    )
 }
 
-/// Parse with step, fault and condition keys resolved among `kinds` only (the kinds on the
-/// bench), so that kinds sharing a key (`under_voltage`, `enable`) do not collide.
-pub(crate) fn with_bench_kinds<T>(kinds: Vec<&'static str>, parse: impl FnOnce() -> T) -> T {
-    let previous = ON_BENCH.with(|k| k.replace(Some(kinds)));
-    let out = parse();
-    ON_BENCH.with(|k| *k.borrow_mut() = previous);
-    out
-}
-
-/// Whether `kind` is on the bench being parsed.
-fn on_bench(kind: &str) -> bool {
-    ON_BENCH.with(|k| {
-        k.borrow()
-            .as_ref()
-            .is_none_or(|kinds| kinds.contains(&kind))
-    })
+/// Whether `kind` is among `kinds`.
+fn on_bench(kind: &str, kinds: KindSet) -> bool {
+    KIND_NAMES
+        .iter()
+        .position(|k| *k == kind)
+        .is_some_and(|index| kinds.has(index))
 }
 
 /// The key as `kind` sees it: `key` itself, or `name` of a qualified `kind.name` (which picks a
 /// kind explicitly on a bench of several kinds); `None` when the key is for another kind.
-fn for_kind<'k>(kind: &str, key: &'k str) -> Option<&'k str> {
+fn for_kind<'k>(kind: &str, key: &'k str, kinds: KindSet) -> Option<&'k str> {
     match key.split_once('.') {
         Some((k, rest)) if k == kind => Some(rest),
         Some(_) => None,
-        None => on_bench(kind).then_some(key),
+        None => on_bench(kind, kinds).then_some(key),
     }
 }
 

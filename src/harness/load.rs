@@ -12,6 +12,7 @@ struct RawHead {
     bench: S<RawBench>,
 }
 use super::validate::{matrix_shape, validate_with, MatrixShape};
+use crate::scenario::read_in::{KindSet, ReadIn};
 use crate::scenario::{Ctx, Res};
 
 /// Parse and validate scenario text; `path` is used for error messages and relative URDFs. A
@@ -45,21 +46,21 @@ impl Parsed {
     fn new(path: &Path, text: String) -> Self {
         // The bench first: its device kinds decide which vocabulary the steps are read with.
         // When it does not parse, the full parse below reports the error.
-        let kinds = serde_saphyr::from_str::<RawHead>(&text).ok().map(|head| {
-            head.bench
-                .value
-                .devices
-                .value
-                .values()
-                .map(|d| d.value.kind_name())
-                .collect::<Vec<_>>()
-        });
-        let parse = || serde_saphyr::from_str::<RawScenario>(&text);
-        let raw = match kinds {
-            Some(kinds) => crate::devices::with_bench_kinds(kinds, parse),
-            None => parse(),
-        }
-        .map_err(|error| Box::new(from_yaml_error(path, &text, &error)));
+        let kinds = serde_saphyr::from_str::<RawHead>(&text)
+            .map(|head| {
+                crate::devices::kinds_named(
+                    head.bench
+                        .value
+                        .devices
+                        .value
+                        .values()
+                        .map(|d| d.value.kind_name()),
+                )
+            })
+            .unwrap_or(KindSet::ALL);
+        let raw =
+            serde_saphyr::with_deserializer_from_str(&text, |de| RawScenario::read_in(de, kinds))
+                .map_err(|error| Box::new(from_yaml_error(path, &text, &error)));
         let shape = match &raw {
             Ok(raw) => matrix_shape(&Ctx::new(path, &text), raw.matrix.as_ref()),
             Err(_) => Ok(None),

@@ -4,20 +4,22 @@
 use std::collections::BTreeMap;
 
 use crate::scenario::onekey::one_key_enum;
+use crate::scenario::read_in::{kinded_struct, KindSet, ReadIn};
 pub(crate) use crate::scenario::S;
 use serde::Deserialize;
 
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct RawScenario {
-    pub name: Option<S<String>>,
-    pub description: Option<String>,
-    pub tags: Option<Vec<S<String>>>,
-    pub matrix: Option<S<RawMatrix>>,
-    pub bench: S<RawBench>,
-    pub record: Option<S<RawRecord>>,
-    pub faults: Option<Vec<S<RawFaultEntry>>>,
-    pub steps: S<Vec<S<RawStep>>>,
+kinded_struct! {
+    /// A scenario file; its steps and faults are read with its bench's kinds.
+    pub(crate) struct RawScenario {
+        pub name: Option<S<String>> = plain,
+        pub description: Option<String> = plain,
+        pub tags: Option<Vec<S<String>>> = plain,
+        pub matrix: Option<S<RawMatrix>> = plain,
+        pub bench: S<RawBench> = plain,
+        pub record: Option<S<RawRecord>> = plain,
+        pub faults: Option<Vec<S<RawFaultEntry>>> = kinded,
+        pub steps: S<Vec<S<RawStep>>> = kinded,
+    }
 }
 
 /// `matrix: {parameter: [values]}` as written.
@@ -56,19 +58,18 @@ pub(crate) struct RawRecord {
     pub plot: Option<bool>,
 }
 
-/// A fault in the schedule (`at_ms` / `after`) or injected by an `inject` step.
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct RawFaultEntry {
-    pub at_ms: Option<S<i64>>,
-    pub after: Option<S<String>>,
-    pub delay_ms: Option<S<i64>>,
-    #[serde(alias = "for_ms")]
-    pub duration_ms: Option<S<i64>>,
-    pub device: Option<S<String>>,
-    /// The bus a bus fault acts on, on a bench of several.
-    pub bus: Option<S<String>>,
-    pub fault: S<RawFault>,
+kinded_struct! {
+    /// A fault in the schedule (`at_ms` / `after`).
+    pub(crate) struct RawFaultEntry {
+        pub at_ms: Option<S<i64>> = plain,
+        pub after: Option<S<String>> = plain,
+        pub delay_ms: Option<S<i64>> = plain,
+        pub duration_ms | "for_ms": Option<S<i64>> = plain,
+        pub device: Option<S<String>> = plain,
+        /// The bus a bus fault acts on, on a bench of several.
+        pub bus: Option<S<String>> = plain,
+        pub fault: S<RawFault> = kinded,
+    }
 }
 
 /// Selects frames for a bus fault: by identifier, by sending node, or all.
@@ -113,27 +114,26 @@ pub(crate) struct RawConditions {
     pub conds: Option<crate::devices::RawDeviceConds>,
 }
 
-/// `inject` step arguments: the fault, its device and how long it lasts.
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct RawInject {
-    pub id: Option<S<String>>,
-    pub device: Option<S<String>>,
-    #[serde(alias = "for_ms")]
-    pub duration_ms: Option<S<i64>>,
-    /// The bus a bus fault acts on, on a bench of several.
-    pub bus: Option<S<String>>,
-    pub fault: S<RawFault>,
+kinded_struct! {
+    /// `inject` step arguments: the fault, its device and how long it lasts.
+    pub(crate) struct RawInject {
+        pub id: Option<S<String>> = plain,
+        pub device: Option<S<String>> = plain,
+        pub duration_ms | "for_ms": Option<S<i64>> = plain,
+        /// The bus a bus fault acts on, on a bench of several.
+        pub bus: Option<S<String>> = plain,
+        pub fault: S<RawFault> = kinded,
+    }
 }
 
 one_key_enum! {
     /// Every step a scenario can take: the generic ones here, the device kinds' after them.
     pub(crate) enum RawStep ("step") {
         "wait_ms" => WaitMs(S<i64>),
-        "inject" => Inject(RawInject),
+        "inject" => Inject(RawInject) [kinded],
         "clear_faults" => ClearFaults(RawClearFaults) [bare],
-        "expect" => Expect(RawConditions),
-        "wait_until" => WaitUntil(RawConditions),
+        "expect" => Expect(RawConditions) [kinded],
+        "wait_until" => WaitUntil(RawConditions) [kinded],
     }
     else Device(crate::devices::RawDeviceStep)
 }
@@ -202,9 +202,12 @@ impl<'de, A: serde::de::MapAccess<'de>> serde::de::MapAccess<'de> for CondMap<'_
     }
 }
 
-impl<'de> Deserialize<'de> for RawConditions {
-    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
-        struct Visit;
+impl ReadIn for RawConditions {
+    fn read_in<'de, D: serde::Deserializer<'de>>(
+        deserializer: D,
+        kinds: KindSet,
+    ) -> Result<Self, D::Error> {
+        struct Visit(KindSet);
         impl<'de> serde::de::Visitor<'de> for Visit {
             type Value = RawConditions;
             fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -219,9 +222,10 @@ impl<'de> Deserialize<'de> for RawConditions {
                     if out.take_generic(&key, &mut map)? {
                         continue;
                     }
-                    let Some(kind) = crate::devices::RawDeviceConds::kind_of_key(&key) else {
+                    let Some(kind) = crate::devices::RawDeviceConds::kind_of_key(&key, self.0)
+                    else {
                         let mut keys: Vec<&'static str> = GENERIC_CONDITION_KEYS.to_vec();
-                        keys.extend(crate::devices::RawDeviceConds::keys());
+                        keys.extend(crate::devices::RawDeviceConds::keys(self.0));
                         return Err(crate::scenario::onekey::unknown("condition", &key, &keys));
                     };
                     let rest = CondMap {
@@ -239,6 +243,6 @@ impl<'de> Deserialize<'de> for RawConditions {
                 Ok(out)
             }
         }
-        deserializer.deserialize_map(Visit)
+        deserializer.deserialize_map(Visit(kinds))
     }
 }

@@ -13,6 +13,7 @@
 mod ctx;
 pub(crate) mod error;
 pub(crate) mod onekey;
+pub(crate) mod read_in;
 pub mod vocab;
 
 pub(crate) use ctx::{Ctx, Res, MAX_NAME_CHARS};

@@ -315,3 +315,42 @@ fn physically_absurd_robstride_values_are_refused_at_their_position() {
         assert!(err.ends_with(message), "{err}");
     }
 }
+
+#[test]
+fn typo_in_an_inject_key_lists_its_keys_with_the_alias() {
+    let text = format!("{BENCH}steps:\n  - inject: {{fault: estop, durration_ms: 5}}\n");
+    assert_eq!(
+        error_of(&text),
+        "broken.yaml:5:28: unknown key `durration_ms`, expected one of id, device, duration_ms, for_ms, bus, fault; did you mean `duration_ms`?"
+    );
+}
+
+#[test]
+fn an_inject_without_its_fault_names_the_missing_key() {
+    let text = format!("{BENCH}steps:\n  - inject: {{for_ms: 5}}\n");
+    assert!(
+        error_of(&text).contains("missing field `fault`"),
+        "{}",
+        error_of(&text)
+    );
+}
+
+/// `under_voltage` is a fault of two kinds with different arguments: the bench decides whose.
+#[test]
+fn a_key_two_kinds_share_is_read_as_the_bench_kind_s() {
+    let robstride = "bench:\n  devices:\n    motor: {kind: robstride}\nsteps:\n  - inject: {fault: {under_voltage: {voltage_v: -1}}}\n";
+    let piper =
+        format!("{BENCH}steps:\n  - inject: {{fault: {{under_voltage: {{voltage_v: -1}}}}}}\n");
+    let (robstride, piper) = (error_of(robstride), error_of(&piper));
+    assert_ne!(robstride, piper, "both benches read the key alike");
+    // A step of a kind not on the bench is unknown, and the list holds this bench's steps.
+    let text = format!("{BENCH}steps:\n  - robstride: {{motor: 1, do: enable}}\n");
+    let e = error_of(&text);
+    assert!(e.contains("unknown step `robstride`"), "{e}");
+    assert!(
+        !e.contains(
+            "expected one of: wait_ms, inject, clear_faults, expect, wait_until, robstride"
+        ),
+        "{e}"
+    );
+}

@@ -8,6 +8,7 @@ use serde::Deserialize;
 use sim::piper::FaultKind;
 
 use crate::scenario::onekey::{one_key_enum, OneKey};
+use crate::scenario::read_in::KindSet;
 use crate::scenario::S;
 
 #[derive(Debug, Deserialize)]
@@ -70,17 +71,20 @@ impl RawFault {
 }
 
 impl OneKey for RawFault {
-    fn keys() -> Vec<&'static str> {
+    const WHAT: &'static str = "fault";
+
+    fn keys(_: KindSet) -> Vec<&'static str> {
         FaultKind::ALL.iter().map(|k| k.name()).collect()
     }
 
-    fn bare<E: serde::de::Error>(key: &str) -> Option<Result<Self, E>> {
+    fn bare<E: serde::de::Error>(key: &str, _: KindSet) -> Option<Result<Self, E>> {
         FaultKind::from_name(key).map(Self::bare_of)
     }
 
     fn entry<'de, A: serde::de::MapAccess<'de>>(
         key: &str,
         map: &mut A,
+        _: KindSet,
     ) -> Option<Result<Self, A::Error>> {
         let kind = FaultKind::from_name(key)?;
         Some(
