@@ -1,11 +1,15 @@
-//! `armhil decode`: print every frame of a candump log or pcap capture decoded with units,
-//! through the driver's codecs.
+//! `armhil decode`: print every frame of a candump log or pcap/pcapng capture decoded with
+//! units, through the driver's codecs: by one protocol (`--device`), or by the devices of a
+//! scenario's bench (`--scenario`), each frame named by the device that owns it, as the report
+//! names them.
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::Arc;
 use std::time::Duration;
 
 use anyhow::Context;
+use armhil::devices::FrameDecoder;
 use armhil::interop::{decode_piper, decode_robstride, decode_robstride_mit, DecodedFrame};
 use bus::{CanFrame, CanId};
 
@@ -23,11 +27,16 @@ pub enum Device {
 /// Arguments of `armhil decode`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// candump `-L` log (`.log`) or pcap capture (`.pcap`).
+    /// candump `-L` log (`.log`), pcap (`.pcap`) or pcapng capture (`.pcapng`, one interface
+    /// per bus, as `armhil run` records a bench of several buses).
     pub file: PathBuf,
-    /// Protocol to decode with.
-    #[arg(long, value_enum, default_value_t = Device::Piper)]
-    pub device: Device,
+    /// Protocol to decode with (default: piper).
+    #[arg(long, value_enum, conflicts_with = "scenario")]
+    pub device: Option<Device>,
+    /// Decode with the devices of this scenario's bench: each frame by the device that owns
+    /// it (a robot's actuators, a Piper and a RobStride bus side by side), as its report does.
+    #[arg(long, value_name = "SCENARIO")]
+    pub scenario: Option<PathBuf>,
     /// RobStride: the host id replies are addressed to.
     #[arg(long, default_value_t = 0xFD)]
     pub host_id: u8,
@@ -36,29 +45,148 @@ pub struct Args {
     pub model: String,
 }
 
-fn read_frames(path: &Path) -> anyhow::Result<Vec<(Duration, CanFrame)>> {
-    let is_pcap = path
+/// The largest capture read (whole, into memory): four times the largest recording
+/// `armhil run --max-recording-mib` allows, so any recording of ours fits.
+const MAX_CAPTURE_BYTES: u64 = 4 * 16_384 * 1024 * 1024;
+
+/// One frame of the capture: when, on which bus (pcapng names its interfaces), and the frame.
+struct Captured {
+    at: Duration,
+    bus: Option<String>,
+    frame: CanFrame,
+}
+
+fn read_capture_bytes(path: &Path) -> anyhow::Result<Vec<u8>> {
+    let size = std::fs::metadata(path)
+        .with_context(|| format!("cannot read {}", path.display()))?
+        .len();
+    anyhow::ensure!(
+        size <= MAX_CAPTURE_BYTES,
+        "{} is {size} bytes, more than the {MAX_CAPTURE_BYTES} this command reads",
+        path.display()
+    );
+    std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))
+}
+
+fn read_frames(path: &Path) -> anyhow::Result<Vec<Captured>> {
+    let extension = path
         .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("pcap"));
-    if is_pcap {
-        let bytes =
-            std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
-        let frames = bus::pcap::parse_capture(&bytes)
-            .with_context(|| format!("{} is not a readable pcap", path.display()))?;
-        Ok(frames.into_iter().map(|r| (r.timestamp, r.frame)).collect())
-    } else {
-        let entries = bus::candump::read_log(path)
-            .with_context(|| format!("cannot read {}", path.display()))?;
-        Ok(entries
-            .into_iter()
-            .map(|e| (e.timestamp, e.frame))
-            .collect())
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    match extension.as_deref() {
+        Some("pcap") => {
+            let frames = bus::pcap::parse_capture(&read_capture_bytes(path)?)
+                .with_context(|| format!("{} is not a readable pcap", path.display()))?;
+            Ok(frames
+                .into_iter()
+                .map(|r| Captured {
+                    at: r.timestamp,
+                    bus: None,
+                    frame: r.frame,
+                })
+                .collect())
+        }
+        Some("pcapng") => {
+            let capture = bus::pcapng::parse_capture(&read_capture_bytes(path)?)
+                .with_context(|| format!("{} is not a readable pcapng", path.display()))?;
+            let names = capture.interfaces;
+            Ok(capture
+                .frames
+                .into_iter()
+                .map(|(interface, r)| Captured {
+                    at: r.timestamp,
+                    bus: Some(
+                        names
+                            .get(interface as usize)
+                            .filter(|n| !n.is_empty())
+                            .cloned()
+                            .unwrap_or_else(|| format!("if{interface}")),
+                    ),
+                    frame: r.frame,
+                })
+                .collect())
+        }
+        _ => {
+            let entries = bus::candump::read_log(path)
+                .with_context(|| format!("cannot read {}", path.display()))?;
+            Ok(entries
+                .into_iter()
+                .map(|e| Captured {
+                    at: e.timestamp,
+                    bus: None,
+                    frame: e.frame,
+                })
+                .collect())
+        }
+    }
+}
+
+/// How frames are named: one protocol, or the devices of a bench.
+enum Decoder {
+    Protocol {
+        device: Device,
+        host_id: u8,
+        model: driver::robstride::Model,
+    },
+    Bench(Vec<Arc<dyn FrameDecoder>>),
+}
+
+impl Decoder {
+    fn of(args: &Args) -> anyhow::Result<Self> {
+        if let Some(path) = &args.scenario {
+            let scenario =
+                armhil::harness::load_scenario(path).map_err(|e| anyhow::anyhow!("{e}"))?;
+            let decoders: Vec<_> = scenario
+                .bench
+                .devices
+                .iter()
+                .filter_map(|d| d.kind.frame_decoder())
+                .collect();
+            anyhow::ensure!(
+                !decoders.is_empty(),
+                "{}: no device on its bench speaks CAN",
+                path.display()
+            );
+            return Ok(Self::Bench(decoders));
+        }
+        let model = driver::robstride::Model::parse(&args.model)
+            .with_context(|| format!("unknown RobStride model {:?}", args.model))?;
+        Ok(Self::Protocol {
+            device: args.device.unwrap_or(Device::Piper),
+            host_id: args.host_id,
+            model,
+        })
+    }
+
+    /// The frame's name and fields, or why it does not decode.
+    fn decode(&self, frame: &CanFrame) -> (Option<DecodedFrame>, Option<String>) {
+        match self {
+            Self::Protocol {
+                device: Device::Piper,
+                ..
+            } => match decode_piper(frame) {
+                Ok(d) => (d, None),
+                Err(e) => (None, Some(e.to_string())),
+            },
+            Self::Protocol {
+                device: Device::Robstride,
+                host_id,
+                model,
+            } => (decode_robstride(frame, *host_id, *model), None),
+            Self::Protocol {
+                device: Device::RobstrideMit,
+                host_id,
+                model,
+            } => (decode_robstride_mit(frame, *host_id, *model), None),
+            Self::Bench(decoders) => (decoders.iter().find_map(|d| d.decode(frame)), None),
+        }
     }
 }
 
 /// One output line: `t  id  name  field=value unit …` (`raw=…` when nothing decodes it).
+/// A pcapng capture's lines name the bus after the time: `t  can2  id  name …`.
 fn line(
     t_s: f64,
+    bus: Option<&str>,
     frame: &CanFrame,
     decoded: Option<DecodedFrame>,
     error: Option<String>,
@@ -67,7 +195,13 @@ fn line(
         CanId::Standard(id) => format!("{id:03X}"),
         CanId::Extended(id) => format!("{id:08X}"),
     };
-    let mut out = format!("{t_s:.6}  {id}  ");
+    let mut out = format!("{t_s:.6}  ");
+    if let Some(bus) = bus {
+        out.push_str(bus);
+        out.push_str("  ");
+    }
+    out.push_str(&id);
+    out.push_str("  ");
     match (decoded, error) {
         (Some(d), _) => {
             out.push_str(&d.name);
@@ -98,23 +232,22 @@ fn line(
 
 /// Runs `armhil decode`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    let model = driver::robstride::Model::parse(&args.model)
-        .with_context(|| format!("unknown RobStride model {:?}", args.model))?;
+    let decoder = Decoder::of(&args)?;
     let frames = read_frames(&args.file)?;
-    let start = frames.first().map_or(Duration::ZERO, |(t, _)| *t);
+    let start = frames.first().map_or(Duration::ZERO, |c| c.at);
     let mut out = std::io::BufWriter::new(std::io::stdout().lock());
-    for (t, frame) in frames {
-        let t_s = t.saturating_sub(start).as_secs_f64();
-        let (decoded, error) = match args.device {
-            Device::Piper => match decode_piper(&frame) {
-                Ok(d) => (d, None),
-                Err(e) => (None, Some(e.to_string())),
-            },
-            Device::Robstride => (decode_robstride(&frame, args.host_id, model), None),
-            Device::RobstrideMit => (decode_robstride_mit(&frame, args.host_id, model), None),
-        };
+    for captured in frames {
+        let t_s = captured.at.saturating_sub(start).as_secs_f64();
+        let (decoded, error) = decoder.decode(&captured.frame);
+        let text = line(
+            t_s,
+            captured.bus.as_deref(),
+            &captured.frame,
+            decoded,
+            error,
+        );
         use std::io::Write as _;
-        if let Err(e) = writeln!(out, "{}", line(t_s, &frame, decoded, error)) {
+        if let Err(e) = writeln!(out, "{text}") {
             // A closed pipe (`| head`) ends the listing quietly.
             if e.kind() == std::io::ErrorKind::BrokenPipe {
                 return Ok(ExitCode::SUCCESS);

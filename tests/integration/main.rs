@@ -3,7 +3,7 @@
 //!
 //! - the drivers against the emulators on the virtual bus (`*_flow`, `arm_api`, `socketcand`);
 //! - the `armhil` binary itself (`cli_errors`, `signals`, `long_run`) and the crate graph
-//!   (`deps`);
+//!   (`deps`), `decode_cli`;
 //! - the two independent codecs against each other (`codec_cross_props`), the generated DBC
 //!   (`dbc`), broken scenarios (`scenario_errors`) and every kept fuzz input
 //!   (`fuzz_regressions`).
@@ -13,6 +13,7 @@ mod arm_api;
 mod cli_errors;
 mod codec_cross_props;
 mod dbc;
+mod decode_cli;
 mod deps;
 mod fuzz_regressions;
 mod long_run;

@@ -173,8 +173,13 @@ impl KindSpec for Kind {
         })
     }
 
-    fn frame_decoder(_settings: &Settings) -> Option<Arc<dyn FrameDecoder>> {
-        None
+    fn frame_decoder(settings: &Settings) -> Option<Arc<dyn FrameDecoder>> {
+        // Its actuators speak RobStride's private protocol, as a RobStride bus's motors do.
+        Some(Arc::new(
+            super::robstride::decode::RobstrideFrames::of_motors(
+                settings.actuators.iter().map(|a| (a.can_id, a.model)),
+            ),
+        ))
     }
 }
 

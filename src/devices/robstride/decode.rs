@@ -20,11 +20,16 @@ pub(crate) struct RobstrideFrames {
 impl RobstrideFrames {
     /// A decoder for the motors of `settings`.
     pub(crate) fn new(settings: &Settings) -> Self {
+        Self::of_motors(settings.motors.iter().map(|m| (m.can_id, m.model)))
+    }
+
+    /// A decoder for these motors (CAN ID and the emulator's model), wherever they are
+    /// listed: a RobStride bus, an actuator group, a robot.
+    pub(crate) fn of_motors(motors: impl IntoIterator<Item = (u8, sim::robstride::Model)>) -> Self {
         Self {
-            motors: settings
-                .motors
-                .iter()
-                .filter_map(|m| Some((m.can_id, Model::parse(m.model.name())?)))
+            motors: motors
+                .into_iter()
+                .filter_map(|(id, model)| Some((id, Model::parse(model.name())?)))
                 .collect(),
         }
     }

@@ -1,6 +1,6 @@
 //! RobStride actuators (`kind: robstride`): a bus of motors on the bench's CAN bus.
 
-mod decode;
+pub(crate) mod decode;
 mod device;
 pub mod model;
 mod observe;
