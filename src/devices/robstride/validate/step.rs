@@ -2,7 +2,7 @@
 
 use std::time::Duration;
 
-use driver::robstride::OpControl;
+use driver::robstride::{OpControl, Param, Protocol};
 use sim::robstride::faults::{
     check_bus_voltage_v, check_external_torque_nm, check_temperature_c, max_external_torque_nm,
     ValueError as RsValueError,
@@ -186,166 +186,12 @@ fn robstride_step(
         name,
         "no arguments besides `motor`",
     )?;
-    let need = |v: &Option<S<f64>>, key: &str| -> Res<f32> {
-        let v = ctx.required(v, key, name, at)?;
-        f32_of(ctx, v, key)
-    };
-    let need_ms = |v: &Option<S<i64>>, key: &str| -> Res<Duration> {
-        let v = ctx.required(v, key, name, at)?;
-        ctx.millis(v, key)
-    };
-    let opt = |v: &Option<S<f64>>, key: &str| -> Res<f32> {
-        v.as_ref().map_or(Ok(0.0), |v| f32_of(ctx, v, key))
-    };
-    let param = |v: &Option<S<String>>| {
-        let v = ctx.required(v, "param", name, at)?;
-        ctx.choice(v, "param", &PARAMS)
-    };
-    let fault = |v: &Option<S<String>>| {
-        let v = ctx.required(v, "fault", name, at)?;
-        let names: Vec<(Fault, &str)> = Fault::ALL.iter().map(|f| (*f, f.name())).collect();
-        ctx.choice(v, "fault", &names)
-    };
-    let protocol = |v: &Option<S<String>>| {
-        let v = ctx.required(v, "protocol", name, at)?;
-        ctx.choice(v, "protocol", &PROTOCOLS)
-    };
-    let expectation = || -> Res<Option<Near>> {
-        match &a.expect {
-            Some(e) => Ok(Some(Near {
-                value: ctx.finite(e, "expect")?,
-                tolerance: a
-                    .tolerance
-                    .as_ref()
-                    .map_or(Ok(DEFAULT_PARAM_TOLERANCE), |t| {
-                        ctx.non_negative(t, "tolerance")
-                    })?,
-            })),
-            None => Ok(None),
-        }
-    };
-    let command = match name {
-        "enable" => RsCommand::Enable,
-        "disable" => RsCommand::Disable {
-            clear: a.clear.as_ref().is_some_and(|c| c.value),
-        },
-        "mode" => {
-            let m = ctx.required(&a.mode, "mode", name, at)?;
-            RsCommand::Mode(ctx.choice(m, "mode", &RUN_MODES)?)
-        }
-        "op_control" => RsCommand::OpControl(OpControl {
-            torque_nm: opt(&a.torque_nm, "torque_nm")?,
-            angle_rad: opt(&a.angle_rad, "angle_rad")?,
-            speed_rad_s: opt(&a.speed_rad_s, "speed_rad_s")?,
-            kp: opt(&a.kp, "kp")?,
-            kd: opt(&a.kd, "kd")?,
-        }),
-        "velocity" => RsCommand::Velocity {
-            speed_rad_s: need(&a.speed_rad_s, "speed_rad_s")?,
-            limit_cur_a: need(&a.limit_cur_a, "limit_cur_a")?,
-            acc_rad_s2: need(&a.acc_rad_s2, "acc_rad_s2")?,
-        },
-        "profile" => RsCommand::Profile {
-            target_rad: need(&a.target_rad, "target_rad")?,
-            vel_max_rad_s: need(&a.vel_max_rad_s, "vel_max_rad_s")?,
-            acc_rad_s2: need(&a.acc_rad_s2, "acc_rad_s2")?,
-        },
-        "current" => RsCommand::Current {
-            iq_a: need(&a.iq_a, "iq_a")?,
-        },
-        "csp" => RsCommand::Csp {
-            target_rad: need(&a.target_rad, "target_rad")?,
-            limit_spd_rad_s: need(&a.limit_spd_rad_s, "limit_spd_rad_s")?,
-        },
-        "set_zero" => RsCommand::SetZero,
-        "zero_here" => RsCommand::ZeroHere,
-        "read_param" => RsCommand::ReadParam {
-            param: param(&a.param)?,
-            expect: expectation()?,
-        },
-        "write_param" => RsCommand::WriteParam {
-            param: param(&a.param)?,
-            value: ctx.finite(ctx.required(&a.value, "value", name, at)?, "value")?,
-        },
-        "set_can_id" => RsCommand::SetCanId {
-            new_id: can_id(ctx, ctx.required(&a.new_id, "new_id", name, at)?, "new_id")?,
-        },
-        "save" => RsCommand::Save,
-        "restart" => RsCommand::Restart,
-        "active_report" => RsCommand::ActiveReport {
-            on: ctx.required(&a.on, "on", name, at)?.value,
-        },
-        "report_period" => RsCommand::ReportPeriod {
-            period: need_ms(&a.period_ms, "period_ms")?,
-        },
-        "can_timeout" => RsCommand::CanTimeout {
-            window: need_ms(&a.window_ms, "window_ms")?,
-        },
-        "poll" => RsCommand::Poll,
-        "set_protocol" => RsCommand::SetProtocol(protocol(&a.protocol)?),
-        "mit_enable" => RsCommand::MitEnable,
-        "mit_stop" => RsCommand::MitStop,
-        "mit_control" => RsCommand::MitControl(OpControl {
-            torque_nm: opt(&a.torque_nm, "torque_nm")?,
-            angle_rad: opt(&a.angle_rad, "angle_rad")?,
-            speed_rad_s: opt(&a.speed_rad_s, "speed_rad_s")?,
-            kp: opt(&a.kp, "kp")?,
-            kd: opt(&a.kd, "kd")?,
-        }),
-        "mit_mode" => {
-            let m = ctx.required(&a.mode, "mode", name, at)?;
-            RsCommand::MitMode(ctx.choice(m, "mode", &MIT_MODES)?)
-        }
-        "mit_position" => RsCommand::MitPosition {
-            target_rad: need(&a.target_rad, "target_rad")?,
-            limit_spd_rad_s: need(&a.limit_spd_rad_s, "limit_spd_rad_s")?,
-        },
-        "mit_velocity" => RsCommand::MitVelocity {
-            speed_rad_s: need(&a.speed_rad_s, "speed_rad_s")?,
-            limit_cur_a: need(&a.limit_cur_a, "limit_cur_a")?,
-        },
-        "mit_zero" => RsCommand::MitZero,
-        "mit_clear" => RsCommand::MitClear,
-        "mit_read_param" => RsCommand::MitReadParam {
-            param: param(&a.param)?,
-            expect: expectation()?,
-        },
-        "mit_set_protocol" => RsCommand::MitSetProtocol(protocol(&a.protocol)?),
-        "mit_active_report" => RsCommand::MitActiveReport {
-            on: ctx.required(&a.on, "on", name, at)?.value,
-        },
-        "inject" => RsCommand::Inject(fault(&a.fault)?),
-        "remove_cause" => RsCommand::RemoveCause(fault(&a.fault)?),
-        "set_temperature" => RsCommand::SetTemperature {
-            temp_c: emulator_value(
-                ctx,
-                ctx.required(&a.temp_c, "temp_c", name, at)?,
-                check_temperature_c,
-            )?,
-        },
-        "set_bus_voltage" => RsCommand::SetBusVoltage {
-            voltage_v: emulator_value(
-                ctx,
-                ctx.required(&a.voltage_v, "voltage_v", name, at)?,
-                check_bus_voltage_v,
-            )?,
-        },
-        // The motor's model is not known here: the largest model's bound catches the absurd
-        // values; the emulator checks the motor's own bound when the step runs.
-        _ => RsCommand::ExternalTorque {
-            torque_nm: emulator_value(
-                ctx,
-                ctx.required(&a.torque_nm, "torque_nm", name, at)?,
-                |t| {
-                    let strongest = Model::ALL
-                        .into_iter()
-                        .max_by(|a, b| {
-                            max_external_torque_nm(*a).total_cmp(&max_external_torque_nm(*b))
-                        })
-                        .unwrap_or(Model::RS04);
-                    check_external_torque_nm(strongest, t)
-                },
-            )?,
+    let args = CommandArgs { ctx, a, name, at };
+    let command = match private_command(&args)? {
+        Some(command) => command,
+        None => match mit_command(&args)? {
+            Some(command) => command,
+            None => side_door_command(&args)?,
         },
     };
     let motor = match (&command, &a.motor) {
@@ -370,4 +216,219 @@ fn robstride_step(
             expect_error,
         },
     ))
+}
+
+/// One command's arguments as written, read with the command's name in every message.
+struct CommandArgs<'c, 'a> {
+    ctx: &'c Ctx<'a>,
+    a: &'c RawRsStep,
+    /// The command (`do:`).
+    name: &'static str,
+    /// The step.
+    at: Pos,
+}
+
+impl CommandArgs<'_, '_> {
+    /// A required number, as the wire's f32.
+    fn need(&self, v: &Option<S<f64>>, key: &str) -> Res<f32> {
+        let v = self.ctx.required(v, key, self.name, self.at)?;
+        f32_of(self.ctx, v, key)
+    }
+
+    /// A required duration in milliseconds.
+    fn need_ms(&self, v: &Option<S<i64>>, key: &str) -> Res<Duration> {
+        let v = self.ctx.required(v, key, self.name, self.at)?;
+        self.ctx.millis(v, key)
+    }
+
+    /// An optional number, 0 when left out.
+    fn opt(&self, v: &Option<S<f64>>, key: &str) -> Res<f32> {
+        v.as_ref().map_or(Ok(0.0), |v| f32_of(self.ctx, v, key))
+    }
+
+    /// A required value of `key`, checked by `check` as the emulator checks it.
+    fn emulator(
+        &self,
+        v: &Option<S<f64>>,
+        key: &str,
+        check: impl Fn(f64) -> Result<f64, RsValueError>,
+    ) -> Res<f64> {
+        emulator_value(
+            self.ctx,
+            self.ctx.required(v, key, self.name, self.at)?,
+            check,
+        )
+    }
+
+    /// A required word of `table`.
+    fn word<T: Copy>(&self, v: &Option<S<String>>, key: &str, table: &[(T, &str)]) -> Res<T> {
+        let v = self.ctx.required(v, key, self.name, self.at)?;
+        self.ctx.choice(v, key, table)
+    }
+
+    /// The required `param:`.
+    fn param(&self) -> Res<Param> {
+        self.word(&self.a.param, "param", &PARAMS)
+    }
+
+    /// The required `protocol:`.
+    fn protocol(&self) -> Res<Protocol> {
+        self.word(&self.a.protocol, "protocol", &PROTOCOLS)
+    }
+
+    /// The required `on:`.
+    fn on(&self) -> Res<bool> {
+        Ok(self
+            .ctx
+            .required(&self.a.on, "on", self.name, self.at)?
+            .value)
+    }
+
+    /// The operation-control (MIT) frame's five values, each 0 when left out.
+    fn op_control(&self) -> Res<OpControl> {
+        let a = self.a;
+        Ok(OpControl {
+            torque_nm: self.opt(&a.torque_nm, "torque_nm")?,
+            angle_rad: self.opt(&a.angle_rad, "angle_rad")?,
+            speed_rad_s: self.opt(&a.speed_rad_s, "speed_rad_s")?,
+            kp: self.opt(&a.kp, "kp")?,
+            kd: self.opt(&a.kd, "kd")?,
+        })
+    }
+
+    /// `expect:` (and `tolerance:`) of a parameter read.
+    fn expectation(&self) -> Res<Option<Near>> {
+        let (ctx, a) = (self.ctx, self.a);
+        match &a.expect {
+            Some(e) => Ok(Some(Near {
+                value: ctx.finite(e, "expect")?,
+                tolerance: a
+                    .tolerance
+                    .as_ref()
+                    .map_or(Ok(DEFAULT_PARAM_TOLERANCE), |t| {
+                        ctx.non_negative(t, "tolerance")
+                    })?,
+            })),
+            None => Ok(None),
+        }
+    }
+}
+
+/// A command of the private protocol (29-bit frames); `None` for another front end's.
+fn private_command(args: &CommandArgs<'_, '_>) -> Res<Option<RsCommand>> {
+    let a = args.a;
+    Ok(Some(match args.name {
+        "enable" => RsCommand::Enable,
+        "disable" => RsCommand::Disable {
+            clear: a.clear.as_ref().is_some_and(|c| c.value),
+        },
+        "mode" => RsCommand::Mode(args.word(&a.mode, "mode", &RUN_MODES)?),
+        "op_control" => RsCommand::OpControl(args.op_control()?),
+        "velocity" => RsCommand::Velocity {
+            speed_rad_s: args.need(&a.speed_rad_s, "speed_rad_s")?,
+            limit_cur_a: args.need(&a.limit_cur_a, "limit_cur_a")?,
+            acc_rad_s2: args.need(&a.acc_rad_s2, "acc_rad_s2")?,
+        },
+        "profile" => RsCommand::Profile {
+            target_rad: args.need(&a.target_rad, "target_rad")?,
+            vel_max_rad_s: args.need(&a.vel_max_rad_s, "vel_max_rad_s")?,
+            acc_rad_s2: args.need(&a.acc_rad_s2, "acc_rad_s2")?,
+        },
+        "current" => RsCommand::Current {
+            iq_a: args.need(&a.iq_a, "iq_a")?,
+        },
+        "csp" => RsCommand::Csp {
+            target_rad: args.need(&a.target_rad, "target_rad")?,
+            limit_spd_rad_s: args.need(&a.limit_spd_rad_s, "limit_spd_rad_s")?,
+        },
+        "set_zero" => RsCommand::SetZero,
+        "zero_here" => RsCommand::ZeroHere,
+        "read_param" => RsCommand::ReadParam {
+            param: args.param()?,
+            expect: args.expectation()?,
+        },
+        "write_param" => RsCommand::WriteParam {
+            param: args.param()?,
+            value: args.ctx.finite(
+                args.ctx.required(&a.value, "value", args.name, args.at)?,
+                "value",
+            )?,
+        },
+        "set_can_id" => RsCommand::SetCanId {
+            new_id: can_id(
+                args.ctx,
+                args.ctx.required(&a.new_id, "new_id", args.name, args.at)?,
+                "new_id",
+            )?,
+        },
+        "save" => RsCommand::Save,
+        "restart" => RsCommand::Restart,
+        "active_report" => RsCommand::ActiveReport { on: args.on()? },
+        "report_period" => RsCommand::ReportPeriod {
+            period: args.need_ms(&a.period_ms, "period_ms")?,
+        },
+        "can_timeout" => RsCommand::CanTimeout {
+            window: args.need_ms(&a.window_ms, "window_ms")?,
+        },
+        "poll" => RsCommand::Poll,
+        "set_protocol" => RsCommand::SetProtocol(args.protocol()?),
+        _ => return Ok(None),
+    }))
+}
+
+/// A command of the MIT variant (11-bit frames); `None` for another front end's.
+fn mit_command(args: &CommandArgs<'_, '_>) -> Res<Option<RsCommand>> {
+    let a = args.a;
+    Ok(Some(match args.name {
+        "mit_enable" => RsCommand::MitEnable,
+        "mit_stop" => RsCommand::MitStop,
+        "mit_control" => RsCommand::MitControl(args.op_control()?),
+        "mit_mode" => RsCommand::MitMode(args.word(&a.mode, "mode", &MIT_MODES)?),
+        "mit_position" => RsCommand::MitPosition {
+            target_rad: args.need(&a.target_rad, "target_rad")?,
+            limit_spd_rad_s: args.need(&a.limit_spd_rad_s, "limit_spd_rad_s")?,
+        },
+        "mit_velocity" => RsCommand::MitVelocity {
+            speed_rad_s: args.need(&a.speed_rad_s, "speed_rad_s")?,
+            limit_cur_a: args.need(&a.limit_cur_a, "limit_cur_a")?,
+        },
+        "mit_zero" => RsCommand::MitZero,
+        "mit_clear" => RsCommand::MitClear,
+        "mit_read_param" => RsCommand::MitReadParam {
+            param: args.param()?,
+            expect: args.expectation()?,
+        },
+        "mit_set_protocol" => RsCommand::MitSetProtocol(args.protocol()?),
+        "mit_active_report" => RsCommand::MitActiveReport { on: args.on()? },
+        _ => return Ok(None),
+    }))
+}
+
+/// A command to the emulator itself (faults, temperature, supply, load), not on the wire.
+fn side_door_command(args: &CommandArgs<'_, '_>) -> Res<RsCommand> {
+    let a = args.a;
+    let fault_names: Vec<(Fault, &str)> = Fault::ALL.iter().map(|f| (*f, f.name())).collect();
+    Ok(match args.name {
+        "inject" => RsCommand::Inject(args.word(&a.fault, "fault", &fault_names)?),
+        "remove_cause" => RsCommand::RemoveCause(args.word(&a.fault, "fault", &fault_names)?),
+        "set_temperature" => RsCommand::SetTemperature {
+            temp_c: args.emulator(&a.temp_c, "temp_c", check_temperature_c)?,
+        },
+        "set_bus_voltage" => RsCommand::SetBusVoltage {
+            voltage_v: args.emulator(&a.voltage_v, "voltage_v", check_bus_voltage_v)?,
+        },
+        // The motor's model is not known here: the largest model's bound catches the absurd
+        // values; the emulator checks the motor's own bound when the step runs.
+        _ => RsCommand::ExternalTorque {
+            torque_nm: args.emulator(&a.torque_nm, "torque_nm", |t| {
+                let strongest = Model::ALL
+                    .into_iter()
+                    .max_by(|a, b| {
+                        max_external_torque_nm(*a).total_cmp(&max_external_torque_nm(*b))
+                    })
+                    .unwrap_or(Model::RS04);
+                check_external_torque_nm(strongest, t)
+            })?,
+        },
+    })
 }
