@@ -231,26 +231,123 @@ fn estimate_inertias(
     }))
 }
 
-impl Firmware {
-    /// Boot the firmware: load the URDF, the flash (state file) and place the arm.
-    pub fn new(config: PiperConfig) -> Result<Self, PiperError> {
-        let mut world = load_world(&config)?;
-        let find = |name: &str| {
-            world
-                .joint_index(name)
-                .ok_or_else(|| PiperError::MissingJoint {
-                    name: name.to_string(),
-                })
-        };
-        let arm_idx = [
+/// The six arm joints' and the two fingers' indices in the URDF world.
+fn find_joints(world: &ArmWorld) -> Result<([usize; 6], [usize; 2]), PiperError> {
+    let find = |name: &str| {
+        world
+            .joint_index(name)
+            .ok_or_else(|| PiperError::MissingJoint {
+                name: name.to_string(),
+            })
+    };
+    Ok((
+        [
             find("joint1")?,
             find("joint2")?,
             find("joint3")?,
             find("joint4")?,
             find("joint5")?,
             find("joint6")?,
-        ];
-        let finger_idx = [find("joint7")?, find("joint8")?];
+        ],
+        [find("joint7")?, find("joint8")?],
+    ))
+}
+
+/// The flash at power-on: a state file that exists wins; a new one starts from
+/// `config.flash` (or defaults). Either is checked with the commands' rules (a value no
+/// command could store, min above max, would otherwise panic the core at the first move), and
+/// its zero offsets against the URDF.
+fn boot_flash(
+    config: &PiperConfig,
+    world: &ArmWorld,
+    arm_idx: [usize; 6],
+    finger_idx: [usize; 2],
+    finger_sign: [f64; 2],
+) -> Result<Flash, PiperError> {
+    let from_file = config.state_file.as_ref().filter(|path| path.exists());
+    let flash = match from_file {
+        Some(path) => Flash::load(path)?,
+        None => {
+            let flash = config.flash.clone().unwrap_or_default();
+            flash.validate().map_err(PiperError::InvalidFlash)?;
+            flash
+        }
+    };
+    // A zero offset is the joint's physical angle when it was zeroed (0x475), so it lies
+    // within the URDF's range; the gripper's, within the fingers' travel.
+    let zero_fields = arm_idx.iter().enumerate().map(|(j, &i)| {
+        let lim = &world.joints()[i];
+        (
+            format!("flash.zero_offset_rad[{j}]"),
+            flash.zero_offset_rad[j],
+            lim.lower,
+            lim.upper,
+        )
+    });
+    let travel: [(f64, f64); 2] = std::array::from_fn(|k| {
+        let lim = &world.joints()[finger_idx[k]];
+        let (a, b) = (finger_sign[k] * lim.lower, finger_sign[k] * lim.upper);
+        (a.min(b), a.max(b))
+    });
+    let gripper_field = (
+        "flash.gripper_zero_offset_m".to_owned(),
+        flash.gripper_zero_offset_m,
+        travel[0].0 + travel[1].0,
+        travel[0].1 + travel[1].1,
+    );
+    for (field, value, lower, upper) in zero_fields.chain(std::iter::once(gripper_field)) {
+        if !(lower - 1e-9..=upper + 1e-9).contains(&value) {
+            let invalid = InvalidField::new(
+                field,
+                format!("{value} is outside the URDF's range [{lower}, {upper}]"),
+            );
+            return Err(match from_file {
+                Some(path) => PiperError::Flash(FlashError::invalid(path, invalid)),
+                None => PiperError::InvalidFlash(invalid),
+            });
+        }
+    }
+    Ok(flash)
+}
+
+/// Every URDF joint's position at power-on: the configured joint angles (through the flash's
+/// zero offsets, refused outside the URDF's range) and each finger at half the opening.
+fn initial_positions(
+    config: &PiperConfig,
+    world: &ArmWorld,
+    flash: &Flash,
+    arm_idx: [usize; 6],
+    finger_idx: [usize; 2],
+    finger_sign: [f64; 2],
+) -> Result<Vec<f64>, PiperError> {
+    let mut q0 = vec![0.0; world.joints().len()];
+    for (j, &i) in arm_idx.iter().enumerate() {
+        let lim = &world.joints()[i];
+        let phys = config.initial_joints_rad[j] + flash.zero_offset_rad[j];
+        if !phys.is_finite() || phys < lim.lower - 1e-9 || phys > lim.upper + 1e-9 {
+            return Err(PiperError::InitialJointOutOfRange {
+                joint: j + 1,
+                value_rad: config.initial_joints_rad[j],
+                lower_rad: lim.lower,
+                upper_rad: lim.upper,
+            });
+        }
+        q0[i] = phys.clamp(lim.lower, lim.upper);
+    }
+    // Each finger takes half of the initial opening (clamped to its travel).
+    let half_stroke_m = 0.5 * config.initial_gripper_stroke_m.max(0.0);
+    for (k, &i) in finger_idx.iter().enumerate() {
+        let lim = &world.joints()[i];
+        q0[i] = (finger_sign[k] * half_stroke_m).clamp(lim.lower, lim.upper);
+    }
+    Ok(q0)
+}
+
+impl Firmware {
+    /// Boot the firmware: load the URDF, the flash (state file) and place the arm.
+    pub fn new(config: PiperConfig) -> Result<Self, PiperError> {
+        let mut world = load_world(&config)?;
+        let (arm_idx, finger_idx) = find_joints(&world)?;
         // A finger opens towards whichever side of zero its range lies on.
         let finger_sign = finger_idx.map(|i| {
             let j = &world.joints()[i];
@@ -262,73 +359,8 @@ impl Firmware {
                 1.0
             }
         });
-        // A state file that exists wins; a new one starts from `config.flash` (or defaults).
-        // Either is checked with the commands' rules: a value no command could store (min
-        // above max) would otherwise panic the core at the first move.
-        let from_file = config.state_file.as_ref().filter(|path| path.exists());
-        let flash = match from_file {
-            Some(path) => Flash::load(path)?,
-            None => {
-                let flash = config.flash.clone().unwrap_or_default();
-                flash.validate().map_err(PiperError::InvalidFlash)?;
-                flash
-            }
-        };
-        // A zero offset is the joint's physical angle when it was zeroed (0x475), so it lies
-        // within the URDF's range; the gripper's, within the fingers' travel.
-        let zero_fields = arm_idx.iter().enumerate().map(|(j, &i)| {
-            let lim = &world.joints()[i];
-            (
-                format!("flash.zero_offset_rad[{j}]"),
-                flash.zero_offset_rad[j],
-                lim.lower,
-                lim.upper,
-            )
-        });
-        let travel: [(f64, f64); 2] = std::array::from_fn(|k| {
-            let lim = &world.joints()[finger_idx[k]];
-            let (a, b) = (finger_sign[k] * lim.lower, finger_sign[k] * lim.upper);
-            (a.min(b), a.max(b))
-        });
-        let gripper_field = (
-            "flash.gripper_zero_offset_m".to_owned(),
-            flash.gripper_zero_offset_m,
-            travel[0].0 + travel[1].0,
-            travel[0].1 + travel[1].1,
-        );
-        for (field, value, lower, upper) in zero_fields.chain(std::iter::once(gripper_field)) {
-            if !(lower - 1e-9..=upper + 1e-9).contains(&value) {
-                let invalid = InvalidField::new(
-                    field,
-                    format!("{value} is outside the URDF's range [{lower}, {upper}]"),
-                );
-                return Err(match from_file {
-                    Some(path) => PiperError::Flash(FlashError::invalid(path, invalid)),
-                    None => PiperError::InvalidFlash(invalid),
-                });
-            }
-        }
-        let n = world.joints().len();
-        let mut q0 = vec![0.0; n];
-        for (j, &i) in arm_idx.iter().enumerate() {
-            let lim = &world.joints()[i];
-            let phys = config.initial_joints_rad[j] + flash.zero_offset_rad[j];
-            if !phys.is_finite() || phys < lim.lower - 1e-9 || phys > lim.upper + 1e-9 {
-                return Err(PiperError::InitialJointOutOfRange {
-                    joint: j + 1,
-                    value_rad: config.initial_joints_rad[j],
-                    lower_rad: lim.lower,
-                    upper_rad: lim.upper,
-                });
-            }
-            q0[i] = phys.clamp(lim.lower, lim.upper);
-        }
-        // Each finger takes half of the initial opening (clamped to its travel).
-        let half_stroke_m = 0.5 * config.initial_gripper_stroke_m.max(0.0);
-        for (k, &i) in finger_idx.iter().enumerate() {
-            let lim = &world.joints()[i];
-            q0[i] = (finger_sign[k] * half_stroke_m).clamp(lim.lower, lim.upper);
-        }
+        let flash = boot_flash(&config, &world, arm_idx, finger_idx, finger_sign)?;
+        let q0 = initial_positions(&config, &world, &flash, arm_idx, finger_idx, finger_sign)?;
         world.set_joint_positions(&q0)?;
         let viscous = std::array::from_fn(|j| world.joints()[arm_idx[j]].damping);
         let inertia = estimate_inertias(&world, &q0, &arm_idx)?;
@@ -337,6 +369,7 @@ impl Firmware {
         });
         let leader_active = flash.linkage_role == LinkageRole::Leader;
         let hold_ref = std::array::from_fn(|j| q0[arm_idx[j]]);
+        let n = q0.len();
         let v0 = vec![0.0; n];
         Ok(Self {
             profile: config.firmware,

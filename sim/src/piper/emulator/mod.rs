@@ -9,28 +9,29 @@
 //! wake-ups. A late wake-up runs every missed step (emulated time keeps up with the wall
 //! clock) and sends each periodic feedback frame once for the missed periods, never a backlog
 //! burst. A backlog beyond [`MAX_CATCH_UP_STEPS`], or beyond what half a core can run in the
-//! time since the previous wake-up at the measured cost of a step ([`CpuBudget`]), is dropped
-//! and counted as an overrun rather than spun through: on a machine too slow for real time the
+//! time since the previous wake-up at the measured cost of a step
+//! ([`CpuBudget`](crate::cpu_budget::CpuBudget)), is dropped and counted as an overrun rather
+//! than spun through: on a machine too slow for real time the
 //! emulator falls behind instead of starving its clients. Under a paused clock no wake-up is
 //! ever late and computing takes no time, so nothing changes there.
 
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::Duration;
 
-use bus::{BusError, CanBus, CanFrame};
+use bus::{CanBus, CanFrame};
 use tokio::sync::{mpsc, watch};
 use tokio::task::JoinHandle;
-use tokio::time::{sleep, Instant};
 
 use super::config::{PiperConfig, PiperError};
 use super::faults::{FaultError, PiperFault};
 use super::firmware::{Firmware, STEP_S};
 use super::state::PiperSimState;
-use crate::cpu_budget::CpuBudget;
-use crate::pacer::Pacer;
 use crate::physics::{ObstacleId, ObstacleShape};
 use crate::realtime::{RealtimeCounters, RealtimeStats};
 use crate::supervise::{DeathWatch, Supervisor};
+
+mod tasks;
+use tasks::{receive, run_core, transmit, CoreTask, RX_QUEUE_FRAMES};
 
 /// Wait between two attempts to queue a frame on a full transmit queue (about one frame time
 /// at 1 Mbit/s).
@@ -127,164 +128,37 @@ impl PiperEmulator {
         tracing::info!(firmware = %firmware.profile(), bus = bus.name(), "Piper emulator starting");
         let core = Arc::new(Mutex::new(firmware));
         let counters = Arc::new(Mutex::new(RealtimeCounters::new()));
-        let (in_tx, mut in_rx) = mpsc::unbounded_channel::<CanFrame>();
-        let (out_tx, mut out_rx) = mpsc::unbounded_channel::<CanFrame>();
+        let (in_tx, in_rx) = mpsc::channel::<CanFrame>(RX_QUEUE_FRAMES);
+        let (out_tx, out_rx) = mpsc::unbounded_channel::<CanFrame>();
         let (stop, stop_rx) = watch::channel(false);
         // A task that panics or gives up is reported, not left dead behind an open bus.
         let (supervisor, death) = Supervisor::new();
 
-        let rx_bus = Arc::clone(&bus);
-        let mut rx_stop = stop_rx.clone();
-        let receiver = supervisor.spawn(&runtime, "Piper receiver", async move {
-            loop {
-                tokio::select! {
-                    biased;
-                    r = rx_bus.recv() => match r {
-                        Ok(rf) => {
-                            if in_tx.send(rf.frame).is_err() {
-                                break;
-                            }
-                        }
-                        Err(BusError::Closed) => break,
-                        Err(e) => {
-                            tracing::warn!(error = %e, "Piper emulator receive error");
-                            sleep(Duration::from_millis(1)).await;
-                        }
-                    },
-                    _ = rx_stop.changed() => break,
-                }
-            }
-            Ok(())
-        });
-
-        let tick_core = Arc::clone(&core);
-        let tick_counters = Arc::clone(&counters);
-        let mut tick_stop = stop_rx.clone();
-        let ticker = supervisor.spawn(&runtime, "Piper core", async move {
-            let per_wake = u64::from(ticks_per_wake);
-            // The pacer only prompts the wake-ups (on absolute deadlines in real time); how
-            // many steps run comes from the clock (`plan_wake_within`), so a skipped wake-up
-            // loses no emulated time.
-            let mut clock = Pacer::new(
-                Duration::from_secs_f64(STEP_S * per_wake as f64),
-                "piper-clock",
-            );
-            let boot = Instant::now();
-            let mut done: u64 = 0;
-            let mut produced = Vec::with_capacity(32);
-            let mut budget = CpuBudget::default();
-            let mut last_wake = boot;
-            let mut unreported_drops: u64 = 0;
-            let mut last_report: Option<Instant> = None;
-            loop {
-                tokio::select! {
-                    biased;
-                    _ = clock.tick() => {}
-                    _ = tick_stop.changed() => break,
-                }
-                let woke = Instant::now();
-                // On a machine too slow for real time, catching up a backlog would take the
-                // CPU from the clients; the budget lets the emulator fall behind instead.
-                let affordable = budget.limit(woke - last_wake, per_wake, max_catch_up);
-                last_wake = woke;
-                let plan = plan_wake_within(woke - boot, done, per_wake, affordable);
-                done += plan.run + plan.skipped;
-                let late = plan.run > per_wake;
-                {
-                    let mut fw = lock(&tick_core);
-                    while let Ok(frame) = in_rx.try_recv() {
-                        fw.handle_frame(&frame);
-                    }
-                    if late {
-                        fw.catch_up(plan.run as u32);
-                    } else {
-                        for _ in 0..plan.run {
-                            fw.tick();
-                        }
-                    }
-                    fw.drain_output_into(&mut produced);
-                    // Parameters a client changed could not be kept: stop serving rather
-                    // than let the client believe they were stored.
-                    if let Some(e) = fw.take_save_error() {
-                        return Err(e.to_string());
-                    }
-                }
-                budget.observe(plan.run, woke.elapsed());
-                {
-                    let mut c = lock(&tick_counters);
-                    c.record_wakeup(woke, plan.run, late);
-                    if plan.skipped > 0 {
-                        c.record_overrun(plan.skipped);
-                        unreported_drops += plan.skipped;
-                        // A machine too slow for real time overruns at every wake-up: one
-                        // line a second with the total, not a line per wake-up.
-                        if last_report.is_none_or(|at| woke - at >= OVERRUN_REPORT_PERIOD) {
-                            tracing::warn!(
-                                dropped_steps = unreported_drops,
-                                step_cost_us = budget.step_cost().map(|d| d.as_micros()),
-                                "Piper emulator behind the wall clock by more than a wake-up \
-                                 may catch up (the catch-up limit, or the CPU a catch-up may \
-                                 take): steps dropped since the last report"
-                            );
-                            unreported_drops = 0;
-                            last_report = Some(woke);
-                        }
-                    } else if late {
-                        tracing::debug!(
-                            steps = plan.run,
-                            "Piper emulator caught up a late wake-up"
-                        );
-                    }
-                }
-                for frame in produced.drain(..) {
-                    if out_tx.send(frame).is_err() {
-                        // The transmitter ended: on a stop, or because the bus was closed (the
-                        // owner of the bus closing it first is a way to stop, not a failure).
-                        return Ok(());
-                    }
-                }
-            }
-            Ok(())
-        });
-
-        let tx_bus = bus;
-        let tx_counters = Arc::clone(&counters);
-        let mut tx_stop = stop_rx;
-        let transmitter = supervisor.spawn(&runtime, "Piper transmitter", async move {
-            let mut dropped: u64 = 0;
-            loop {
-                let frame = tokio::select! {
-                    biased;
-                    f = out_rx.recv() => match f {
-                        Some(f) => f,
-                        None => break,
-                    },
-                    _ = tx_stop.changed() => break,
-                };
-                let mut attempts = 0;
-                loop {
-                    match tx_bus.send(frame).await {
-                        Ok(()) => {
-                            lock(&tx_counters).record_frame(frame.raw_id(), Instant::now());
-                            break;
-                        }
-                        Err(BusError::Closed) => return Ok(()),
-                        Err(e) => {
-                            attempts += 1;
-                            if attempts >= TX_RETRIES {
-                                dropped += 1;
-                                if dropped.is_power_of_two() {
-                                    tracing::warn!(error = %e, dropped, "Piper emulator dropped a frame");
-                                }
-                                break;
-                            }
-                            sleep(TX_RETRY_WAIT).await;
-                        }
-                    }
-                }
-            }
-            Ok(())
-        });
+        let receiver = supervisor.spawn(
+            &runtime,
+            "Piper receiver",
+            receive(Arc::clone(&bus), in_tx, stop_rx.clone()),
+        );
+        let ticker = supervisor.spawn(
+            &runtime,
+            "Piper core",
+            run_core(
+                CoreTask {
+                    core: Arc::clone(&core),
+                    counters: Arc::clone(&counters),
+                    ticks_per_wake,
+                    max_catch_up,
+                },
+                in_rx,
+                out_tx,
+                stop_rx.clone(),
+            ),
+        );
+        let transmitter = supervisor.spawn(
+            &runtime,
+            "Piper transmitter",
+            transmit(bus, Arc::clone(&counters), out_rx, stop_rx),
+        );
 
         Ok(PiperHandle {
             core,
