@@ -25,6 +25,30 @@ pub struct MdhJoint {
     pub max_rad: f64,
 }
 
+impl MdhJoint {
+    /// A joint of this geometry without limits (the chain's user clamps, or does not).
+    pub fn unlimited(a_m: f64, alpha_rad: f64, d_m: f64, offset_rad: f64) -> Self {
+        Self {
+            a_m,
+            alpha_rad,
+            d_m,
+            offset_rad,
+            min_rad: f64::NEG_INFINITY,
+            max_rad: f64::INFINITY,
+        }
+    }
+
+    /// The transform from the previous frame to this joint's at reading `q_rad`.
+    fn transform(&self, q_rad: f64) -> Isometry3<f64> {
+        let rx = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), self.alpha_rad);
+        let rz = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), q_rad + self.offset_rad);
+        Isometry3::from_parts(Translation3::identity(), rx)
+            * Isometry3::translation(self.a_m, 0.0, 0.0)
+            * Isometry3::from_parts(Translation3::identity(), rz)
+            * Isometry3::translation(0.0, 0.0, self.d_m)
+    }
+}
+
 /// A serial chain from the base to the flange, with an optional reference frame in front
 /// (poses are reported in it) and a tool behind (poses are of the tool point).
 #[derive(Debug, Clone, PartialEq)]
@@ -74,15 +98,23 @@ impl Chain {
     fn transform(&self, q_rad: &[f64]) -> Isometry3<f64> {
         let mut t = self.base;
         for (j, q) in self.joints.iter().zip(q_rad) {
-            let rx = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), j.alpha_rad);
-            let rz = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), q + j.offset_rad);
-            t = t
-                * Isometry3::from_parts(Translation3::identity(), rx)
-                * Isometry3::translation(j.a_m, 0.0, 0.0)
-                * Isometry3::from_parts(Translation3::identity(), rz)
-                * Isometry3::translation(0.0, 0.0, j.d_m);
+            t *= j.transform(*q);
         }
         t * self.tool
+    }
+
+    /// Every joint's frame in the reference frame for joint angles `q_rad`, base first; the
+    /// last is the flange's (without the tool).
+    pub fn link_frames(&self, q_rad: &[f64]) -> Vec<Isometry3<f64>> {
+        let mut t = self.base;
+        self.joints
+            .iter()
+            .zip(q_rad)
+            .map(|(j, q)| {
+                t *= j.transform(*q);
+                t
+            })
+            .collect()
     }
 
     /// Flange pose for joint angles `q_rad` (one per joint).

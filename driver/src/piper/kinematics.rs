@@ -1,5 +1,10 @@
 //! Forward kinematics of the Piper from the SDK's modified (Craig) DH table (spec §12),
-//! implemented from the table, not from the SDK's code.
+//! implemented from the table, not from the SDK's code, on the crate's one MDH chain
+//! ([`crate::arm::kinematics::Chain`]).
+
+use nalgebra::Isometry3;
+
+use crate::arm::kinematics::{Chain, MdhJoint};
 
 /// Which DH table to use: the firmware's 2° J2/J3 offset arrived with S-V1.6-3.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
@@ -29,15 +34,6 @@ pub struct LinkPose {
     pub yaw_deg: f64,
 }
 
-type Mat4 = [[f64; 4]; 4];
-
-const IDENTITY: Mat4 = [
-    [1.0, 0.0, 0.0, 0.0],
-    [0.0, 1.0, 0.0, 0.0],
-    [0.0, 0.0, 1.0, 0.0],
-    [0.0, 0.0, 0.0, 1.0],
-];
-
 /// (a mm, alpha rad, d mm) per joint.
 const DH_A_ALPHA_D: [(f64, f64, f64); 6] = [
     (0.0, 0.0, 123.0),
@@ -55,64 +51,29 @@ fn theta_offsets_deg(variant: DhVariant) -> [f64; 6] {
     }
 }
 
-/// One row of the modified-DH table: a (mm), alpha (rad), d (mm) and the angle added to the
-/// joint reading (rad).
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct DhRow {
-    /// a(i-1), mm.
-    pub a_mm: f64,
-    /// alpha(i-1), rad.
-    pub alpha_rad: f64,
-    /// d(i), mm.
-    pub d_mm: f64,
-    /// θ offset, rad.
-    pub theta_offset_rad: f64,
-}
-
-/// The DH table [`forward_kinematics`] uses, for other solvers (the Arm API's IK).
-pub fn dh_table(variant: DhVariant) -> [DhRow; 6] {
+/// The Piper's modified-DH table (metres, radians; no joint limits), which
+/// [`forward_kinematics`] and the Arm API's solver both use.
+pub fn dh_table(variant: DhVariant) -> [MdhJoint; 6] {
     let offsets = theta_offsets_deg(variant);
     std::array::from_fn(|i| {
         let (a_mm, alpha_rad, d_mm) = DH_A_ALPHA_D[i];
-        DhRow {
-            a_mm,
+        MdhJoint::unlimited(
+            a_mm / 1000.0,
             alpha_rad,
-            d_mm,
-            theta_offset_rad: offsets[i].to_radians(),
-        }
+            d_mm / 1000.0,
+            offsets[i].to_radians(),
+        )
     })
 }
 
-/// RotX(α)·TransX(a)·RotZ(θ)·TransZ(d).
-fn link(a: f64, alpha: f64, theta: f64, d: f64) -> Mat4 {
-    let (st, ct) = theta.sin_cos();
-    let (sa, ca) = alpha.sin_cos();
-    [
-        [ct, -st, 0.0, a],
-        [st * ca, ct * ca, -sa, -sa * d],
-        [st * sa, ct * sa, ca, ca * d],
-        [0.0, 0.0, 0.0, 1.0],
-    ]
-}
-
-fn mul(x: &Mat4, y: &Mat4) -> Mat4 {
-    let mut out = [[0.0; 4]; 4];
-    for (i, row) in out.iter_mut().enumerate() {
-        for (j, cell) in row.iter_mut().enumerate() {
-            *cell = (0..4).map(|k| x[i][k] * y[k][j]).sum();
-        }
-    }
-    out
-}
-
-fn pose(t: &Mat4) -> LinkPose {
-    let roll = t[2][1].atan2(t[2][2]);
-    let pitch = (-t[2][0]).atan2((t[0][0] * t[0][0] + t[1][0] * t[1][0]).sqrt());
-    let yaw = t[1][0].atan2(t[0][0]);
+/// A frame as the SDK reports it: mm and Z-Y-X Euler degrees.
+fn link_pose(t: &Isometry3<f64>) -> LinkPose {
+    let (roll, pitch, yaw) = t.rotation.euler_angles();
+    let p = t.translation.vector * 1000.0;
     LinkPose {
-        x_mm: t[0][3],
-        y_mm: t[1][3],
-        z_mm: t[2][3],
+        x_mm: p.x,
+        y_mm: p.y,
+        z_mm: p.z,
         roll_deg: roll.to_degrees(),
         pitch_deg: pitch.to_degrees(),
         yaw_deg: yaw.to_degrees(),
@@ -128,15 +89,8 @@ fn pose(t: &Mat4) -> LinkPose {
 /// assert!((flange.x_mm - 56.128).abs() < 0.01 && (flange.pitch_deg - 85.0).abs() < 0.01);
 /// ```
 pub fn forward_kinematics(q_rad: [f64; 6], variant: DhVariant) -> [LinkPose; 6] {
-    let offsets = theta_offsets_deg(variant);
-    let mut t = IDENTITY;
-    let mut out = [pose(&IDENTITY); 6];
-    for i in 0..6 {
-        let (a, alpha, d) = DH_A_ALPHA_D[i];
-        t = mul(&t, &link(a, alpha, q_rad[i] + offsets[i].to_radians(), d));
-        out[i] = pose(&t);
-    }
-    out
+    let frames = Chain::new(dh_table(variant).to_vec()).link_frames(&q_rad);
+    std::array::from_fn(|i| link_pose(&frames[i]))
 }
 
 #[cfg(test)]

@@ -54,7 +54,7 @@ pub use codec::{
     TrackCommand,
 };
 pub use error::{LimitedAxis, PiperError};
-pub use kinematics::{dh_table, forward_kinematics, DhRow, DhVariant, LinkPose};
+pub use kinematics::{dh_table, forward_kinematics, DhVariant, LinkPose};
 pub use limits::{ClientLimits, LimitPolicy};
 pub use state::{BusFault, JointAngles, LinkHealth, PiperState, Stamped};
 pub use types::{

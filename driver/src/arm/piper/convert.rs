@@ -57,12 +57,9 @@ pub(crate) fn chain(variant: DhVariant) -> Chain {
             .iter()
             .zip(limits)
             .map(|(row, (min_rad, max_rad))| MdhJoint {
-                a_m: row.a_mm / 1000.0,
-                alpha_rad: row.alpha_rad,
-                d_m: row.d_mm / 1000.0,
-                offset_rad: row.theta_offset_rad,
                 min_rad,
                 max_rad,
+                ..*row
             })
             .collect(),
     )
