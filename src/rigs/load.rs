@@ -17,39 +17,20 @@ pub const MAX_DEVICES: usize = 64;
 /// Longest device name (it appears in every message about the device).
 const MAX_NAME_CHARS: usize = 64;
 
-/// The `armhil sim` subcommands a bench can hold.
+/// An `armhil sim` subcommand a bench can hold: the CLI's registry of served kinds lists them
+/// (this reader knows none by name).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum SimKind {
-    /// `armhil sim piper`.
-    Piper,
-    /// `armhil sim realman`.
-    Realman,
-    /// `armhil sim robstride`.
-    Robstride,
-    /// `armhil sim robot FILE` (the robot file is the `file:` key).
-    Robot,
+pub struct SimKind {
+    /// The subcommand's name (`kind:` in the file).
+    pub name: &'static str,
+    /// The keys written as positional arguments rather than options (`file:` of a robot).
+    pub positional_keys: &'static [&'static str],
 }
 
 impl SimKind {
-    /// Every kind, in the order messages list them.
-    pub const ALL: [SimKind; 4] = [Self::Piper, Self::Realman, Self::Robstride, Self::Robot];
-
     /// The subcommand's name (`kind:` in the file).
     pub fn name(self) -> &'static str {
-        match self {
-            Self::Piper => "piper",
-            Self::Realman => "realman",
-            Self::Robstride => "robstride",
-            Self::Robot => "robot",
-        }
-    }
-
-    /// The keys written as positional arguments rather than options (`file:` of a robot).
-    fn positional_keys(self) -> &'static [&'static str] {
-        match self {
-            Self::Robot => &["file"],
-            _ => &[],
-        }
+        self.name
     }
 }
 
@@ -156,7 +137,9 @@ impl RawItem {
 /// Loads the bench file `path`: every device's kind and option list, every problem named at
 /// its line. Whether the options themselves are right is the command's to say (the CLI
 /// parses them and reports through [`BenchDevice::error`]).
-pub fn load_bench_file(path: &Path) -> Result<BenchFile, BenchFileError> {
+///
+/// `kinds` are the subcommands a device may be, in the order messages list them.
+pub fn load_bench_file(path: &Path, kinds: &[SimKind]) -> Result<BenchFile, BenchFileError> {
     let text = read_text_file(path, MAX_BENCH_FILE_BYTES, "bench file").map_err(|message| {
         BenchFileError::Read {
             path: path.to_owned(),
@@ -199,7 +182,7 @@ pub fn load_bench_file(path: &Path) -> Result<BenchFile, BenchFileError> {
         let at = pos(entry);
         check_name(name).map_err(|message| err(at, message))?;
         let device_err = |at: Pos, message: String| err(at, format!("device `{name}`: {message}"));
-        let kind = kind_of(&entry.value, at).map_err(|(at, m)| device_err(at, m))?;
+        let kind = kind_of(kinds, &entry.value, at).map_err(|(at, m)| device_err(at, m))?;
         let args = command_line(kind, &entry.value).map_err(|(at, m)| device_err(at, m))?;
         devices.push(BenchDevice {
             name: name.clone(),
@@ -224,8 +207,8 @@ fn check_name(name: &str) -> Result<(), String> {
     Ok(())
 }
 
-fn kind_of(entry: &Entry, at: Pos) -> Result<SimKind, (Pos, String)> {
-    let names: Vec<&str> = SimKind::ALL.iter().map(|k| k.name()).collect();
+fn kind_of(kinds: &[SimKind], entry: &Entry, at: Pos) -> Result<SimKind, (Pos, String)> {
+    let names: Vec<&str> = kinds.iter().map(|k| k.name()).collect();
     let Some(value) = entry.get("kind") else {
         return Err((at, format!("no `kind:` (one of {})", names.join(", "))));
     };
@@ -233,8 +216,9 @@ fn kind_of(entry: &Entry, at: Pos) -> Result<SimKind, (Pos, String)> {
         RawValue::Text(word) => word.as_str(),
         _ => "",
     };
-    SimKind::ALL
-        .into_iter()
+    kinds
+        .iter()
+        .copied()
         .find(|k| k.name() == word)
         .ok_or_else(|| {
             (
@@ -258,7 +242,7 @@ fn command_line(kind: SimKind, entry: &Entry) -> Result<Vec<String>, (Pos, Strin
         let option = format!("--{}", key.replace('_', "-"));
         let words: Vec<String> = match &value.value {
             RawValue::Flag(set) => {
-                if kind.positional_keys().contains(&key.as_str()) {
+                if kind.positional_keys.contains(&key.as_str()) {
                     return Err((pos(value), format!("`{key}:` takes a value, not {set}")));
                 }
                 if *set {
@@ -271,7 +255,7 @@ fn command_line(kind: SimKind, entry: &Entry) -> Result<Vec<String>, (Pos, Strin
             RawValue::Text(t) => vec![t.clone()],
             RawValue::List(items) => items.iter().map(RawItem::text).collect(),
         };
-        if kind.positional_keys().contains(&key.as_str()) {
+        if kind.positional_keys.contains(&key.as_str()) {
             if words.len() != 1 {
                 return Err((pos(value), format!("`{key}:` takes one value, not a list")));
             }

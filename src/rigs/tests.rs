@@ -4,6 +4,25 @@ use std::path::PathBuf;
 
 use super::*;
 
+/// Kinds as the CLI registers them (this module knows none by name).
+const PIPER: SimKind = SimKind {
+    name: "piper",
+    positional_keys: &[],
+};
+const REALMAN: SimKind = SimKind {
+    name: "realman",
+    positional_keys: &[],
+};
+const ROBSTRIDE: SimKind = SimKind {
+    name: "robstride",
+    positional_keys: &[],
+};
+const ROBOT: SimKind = SimKind {
+    name: "robot",
+    positional_keys: &["file"],
+};
+const KINDS: [SimKind; 4] = [PIPER, REALMAN, ROBSTRIDE, ROBOT];
+
 fn write(text: &str) -> (tempfile::TempDir, PathBuf) {
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("bench.yaml");
@@ -13,7 +32,7 @@ fn write(text: &str) -> (tempfile::TempDir, PathBuf) {
 
 fn load(text: &str) -> Result<BenchFile, String> {
     let (_dir, file) = write(text);
-    load_bench_file(&file).map_err(|e| match e {
+    load_bench_file(&file, &KINDS).map_err(|e| match e {
         BenchFileError::Invalid(e) => e.headline().rsplit_once(".yaml:").unwrap().1.to_owned(),
         other => other.to_string(),
     })
@@ -47,10 +66,10 @@ fn each_entry_becomes_its_command_line() {
     assert_eq!(
         lines,
         [
-            ("controller", SimKind::Realman, vec!["--port=8081"]),
+            ("controller", REALMAN, vec!["--port=8081"]),
             (
                 "left",
-                SimKind::Robot,
+                ROBOT,
                 vec![
                     "--create-vxcan",
                     "--state-file=left.json",
@@ -60,7 +79,7 @@ fn each_entry_becomes_its_command_line() {
             ),
             (
                 "right",
-                SimKind::Piper,
+                PIPER,
                 vec![
                     "--iface=can_right",
                     "--initial-joints-deg=0",
@@ -95,7 +114,7 @@ fn mistakes_are_named_at_their_line() {
 #[test]
 fn a_device_error_names_the_device_at_its_entry() {
     let (_dir, file) = write("devices:\n  left: {kind: piper, ifac: can0}\n");
-    let bench = load_bench_file(&file).unwrap();
+    let bench = load_bench_file(&file, &KINDS).unwrap();
     let error = bench.devices[0].error("unexpected argument '--ifac'");
     assert!(
         error
@@ -112,6 +131,6 @@ fn a_device_error_names_the_device_at_its_entry() {
 
 #[test]
 fn a_file_that_is_not_one_is_refused_without_reading_it_all() {
-    let error = load_bench_file(std::path::Path::new("/dev/zero")).unwrap_err();
+    let error = load_bench_file(std::path::Path::new("/dev/zero"), &KINDS).unwrap_err();
     assert!(error.to_string().contains("not a regular file"), "{error}");
 }

@@ -7,10 +7,10 @@ use std::process::ExitCode;
 
 use anyhow::Context;
 use armhil::rigs::{load_bench_file, BenchDevice, BenchFile, SimKind};
-use clap::Parser;
 use tokio::sync::watch;
 use tokio::task::JoinSet;
 
+use super::served::BenchEntry;
 use super::StopSource;
 
 /// Arguments of `armhil sim bench`.
@@ -18,30 +18,6 @@ use super::StopSource;
 pub struct Args {
     /// The bench file (`rigs/bimanual_piper.yaml`, grammar in `rigs/README.md`).
     pub file: PathBuf,
-}
-
-/// One device's options, parsed by its own subcommand's parser.
-#[derive(Debug)]
-enum DeviceArgs {
-    Piper(super::piper::Args),
-    Realman(super::realman::Args),
-    Robstride(super::robstride::Args),
-    Robot(super::robot::Args),
-}
-
-/// `armhil sim KIND` alone: what a bench entry's options are parsed with, so they take what
-/// the command line takes and fail with its messages.
-#[derive(Debug, Parser)]
-#[command(no_binary_name = true, disable_help_flag = true)]
-struct Entry<T: clap::Args> {
-    #[command(flatten)]
-    args: T,
-}
-
-fn parse<T: clap::Args>(device: &BenchDevice) -> anyhow::Result<T> {
-    Entry::<T>::try_parse_from(&device.args)
-        .map(|entry| entry.args)
-        .map_err(|e| anyhow::anyhow!("{}", device.error(clap_message(&e))))
 }
 
 /// clap's message without its usage block, with its `--option` words as the file's keys
@@ -94,64 +70,39 @@ fn positional_as_key(text: &str) -> String {
     }
 }
 
-impl DeviceArgs {
-    /// Parse a device's options and resolve its paths against the bench file's folder.
-    fn parse(device: &BenchDevice, dir: &Path) -> anyhow::Result<Self> {
-        let mut args = match device.kind {
-            SimKind::Piper => Self::Piper(parse(device)?),
-            SimKind::Realman => Self::Realman(parse(device)?),
-            SimKind::Robstride => Self::Robstride(parse(device)?),
-            SimKind::Robot => Self::Robot(parse(device)?),
-        };
-        for path in args.paths_mut() {
-            if path.is_relative() {
-                *path = dir.join(&*path);
-            }
-        }
-        Ok(args)
-    }
-
-    /// Every file the options name (relative to the bench file, as a robot file's URDF is
-    /// relative to the robot file).
-    fn paths_mut(&mut self) -> Vec<&mut PathBuf> {
-        match self {
-            Self::Piper(a) => [&mut a.state_file, &mut a.urdf, &mut a.record]
-                .into_iter()
-                .flatten()
-                .collect(),
-            Self::Realman(a) => a.state_file.iter_mut().collect(),
-            Self::Robstride(a) => a.state_file.iter_mut().collect(),
-            Self::Robot(a) => std::iter::once(&mut a.file)
-                .chain(a.state_file.iter_mut())
-                .collect(),
+/// Parse a device's options with its kind's own parser and resolve its paths against the
+/// bench file's folder.
+fn parse(device: &BenchDevice, dir: &Path) -> anyhow::Result<Box<dyn BenchEntry>> {
+    let (_, parse_entry) = super::SERVED
+        .iter()
+        .find(|(kind, _)| *kind == device.kind)
+        .ok_or_else(|| anyhow::anyhow!("{}", device.error("no such kind is served")))?;
+    let mut args =
+        parse_entry(device).map_err(|e| anyhow::anyhow!("{}", device.error(clap_message(&e))))?;
+    for path in args.paths_mut() {
+        if path.is_relative() {
+            *path = dir.join(&*path);
         }
     }
-
-    async fn serve(self, stop: StopSource) -> anyhow::Result<ExitCode> {
-        match self {
-            Self::Piper(a) => super::piper::serve(a, stop).await,
-            Self::Realman(a) => super::realman::serve(a, stop).await,
-            Self::Robstride(a) => super::robstride::serve(a, stop).await,
-            Self::Robot(a) => super::robot::serve(a, stop).await,
-        }
-    }
+    Ok(args)
 }
 
 /// Serve every device of the bench file until Ctrl-C, or until one of them stops on its own
 /// (it could not start, or it died), which stops the others.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    let bench = load_bench_file(&args.file)?;
+    let kinds: Vec<SimKind> = super::SERVED.iter().map(|(kind, _)| *kind).collect();
+    let bench = load_bench_file(&args.file, &kinds)?;
     let devices = bench
         .devices
         .iter()
-        .map(|d| Ok((d.name.clone(), d.kind, DeviceArgs::parse(d, bench.dir())?)))
+        .map(|d| Ok((d.name.clone(), d.kind, parse(d, bench.dir())?)))
         .collect::<anyhow::Result<Vec<_>>>()?;
     super::real_time_runtime()?.block_on(serve(&bench, devices))
 }
 
 async fn serve(
     bench: &BenchFile,
-    devices: Vec<(String, SimKind, DeviceArgs)>,
+    devices: Vec<(String, SimKind, Box<dyn BenchEntry>)>,
 ) -> anyhow::Result<ExitCode> {
     let mut signals = StopSource::signals()?;
     let (stop, stop_request) = watch::channel(None);

@@ -13,7 +13,10 @@ pub mod piper;
 pub mod realman;
 pub mod robot;
 pub mod robstride;
+pub mod served;
 pub mod served_bus;
+
+use served::ServedKind;
 
 /// Arguments of `armhil sim`.
 #[derive(Debug, clap::Args)]
@@ -22,19 +25,66 @@ pub struct Args {
     device: Device,
 }
 
-#[derive(Debug, Subcommand)]
-enum Device {
+/// Register the served kinds: `"name" => Variant(module)`, each module holding a `Kind`
+/// that implements [`ServedKind`]. The subcommands, the kinds a bench file may hold and the
+/// bench's dispatch are generated from this list; nothing else in the CLI lists them.
+macro_rules! served_kinds {
+    ($( $(#[$doc:meta])* $name:literal => $variant:ident($module:ident) ),* $(,)?) => {
+        // Each registration line's name is its kind's `ServedKind::NAME`.
+        $( const _: () = assert!(
+            same_text($name, <$module::Kind as ServedKind>::NAME),
+            concat!("`", $name, "` is registered under another name than its ServedKind::NAME")
+        ); )*
+
+        #[derive(Debug, Subcommand)]
+        enum Device {
+            $( $(#[$doc])* #[command(name = $name)] $variant(<$module::Kind as ServedKind>::Args), )*
+            /// Several devices in one process from a bench file (`rigs/`): two Piper arms on two
+            /// interfaces, Realman controllers on several ports, robots; stopped together.
+            Bench(bench::Args),
+        }
+
+        /// Every kind a bench file may hold, with the parser of its options.
+        pub(crate) const SERVED: &[(armhil::rigs::SimKind, served::EntryParser)] = &[
+            $( (served::sim_kind::<$module::Kind>(), served::parse_entry::<$module::Kind>), )*
+        ];
+
+        /// Run the chosen emulator until Ctrl-C.
+        pub fn run(args: Args) -> anyhow::Result<ExitCode> {
+            raise_open_file_limit();
+            match args.device {
+                $( Device::$variant(args) => served::run_alone::<$module::Kind>(args), )*
+                Device::Bench(args) => bench::run(args),
+            }
+        }
+    };
+}
+
+served_kinds! {
     /// AgileX Piper 6-DoF arm (CAN, 11-bit IDs).
-    Piper(piper::Args),
+    "piper" => Piper(piper),
     /// Realman arm controller (JSON over TCP, realtime push over UDP).
-    Realman(realman::Args),
+    "realman" => Realman(realman),
     /// RobStride actuators (CAN, 29-bit IDs), any number on one bus.
-    Robstride(robstride::Args),
+    "robstride" => Robstride(robstride),
     /// A whole robot from its robot file: one physics world, every bus served at once.
-    Robot(robot::Args),
-    /// Several devices in one process from a bench file (`rigs/`): two Piper arms on two
-    /// interfaces, Realman controllers on several ports, robots; stopped together.
-    Bench(bench::Args),
+    "robot" => Robot(robot),
+}
+
+/// `a == b` where the compiler can evaluate it (registration checks).
+const fn same_text(a: &str, b: &str) -> bool {
+    let (a, b) = (a.as_bytes(), b.as_bytes());
+    if a.len() != b.len() {
+        return false;
+    }
+    let mut i = 0;
+    while i < a.len() {
+        if a[i] != b[i] {
+            return false;
+        }
+        i += 1;
+    }
+    true
 }
 
 /// The runtime every emulator of `armhil sim` runs on: two workers, made punctual (the clock's
@@ -224,18 +274,6 @@ fn raise_open_file_limit() -> Option<u64> {
             tracing::warn!("cannot raise the open-file limit: {e}");
             None
         }
-    }
-}
-
-/// Run the chosen emulator until Ctrl-C.
-pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    raise_open_file_limit();
-    match args.device {
-        Device::Piper(args) => piper::run(args),
-        Device::Realman(args) => realman::run(args),
-        Device::Robstride(args) => robstride::run(args),
-        Device::Robot(args) => robot::run(args),
-        Device::Bench(args) => bench::run(args),
     }
 }
 

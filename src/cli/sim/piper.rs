@@ -68,9 +68,26 @@ pub enum Role {
     Follower,
 }
 
-/// Run the emulator until Ctrl-C.
-pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    super::real_time_runtime()?.block_on(async { serve(args, super::StopSource::signals()?).await })
+/// `armhil sim piper` (registered in [`super::served_kinds`]).
+pub(crate) struct Kind;
+
+impl super::served::ServedKind for Kind {
+    const NAME: &'static str = "piper";
+    type Args = Args;
+
+    fn paths_mut(args: &mut Args) -> Vec<&mut PathBuf> {
+        [&mut args.state_file, &mut args.urdf, &mut args.record]
+            .into_iter()
+            .flatten()
+            .collect()
+    }
+
+    fn serve(
+        args: Args,
+        stop: super::StopSource,
+    ) -> impl std::future::Future<Output = anyhow::Result<ExitCode>> + Send {
+        serve(args, stop)
+    }
 }
 
 fn initial_joints_rad(args: &Args) -> anyhow::Result<[f64; 6]> {

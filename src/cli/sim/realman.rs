@@ -56,9 +56,23 @@ pub struct Args {
     pub ui: Option<String>,
 }
 
-/// Run the emulator until Ctrl-C.
-pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    super::real_time_runtime()?.block_on(async { serve(args, super::StopSource::signals()?).await })
+/// `armhil sim realman` (registered in [`super::served_kinds`]).
+pub(crate) struct Kind;
+
+impl super::served::ServedKind for Kind {
+    const NAME: &'static str = "realman";
+    type Args = Args;
+
+    fn paths_mut(args: &mut Args) -> Vec<&mut PathBuf> {
+        args.state_file.iter_mut().collect()
+    }
+
+    fn serve(
+        args: Args,
+        stop: super::StopSource,
+    ) -> impl std::future::Future<Output = anyhow::Result<ExitCode>> + Send {
+        serve(args, stop)
+    }
 }
 
 /// Serve until `stop` asks (a signal, or the bench this device is part of stopping).

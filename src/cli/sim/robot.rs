@@ -46,9 +46,26 @@ const VXCAN_PREFIX: &str = "sim-";
 /// Longest Linux interface name (IFNAMSIZ − 1).
 const MAX_IFACE_CHARS: usize = 15;
 
-/// Run the robot until Ctrl-C.
-pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    super::real_time_runtime()?.block_on(async { serve(args, super::StopSource::signals()?).await })
+/// `armhil sim robot` (registered in [`super::served_kinds`]).
+pub(crate) struct Kind;
+
+impl super::served::ServedKind for Kind {
+    const NAME: &'static str = "robot";
+    const POSITIONAL_KEYS: &'static [&'static str] = &["file"];
+    type Args = Args;
+
+    fn paths_mut(args: &mut Args) -> Vec<&mut PathBuf> {
+        std::iter::once(&mut args.file)
+            .chain(args.state_file.iter_mut())
+            .collect()
+    }
+
+    fn serve(
+        args: Args,
+        stop: super::StopSource,
+    ) -> impl std::future::Future<Output = anyhow::Result<ExitCode>> + Send {
+        serve(args, stop)
+    }
 }
 
 /// Where the buses are served, and what has to be shut down with them.

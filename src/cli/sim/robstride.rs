@@ -112,9 +112,23 @@ impl FromStr for LoadSpec {
     }
 }
 
-/// Run the emulator until Ctrl-C.
-pub fn run(args: Args) -> anyhow::Result<ExitCode> {
-    super::real_time_runtime()?.block_on(async { serve(args, super::StopSource::signals()?).await })
+/// `armhil sim robstride` (registered in [`super::served_kinds`]).
+pub(crate) struct Kind;
+
+impl super::served::ServedKind for Kind {
+    const NAME: &'static str = "robstride";
+    type Args = Args;
+
+    fn paths_mut(args: &mut Args) -> Vec<&mut PathBuf> {
+        args.state_file.iter_mut().collect()
+    }
+
+    fn serve(
+        args: Args,
+        stop: super::StopSource,
+    ) -> impl std::future::Future<Output = anyhow::Result<ExitCode>> + Send {
+        serve(args, stop)
+    }
 }
 
 fn config(args: &Args) -> anyhow::Result<RobstrideConfig> {
