@@ -16,14 +16,82 @@ const COLORS: [&str; 8] = [
     "#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#17becf",
 ];
 
-/// Groups plotted, in order, with their axis label.
-const GROUPS: [(&str, &str); 5] = [
-    ("joints", "joint angle (deg)"),
-    ("currents", "motor current (A)"),
-    ("gripper", "gripper stroke (mm)"),
-    ("speeds", "joint speed (deg/s)"),
-    ("temperatures", "motor temperature (°C)"),
+/// Plot groups, in the order their panels stand, with the quantity their axis shows. A group
+/// not listed gets a panel after these, named by the group; `status` (mode and fault codes)
+/// gets none: its numbers are labels, not quantities.
+const GROUPS: [(&str, &str); 10] = [
+    ("joints", "joint angle"),
+    ("angles", "joint angle"),
+    ("currents", "motor current"),
+    ("gripper", "gripper stroke"),
+    ("speeds", "joint speed"),
+    ("torques", "torque"),
+    ("temperatures", "motor temperature"),
+    ("pose", "pose"),
+    ("base", "floating base"),
+    ("status", ""),
 ];
+
+/// Units by column-name suffix, longest first (`_rad_s` before `_s`-less `_rad`).
+const UNITS: [(&str, &str); 10] = [
+    ("_deg_s", "deg/s"),
+    ("_rad_s", "rad/s"),
+    ("_deg", "deg"),
+    ("_rad", "rad"),
+    ("_nm", "N·m"),
+    ("_mm", "mm"),
+    ("_m", "m"),
+    ("_a", "A"),
+    ("_c", "°C"),
+    ("_v", "V"),
+];
+
+/// The unit of a column, from its name's suffix.
+fn unit_of(column: &str) -> Option<&'static str> {
+    UNITS
+        .iter()
+        .find(|(suffix, _)| column.ends_with(suffix))
+        .map(|(_, unit)| *unit)
+}
+
+/// The panels to draw: each group of the trace once, in [`GROUPS`]' order then the trace's,
+/// with its axis label (the unit when every column of the group shares one).
+fn panels(trace: &Trace) -> Vec<(&'static str, String)> {
+    let mut groups: Vec<&'static str> = Vec::new();
+    for known in GROUPS.iter().map(|(g, _)| *g) {
+        if trace.columns.iter().any(|c| c.group == known) {
+            groups.push(known);
+        }
+    }
+    for column in &trace.columns {
+        if !groups.contains(&column.group) {
+            groups.push(column.group);
+        }
+    }
+    groups
+        .into_iter()
+        .filter_map(|group| {
+            let quantity = GROUPS
+                .iter()
+                .find(|(g, _)| *g == group)
+                .map_or(group, |(_, q)| *q);
+            if quantity.is_empty() {
+                return None;
+            }
+            let mut units = trace
+                .columns
+                .iter()
+                .filter(|c| c.group == group)
+                .map(|c| unit_of(&c.name));
+            let first = units.next().flatten();
+            let label = match first {
+                Some(unit) if units.all(|u| u == Some(unit)) => format!("{quantity} ({unit})"),
+                _ => quantity.to_owned(),
+            };
+            Some((group, label))
+        })
+        .collect()
+}
 
 /// A shaded time window with its label.
 pub(super) struct Window {
@@ -97,15 +165,50 @@ fn bounds(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
     Some((lo - margin, hi + margin))
 }
 
+/// Where a panel stands: its top, its height (enough for its legend) and the right margin
+/// the legends take.
+#[derive(Debug, Clone, Copy)]
+struct Frame {
+    top: f64,
+    height: f64,
+    right: f64,
+}
+
+/// Height of one legend line, px.
+const LEGEND_LINE: f64 = 16.0;
+
+/// A panel's height: the standard one, or taller when its legend needs it (a robot's 20
+/// joints).
+fn panel_height(trace: &Trace, group: &str) -> f64 {
+    let lines = trace.columns.iter().filter(|c| c.group == group).count() as f64;
+    PANEL_HEIGHT.max(14.0 + LEGEND_LINE * lines)
+}
+
+/// The right margin: the standard one, or wider for long column names (`right_shoulder_pitch_rad`).
+fn right_margin(trace: &Trace) -> f64 {
+    let longest = trace
+        .columns
+        .iter()
+        .map(|c| c.name.chars().count())
+        .max()
+        .unwrap_or(0) as f64;
+    RIGHT.max(45.0 + 6.5 * longest).min(WIDTH / 3.0)
+}
+
 fn panel(
     out: &mut String,
     trace: &Trace,
     group: &str,
     label: &str,
-    top: f64,
+    frame: Frame,
     t_end: f64,
     windows: &[Window],
 ) {
+    let Frame {
+        top,
+        height: panel_height,
+        right,
+    } = frame;
     let cols: Vec<usize> = trace
         .columns
         .iter()
@@ -127,19 +230,19 @@ fn panel(
     ) else {
         return;
     };
-    let plot_w = WIDTH - LEFT - RIGHT;
+    let plot_w = WIDTH - LEFT - right;
     let x = |t: f64| LEFT + plot_w * (t / t_end);
-    let y = |v: f64| top + PANEL_HEIGHT * (1.0 - (v - lo) / (hi - lo));
+    let y = |v: f64| top + panel_height * (1.0 - (v - lo) / (hi - lo));
     let _ = writeln!(
         out,
-        r##"<rect x="{LEFT}" y="{top}" width="{plot_w}" height="{PANEL_HEIGHT}" fill="#fafafa" stroke="#999"/>"##
+        r##"<rect x="{LEFT}" y="{top}" width="{plot_w}" height="{panel_height}" fill="#fafafa" stroke="#999"/>"##
     );
     for w in windows {
         let x0 = x(w.from.as_secs_f64());
         let x1 = x(w.to.as_secs_f64()).max(x0 + 1.0);
         let _ = writeln!(
             out,
-            r##"<rect x="{x0:.1}" y="{top}" width="{:.1}" height="{PANEL_HEIGHT}" fill="#d62728" fill-opacity="0.15"><title>{}</title></rect>"##,
+            r##"<rect x="{x0:.1}" y="{top}" width="{:.1}" height="{panel_height}" fill="#d62728" fill-opacity="0.15"><title>{}</title></rect>"##,
             x1 - x0,
             escape(&w.label)
         );
@@ -156,13 +259,15 @@ fn panel(
             );
         }
     }
-    // Horizontal grid: bottom, middle, top values.
+    // Horizontal grid: bottom, middle, top values, with the decimals their spacing needs (a
+    // floating base resting at 0.805-0.810 m reads as such, not as 0.8 three times).
+    let decimals = (1.0 - (hi - lo).log10()).ceil().clamp(1.0, 4.0) as usize;
     for frac in [0.0, 0.5, 1.0] {
         let v = lo + (hi - lo) * frac;
         let yy = y(v);
         let _ = writeln!(
             out,
-            r##"<line x1="{LEFT}" y1="{yy:.1}" x2="{:.1}" y2="{yy:.1}" stroke="#ddd"/><text x="{:.1}" y="{:.1}" font-size="11" text-anchor="end">{v:.1}</text>"##,
+            r##"<line x1="{LEFT}" y1="{yy:.1}" x2="{:.1}" y2="{yy:.1}" stroke="#ddd"/><text x="{:.1}" y="{:.1}" font-size="11" text-anchor="end">{v:.decimals$}</text>"##,
             LEFT + plot_w,
             LEFT - 6.0,
             yy + 4.0
@@ -180,8 +285,8 @@ fn panel(
     let _ = writeln!(
         out,
         r##"<text x="14" y="{:.1}" font-size="12" transform="rotate(-90 14 {:.1})" text-anchor="middle">{}</text>"##,
-        top + PANEL_HEIGHT / 2.0,
-        top + PANEL_HEIGHT / 2.0,
+        top + panel_height / 2.0,
+        top + panel_height / 2.0,
         escape(label)
     );
     for (k, c) in cols.iter().enumerate() {
@@ -199,9 +304,9 @@ fn panel(
         let _ = writeln!(
             out,
             r##"<line x1="{:.1}" y1="{ly:.1}" x2="{:.1}" y2="{ly:.1}" stroke="{color}" stroke-width="2"/><text x="{:.1}" y="{:.1}" font-size="11">{}</text>"##,
-            WIDTH - RIGHT + 10.0,
-            WIDTH - RIGHT + 30.0,
-            WIDTH - RIGHT + 35.0,
+            WIDTH - right + 10.0,
+            WIDTH - right + 30.0,
+            WIDTH - right + 35.0,
             ly + 4.0,
             escape(&trace.columns[*c].name)
         );
@@ -237,13 +342,20 @@ fn polyline_points(points: impl Iterator<Item = (f64, f64)>) -> String {
 /// Render the plot of a run: one panel per signal group, fault windows shaded.
 pub fn plot_svg(result: &ScenarioResult) -> String {
     let trace = &result.trace;
-    let groups: Vec<(&str, &str)> = GROUPS
-        .iter()
-        .copied()
-        .filter(|(g, _)| trace.columns.iter().any(|c| c.group == *g))
-        .collect();
-    let panels = groups.len().max(1) as f64;
-    let height = TOP + panels * (PANEL_HEIGHT + GAP) + 20.0;
+    let groups = panels(trace);
+    let right = right_margin(trace);
+    let mut frames = Vec::with_capacity(groups.len());
+    let mut top = TOP;
+    for (group, _) in &groups {
+        let height = panel_height(trace, group);
+        frames.push(Frame { top, height, right });
+        top += height + GAP;
+    }
+    let height = if groups.is_empty() {
+        TOP + PANEL_HEIGHT + GAP + 20.0
+    } else {
+        top + 20.0
+    };
     let t_end = result
         .duration
         .as_secs_f64()
@@ -262,18 +374,18 @@ pub fn plot_svg(result: &ScenarioResult) -> String {
         result.verdict.word(),
         escape(&result.clock)
     );
-    for (i, (group, label)) in groups.iter().enumerate() {
-        let top = TOP + i as f64 * (PANEL_HEIGHT + GAP);
-        panel(&mut out, trace, group, label, top, t_end, &windows);
+    for ((group, label), frame) in groups.iter().zip(&frames) {
+        panel(&mut out, trace, group, label, *frame, t_end, &windows);
         // Time axis under every panel.
-        let plot_w = WIDTH - LEFT - RIGHT;
+        let (top, panel_height) = (frame.top, frame.height);
+        let plot_w = WIDTH - LEFT - right;
         for k in 0..=5 {
             let t = t_end * f64::from(k) / 5.0;
             let xx = LEFT + plot_w * f64::from(k) / 5.0;
             let _ = writeln!(
                 out,
                 r#"<text x="{xx:.1}" y="{:.1}" font-size="10" text-anchor="middle">{:.0} ms</text>"#,
-                top + PANEL_HEIGHT + 13.0,
+                top + panel_height + 13.0,
                 t * 1000.0
             );
         }
@@ -310,5 +422,74 @@ mod tests {
         );
         assert_eq!(polyline_points(std::iter::empty()), "");
         assert_eq!(polyline_points([(1.0, 2.0)].into_iter()), "1.0,2.0");
+    }
+
+    fn trace_of(columns: &[(&str, &'static str)]) -> Trace {
+        Trace {
+            period: Duration::from_millis(10),
+            columns: columns
+                .iter()
+                .map(|(name, group)| crate::harness::result::Column {
+                    name: (*name).to_owned(),
+                    quantum: 0.001,
+                    group,
+                })
+                .collect(),
+            rows: (0..3)
+                .map(|i| {
+                    let t = Duration::from_millis(10 * i);
+                    (t, columns.iter().map(|_| Some(805 + i as i64)).collect())
+                })
+                .collect(),
+        }
+    }
+
+    /// Every group a kind traces gets its panel (a RobStride bus's and a robot's `angles` had
+    /// none: their plot was empty), with the unit its columns share; codes are not plotted.
+    #[test]
+    fn every_traced_quantity_gets_a_panel_labelled_with_its_unit() {
+        let trace = trace_of(&[
+            ("m1_rad", "angles"),
+            ("m1_nm", "torques"),
+            ("m1_mode", "status"),
+            ("base_height_m", "base"),
+            ("base_roll_rad", "base"),
+        ]);
+        let labels: Vec<String> = panels(&trace).into_iter().map(|(_, l)| l).collect();
+        assert_eq!(
+            labels,
+            ["joint angle (rad)", "torque (N·m)", "floating base"]
+        );
+    }
+
+    /// A robot's twenty joints: the panel grows so that its legend stays inside it, the margin
+    /// so that the longest name is not cut, and the axis shows the decimals its range needs.
+    #[test]
+    fn a_panel_of_many_long_columns_makes_room_for_its_legend() {
+        let names: Vec<String> = (0..20)
+            .map(|i| format!("right_shoulder_pitch_{i}_rad"))
+            .collect();
+        let columns: Vec<(&str, &'static str)> =
+            names.iter().map(|n| (n.as_str(), "angles")).collect();
+        let trace = trace_of(&columns);
+        assert!(panel_height(&trace, "angles") >= 14.0 + LEGEND_LINE * 20.0);
+        assert!(right_margin(&trace) > RIGHT);
+        let mut out = String::new();
+        let frame = Frame {
+            top: TOP,
+            height: panel_height(&trace, "angles"),
+            right: right_margin(&trace),
+        };
+        panel(
+            &mut out,
+            &trace,
+            "angles",
+            "joint angle (rad)",
+            frame,
+            0.02,
+            &[],
+        );
+        // Values 0.805 to 0.807: the middle tick is 0.806, not "0.8".
+        assert!(out.contains(">0.8060</text>"), "{out}");
     }
 }
