@@ -45,9 +45,9 @@ pub struct Args {
     pub model: String,
 }
 
-/// The largest capture read (whole, into memory): four times the largest recording
-/// `armhil run --max-recording-mib` allows, so any recording of ours fits.
-const MAX_CAPTURE_BYTES: u64 = 4 * 16_384 * 1024 * 1024;
+/// The largest capture read (whole, into memory, so bounded by what a laptop holds): 4 GiB,
+/// sixty-four times a recording at `armhil run`'s default limit.
+const MAX_CAPTURE_BYTES: u64 = 4 * 1024 * 1024 * 1024;
 
 /// One frame of the capture: when, on which bus (pcapng names its interfaces), and the frame.
 struct Captured {
@@ -56,16 +56,22 @@ struct Captured {
     frame: CanFrame,
 }
 
+/// The capture's bytes: a regular file (not a FIFO or `/dev/zero`) of at most
+/// [`MAX_CAPTURE_BYTES`].
 fn read_capture_bytes(path: &Path) -> anyhow::Result<Vec<u8>> {
-    let size = std::fs::metadata(path)
-        .with_context(|| format!("cannot read {}", path.display()))?
-        .len();
-    anyhow::ensure!(
-        size <= MAX_CAPTURE_BYTES,
-        "{} is {size} bytes, more than the {MAX_CAPTURE_BYTES} this command reads",
-        path.display()
-    );
-    std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))
+    sim::bounded_read::read_regular_file(path, MAX_CAPTURE_BYTES).map_err(|e| {
+        anyhow::anyhow!(
+            "cannot read {}: {}",
+            path.display(),
+            match e {
+                sim::bounded_read::BoundedReadError::TooLarge { limit_bytes } => format!(
+                    "larger than the {} GiB this command reads (record with a smaller --max-recording-mib)",
+                    limit_bytes / (1024 * 1024 * 1024)
+                ),
+                other => other.to_string(),
+            }
+        )
+    })
 }
 
 fn read_frames(path: &Path) -> anyhow::Result<Vec<Captured>> {
@@ -106,13 +112,20 @@ fn read_frames(path: &Path) -> anyhow::Result<Vec<Captured>> {
                 .collect())
         }
         _ => {
-            let entries = bus::candump::read_log(path)
-                .with_context(|| format!("cannot read {}", path.display()))?;
+            let bytes = read_capture_bytes(path)?;
+            let text = String::from_utf8(bytes).map_err(|_| {
+                anyhow::anyhow!("{} is not a candump log (not text)", path.display())
+            })?;
+            let entries = bus::candump::parse_log(&text)
+                .with_context(|| format!("{} is not a readable candump log", path.display()))?;
+            // A log of several interfaces (a bench of several buses) names each line's bus,
+            // as a pcapng does; a log of one reads as it always has.
+            let several = entries.iter().any(|e| e.iface != entries[0].iface);
             Ok(entries
                 .into_iter()
                 .map(|e| Captured {
                     at: e.timestamp,
-                    bus: None,
+                    bus: several.then_some(e.iface),
                     frame: e.frame,
                 })
                 .collect())

@@ -69,6 +69,21 @@ fn a_robot_s_capture_is_decoded_by_its_scenario_s_devices_with_each_frame_s_bus(
         .expect("a torque field");
     assert!(torque.abs() > 5.0, "{shoulder}");
 
+    // bus.log (candump -L) holds the same frames with their interface: the same lines.
+    let from_log = Command::new(ARMHIL)
+        .arg("decode")
+        .arg(out.path().join("arm6_hold_gravity/bus.log"))
+        .arg("--scenario")
+        .arg(&scenario)
+        .output()
+        .expect("armhil runs");
+    let log_text = String::from_utf8_lossy(&from_log.stdout);
+    let fields = |line: &str| line.splitn(2, "  ").nth(1).map(str::to_owned);
+    let pcap_lines: Vec<_> = text.lines().filter_map(fields).collect();
+    let log_lines: Vec<_> = log_text.lines().filter_map(fields).collect();
+    assert_eq!(pcap_lines.len(), log_lines.len());
+    assert_eq!(pcap_lines[..50], log_lines[..50]);
+
     // `--device` and `--scenario` are two ways to choose; both at once is refused.
     let both = Command::new(ARMHIL)
         .arg("decode")
@@ -78,4 +93,20 @@ fn a_robot_s_capture_is_decoded_by_its_scenario_s_devices_with_each_frame_s_bus(
         .output()
         .expect("armhil runs");
     assert_eq!(both.status.code(), Some(2));
+}
+
+/// A capture is read whole, so what is not a regular file is refused before reading: a FIFO
+/// would block, `/dev/zero` never ends.
+#[test]
+fn a_capture_that_is_not_a_file_is_refused_by_name() {
+    for path in ["/dev/zero", "/dev/zero.pcap"] {
+        let out = Command::new(ARMHIL)
+            .args(["decode", path])
+            .output()
+            .expect("armhil runs");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success());
+        assert!(stderr.contains(path), "{stderr}");
+        assert_ne!(out.status.code(), Some(101), "a panic: {stderr}");
+    }
 }
