@@ -78,7 +78,7 @@ fn a_robot_s_capture_is_decoded_by_its_scenario_s_devices_with_each_frame_s_bus(
         .output()
         .expect("armhil runs");
     let log_text = String::from_utf8_lossy(&from_log.stdout);
-    let fields = |line: &str| line.splitn(2, "  ").nth(1).map(str::to_owned);
+    let fields = |line: &str| line.split_once("  ").map(|(_, rest)| rest.to_owned());
     let pcap_lines: Vec<_> = text.lines().filter_map(fields).collect();
     let log_lines: Vec<_> = log_text.lines().filter_map(fields).collect();
     assert_eq!(pcap_lines.len(), log_lines.len());
