@@ -321,8 +321,9 @@ macro_rules! device_kinds {
     };
 }
 
-/// `a == b` where the compiler can evaluate it (registration checks).
-const fn same_text(a: &str, b: &str) -> bool {
+/// `a == b` where the compiler can evaluate it: how a registry line is checked against its
+/// kind's `NAME` (this one, and `armhil sim`'s served kinds).
+pub const fn same_text(a: &str, b: &str) -> bool {
     let (a, b) = (a.as_bytes(), b.as_bytes());
     if a.len() != b.len() {
         return false;

@@ -32,7 +32,7 @@ macro_rules! served_kinds {
     ($( $(#[$doc:meta])* $name:literal => $variant:ident($module:ident) ),* $(,)?) => {
         // Each registration line's name is its kind's `ServedKind::NAME`.
         $( const _: () = assert!(
-            same_text($name, <$module::Kind as ServedKind>::NAME),
+            armhil::devices::same_text($name, <$module::Kind as ServedKind>::NAME),
             concat!("`", $name, "` is registered under another name than its ServedKind::NAME")
         ); )*
 
@@ -71,21 +71,6 @@ served_kinds! {
     "robot" => Robot(robot),
 }
 
-/// `a == b` where the compiler can evaluate it (registration checks).
-const fn same_text(a: &str, b: &str) -> bool {
-    let (a, b) = (a.as_bytes(), b.as_bytes());
-    if a.len() != b.len() {
-        return false;
-    }
-    let mut i = 0;
-    while i < a.len() {
-        if a[i] != b[i] {
-            return false;
-        }
-        i += 1;
-    }
-    true
-}
 
 /// The runtime every emulator of `armhil sim` runs on: two workers, made punctual (the clock's
 /// deadline thread wakes on time, and the step it prompts runs on a worker, which a busy core
