@@ -10,7 +10,9 @@ use std::time::Duration;
 
 use anyhow::Context;
 use armhil::devices::FrameDecoder;
-use armhil::interop::{decode_piper, decode_robstride, decode_robstride_mit, DecodedFrame};
+use armhil::interop::{
+    decode_piper, decode_robstride, decode_robstride_command, decode_robstride_mit, DecodedFrame,
+};
 use bus::{CanFrame, CanId};
 
 /// Which protocol the capture carries.
@@ -184,7 +186,11 @@ impl Decoder {
                 device: Device::Robstride,
                 host_id,
                 model,
-            } => (decode_robstride(frame, *host_id, *model), None),
+            } => (
+                decode_robstride(frame, *host_id, *model)
+                    .or_else(|| decode_robstride_command(frame, *host_id, *model)),
+                None,
+            ),
             Self::Protocol {
                 device: Device::RobstrideMit,
                 host_id,

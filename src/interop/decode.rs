@@ -149,7 +149,7 @@ pub fn decode_piper(frame: &CanFrame) -> Result<Option<DecodedFrame>, codec::Dec
     Ok(Some(DecodedFrame { name, fields }))
 }
 
-fn num(name: &str, value: f64, places: usize, unit: &'static str) -> Field {
+pub(super) fn num(name: &str, value: f64, places: usize, unit: &'static str) -> Field {
     Field {
         name: name.to_owned(),
         value: format!("{value:.places$}"),

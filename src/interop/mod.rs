@@ -8,8 +8,10 @@
 
 mod decode;
 mod piper;
+mod robstride_commands;
 mod units;
 
 pub use decode::{decode_piper, decode_robstride, decode_robstride_mit, DecodedFrame, Field};
 pub use piper::{piper_dbc, piper_messages, probe_field, MessageSpec, SignalSpec};
+pub use robstride_commands::decode_robstride_command;
 pub use units::{unit_of, UnitSpec};

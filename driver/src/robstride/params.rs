@@ -71,8 +71,11 @@ impl ParamValue {
     }
 }
 
-/// A control parameter.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+/// A control parameter. Its name is the manual's in snake case (`loc_ref`, `epscan_time`).
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, strum::IntoStaticStr, strum::VariantArray,
+)]
+#[strum(serialize_all = "snake_case")]
 pub enum Param {
     /// 0x7005 run_mode (u8).
     RunMode,
@@ -181,8 +184,38 @@ impl Param {
         self.index_and_type().1
     }
 
+    /// Every parameter, in index order.
+    pub const ALL: &'static [Param] = <Param as strum::VariantArray>::VARIANTS;
+
+    /// The manual's name in snake case (`run_mode`, `loc_ref`).
+    pub fn name(self) -> &'static str {
+        self.into()
+    }
+
+    /// The parameter at `index` (0x7005 …), if it is one of these.
+    pub fn from_index(index: u16) -> Option<Self> {
+        Self::ALL.iter().copied().find(|p| p.index() == index)
+    }
+
     /// Read-only parameters (the motor refuses writes).
     pub fn is_read_only(self) -> bool {
         matches!(self, Self::MechPos | Self::Iqf | Self::MechVel | Self::Vbus)
+    }
+}
+
+#[cfg(test)]
+mod name_tests {
+    use super::Param;
+
+    #[test]
+    fn names_and_indices_find_each_other() {
+        assert_eq!(Param::ALL.len(), 29);
+        assert_eq!(Param::LocRef.name(), "loc_ref");
+        assert_eq!(Param::EpscanTime.name(), "epscan_time");
+        assert_eq!(Param::from_index(0x7016), Some(Param::LocRef));
+        assert_eq!(Param::from_index(0x7001), None);
+        for p in Param::ALL {
+            assert_eq!(Param::from_index(p.index()), Some(*p));
+        }
     }
 }

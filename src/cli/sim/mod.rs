@@ -71,7 +71,6 @@ served_kinds! {
     "robot" => Robot(robot),
 }
 
-
 /// The runtime every emulator of `armhil sim` runs on: two workers, made punctual (the clock's
 /// deadline thread wakes on time, and the step it prompts runs on a worker, which a busy core
 /// would otherwise keep waiting; `cargo bench --bench realtime_jitter` measures both).

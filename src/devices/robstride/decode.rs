@@ -5,13 +5,14 @@ use driver::robstride::Model;
 
 use super::Settings;
 use crate::devices::FrameDecoder;
-use crate::interop::{decode_robstride, DecodedFrame};
+use crate::interop::{decode_robstride, decode_robstride_command, DecodedFrame};
 
 /// The RobStride driver's host ID (the address motors reply to).
 const HOST_ID: u8 = 0xFD;
 
-/// Decodes the private protocol's extended (29-bit) frames of the motors on this bus, each with
-/// its own model's ranges; frames of other motors or other protocols are not this device's.
+/// Decodes the private protocol's extended (29-bit) frames of the motors on this bus, replies
+/// and the host's commands, each with its own motor's model's ranges; frames of other motors
+/// or other protocols are not this device's.
 pub(crate) struct RobstrideFrames {
     /// The bus's motors: CAN ID and model.
     motors: Vec<(u8, Model)>,
@@ -40,10 +41,17 @@ impl FrameDecoder for RobstrideFrames {
         if !frame.is_extended() {
             return None;
         }
-        // Motor replies carry the motor's CAN ID in bits 8..16.
-        let motor = ((frame.raw_id() >> 8) & 0xFF) as u8;
-        let (_, model) = self.motors.iter().find(|(id, _)| *id == motor)?;
-        decode_robstride(frame, HOST_ID, *model)
+        let model_of = |id: u8| self.motors.iter().find(|(m, _)| *m == id).map(|(_, m)| *m);
+        // Motor replies carry the motor's CAN ID in bits 8..16, the host's commands in bits
+        // 0..8.
+        let replier = ((frame.raw_id() >> 8) & 0xFF) as u8;
+        let addressee = (frame.raw_id() & 0xFF) as u8;
+        model_of(replier)
+            .and_then(|model| decode_robstride(frame, HOST_ID, model))
+            .or_else(|| {
+                model_of(addressee)
+                    .and_then(|model| decode_robstride_command(frame, HOST_ID, model))
+            })
     }
 }
 

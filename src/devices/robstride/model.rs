@@ -277,38 +277,10 @@ pub const MIT_MODES: [(MitMode, &str); 3] = [
     (MitMode::Velocity, "velocity"),
 ];
 
-/// Names of the parameters (`param:`).
-pub const PARAMS: [(Param, &str); 29] = [
-    (Param::RunMode, "run_mode"),
-    (Param::IqRef, "iq_ref"),
-    (Param::SpdRef, "spd_ref"),
-    (Param::LimitTorque, "limit_torque"),
-    (Param::CurKp, "cur_kp"),
-    (Param::CurKi, "cur_ki"),
-    (Param::CurFiltGain, "cur_filt_gain"),
-    (Param::LocRef, "loc_ref"),
-    (Param::LimitSpd, "limit_spd"),
-    (Param::LimitCur, "limit_cur"),
-    (Param::MechPos, "mech_pos"),
-    (Param::Iqf, "iqf"),
-    (Param::MechVel, "mech_vel"),
-    (Param::Vbus, "vbus"),
-    (Param::LocKp, "loc_kp"),
-    (Param::SpdKp, "spd_kp"),
-    (Param::SpdKi, "spd_ki"),
-    (Param::SpdFiltGain, "spd_filt_gain"),
-    (Param::AccRad, "acc_rad"),
-    (Param::VelMax, "vel_max"),
-    (Param::AccSet, "acc_set"),
-    (Param::EpscanTime, "epscan_time"),
-    (Param::CanTimeout, "can_timeout"),
-    (Param::ZeroSta, "zero_sta"),
-    (Param::Damper, "damper"),
-    (Param::AddOffset, "add_offset"),
-    (Param::AlveolousOpen, "alveolous_open"),
-    (Param::IqTest, "iq_test"),
-    (Param::DccSet, "dcc_set"),
-];
+/// Names of the parameters (`param:`): the driver's (the manual's, in snake case).
+pub fn params() -> Vec<(Param, &'static str)> {
+    Param::ALL.iter().map(|p| (*p, p.name())).collect()
+}
 
 /// Names of the status-frame fault bits (bits 16..21), in bit order.
 pub const STATUS_FAULTS: [&str; 6] = [

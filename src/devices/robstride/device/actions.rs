@@ -10,7 +10,7 @@ use driver::robstride::{Feedback, ParamValue, RobstrideError};
 use sim::robstride::{RobstrideBus, RobstrideHandle};
 
 use super::{lock, RobstrideDevice};
-use crate::devices::robstride::model::{RobstrideAction, RsCommand, PARAMS};
+use crate::devices::robstride::model::{RobstrideAction, RsCommand};
 use crate::devices::robstride::observe::{f2, near_text};
 use crate::devices::{DeviceError, Reply};
 use crate::scenario::ErrorClass;
@@ -331,10 +331,7 @@ fn param_reply(
     expect: Option<&crate::scenario::Near>,
 ) {
     let value = raw.as_f64();
-    let name = PARAMS
-        .iter()
-        .find(|(p, _)| *p == param)
-        .map_or("value", |(_, n)| n);
+    let name = param.name();
     // Integer parameters as integers, floats to the millesimal.
     let shown = match raw {
         ParamValue::F32(_) => format!("{value:.3}"),

@@ -11,7 +11,7 @@ use sim::robstride::{Fault, Model};
 
 use super::can_id;
 use crate::devices::robstride::model::{
-    RobstrideAction, RsCommand, MIT_MODES, PARAMS, PROTOCOLS, RUN_MODES,
+    params, RobstrideAction, RsCommand, MIT_MODES, PROTOCOLS, RUN_MODES,
 };
 use crate::devices::robstride::raw::{RawRsStep, RawStep};
 use crate::scenario::error::Pos;
@@ -268,7 +268,7 @@ impl CommandArgs<'_, '_> {
 
     /// The required `param:`.
     fn param(&self) -> Res<Param> {
-        self.word(&self.a.param, "param", &PARAMS)
+        self.word(&self.a.param, "param", &params())
     }
 
     /// The required `protocol:`.
