@@ -3,17 +3,15 @@
 
 use std::path::PathBuf;
 use std::sync::Arc;
-use std::time::Duration;
 
-use bus::{BusError, CanBus, CanFrame};
+use bus::{CanBus, CanFrame};
 use tokio::sync::{mpsc, oneshot};
 use tokio::task::JoinHandle;
-use tokio::time::sleep;
 
 use super::base_pose::BasePose;
 use super::config::{RobotConfig, RobotConfigError};
 use super::world::{RobotWorld, RobotWorldError};
-use crate::can_runner::{receive_frames, StepClock, STEP};
+use crate::can_runner::{receive_frames, StepClock, TxBacklog, STEP};
 use crate::pacer::Pacer;
 use crate::physics::PhysicsError;
 use crate::robstride::faults::{check_external_torque_nm, check_temperature_c, ValueError};
@@ -182,6 +180,7 @@ impl RobotEmulator {
                 name: b.name.clone(),
                 bus,
                 lost: false,
+                backlog: TxBacklog::default(),
             })
             .collect();
         let (requests, inbox) = mpsc::channel(REQUEST_QUEUE);
@@ -339,6 +338,8 @@ struct Port {
     name: String,
     bus: Arc<dyn CanBus>,
     lost: bool,
+    /// Frames the bus's full transmit queue refused, sent first at the next chance.
+    backlog: TxBacklog,
 }
 
 struct Runner {
@@ -562,8 +563,14 @@ impl Runner {
         }
         self.world.step()?;
         *self.base.lock().unwrap_or_else(|e| e.into_inner()) = base_pose(&self.world);
-        for (bus, frame) in out {
-            self.send(bus, Some(frame)).await;
+        for port in 0..self.ports.len() {
+            let frames: Vec<CanFrame> = out
+                .iter()
+                .filter(|(bus, _)| *bus == port)
+                .map(|(_, frame)| *frame)
+                .collect();
+            // Also a step without frames of its own sends what a busy bus refused earlier.
+            self.send(port, frames).await;
         }
         Ok(())
     }
@@ -584,24 +591,13 @@ impl Runner {
         Ok(())
     }
 
-    async fn send(&self, port: usize, frames: impl IntoIterator<Item = CanFrame>) {
-        let port = &self.ports[port];
+    async fn send(&mut self, port: usize, frames: impl IntoIterator<Item = CanFrame>) {
+        let port = &mut self.ports[port];
         if port.lost {
             return;
         }
-        for frame in frames {
-            // A full transmit queue is the mailbox being busy: retry briefly, then drop the
-            // frame as a firmware would.
-            for _attempt in 0..50 {
-                match port.bus.send(frame).await {
-                    Err(BusError::TxQueueFull { .. }) => sleep(Duration::from_micros(100)).await,
-                    Err(error) => {
-                        tracing::debug!(bus = %port.name, %error, %frame, "robot emulator: frame not sent");
-                        break;
-                    }
-                    Ok(()) => break,
-                }
-            }
-        }
+        port.backlog
+            .send(port.bus.as_ref(), frames, "robot", &port.name)
+            .await;
     }
 }

@@ -3,14 +3,12 @@
 
 use std::path::PathBuf;
 use std::sync::Arc;
-use std::time::Duration;
 
-use bus::{BusError, CanBus, CanFrame};
+use bus::{CanBus, CanFrame};
 use tokio::sync::{mpsc, oneshot};
 use tokio::task::JoinHandle;
-use tokio::time::sleep;
 
-use crate::can_runner::{receive_frames, StepClock, STEP};
+use crate::can_runner::{receive_frames, StepClock, TxBacklog, STEP};
 use crate::pacer::Pacer;
 use crate::robstride::faults::{
     check_bus_voltage_v, check_external_torque_nm, check_temperature_c, Fault, ValueError,
@@ -142,6 +140,7 @@ impl RobstrideBus {
         let (requests, inbox) = mpsc::unbounded_channel();
         let runner = Runner {
             bus,
+            backlog: TxBacklog::default(),
             motors,
             state,
             state_path: config.state_file,
@@ -275,6 +274,8 @@ impl Drop for RobstrideHandle {
 
 struct Runner {
     bus: Arc<dyn CanBus>,
+    /// Frames the bus's full transmit queue refused, sent first at the next chance.
+    backlog: TxBacklog,
     motors: Vec<Actuator>,
     state: StateFile,
     state_path: Option<PathBuf>,
@@ -427,21 +428,10 @@ impl Runner {
         Ok(())
     }
 
-    async fn send_all(&self, frames: impl IntoIterator<Item = CanFrame>) {
-        for frame in frames {
-            // A full transmit queue is the mailbox being busy: retry briefly, then drop the
-            // frame as a firmware would.
-            for _attempt in 0..50 {
-                match self.bus.send(frame).await {
-                    Err(BusError::TxQueueFull { .. }) => sleep(Duration::from_micros(100)).await,
-                    Err(error) => {
-                        tracing::debug!(%error, %frame, "robstride emulator: frame not sent");
-                        break;
-                    }
-                    Ok(()) => break,
-                }
-            }
-        }
+    async fn send_all(&mut self, frames: impl IntoIterator<Item = CanFrame>) {
+        self.backlog
+            .send(self.bus.as_ref(), frames, "robstride", "bus")
+            .await;
     }
 }
 
@@ -472,7 +462,7 @@ mod tests {
         // In range: accepted.
         emulator.set_external_torque(1, 30.0).await.unwrap();
         emulator.set_temperature(1, 60.0).await.unwrap();
-        tokio::time::sleep(Duration::from_millis(200)).await;
+        tokio::time::sleep(std::time::Duration::from_millis(200)).await;
         let snapshot = emulator.snapshot().await.unwrap();
         let m = &snapshot[0];
         assert!(
