@@ -249,6 +249,14 @@ fn real_time_humanoid() {
             snapshot.time_s,
             snapshot.base_position_m[2]
         );
+        if snapshot.time_s < 0.95 * elapsed {
+            // The figures above are then of a robot that did not keep up (a stalled step loop
+            // once read as a cheap one here).
+            println!(
+                "  WARNING: the robot fell behind the wall clock ({:.2} s of {elapsed:.2} s); its CPU share is not the cost of real time",
+                snapshot.time_s
+            );
+        }
         let bits = extended_frame_bits(8);
         for (k, bus) in running.config.buses.iter().enumerate() {
             let per_s = sent[k] as f64 / elapsed;

@@ -231,7 +231,9 @@ mod tests {
         };
         let mut backlog = TxBacklog::default();
         let started = std::time::Instant::now();
-        backlog.send(&bus, (0..5).map(frame), "test", "mailbox").await;
+        backlog
+            .send(&bus, (0..5).map(frame), "test", "mailbox")
+            .await;
         assert_eq!(*bus.sent.lock().unwrap(), [0, 1]);
         // The bus frees its queue; the next step sends the waiting frames first.
         bus.sent.lock().unwrap().clear();
@@ -248,7 +250,9 @@ mod tests {
         };
         let mut backlog = TxBacklog::default();
         let n = TxBacklog::CAPACITY as u8 + 10;
-        backlog.send(&stuck, (0..n).map(frame), "test", "stuck").await;
+        backlog
+            .send(&stuck, (0..n).map(frame), "test", "stuck")
+            .await;
         assert_eq!(backlog.dropped(), 10);
         assert_eq!(backlog.frames.front().map(|f| f.data()[0]), Some(10));
     }
