@@ -5,11 +5,9 @@
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::sync::Arc;
 use std::time::Duration;
 
 use anyhow::Context;
-use armhil::devices::FrameDecoder;
 use armhil::interop::{
     decode_piper, decode_robstride, decode_robstride_command, decode_robstride_mit, DecodedFrame,
 };
@@ -142,7 +140,7 @@ enum Decoder {
         host_id: u8,
         model: driver::robstride::Model,
     },
-    Bench(Vec<Arc<dyn FrameDecoder>>),
+    Bench(armhil::harness::result::BenchInfo),
 }
 
 impl Decoder {
@@ -150,18 +148,14 @@ impl Decoder {
         if let Some(path) = &args.scenario {
             let scenario =
                 armhil::harness::load_scenario(path).map_err(|e| anyhow::anyhow!("{e}"))?;
-            let decoders: Vec<_> = scenario
-                .bench
-                .devices
-                .iter()
-                .filter_map(|d| d.kind.frame_decoder())
-                .collect();
+            // The devices the scenario's report names frames with, in the same order.
+            let bench = armhil::harness::report::bench_info(&scenario);
             anyhow::ensure!(
-                !decoders.is_empty(),
+                !bench.frame_decoders.is_empty(),
                 "{}: no device on its bench speaks CAN",
                 path.display()
             );
-            return Ok(Self::Bench(decoders));
+            return Ok(Self::Bench(bench));
         }
         let model = driver::robstride::Model::parse(&args.model)
             .with_context(|| format!("unknown RobStride model {:?}", args.model))?;
@@ -196,7 +190,7 @@ impl Decoder {
                 host_id,
                 model,
             } => (decode_robstride_mit(frame, *host_id, *model), None),
-            Self::Bench(decoders) => (decoders.iter().find_map(|d| d.decode(frame)), None),
+            Self::Bench(bench) => (bench.decode(frame), None),
         }
     }
 }

@@ -177,6 +177,14 @@ pub struct BenchInfo {
     pub frame_decoders: Vec<std::sync::Arc<dyn crate::devices::FrameDecoder>>,
 }
 
+impl BenchInfo {
+    /// The frame's name and fields by the first device that knows it (`None`: no device on
+    /// the bench does).
+    pub fn decode(&self, frame: &bus::CanFrame) -> Option<crate::interop::DecodedFrame> {
+        self.frame_decoders.iter().find_map(|d| d.decode(frame))
+    }
+}
+
 impl std::fmt::Debug for BenchInfo {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("BenchInfo")

@@ -149,6 +149,16 @@ pub fn decode_piper(frame: &CanFrame) -> Result<Option<DecodedFrame>, codec::Dec
     Ok(Some(DecodedFrame { name, fields }))
 }
 
+/// A field shown as written (a label, a hex word), without a unit.
+pub(super) fn text(name: &str, value: String) -> Field {
+    Field {
+        name: name.to_owned(),
+        value,
+        unit: "",
+    }
+}
+
+/// A number with `places` decimals in `unit`.
 pub(super) fn num(name: &str, value: f64, places: usize, unit: &'static str) -> Field {
     Field {
         name: name.to_owned(),
@@ -287,11 +297,6 @@ pub fn decode_robstride_mit(frame: &CanFrame, host_id: u8, model: Model) -> Opti
     let ranges = model.ranges(RangeTable::Manual);
     let incoming = mit_codec::decode(frame, host_id, |_| Some(ranges))?;
     let motor = num("motor", f64::from(incoming.motor_id()), 0, "");
-    let text = |name: &str, value: String| Field {
-        name: name.to_owned(),
-        value,
-        unit: "",
-    };
     let (name, fields) = match incoming {
         mit_codec::MitIncoming::Status(s) => (
             "MitStatus",

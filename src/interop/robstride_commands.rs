@@ -7,7 +7,7 @@ use bus::CanFrame;
 use driver::robstride::codec::{comm, from_u16};
 use driver::robstride::{Model, Param, ParamType, ParamValue, RangeTable};
 
-use super::decode::{num, DecodedFrame, Field};
+use super::decode::{num, text, DecodedFrame};
 
 /// A command frame to a motor (not addressed to `host_id`), decoded with `model`'s ranges;
 /// `None` for anything else (a reply, an 11-bit frame, a type this protocol does not send).
@@ -28,11 +28,6 @@ pub fn decode_robstride_command(
         return None;
     }
     let r = model.ranges(RangeTable::Manual);
-    let text = |name: &str, value: String| Field {
-        name: name.to_owned(),
-        value,
-        unit: "",
-    };
     let be = |i: usize| u16::from_be_bytes([data[i], data[i + 1]]);
     let index = u16::from_le_bytes([data[0], data[1]]);
     let param_name = || {

@@ -117,3 +117,32 @@ pub enum PhysicsError {
         joint: String,
     },
 }
+
+/// Where and when a world's state first stopped being finite, kept for good: a diverged
+/// world does not recover, and its owner must report it instead of reading its NaNs. Both
+/// physics worlds (rapier's and the articulated one) hold one.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub(crate) struct Divergence(Option<(String, f64)>);
+
+impl Divergence {
+    /// Whether the state has stopped being finite.
+    pub(crate) fn happened(&self) -> bool {
+        self.0.is_some()
+    }
+
+    /// Remember `joint` at `time_s` as the first non-finite state.
+    pub(crate) fn record(&mut self, joint: String, time_s: f64) {
+        self.0 = Some((joint, time_s));
+    }
+
+    /// `Ok` while the state is finite, then [`PhysicsError::Diverged`] naming the first joint.
+    pub(crate) fn check(&self) -> Result<(), PhysicsError> {
+        match &self.0 {
+            None => Ok(()),
+            Some((joint, time_s)) => Err(PhysicsError::Diverged {
+                joint: joint.clone(),
+                time_s: *time_s,
+            }),
+        }
+    }
+}

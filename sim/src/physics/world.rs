@@ -11,7 +11,7 @@ use rapier3d::prelude::{
 };
 use rapier3d_urdf::{UrdfLoaderOptions, UrdfMultibodyOptions, UrdfRobot};
 
-use super::error::PhysicsError;
+use super::error::{Divergence, PhysicsError};
 use super::friction::KineticFriction;
 use super::model::{ArmModel, JointInfo, JointKind, DEFAULT_GRAVITY_M_S2};
 use super::obstacle::{Contact, ObstacleId, ObstacleShape};
@@ -97,7 +97,7 @@ pub struct ArmWorld {
     warned_torque_len: bool,
     /// The first joint whose position or velocity stopped being finite, and the time it
     /// happened: kept once set (see [`ArmWorld::check_finite`]).
-    diverged: Option<(String, f64)>,
+    diverged: Divergence,
 }
 
 impl std::fmt::Debug for ArmWorld {
@@ -248,7 +248,7 @@ impl ArmWorld {
             next_obstacle: 0,
             steps: 0,
             warned_torque_len: false,
-            diverged: None,
+            diverged: Divergence::default(),
         };
         world.apply_joint_dynamics();
         Ok(world)
@@ -553,7 +553,7 @@ impl ArmWorld {
         self.physics.step();
         self.enforce_hard_stops();
         self.steps += 1;
-        if self.diverged.is_none() {
+        if !self.diverged.happened() {
             self.detect_divergence();
         }
     }
@@ -577,7 +577,7 @@ impl ArmWorld {
                 velocity = velocities[i],
                 "the physics diverged: a joint state is no longer finite"
             );
-            self.diverged = Some((joint, time_s));
+            self.diverged.record(joint, time_s);
         }
     }
 
@@ -586,13 +586,7 @@ impl ArmWorld {
     /// A diverged world reads NaN, which a wire codec would send as zeros (an arm "at rest at
     /// 0°"): callers must report this instead of its state.
     pub fn check_finite(&self) -> Result<(), PhysicsError> {
-        match &self.diverged {
-            None => Ok(()),
-            Some((joint, time_s)) => Err(PhysicsError::Diverged {
-                joint: joint.clone(),
-                time_s: *time_s,
-            }),
-        }
+        self.diverged.check()
     }
 
     /// rapier's multibody limit constraint only engages once a joint is already past its limit,

@@ -564,11 +564,10 @@ impl Runner {
         self.world.step()?;
         *self.base.lock().unwrap_or_else(|e| e.into_inner()) = base_pose(&self.world);
         for port in 0..self.ports.len() {
-            let frames: Vec<CanFrame> = out
+            let frames = out
                 .iter()
                 .filter(|(bus, _)| *bus == port)
-                .map(|(_, frame)| *frame)
-                .collect();
+                .map(|(_, frame)| *frame);
             // Also a step without frames of its own sends what a busy bus refused earlier.
             self.send(port, frames).await;
         }

@@ -6,6 +6,7 @@ use super::contact::GroundContacts;
 use super::spatial::{
     angular, cross_force, cross_motion, linear, motion_transform, spatial, spatial_inertia,
 };
+use crate::physics::error::Divergence;
 use crate::physics::model::{TreeJoint, TreeJointKind};
 use crate::physics::{ArmModel, JointInfo, PhysicsError, WorldConfig};
 
@@ -81,7 +82,7 @@ pub struct ArticulatedWorld {
     external_torques: Vec<f64>,
     steps: u64,
     /// The first joint whose state stopped being finite, and when.
-    diverged: Option<(String, f64)>,
+    diverged: Divergence,
 }
 
 impl std::fmt::Debug for ArticulatedWorld {
@@ -142,7 +143,7 @@ impl ArticulatedWorld {
             root_velocity: Vector6::zeros(),
             external_torques: vec![0.0; n],
             steps: 0,
-            diverged: None,
+            diverged: Divergence::default(),
         })
     }
 
@@ -208,7 +209,7 @@ impl ArticulatedWorld {
             self.substep(&tau, dt);
         }
         self.steps += 1;
-        if self.diverged.is_none() {
+        if !self.diverged.happened() {
             self.detect_divergence();
         }
     }
@@ -288,13 +289,7 @@ impl ArticulatedWorld {
 
     /// `Ok` while every joint state has stayed finite; then the first joint that did not.
     pub fn check_finite(&self) -> Result<(), PhysicsError> {
-        match &self.diverged {
-            None => Ok(()),
-            Some((joint, time_s)) => Err(PhysicsError::Diverged {
-                joint: joint.clone(),
-                time_s: *time_s,
-            }),
-        }
+        self.diverged.check()
     }
 
     fn detect_divergence(&mut self) {
@@ -316,7 +311,7 @@ impl ArticulatedWorld {
             (None, true) => return,
         };
         tracing::error!(%joint, time_s = self.time_s(), "the physics diverged: a joint state is no longer finite");
-        self.diverged = Some((joint, self.time_s()));
+        self.diverged.record(joint, self.time_s());
     }
 
     /// The joint force of everything treated on the joint itself, explicit part, and what

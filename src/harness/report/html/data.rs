@@ -66,9 +66,7 @@ fn trace_json(result: &ScenarioResult) -> Value {
 }
 
 fn decode(frame: &ReceivedFrame, info: &BenchInfo) -> Option<DecodedFrame> {
-    info.frame_decoders
-        .iter()
-        .find_map(|d| d.decode(&frame.frame))
+    info.decode(&frame.frame)
 }
 
 /// Which frames the table lists, out of `n` with the first failure's frame at `centre` (`n`
