@@ -10,8 +10,9 @@
 use std::fmt;
 
 /// One argument value as written: every front end reads numbers (YAML, JSON and Python ints and
-/// floats alike) and words (a joint or phase name).
-#[derive(Debug, Clone, PartialEq)]
+/// floats alike) and words (a joint or phase name). Serialized as the bare number or word.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[serde(untagged)]
 pub enum FaultArgValue {
     /// A number.
     Number(f64),
@@ -112,6 +113,21 @@ impl FaultArgError {
             arg: None,
             message: message.into(),
         }
+    }
+}
+
+/// Longest word a message repeats whole; a longer one (a pasted blob) is cut, so a message
+/// stays one readable line.
+const SHOWN_WORD_CHARS: usize = 24;
+
+/// `text` in backquotes as a message repeats it: cut after 24 characters, with its length.
+pub fn shown_word(text: &str) -> String {
+    let count = text.chars().count();
+    if count <= SHOWN_WORD_CHARS {
+        format!("`{text}`")
+    } else {
+        let head: String = text.chars().take(SHOWN_WORD_CHARS).collect();
+        format!("`{head}…` ({count} characters)")
     }
 }
 

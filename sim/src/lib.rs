@@ -2,6 +2,8 @@
 //!
 //! - [`fault_args`]: a named fault's arguments as a front end read them (scenario, web view,
 //!   Python), for each emulator's one fault builder.
+//! - [`fault_desk`]: the contract a front end (web view, Python) reaches a running emulator's
+//!   faults through, and the desk that builds, applies and remembers them.
 //! - [`cpu_budget`]: how much a late real-time wake-up may catch up, bounded by CPU.
 //! - [`kinematics`]: modified-DH kinematics (one row type, frames, Jacobian) for every arm.
 //! - [`pacer`]: an emulator clock task's wake-ups, on absolute deadlines in real time.
@@ -21,6 +23,7 @@ pub mod bounded_read;
 pub mod can_runner;
 pub mod cpu_budget;
 pub mod fault_args;
+pub mod fault_desk;
 pub mod kinematics;
 pub mod pacer;
 pub mod physics;

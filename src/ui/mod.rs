@@ -39,6 +39,10 @@ use axum::Router;
 use serde::Deserialize;
 use serde_json::{json, Value};
 
+use sim::fault_args::FaultArgs;
+use sim::fault_desk::{FaultAction, Faults};
+
+use crate::harness::elide_long_tokens;
 use crate::harness::report::html::{live_page, LIVE_JS};
 pub use listener::Limits;
 
@@ -59,15 +63,57 @@ pub struct Command {
     pub args: serde_json::Map<String, Value>,
 }
 
-/// What the page shows: one emulator.
+/// What the page shows: one emulator, and its faults through the emulator's own
+/// [`Faults`] desk (the same builder, table and messages as scenario files and Python).
 #[async_trait::async_trait]
 pub trait LiveSource: Send + Sync + 'static {
-    /// The message sent once per connection.
+    /// The message sent once per connection, without its `faults` (the server adds the
+    /// emulator's fault table).
     fn hello(&self) -> Value;
-    /// The current state message.
+    /// The current state message; the server adds the faults applied from the page and not
+    /// cleared as `faults`, unless the source set `faults` itself (a stopped robot says so).
     async fn state(&self) -> Value;
-    /// Apply a fault command; `Ok` carries a line for the page, `Err` why it was refused.
-    async fn command(&self, command: &Command) -> Result<String, String>;
+    /// The emulator's faults.
+    fn faults(&self) -> &dyn Faults;
+}
+
+/// The hello of `source`: its own fields and the emulator's fault table.
+pub fn hello_message(source: &dyn LiveSource) -> Value {
+    let mut hello = source.hello();
+    if let Value::Object(fields) = &mut hello {
+        fields.insert("faults".into(), json!(source.faults().table()));
+    }
+    hello
+}
+
+/// The state message of `source`, with the faults applied from the page.
+pub async fn state_message(source: &dyn LiveSource) -> Value {
+    let mut state = source.state().await;
+    if let Value::Object(fields) = &mut state {
+        fields
+            .entry("faults")
+            .or_insert_with(|| json!(source.faults().active()));
+    }
+    state
+}
+
+/// A page command's arguments as the emulators' fault builders read them.
+pub fn page_fault_args(args: &serde_json::Map<String, Value>) -> FaultArgs {
+    fault_args::fault_args(args)
+}
+
+/// Apply a page's fault command through the emulator's desk; `Ok` is the line the page
+/// shows, `Err` why it was refused (a pasted huge value elided).
+pub async fn apply_command(faults: &dyn Faults, command: &Command) -> Result<String, String> {
+    let action = match command.action.as_str() {
+        "inject" => FaultAction::Inject,
+        "clear" => FaultAction::Clear,
+        other => return Err(format!("unknown command `{}`", elide_long_tokens(other))),
+    };
+    faults
+        .apply(action, &command.fault, &page_fault_args(&command.args))
+        .await
+        .map_err(|e| elide_long_tokens(&e.to_string()))
 }
 
 /// Why the server could not start.
@@ -232,11 +278,11 @@ async fn index(State(app): State<App>) -> impl IntoResponse {
 }
 
 async fn state_json(State(app): State<App>) -> Json<Value> {
-    Json(app.source.state().await)
+    Json(state_message(app.source.as_ref()).await)
 }
 
 async fn hello_json(State(app): State<App>) -> Json<Value> {
-    Json(app.source.hello())
+    Json(hello_message(app.source.as_ref()))
 }
 
 async fn ws(
@@ -278,7 +324,10 @@ pub fn same_origin(origin: Option<&str>, host: Option<&str>) -> bool {
 /// One page: hello, then state every period, commands answered as they come.
 async fn stream(app: App, mut socket: WebSocket) {
     let mut stop = app.stop.clone();
-    if send(&mut socket, &app.source.hello()).await.is_err() {
+    if send(&mut socket, &hello_message(app.source.as_ref()))
+        .await
+        .is_err()
+    {
         return;
     }
     let mut tick = tokio::time::interval(STATE_PERIOD);
@@ -286,7 +335,7 @@ async fn stream(app: App, mut socket: WebSocket) {
     loop {
         tokio::select! {
             _ = tick.tick() => {
-                let state = app.source.state().await;
+                let state = state_message(app.source.as_ref()).await;
                 if send(&mut socket, &state).await.is_err() {
                     break;
                 }
@@ -310,10 +359,7 @@ async fn stream(app: App, mut socket: WebSocket) {
 /// The reply to one text message (malformed ones get an error reply, never a panic).
 pub async fn answer(source: &dyn LiveSource, text: &str) -> Value {
     let result = match serde_json::from_str::<Command>(text) {
-        Ok(command) if matches!(command.action.as_str(), "inject" | "clear") => {
-            source.command(&command).await
-        }
-        Ok(command) => Err(format!("unknown command `{}`", command.action)),
+        Ok(command) => apply_command(source.faults(), &command).await,
         Err(e) => Err(format!("bad message: {e}")),
     };
     match result {
@@ -356,6 +402,32 @@ mod tests {
 
     struct Echo;
 
+    /// Says what it was asked to do.
+    #[derive(Debug)]
+    struct EchoFaults;
+
+    #[async_trait::async_trait]
+    impl Faults for EchoFaults {
+        fn table(&self) -> Vec<sim::fault_desk::FaultInfo> {
+            Vec::new()
+        }
+        async fn apply(
+            &self,
+            action: FaultAction,
+            name: &str,
+            _args: &FaultArgs,
+        ) -> Result<String, sim::fault_desk::FaultCommandError> {
+            let verb = match action {
+                FaultAction::Inject => "inject",
+                FaultAction::Clear => "clear",
+            };
+            Ok(format!("{verb} {name}"))
+        }
+        fn active(&self) -> Vec<String> {
+            vec!["estop".into()]
+        }
+    }
+
     #[async_trait::async_trait]
     impl LiveSource for Echo {
         fn hello(&self) -> Value {
@@ -364,8 +436,8 @@ mod tests {
         async fn state(&self) -> Value {
             json!({"type": "state"})
         }
-        async fn command(&self, command: &Command) -> Result<String, String> {
-            Ok(format!("{} {}", command.action, command.fault))
+        fn faults(&self) -> &dyn Faults {
+            &EchoFaults
         }
     }
 
@@ -567,6 +639,10 @@ mod tests {
         assert_eq!(ok["message"], "inject estop");
         let unknown = answer(&Echo, r#"{"type": "reboot", "fault": "estop"}"#).await;
         assert_eq!(unknown["ok"], false);
+        assert_eq!(unknown["message"], "unknown command `reboot`");
+        // The server adds the fault table to the hello and the active faults to the state.
+        assert_eq!(hello_message(&Echo)["faults"], json!([]));
+        assert_eq!(state_message(&Echo).await["faults"], json!(["estop"]));
         for bad in [
             "",
             "{",

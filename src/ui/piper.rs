@@ -1,25 +1,21 @@
 //! The Piper's live source: state from the emulator's snapshot, bus figures from a tap, faults
 //! from the emulator's own table ([`sim::piper::FaultKind`]), named as in scenario files.
 
-use std::sync::{Mutex, PoisonError};
-
 use driver::piper::{ArmStatusCode, CtrlMode, DriverStatus, MotionStatus};
-use serde_json::{json, Map, Value};
-use sim::piper::{FaultKind, PiperFault, PiperMonitor};
+use serde_json::{json, Value};
+use sim::fault_desk::{FaultDesk, Faults};
+use sim::piper::PiperMonitor;
 
 use super::bus_tap::BusTap;
-use super::fault_args::fault_args;
-use super::{round3, Command, LiveSource};
+use super::{round3, LiveSource};
 use crate::harness::report::html::arm_model;
 
 /// A running Piper emulator as the web view sees it.
 #[derive(Debug)]
 pub struct PiperLive {
-    monitor: PiperMonitor,
+    faults: FaultDesk<PiperMonitor>,
     tap: Option<BusTap>,
     hello: Value,
-    /// Faults injected from the page and not cleared, with their text.
-    active: Mutex<Vec<(String, PiperFault)>>,
 }
 
 impl PiperLive {
@@ -28,44 +24,13 @@ impl PiperLive {
         let model = arm_model(urdf)
             .ok()
             .and_then(|m| serde_json::to_value(m).ok());
-        let faults: Vec<Value> = FaultKind::ALL
-            .iter()
-            .map(|k| {
-                let params: Vec<Value> = k
-                    .params()
-                    .iter()
-                    .map(|p| {
-                        json!({"name": p.name, "description": p.description,
-                               "required": p.required, "default": p.default,
-                               "min": p.range.map(|r| r.0), "max": p.range.map(|r| r.1)})
-                    })
-                    .collect();
-                json!({"name": k.name(), "description": k.description(), "params": params})
-            })
-            .collect();
-        let hello = json!({"type": "hello", "device": "piper", "title": title,
-                           "model": model, "faults": faults});
+        let hello = json!({"type": "hello", "device": "piper", "title": title, "model": model});
         Self {
-            monitor,
+            faults: FaultDesk::new(monitor),
             tap,
             hello,
-            active: Mutex::new(Vec::new()),
         }
     }
-}
-
-/// The fault a page command names, built by the emulator's fault builder
-/// ([`sim::piper::build_fault`]): the same defaults, ranges and messages as scenario files.
-pub fn piper_fault(name: &str, args: &Map<String, Value>) -> Result<PiperFault, String> {
-    sim::piper::build_fault(name, &fault_args(args)).map_err(|e| e.message)
-}
-
-/// The fault a page's `clear` names: its site (joint, board) checked, its values ignored
-/// ([`FaultKind::build_to_clear`]).
-pub fn piper_fault_to_clear(name: &str, args: &Map<String, Value>) -> Result<PiperFault, String> {
-    FaultKind::named(name)
-        .and_then(|kind| kind.build_to_clear(&fault_args(args)))
-        .map_err(|e| e.message)
 }
 
 fn deg(values: &[f64; 6]) -> Vec<f64> {
@@ -83,19 +48,12 @@ impl LiveSource for PiperLive {
     }
 
     async fn state(&self) -> Value {
-        let s = self.monitor.snapshot();
+        let s = self.faults.target().snapshot();
         let st = &s.status;
         let bus = match &self.tap {
             Some(tap) => tap.to_json(),
             None => json!({"load_percent": null, "ids": []}),
         };
-        let active: Vec<String> = self
-            .active
-            .lock()
-            .unwrap_or_else(PoisonError::into_inner)
-            .iter()
-            .map(|(text, _)| text.clone())
-            .collect();
         json!({
             "type": "state",
             "t": round3(s.time_s),
@@ -124,38 +82,113 @@ impl LiveSource for PiperLive {
                 "comm_bits": st.comm_bits,
             },
             "bus": bus,
-            "faults": active,
         })
     }
 
-    async fn command(&self, command: &Command) -> Result<String, String> {
-        let inject = command.action == "inject";
-        let fault = if inject {
-            piper_fault(&command.fault, &command.args)?
-        } else {
-            piper_fault_to_clear(&command.fault, &command.args)?
-        };
-        let text = fault.to_string();
-        let mut active = self.active.lock().unwrap_or_else(PoisonError::into_inner);
-        if inject {
-            self.monitor.inject(fault).map_err(|e| e.to_string())?;
-            active.retain(|(_, f)| !f.same_site(&fault));
-            active.push((text.clone(), fault));
-            Ok(format!("injected {text}"))
-        } else {
-            self.monitor.clear(fault).map_err(|e| e.to_string())?;
-            active.retain(|(_, f)| !f.same_site(&fault));
-            Ok(format!("cleared {text}"))
-        }
+    fn faults(&self) -> &dyn Faults {
+        &self.faults
     }
 }
 
 #[cfg(test)]
 mod tests {
+    use std::sync::Arc;
+
+    use bus::virtual_bus::{VirtualBus, VirtualBusConfig};
+    use serde_json::Map;
+    use sim::piper::{FaultKind, PiperConfig, PiperEmulator, PiperFault};
+
     use super::*;
+    use crate::ui::{answer, hello_message, page_fault_args, state_message};
 
     fn args(v: Value) -> Map<String, Value> {
         v.as_object().cloned().unwrap_or_default()
+    }
+
+    /// What the page's arguments build (the desk's inject path without the emulator).
+    fn piper_fault(name: &str, page: &Map<String, Value>) -> Result<PiperFault, String> {
+        sim::piper::build_fault(name, &page_fault_args(page)).map_err(|e| e.message)
+    }
+
+    /// What the page's arguments build to clear.
+    fn piper_fault_to_clear(name: &str, page: &Map<String, Value>) -> Result<PiperFault, String> {
+        FaultKind::named(name)
+            .and_then(|kind| kind.build_to_clear(&page_fault_args(page)))
+            .map_err(|e| e.message)
+    }
+
+    fn command(action: &str, fault: &str, args: Value) -> String {
+        json!({"type": action, "fault": fault, "args": args}).to_string()
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn page_commands_fault_the_running_firmware_and_show_while_active() {
+        let bus = VirtualBus::new(VirtualBusConfig::default());
+        let emulator =
+            PiperEmulator::spawn(Arc::new(bus.attach("piper")), PiperConfig::default()).unwrap();
+        let live = PiperLive::new(emulator.monitor(), None, sim::piper::BUNDLED_URDF, "arm");
+        let hello = hello_message(&live);
+        let torque = hello["faults"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|f| f["name"] == "external_torque")
+            .unwrap();
+        assert_eq!(torque["params"][1]["name"], "torque_nm");
+        assert_eq!(
+            (&torque["params"][1]["min"], &torque["params"][1]["max"]),
+            (&json!(-320.0), &json!(320.0))
+        );
+
+        let ack = answer(
+            &live,
+            &command("inject", "motor_over_temp", json!({"joint": 2})),
+        )
+        .await;
+        assert_eq!(
+            ack["message"], "injected motor_over_temp joint 2 90 C",
+            "{ack}"
+        );
+        let hot = answer(
+            &live,
+            &command(
+                "inject",
+                "motor_over_temp",
+                json!({"joint": 2, "temp_c": 120}),
+            ),
+        )
+        .await;
+        assert_eq!(hot["ok"], true);
+        // The same site again replaces the earlier entry.
+        assert_eq!(
+            state_message(&live).await["faults"],
+            json!(["motor_over_temp joint 2 120 C"])
+        );
+        tokio::time::sleep(std::time::Duration::from_millis(20)).await;
+        assert_eq!(
+            emulator.monitor().snapshot().motor_temps_c[1],
+            120.0,
+            "the firmware's winding is forced"
+        );
+        let refused = answer(
+            &live,
+            &command("inject", "under_voltage", json!({"voltage_v": -5})),
+        )
+        .await;
+        assert_eq!(
+            (&refused["ok"], &refused["message"]),
+            (
+                &json!(false),
+                &json!("`voltage_v` must be between 0 and 60, got -5")
+            )
+        );
+        let cleared = answer(
+            &live,
+            &command("clear", "motor_over_temp", json!({"joint": 2})),
+        )
+        .await;
+        assert_eq!(cleared["ok"], true, "{cleared}");
+        assert_eq!(state_message(&live).await["faults"], json!([]));
     }
 
     #[test]

@@ -2,33 +2,18 @@
 //! and the UDP push targets, faults from the emulator's table ([`sim::realman::RealmanFaultKind`])
 //! with the parameters scenario files give them.
 
-use std::sync::{Mutex, PoisonError};
+use serde_json::{json, Value};
+use sim::fault_desk::{FaultDesk, Faults};
+use sim::realman::RealmanMonitor;
 
-use serde_json::{json, Map, Value};
-use sim::realman::{RealmanFault, RealmanFaultKind, RealmanMonitor};
-
-use super::fault_args::fault_args;
-use super::{round3, Command, LiveSource};
-use crate::harness::elide_long_tokens;
+use super::{round3, LiveSource};
 use crate::harness::report::html::arm_model;
-
-/// The fault a page command names, built by the emulator's one fault builder
-/// ([`RealmanFaultKind::build`]): the ranges and messages of scenario files (a huge value is
-/// elided from the message). The page picks the name from the hello's list, so an unknown
-/// name is refused without repeating that list.
-pub fn realman_fault(name: &str, args: &Map<String, Value>) -> Result<RealmanFault, String> {
-    let kind = RealmanFaultKind::from_name(name)
-        .ok_or_else(|| elide_long_tokens(&format!("no Realman fault `{name}`")))?;
-    kind.build(&fault_args(args))
-        .map_err(|e| elide_long_tokens(&e.message))
-}
 
 /// A running Realman emulator as the web view sees it.
 #[derive(Debug)]
 pub struct RealmanLive {
-    monitor: RealmanMonitor,
+    faults: FaultDesk<RealmanMonitor>,
     hello: Value,
-    active: Mutex<Vec<RealmanFaultKind>>,
 }
 
 impl RealmanLive {
@@ -37,27 +22,10 @@ impl RealmanLive {
         let model = arm_model(urdf)
             .ok()
             .and_then(|m| serde_json::to_value(m).ok());
-        let faults: Vec<Value> = RealmanFaultKind::ALL
-            .iter()
-            .map(|k| {
-                let params: Vec<Value> = k
-                    .params()
-                    .iter()
-                    .map(|p| {
-                        json!({"name": p.name, "description": p.description,
-                               "required": true, "default": null,
-                               "min": p.min, "max": p.max})
-                    })
-                    .collect();
-                json!({"name": k.name(), "description": k.description(), "params": params})
-            })
-            .collect();
-        let hello = json!({"type": "hello", "device": "realman", "title": title,
-                           "model": model, "faults": faults});
+        let hello = json!({"type": "hello", "device": "realman", "title": title, "model": model});
         Self {
-            monitor,
+            faults: FaultDesk::new(monitor),
             hello,
-            active: Mutex::new(Vec::new()),
         }
     }
 }
@@ -69,28 +37,20 @@ impl LiveSource for RealmanLive {
     }
 
     async fn state(&self) -> Value {
-        let s = self.monitor.snapshot();
-        let (push, io) = self
-            .monitor
-            .with_controller(|c| (c.params().push.clone(), c.params().io.summary()));
-        let clients = self.monitor.clients();
-        let stats = self.monitor.stats();
+        let monitor = self.faults.target();
+        let s = monitor.snapshot();
+        let (push, io) =
+            monitor.with_controller(|c| (c.params().push.clone(), c.params().io.summary()));
+        let clients = monitor.clients();
+        let stats = monitor.stats();
         // Where the push goes now, as the emulator's push task decides it.
-        let targets: Vec<String> = self
-            .monitor
+        let targets: Vec<String> = monitor
             .push_targets()
             .iter()
             .map(ToString::to_string)
             .collect();
         let deg = |v: &[f64]| v.iter().map(|x| round3(x.to_degrees())).collect::<Vec<_>>();
         let errors: Vec<String> = s.errors.iter().map(|e| format!("0x{e:04X}")).collect();
-        let active: Vec<&str> = self
-            .active
-            .lock()
-            .unwrap_or_else(PoisonError::into_inner)
-            .iter()
-            .map(|k| k.name())
-            .collect();
         let p = s.pose.position_m;
         let panel = vec![
             json!(["status", s.status]),
@@ -163,37 +123,63 @@ impl LiveSource for RealmanLive {
             "status": {"status": s.status, "power_on": s.power_on, "enabled": s.enabled},
             "panel": panel,
             "bus": null,
-            "faults": active,
         })
     }
 
-    async fn command(&self, command: &Command) -> Result<String, String> {
-        let kind = RealmanFaultKind::from_name(&command.fault)
-            .ok_or_else(|| format!("no Realman fault `{}`", command.fault))?;
-        let mut active = self.active.lock().unwrap_or_else(PoisonError::into_inner);
-        if command.action == "inject" {
-            let fault = realman_fault(&command.fault, &command.args)?;
-            self.monitor.inject(fault).map_err(|e| e.to_string())?;
-            active.retain(|k| *k != kind);
-            // A connection drop is an event, not a state: nothing to clear.
-            if kind != RealmanFaultKind::ConnectionDrop {
-                active.push(kind);
-            }
-            Ok(format!("injected {}", kind.name()))
-        } else {
-            self.monitor.clear(kind);
-            active.retain(|k| *k != kind);
-            Ok(format!("cleared {}", kind.name()))
-        }
+    fn faults(&self) -> &dyn Faults {
+        &self.faults
     }
 }
 
 #[cfg(test)]
 mod tests {
+    use serde_json::Map;
+    use sim::realman::{RealmanFault, RealmanFaultKind};
+
     use super::*;
+    use crate::harness::elide_long_tokens;
+    use crate::ui::{answer, page_fault_args, state_message};
 
     fn args(v: Value) -> Map<String, Value> {
         v.as_object().cloned().unwrap_or_default()
+    }
+
+    /// What the page's arguments build, as the page shows a refusal.
+    fn realman_fault(name: &str, page: &Map<String, Value>) -> Result<RealmanFault, String> {
+        sim::realman::build_fault(name, &page_fault_args(page))
+            .map_err(|e| elide_long_tokens(&e.message))
+    }
+
+    fn command(action: &str, fault: &str, args: Value) -> String {
+        json!({"type": action, "fault": fault, "args": args}).to_string()
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn page_faults_reach_the_controller_and_events_are_not_kept() {
+        let emu = rm65b_in_memory().await;
+        let live = RealmanLive::new(emu.monitor(), "", "test");
+        let ack = answer(&live, &command("inject", "estop", json!({}))).await;
+        assert_eq!(ack["message"], "injected estop", "{ack}");
+        assert!(
+            emu.snapshot()
+                .errors
+                .contains(&sim::realman::faults::codes::JOINT_DISABLED),
+            "the controller is in e-stop"
+        );
+        let drop = answer(&live, &command("inject", "connection_drop", json!({}))).await;
+        assert_eq!(drop["ok"], true, "{drop}");
+        assert_eq!(state_message(&live).await["faults"], json!(["estop"]));
+        // Cleared by name: the page's leftover arguments do not matter.
+        let cleared = answer(&live, &command("clear", "estop", json!({"joint": 1}))).await;
+        assert_eq!(cleared["message"], "cleared estop");
+        assert_eq!(state_message(&live).await["faults"], json!([]));
+        let bad = answer(
+            &live,
+            &command("inject", "udp_loss", json!({"permille": 1001})),
+        )
+        .await;
+        assert_eq!(bad["ok"], false);
+        emu.shutdown().await;
     }
 
     #[test]
@@ -303,7 +289,9 @@ mod tests {
         let digits = format!("1{}", "0".repeat(300));
         let err = realman_fault("reply_delay", &args(json!({"delay_ms": digits}))).unwrap_err();
         assert!(err.len() < 120, "{err}");
+        // The name is cut; the known names follow it.
         let err = realman_fault(&"x".repeat(300), &Map::new()).unwrap_err();
-        assert!(err.len() < 120, "{err}");
+        assert!(!err.contains(&"x".repeat(50)), "{err}");
+        assert!(err.ends_with("estop, gripper_fault"), "{err}");
     }
 }

@@ -2,42 +2,24 @@
 //! actuator's state, and faults per actuator (RobStride's fault table, addressed by URDF
 //! joint name), a push on a joint, and a bus cut off.
 
-use std::sync::{Mutex, PoisonError};
-
 use serde_json::{json, Value};
-use sim::fault_args::FaultArgValue;
+use sim::fault_desk::{FaultDesk, Faults};
 use sim::robot::{RobotMonitor, RobotSnapshot};
-use sim::robstride::Fault;
 
 use super::bus_tap::BusTap;
-use super::fault_args::fault_args;
 use super::robstride::{fault_names, mode_name};
-use super::{round3, Command, LiveSource};
+use super::{round3, LiveSource};
 use crate::harness::report::html::arm_model;
-
-/// The bus fault's name on the page.
-const BUS_LOST: &str = "bus_lost";
-/// The push's name on the page.
-const EXTERNAL_TORQUE: &str = "external_torque";
 
 /// A robot as the web view sees it.
 #[derive(Debug)]
 pub struct RobotLive {
-    monitor: RobotMonitor,
+    faults: FaultDesk<RobotMonitor>,
     /// Per bus: its name and its tap.
     taps: Vec<(String, BusTap)>,
     /// The joints the 3D view sets, in the model's order (revolute, not mimic).
     drawn: Vec<String>,
     hello: Value,
-    /// Faults injected from the page and not cleared, as shown.
-    active: Mutex<Vec<String>>,
-}
-
-/// What the page can do to the robot.
-enum Action {
-    Fault { joint: String, fault: Fault },
-    Push { joint: String, torque_nm: f64 },
-    BusLost { bus: String },
 }
 
 impl RobotLive {
@@ -60,35 +42,13 @@ impl RobotLive {
                 .map(|j| j.name.clone())
                 .collect()
         });
-        let first_joint = joints.first().cloned();
-        let first_bus = taps.first().map(|(name, _)| name.clone());
-        let joint_param = |what: &str| {
-            json!({"name": "joint", "description": format!("URDF joint {what}"),
-                   "required": true, "default": first_joint})
-        };
-        let mut faults: Vec<Value> = Fault::ALL
-            .iter()
-            .map(|f| {
-                json!({"name": f.name(),
-                       "description": format!("sets fault word bit 0x{:08X} of the joint's actuator; clear removes the cause", f.word_bit()),
-                       "params": [joint_param("whose actuator faults")]})
-            })
-            .collect();
-        faults.push(json!({"name": EXTERNAL_TORQUE,
-            "description": "a torque from outside on the joint (N·m); clear stops pushing",
-            "params": [joint_param("pushed"),
-                       {"name": "torque_nm", "description": "N·m", "required": true, "default": 5.0}]}));
-        faults.push(json!({"name": BUS_LOST,
-            "description": "the bus cut off: no frame reaches or leaves its actuators",
-            "params": [{"name": "bus", "description": "bus name", "required": true, "default": first_bus}]}));
         let hello = json!({"type": "hello", "device": "robot", "title": title, "model": model,
-                           "strip_names": joints, "faults": faults});
+                           "strip_names": joints});
         Self {
-            monitor,
+            faults: FaultDesk::new(monitor),
             taps,
             drawn,
             hello,
-            active: Mutex::new(Vec::new()),
         }
     }
 
@@ -152,33 +112,6 @@ impl RobotLive {
         }
         panel
     }
-
-    fn action(command: &Command) -> Result<Action, String> {
-        let args = fault_args(&command.args);
-        let text = |name: &str| match args.get(name) {
-            Some(FaultArgValue::Text(t)) => Ok(t.clone()),
-            Some(FaultArgValue::Number(x)) => Ok(x.to_string()),
-            None => Err(format!("`{}` needs `{name}`", command.fault)),
-        };
-        match command.fault.as_str() {
-            BUS_LOST => Ok(Action::BusLost { bus: text("bus")? }),
-            EXTERNAL_TORQUE => {
-                let torque_nm = match args.get("torque_nm") {
-                    Some(FaultArgValue::Number(x)) => *x,
-                    None if command.action != "inject" => 0.0,
-                    _ => return Err("`torque_nm` must be a number (N·m)".into()),
-                };
-                Ok(Action::Push {
-                    joint: text("joint")?,
-                    torque_nm,
-                })
-            }
-            name => Ok(Action::Fault {
-                joint: text("joint")?,
-                fault: Fault::named(name).map_err(|e| e.message)?,
-            }),
-        }
-    }
 }
 
 /// The root link's pose as the 3D view takes it: a 4×4 transform by rows.
@@ -204,7 +137,7 @@ impl LiveSource for RobotLive {
     }
 
     async fn state(&self) -> Value {
-        let Ok(s) = self.monitor.snapshot().await else {
+        let Ok(s) = self.faults.target().snapshot().await else {
             return json!({"type": "state", "t": 0.0, "faults": ["the robot has stopped"]});
         };
         let per = |f: &dyn Fn(&sim::robot::JointSnapshot) -> f64| -> Vec<f64> {
@@ -216,11 +149,6 @@ impl LiveSource for RobotLive {
             .iter()
             .map(|name| s.joint(name).map(|j| round3(j.position_rad.to_degrees())))
             .collect();
-        let active = self
-            .active
-            .lock()
-            .unwrap_or_else(PoisonError::into_inner)
-            .clone();
         json!({
             "type": "state",
             "t": round3(s.time_s),
@@ -233,40 +161,11 @@ impl LiveSource for RobotLive {
             "temperature_c": per(&|j| j.motor.temperature_c),
             "panel": self.panel(&s),
             "bus": self.bus_json(),
-            "faults": active,
         })
     }
 
-    async fn command(&self, command: &Command) -> Result<String, String> {
-        let inject = command.action == "inject";
-        let (shown, done) = match Self::action(command)? {
-            Action::Fault { joint, fault } => {
-                let done = if inject {
-                    self.monitor.inject(&joint, fault).await
-                } else {
-                    self.monitor.clear(&joint, fault).await
-                };
-                (format!("{} on {joint}", fault.name()), done)
-            }
-            Action::Push { joint, torque_nm } => {
-                let torque = if inject { torque_nm } else { 0.0 };
-                let done = self.monitor.set_external_torque(&joint, torque).await;
-                (format!("{EXTERNAL_TORQUE} on {joint}"), done)
-            }
-            Action::BusLost { bus } => {
-                let done = self.monitor.set_bus_lost(&bus, inject).await;
-                (format!("{BUS_LOST} {bus}"), done)
-            }
-        };
-        done.map_err(|e| e.to_string())?;
-        let mut active = self.active.lock().unwrap_or_else(PoisonError::into_inner);
-        active.retain(|a| *a != shown);
-        if inject {
-            active.push(shown.clone());
-            Ok(format!("injected {shown}"))
-        } else {
-            Ok(format!("cleared {shown}"))
-        }
+    fn faults(&self) -> &dyn Faults {
+        &self.faults
     }
 }
 
@@ -279,6 +178,7 @@ mod tests {
     use sim::robot::RobotEmulator;
 
     use super::*;
+    use crate::ui::{apply_command, hello_message, state_message, Command};
 
     fn command(action: &str, fault: &str, args: Value) -> Command {
         serde_json::from_value(json!({"type": action, "fault": fault, "args": args})).unwrap()
@@ -314,7 +214,7 @@ mod tests {
         let robot = RobotEmulator::spawn(config, nodes).unwrap();
         let live = RobotLive::new(robot.monitor(), &urdf, &joints, taps, "arm6");
 
-        let hello = live.hello();
+        let hello = hello_message(&live);
         assert_eq!(hello["strip_names"][3], "wrist_roll");
         assert!(hello["model"]["joints"]
             .as_array()
@@ -323,30 +223,39 @@ mod tests {
             .as_array()
             .unwrap()
             .iter()
-            .find(|f| f["name"] == BUS_LOST);
+            .find(|f| f["name"] == "bus_lost");
         assert_eq!(bus_lost.unwrap()["params"][0]["default"], "can0");
 
-        let ack = live
-            .command(&command(
+        let ack = apply_command(
+            live.faults(),
+            &command(
                 "inject",
                 "over_temperature",
                 json!({"joint": "elbow_pitch"}),
-            ))
-            .await
-            .unwrap();
+            ),
+        )
+        .await
+        .unwrap();
         assert_eq!(ack, "injected over_temperature on elbow_pitch");
-        live.command(&command("inject", "bus_lost", json!({"bus": "can1"})))
-            .await
-            .unwrap();
-        live.command(&command(
-            "inject",
-            "external_torque",
-            json!({"joint": "shoulder_yaw", "torque_nm": "8"}),
-        ))
+        let faults = live.faults();
+        apply_command(
+            faults,
+            &command("inject", "bus_lost", json!({"bus": "can1"})),
+        )
+        .await
+        .unwrap();
+        apply_command(
+            faults,
+            &command(
+                "inject",
+                "external_torque",
+                json!({"joint": "shoulder_yaw", "torque_nm": "8"}),
+            ),
+        )
         .await
         .unwrap();
         tokio::time::sleep(std::time::Duration::from_millis(300)).await;
-        let state = live.state().await;
+        let state = state_message(&live).await;
         assert_eq!(
             state["faults"],
             json!([
@@ -365,25 +274,41 @@ mod tests {
         assert_eq!(state["physical_deg"][0], state["joints_deg"][0]);
         assert_eq!(state["base_pose"].as_array().unwrap().len(), 16);
 
-        let cleared = live
-            .command(&command("clear", "bus_lost", json!({"bus": "can1"})))
-            .await
-            .unwrap();
+        let cleared = apply_command(
+            faults,
+            &command("clear", "bus_lost", json!({"bus": "can1"})),
+        )
+        .await
+        .unwrap();
         assert_eq!(cleared, "cleared bus_lost can1");
-        let unknown = live
-            .command(&command(
-                "inject",
-                "over_temperature",
-                json!({"joint": "elbo"}),
-            ))
-            .await
-            .unwrap_err();
-        assert!(unknown.contains("elbo"), "{unknown}");
-        let no_fault = live
-            .command(&command("inject", "melt", json!({"joint": "elbow_pitch"})))
-            .await
-            .unwrap_err();
-        assert!(no_fault.contains("no RobStride fault `melt`"), "{no_fault}");
+        // A push is cleared by its joint alone, and stops.
+        let stop = command("clear", "external_torque", json!({"joint": "shoulder_yaw"}));
+        assert_eq!(
+            apply_command(faults, &stop).await,
+            Ok("cleared external_torque on shoulder_yaw".into())
+        );
+        let unknown = command("inject", "over_temperature", json!({"joint": "elbo"}));
+        let unknown = apply_command(faults, &unknown).await.unwrap_err();
+        assert!(
+            unknown.starts_with("no actuator drives joint `elbo`"),
+            "{unknown}"
+        );
+        let melt = command("inject", "melt", json!({"joint": "elbow_pitch"}));
+        let melt = apply_command(faults, &melt).await.unwrap_err();
+        assert!(melt.starts_with("no robot fault `melt`"), "{melt}");
+        // A push beyond ten times the actuator's peak torque is refused before it reaches
+        // the physics.
+        let shove = command(
+            "inject",
+            "external_torque",
+            json!({"joint": "shoulder_yaw", "torque_nm": 1e6}),
+        );
+        let shove = apply_command(faults, &shove).await.unwrap_err();
+        assert!(shove.starts_with("`torque_nm` must be between"), "{shove}");
+        assert_eq!(
+            state_message(&live).await["faults"],
+            json!(["over_temperature on elbow_pitch"])
+        );
         robot.shutdown().await;
     }
 }

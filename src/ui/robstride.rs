@@ -1,49 +1,34 @@
 //! RobStride's live source: every motor's state from the emulator's snapshot, faults from the
 //! emulator's table ([`sim::robstride::Fault`]) addressed by motor CAN ID, as in scenario files.
 
-use std::sync::{Mutex, PoisonError};
 use std::time::Instant;
 
 use serde_json::{json, Value};
-use sim::robstride::{Fault, ModeState, MotorFault, MotorSnapshot, RobstrideMonitor};
+use sim::fault_desk::{FaultDesk, Faults};
+use sim::robstride::{Fault, ModeState, MotorSnapshot, RobstrideMonitor};
 
 use super::bus_tap::BusTap;
-use super::fault_args::fault_args;
-use super::{round3, Command, LiveSource};
+use super::{round3, LiveSource};
 
 /// RobStride actuators on one bus as the web view sees them.
 #[derive(Debug)]
 pub struct RobstrideLive {
-    monitor: RobstrideMonitor,
+    faults: FaultDesk<RobstrideMonitor>,
     tap: Option<BusTap>,
     hello: Value,
     started: Instant,
-    /// Faults injected from the page and not cleared: (motor, fault).
-    active: Mutex<Vec<(u8, Fault)>>,
 }
 
 impl RobstrideLive {
     /// A source for `monitor`; `motors` are the configured CAN IDs, `title` names the run.
     pub fn new(monitor: RobstrideMonitor, tap: Option<BusTap>, motors: &[u8], title: &str) -> Self {
-        let first = motors.first().copied().map(f64::from);
-        let faults: Vec<Value> = Fault::ALL
-            .iter()
-            .map(|f| {
-                json!({"name": f.name(),
-                       "description": format!("sets fault word bit 0x{:08X}; clear removes the cause, the latch stays until stop + clear", f.word_bit()),
-                       "params": f.params().iter().map(|p| json!({
-                           "name": p.name, "description": format!("{} of the motor", p.what),
-                           "required": true, "default": first})).collect::<Vec<_>>()})
-            })
-            .collect();
         let hello = json!({"type": "hello", "device": "robstride", "title": title,
-                           "model": null, "motors": motors, "faults": faults});
+                           "model": null, "motors": motors});
         Self {
-            monitor,
+            faults: FaultDesk::new(monitor),
             tap,
             hello,
             started: Instant::now(),
-            active: Mutex::new(Vec::new()),
         }
     }
 }
@@ -81,14 +66,6 @@ fn motor_json(m: &MotorSnapshot) -> Value {
     })
 }
 
-/// The motor ID and fault of a page command, made by the emulator's one fault builder
-/// ([`sim::robstride::build_fault`]): the names, CAN ID range and messages of scenario files.
-pub fn robstride_fault(command: &Command) -> Result<(u8, Fault), String> {
-    sim::robstride::build_fault(&command.fault, &fault_args(&command.args))
-        .map(|MotorFault { motor, fault }| (motor, fault))
-        .map_err(|e| e.message)
-}
-
 #[async_trait::async_trait]
 impl LiveSource for RobstrideLive {
     fn hello(&self) -> Value {
@@ -96,17 +73,10 @@ impl LiveSource for RobstrideLive {
     }
 
     async fn state(&self) -> Value {
-        let motors = self.monitor.snapshot().await.unwrap_or_default();
+        let motors = self.faults.target().snapshot().await.unwrap_or_default();
         let per = |f: &dyn Fn(&MotorSnapshot) -> f64| -> Vec<f64> {
             motors.iter().map(|m| round3(f(m))).collect()
         };
-        let active: Vec<String> = self
-            .active
-            .lock()
-            .unwrap_or_else(PoisonError::into_inner)
-            .iter()
-            .map(|(id, f)| format!("{} motor {id}", f.name()))
-            .collect();
         json!({
             "type": "state",
             "t": round3(self.started.elapsed().as_secs_f64()),
@@ -116,76 +86,102 @@ impl LiveSource for RobstrideLive {
             "torque_nm": per(&|m| m.torque_nm),
             "temperature_c": per(&|m| m.temperature_c),
             "bus": self.tap.as_ref().map_or(json!({"load_percent": null, "ids": []}), BusTap::to_json),
-            "faults": active,
         })
     }
 
-    async fn command(&self, command: &Command) -> Result<String, String> {
-        let (motor, fault) = robstride_fault(command)?;
-        if command.action == "inject" {
-            self.monitor
-                .inject(motor, fault)
-                .await
-                .map_err(|e| e.to_string())?;
-            let mut active = self.active.lock().unwrap_or_else(PoisonError::into_inner);
-            active.retain(|x| *x != (motor, fault));
-            active.push((motor, fault));
-            Ok(format!("injected {} on motor {motor}", fault.name()))
-        } else {
-            self.monitor
-                .clear(motor, fault)
-                .await
-                .map_err(|e| e.to_string())?;
-            self.active
-                .lock()
-                .unwrap_or_else(PoisonError::into_inner)
-                .retain(|x| *x != (motor, fault));
-            Ok(format!("cleared {} on motor {motor}", fault.name()))
-        }
+    fn faults(&self) -> &dyn Faults {
+        &self.faults
     }
 }
 
 #[cfg(test)]
 mod tests {
-    use super::*;
+    use std::sync::Arc;
 
-    fn command(fault: &str, args: Value) -> Command {
-        Command {
-            action: "inject".into(),
-            fault: fault.into(),
-            args: args.as_object().cloned().unwrap_or_default(),
-        }
+    use bus::virtual_bus::{VirtualBus, VirtualBusConfig};
+    use sim::robstride::{Model, MotorConfig, RobstrideBus, RobstrideConfig};
+
+    use super::*;
+    use crate::ui::{answer, hello_message, state_message};
+
+    fn command(action: &str, fault: &str, args: Value) -> String {
+        json!({"type": action, "fault": fault, "args": args}).to_string()
     }
 
-    #[test]
-    fn page_commands_name_a_motor_and_a_fault_of_the_table() {
+    #[tokio::test(start_paused = true)]
+    async fn page_commands_reach_a_motor_through_the_emulators_fault_builder() {
+        let bus = VirtualBus::new(VirtualBusConfig::default());
+        let config = RobstrideConfig::new(vec![MotorConfig::new(5, Model::RS03)]);
+        let emulator = RobstrideBus::spawn(Arc::new(bus.attach("motors")), config).unwrap();
+        let live = RobstrideLive::new(emulator.monitor(), None, &[5], "one motor");
+
+        // The menu: the emulator's table, the motor field starting at the configured ID.
+        let hello = hello_message(&live);
+        let faults = hello["faults"].as_array().unwrap();
+        assert_eq!(faults.len(), Fault::ALL.len());
+        assert_eq!(faults[0]["name"], "over_temperature");
+        let motor = &faults[0]["params"][0];
         assert_eq!(
-            robstride_fault(&command("over_temperature", json!({"motor": 127}))),
-            Ok((127, Fault::OverTemperature))
+            (
+                &motor["name"],
+                &motor["default"],
+                &motor["min"],
+                &motor["max"]
+            ),
+            (&json!("motor"), &json!(5.0), &json!(1.0), &json!(127.0))
         );
+
+        // A number typed into the box is a number; the fault reaches the motor's fault word.
+        let ack = answer(
+            &live,
+            &command("inject", "gate_driver", json!({"motor": "5"})),
+        )
+        .await;
+        assert_eq!(ack["message"], "injected gate_driver on motor 5", "{ack}");
+        assert_eq!(ack["ok"], true);
+        tokio::time::sleep(std::time::Duration::from_millis(5)).await;
+        let state = state_message(&live).await;
+        assert_eq!(state["faults"], json!(["gate_driver on motor 5"]));
         assert_eq!(
-            robstride_fault(&command("gate_driver", json!({"motor": "5"}))),
-            Ok((5, Fault::GateDriver))
+            state["motors"][0]["faults"],
+            json!(["gate_driver"]),
+            "{state}"
         );
-        assert!(robstride_fault(&command("gate_driver", json!({}))).is_err());
-        assert!(robstride_fault(&command("gate_driver", json!({"motor": 200}))).is_err());
-        assert!(robstride_fault(&command("melted", json!({"motor": 1}))).is_err());
-        // An argument the fault does not take is refused, as in scenario files (it used to be
-        // ignored here).
-        assert_eq!(
-            robstride_fault(&command("gate_driver", json!({"motor": 1, "joint": 2}))),
-            Err("fault `gate_driver` has no argument `joint`; it takes: motor".to_owned())
-        );
-        assert_eq!(
-            robstride_fault(&command("gate_driver", json!({"motor": ""}))),
-            Err("`gate_driver` needs `motor`".to_owned())
-        );
-        for f in Fault::ALL {
+
+        // Refused with the builder's messages (the scenario files' too).
+        for (fault, args, message) in [
+            (
+                "gate_driver",
+                json!({"motor": 200}),
+                "`motor`: CAN ID 200 out of range, expected 1..=127",
+            ),
+            ("gate_driver", json!({}), "`gate_driver` needs `motor`"),
+            (
+                "gate_driver",
+                json!({"motor": ""}),
+                "`gate_driver` needs `motor`",
+            ),
+            (
+                "gate_driver",
+                json!({"motor": 5, "joint": 2}),
+                "fault `gate_driver` has no argument `joint`; it takes: motor",
+            ),
+        ] {
+            let ack = answer(&live, &command("inject", fault, args)).await;
             assert_eq!(
-                robstride_fault(&command(f.name(), json!({"motor": 1}))),
-                Ok((1, f))
+                (&ack["ok"], &ack["message"]),
+                (&json!(false), &json!(message))
             );
         }
+        let melted = answer(&live, &command("inject", "melted", json!({"motor": 5}))).await;
+        assert!(melted["message"]
+            .as_str()
+            .unwrap()
+            .starts_with("no RobStride fault `melted`; known:"));
+
+        let ack = answer(&live, &command("clear", "gate_driver", json!({"motor": 5}))).await;
+        assert_eq!(ack["message"], "cleared gate_driver on motor 5");
+        assert_eq!(state_message(&live).await["faults"], json!([]));
     }
 
     #[test]

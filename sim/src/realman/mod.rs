@@ -74,7 +74,7 @@ pub mod push;
 pub mod server;
 pub mod wire;
 
-pub use faults::{build_fault, FaultError, RealmanFault, RealmanFaultKind};
+pub use faults::{build_fault, FaultError, RealmanFault, RealmanFaultCommand, RealmanFaultKind};
 pub use firmware::{Answer, ClientId, Controller, ControllerConfig, ControllerError, Event};
 pub use profile::FirmwareProfile;
 pub use server::{

@@ -9,9 +9,11 @@
 //! - [`RobotEmulator::spawn`]: every bus served at once by one task (1 ms steps on absolute
 //!   deadlines in real time, or under a paused clock), with a [`RobotHandle`] for faults per
 //!   joint and per bus, snapshots and shutdown. A state file keeps every actuator's flash.
+//! - [`faults`]: the one builder of a robot's faults for the web view and Python.
 
 mod base_pose;
 mod config;
+pub mod faults;
 pub mod file;
 pub mod joint_plant;
 mod runner;
@@ -19,6 +21,7 @@ mod world;
 
 pub use base_pose::BasePose;
 pub use config::{Base, BusConfig, JointActuator, RobotConfig, RobotConfigError};
+pub use faults::{RobotFault, RobotLayout};
 pub use runner::{
     JointSnapshot, RobotEmulator, RobotError, RobotHandle, RobotMonitor, RobotSnapshot,
 };

@@ -14,6 +14,7 @@ use super::world::{RobotWorld, RobotWorldError};
 use crate::can_runner::{receive_frames, StepClock, TxBacklog, STEP};
 use crate::pacer::Pacer;
 use crate::physics::PhysicsError;
+use crate::robot::faults::RobotLayout;
 use crate::robstride::faults::{check_external_torque_nm, check_temperature_c, ValueError};
 use crate::robstride::state_file::{uid_key, StateFile, StateFileError};
 use crate::robstride::{Actuator, Fault, MotorSnapshot};
@@ -134,6 +135,8 @@ pub struct RobotMonitor {
     /// The root link's pose after the latest step (read without asking the runner, so a
     /// scenario's synchronous checks and its trace can see it).
     base: Arc<std::sync::Mutex<BasePose>>,
+    /// Its joints and buses by name, which its faults are addressed by.
+    layout: Arc<RobotLayout>,
 }
 
 impl RobotEmulator {
@@ -185,6 +188,14 @@ impl RobotEmulator {
             .collect();
         let (requests, inbox) = mpsc::channel(REQUEST_QUEUE);
         let base = Arc::new(std::sync::Mutex::new(base_pose(&world)));
+        let layout = Arc::new(RobotLayout {
+            joints: config
+                .actuators
+                .iter()
+                .map(|a| (a.joint.clone(), a.motor.model))
+                .collect(),
+            buses: config.buses.iter().map(|b| b.name.clone()).collect(),
+        });
         let runner = Runner {
             ports,
             actuators,
@@ -200,7 +211,11 @@ impl RobotEmulator {
             runner.run(inbox),
         );
         Ok(RobotHandle {
-            view: RobotMonitor { requests, base },
+            view: RobotMonitor {
+                requests,
+                base,
+                layout,
+            },
             task: Some(task),
             death,
         })
@@ -212,6 +227,11 @@ impl RobotMonitor {
     /// floating robot's pelvis height is its `[2]`.
     pub fn base_position_m(&self) -> [f64; 3] {
         self.base_pose().position_m
+    }
+
+    /// Its actuated joints and buses by name, in configuration order.
+    pub fn layout(&self) -> &RobotLayout {
+        &self.layout
     }
 
     /// Pose of the URDF root link in the world after the latest step.

@@ -138,6 +138,7 @@ impl RobstrideBus {
             motors.push(actuator);
         }
         let (requests, inbox) = mpsc::unbounded_channel();
+        let configured_ids = motors.iter().map(Actuator::can_id).collect();
         let runner = Runner {
             bus,
             backlog: TxBacklog::default(),
@@ -153,7 +154,10 @@ impl RobstrideBus {
             runner.run(inbox),
         );
         Ok(RobstrideHandle {
-            view: RobstrideMonitor { requests },
+            view: RobstrideMonitor {
+                requests,
+                configured_ids,
+            },
             task: Some(task),
             death,
         })
@@ -232,6 +236,9 @@ impl RobstrideHandle {
 #[derive(Debug, Clone)]
 pub struct RobstrideMonitor {
     requests: mpsc::UnboundedSender<Request>,
+    /// The CAN IDs the motors were configured with (a host may change them at run time):
+    /// what a front end suggests as a fault's `motor`.
+    configured_ids: Arc<[u8]>,
 }
 
 impl RobstrideMonitor {
@@ -261,6 +268,11 @@ impl RobstrideMonitor {
     /// See [`RobstrideHandle::snapshot`].
     pub async fn snapshot(&self) -> Result<Vec<MotorSnapshot>, RobstrideError> {
         self.ask(Request::Snapshot).await
+    }
+
+    /// The CAN IDs the motors were configured with, in configuration order.
+    pub fn configured_ids(&self) -> &[u8] {
+        &self.configured_ids
     }
 }
 

@@ -7,11 +7,7 @@
 use super::{
     FaultKind, FaultParam, NtcBoard, PiperFault, Shown, BOARD, JOINT, TEMP_C, TORQUE_NM, VOLTAGE_V,
 };
-use crate::fault_args::{FaultArgError, FaultArgValue, FaultArgs};
-
-/// Longest word a message repeats whole; a longer one (a pasted blob) is cut, so a message
-/// stays one readable line.
-const SHOWN_WORD_CHARS: usize = 24;
+use crate::fault_args::{shown_word as word, FaultArgError, FaultArgValue, FaultArgs};
 
 /// The Piper fault called `name` built from `args` ([`FaultKind::build`]); an unknown name is
 /// refused with the list of known ones.
@@ -209,16 +205,5 @@ impl Reader<'_> {
                     ),
                 )
             })
-    }
-}
-
-/// `text` in backquotes, cut after [`SHOWN_WORD_CHARS`] characters.
-fn word(text: &str) -> String {
-    let count = text.chars().count();
-    if count <= SHOWN_WORD_CHARS {
-        format!("`{text}`")
-    } else {
-        let head: String = text.chars().take(SHOWN_WORD_CHARS).collect();
-        format!("`{head}…` ({count} characters)")
     }
 }

@@ -7,8 +7,10 @@
 //! What a fault does to the firmware is `firmware::protections`.
 
 mod build;
+mod target;
 
 pub use build::build_fault;
+pub use target::fault_table;
 
 /// A fault the harness injects into a running emulator. Joints are numbered 1–6 as on the wire.
 ///

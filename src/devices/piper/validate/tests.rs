@@ -77,7 +77,9 @@ fn scenario_web_view_and_builder_refuse_bad_arguments_alike() {
     for (yaml, name, page, args) in cases {
         let built = sim::piper::build_fault(name, &args).unwrap_err().message;
         assert_eq!(scenario_message(yaml), built, "{yaml}");
-        let web = crate::ui::piper::piper_fault(name, &page_args(page)).unwrap_err();
+        let web = sim::piper::build_fault(name, &crate::ui::page_fault_args(&page_args(page)))
+            .unwrap_err()
+            .message;
         assert_eq!(web, built, "{yaml}");
     }
 }

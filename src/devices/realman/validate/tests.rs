@@ -293,7 +293,9 @@ fn scenario_web_view_and_builder_refuse_bad_arguments_alike() {
             .as_object()
             .cloned()
             .unwrap_or_else(Map::<String, Value>::new);
-        let web = crate::ui::realman::realman_fault(name, &page).unwrap_err();
+        let web = sim::realman::build_fault(name, &crate::ui::page_fault_args(&page))
+            .unwrap_err()
+            .message;
         assert_eq!(web, built, "{yaml}");
     }
     // The scenario error points at the refused argument, or at the fault when one is missing.

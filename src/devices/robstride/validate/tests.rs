@@ -283,13 +283,9 @@ fn scenario_web_view_and_builder_refuse_a_fault_with_one_message() {
             scenario.starts_with(at) && scenario.ends_with(&format!(": {builder}")),
             "{scenario} / {builder}"
         );
-        let command = crate::ui::Command {
-            action: "inject".into(),
-            fault: "under_voltage".into(),
-            args: json_args.as_object().cloned().unwrap_or_default(),
-        };
+        let page = crate::ui::page_fault_args(&json_args.as_object().cloned().unwrap_or_default());
         assert_eq!(
-            crate::ui::robstride::robstride_fault(&command),
+            sim::robstride::build_fault("under_voltage", &page).map_err(|e| e.message),
             Err(builder)
         );
     }

@@ -1,10 +1,14 @@
 //! Faults and warnings: the type-21 fault word, the status-frame fault bits, the typed
 //! faults the harness injects (spec §9), and the one builder ([`build_fault`],
-//! [`Fault::build`]) that makes a [`MotorFault`] from a front end's [`FaultArgs`].
+//! [`Fault::build`]) that makes a [`MotorFault`] from a front end's [`FaultArgs`], which
+//! front ends reach through the monitor's [`FaultTarget`](crate::fault_desk::FaultTarget)
+//! (`target.rs`).
+
+mod target;
 
 use serde::{Deserialize, Serialize};
 
-use crate::fault_args::{FaultArgError, FaultArgValue, FaultArgs};
+use crate::fault_args::{shown_word, FaultArgError, FaultArgValue, FaultArgs};
 use crate::piper::faults::Shown;
 use crate::robstride::firmware::MAX_CAN_ID;
 use crate::robstride::model::Model;
@@ -78,7 +82,8 @@ impl Fault {
         Fault::from_name(name).ok_or_else(|| {
             let known: Vec<&str> = Fault::ALL.iter().map(|f| f.name()).collect();
             FaultArgError::whole(format!(
-                "no RobStride fault `{name}`; known: {}",
+                "no RobStride fault {}; known: {}",
+                shown_word(name),
                 known.join(", ")
             ))
         })
@@ -99,6 +104,14 @@ impl Fault {
             motor: MOTOR.read(self, args)?,
             fault: self,
         })
+    }
+
+    /// What it does to the fault word, and what clears it, in one line.
+    pub fn description(self) -> String {
+        format!(
+            "sets fault word bit 0x{:08X}; clear removes the cause, the latch stays until stop + clear",
+            self.word_bit()
+        )
     }
 
     /// The bit of the type-21 fault word (spec §9.1).

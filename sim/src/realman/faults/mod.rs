@@ -13,9 +13,13 @@
 //! | `estop` | emergency stop: brakes on, joints disabled, error 0x1010, motion aborts; moves refused | `clear` then `clear_system_err` |
 //! | `gripper_fault` | gripper `error` bit (default stall), error 0x2001, gripper commands answer `state:false` | `clear` |
 
+mod target;
+
+pub use target::{fault_table, RealmanFaultCommand};
+
 use std::net::IpAddr;
 
-use crate::fault_args::{FaultArgError, FaultArgValue, FaultArgs};
+use crate::fault_args::{shown_word, FaultArgError, FaultArgValue, FaultArgs};
 
 /// A fault injected into a running emulator. Joints are numbered from 1 as on the wire.
 #[derive(Debug, Clone, PartialEq)]
@@ -142,6 +146,18 @@ impl RealmanFaultKind {
     /// The kind with this name.
     pub fn from_name(name: &str) -> Option<Self> {
         name.parse().ok()
+    }
+
+    /// The kind called `name`, or an error listing the known names.
+    pub fn named(name: &str) -> Result<Self, FaultArgError> {
+        Self::from_name(name).ok_or_else(|| {
+            let known: Vec<&str> = Self::ALL.iter().map(|k| k.name()).collect();
+            FaultArgError::whole(format!(
+                "no Realman fault {}; known: {}",
+                shown_word(name),
+                known.join(", ")
+            ))
+        })
     }
 }
 
@@ -401,13 +417,7 @@ fn peer_ip(args: &FaultArgs) -> Result<Option<IpAddr>, FaultArgError> {
 /// The Realman fault called `name` built from `args` ([`RealmanFaultKind::build`]); an
 /// unknown name is refused with the list of known ones.
 pub fn build_fault(name: &str, args: &FaultArgs) -> Result<RealmanFault, FaultArgError> {
-    let kind = RealmanFaultKind::from_name(name).ok_or_else(|| {
-        let known: Vec<&str> = RealmanFaultKind::ALL.iter().map(|k| k.name()).collect();
-        FaultArgError::whole(format!(
-            "no Realman fault `{name}`; known: {}",
-            known.join(", ")
-        ))
-    })?;
+    let kind = RealmanFaultKind::named(name)?;
     kind.build(args)
 }
 

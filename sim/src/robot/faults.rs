@@ -1,0 +1,365 @@
+//! A robot's faults, the one builder behind the web view and the Python emulator
+//! ([`FaultTarget`] on [`RobotMonitor`]): RobStride's fault table on the actuator of a joint
+//! (addressed by URDF joint name), a push on a joint, and a bus cut off. Scenario files say
+//! the same with `actuator_fault`, `external_torque` and `bus_lost` steps of their own.
+
+use crate::fault_args::{shown_word, FaultArgError, FaultArgValue, FaultArgs};
+use crate::fault_desk::{FaultInfo, FaultTarget, ParamInfo};
+use crate::piper::faults::Shown;
+use crate::robot::RobotMonitor;
+use crate::robstride::faults::check_external_torque_nm;
+use crate::robstride::{Fault, Model};
+use crate::yaml_words::suggestion;
+
+/// The push's name.
+pub const EXTERNAL_TORQUE: &str = "external_torque";
+/// The bus fault's name.
+pub const BUS_LOST: &str = "bus_lost";
+
+/// A fault on a running robot.
+#[derive(Debug, Clone, PartialEq)]
+pub enum RobotFault {
+    /// A RobStride fault on the actuator of `joint`.
+    Actuator {
+        /// The URDF joint.
+        joint: String,
+        /// The fault.
+        fault: Fault,
+    },
+    /// A torque from outside on `joint` (N·m, in the actuator's shaft frame); clearing it
+    /// stops the push.
+    ExternalTorque {
+        /// The URDF joint.
+        joint: String,
+        /// The torque.
+        torque_nm: f64,
+    },
+    /// `bus` cut off: no frame reaches or leaves its actuators.
+    BusLost {
+        /// The bus's name.
+        bus: String,
+    },
+}
+
+/// What a robot's faults are addressed by: its actuated joints (with their actuators'
+/// models, which bound a push) and its buses, in configuration order.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct RobotLayout {
+    /// Each actuated joint and its actuator's model.
+    pub joints: Vec<(String, Model)>,
+    /// Each bus's name.
+    pub buses: Vec<String>,
+}
+
+impl RobotLayout {
+    /// Every fault name: RobStride's table, then the push and the bus cut.
+    fn names() -> Vec<&'static str> {
+        let mut names: Vec<&str> = Fault::ALL.iter().map(|f| f.name()).collect();
+        names.extend([EXTERNAL_TORQUE, BUS_LOST]);
+        names
+    }
+
+    /// The fault table, suggesting the first joint and the first bus.
+    pub fn fault_table(&self) -> Vec<FaultInfo> {
+        let first_joint = self
+            .joints
+            .first()
+            .map(|(name, _)| FaultArgValue::Text(name.clone()));
+        let joint = |what: &str| {
+            ParamInfo::required("joint", format!("URDF joint {what}"))
+                .suggesting(first_joint.clone())
+        };
+        let mut table: Vec<FaultInfo> = Fault::ALL
+            .iter()
+            .map(|f| FaultInfo {
+                name: f.name(),
+                description: format!("{} (on the joint's actuator)", f.description()),
+                params: vec![joint("whose actuator faults")],
+            })
+            .collect();
+        table.push(FaultInfo {
+            name: EXTERNAL_TORQUE,
+            description: "a torque from outside on the joint (N·m); clear stops pushing".into(),
+            params: vec![
+                joint("pushed"),
+                ParamInfo::required("torque_nm", "N·m, in the actuator's shaft frame")
+                    .suggesting(Some(FaultArgValue::Number(5.0))),
+            ],
+        });
+        table.push(FaultInfo {
+            name: BUS_LOST,
+            description: "the bus cut off: no frame reaches or leaves its actuators".into(),
+            params: vec![ParamInfo::required("bus", "bus name")
+                .suggesting(self.buses.first().cloned().map(FaultArgValue::Text))],
+        });
+        table
+    }
+
+    /// The fault `name` from `args`; `clearing`: a push's torque may be left out.
+    pub fn build(
+        &self,
+        name: &str,
+        args: &FaultArgs,
+        clearing: bool,
+    ) -> Result<RobotFault, FaultArgError> {
+        match name {
+            EXTERNAL_TORQUE => {
+                args.only(name, &["joint", "torque_nm"])?;
+                let (joint, model) = self.joint(name, args)?;
+                let torque_nm = match args.get("torque_nm") {
+                    None if clearing => 0.0,
+                    None => return Err(needs(name, "torque_nm")),
+                    Some(FaultArgValue::Number(x)) => check_external_torque_nm(model, *x)
+                        .map_err(|e| FaultArgError::at("torque_nm", e.to_string()))?,
+                    Some(other) => {
+                        return Err(FaultArgError::at(
+                            "torque_nm",
+                            format!("`torque_nm` must be a number (N·m), got {other}"),
+                        ))
+                    }
+                };
+                Ok(RobotFault::ExternalTorque { joint, torque_nm })
+            }
+            BUS_LOST => {
+                args.only(name, &["bus"])?;
+                let bus = word(name, args, "bus")?;
+                if !self.buses.contains(&bus) {
+                    let known: Vec<&str> = self.buses.iter().map(String::as_str).collect();
+                    return Err(FaultArgError::at(
+                        "bus",
+                        format!(
+                            "the robot has no bus {}{}; its buses: {}",
+                            shown_word(&bus),
+                            suggestion(&bus, &known),
+                            known.join(", ")
+                        ),
+                    ));
+                }
+                Ok(RobotFault::BusLost { bus })
+            }
+            _ => {
+                let fault = Fault::from_name(name).ok_or_else(|| {
+                    FaultArgError::whole(format!(
+                        "no robot fault {}; known: {}",
+                        shown_word(name),
+                        Self::names().join(", ")
+                    ))
+                })?;
+                args.only(name, &["joint"])?;
+                let (joint, _) = self.joint(name, args)?;
+                Ok(RobotFault::Actuator { joint, fault })
+            }
+        }
+    }
+
+    /// The `joint` argument: an actuated joint of the robot, and its actuator's model.
+    fn joint(&self, fault: &str, args: &FaultArgs) -> Result<(String, Model), FaultArgError> {
+        let joint = word(fault, args, "joint")?;
+        match self.joints.iter().find(|(name, _)| *name == joint) {
+            Some((_, model)) => Ok((joint, *model)),
+            None => {
+                let known: Vec<&str> = self.joints.iter().map(|(n, _)| n.as_str()).collect();
+                Err(FaultArgError::at(
+                    "joint",
+                    format!(
+                        "no actuator drives joint {}{}",
+                        shown_word(&joint),
+                        suggestion(&joint, &known)
+                    ),
+                ))
+            }
+        }
+    }
+}
+
+fn needs(fault: &str, arg: &str) -> FaultArgError {
+    FaultArgError::whole(format!("`{fault}` needs `{arg}`"))
+}
+
+/// A name argument: a word, or a whole number written where a name was meant (a form's box
+/// reads `1` as a number).
+fn word(fault: &str, args: &FaultArgs, arg: &str) -> Result<String, FaultArgError> {
+    match args.get(arg) {
+        None => Err(needs(fault, arg)),
+        Some(FaultArgValue::Text(text)) => Ok(text.trim().to_owned()),
+        Some(FaultArgValue::Number(x)) => Ok(Shown(*x).to_string()),
+    }
+}
+
+#[async_trait::async_trait]
+impl FaultTarget for RobotMonitor {
+    type Fault = RobotFault;
+
+    fn fault_table(&self) -> Vec<FaultInfo> {
+        self.layout().fault_table()
+    }
+
+    fn build(&self, name: &str, args: &FaultArgs) -> Result<RobotFault, FaultArgError> {
+        self.layout().build(name, args, false)
+    }
+
+    fn build_to_clear(&self, name: &str, args: &FaultArgs) -> Result<RobotFault, FaultArgError> {
+        self.layout().build(name, args, true)
+    }
+
+    fn label(&self, fault: &RobotFault) -> String {
+        match fault {
+            RobotFault::Actuator { joint, fault } => format!("{} on {joint}", fault.name()),
+            RobotFault::ExternalTorque { joint, .. } => format!("{EXTERNAL_TORQUE} on {joint}"),
+            RobotFault::BusLost { bus } => format!("{BUS_LOST} {bus}"),
+        }
+    }
+
+    fn same_site(&self, a: &RobotFault, b: &RobotFault) -> bool {
+        self.label(a) == self.label(b)
+    }
+
+    async fn inject(&self, fault: RobotFault) -> Result<(), String> {
+        match fault {
+            RobotFault::Actuator { joint, fault } => {
+                RobotMonitor::inject(self, &joint, fault).await
+            }
+            RobotFault::ExternalTorque { joint, torque_nm } => {
+                self.set_external_torque(&joint, torque_nm).await
+            }
+            RobotFault::BusLost { bus } => self.set_bus_lost(&bus, true).await,
+        }
+        .map_err(|e| e.to_string())
+    }
+
+    async fn clear(&self, fault: RobotFault) -> Result<(), String> {
+        match fault {
+            RobotFault::Actuator { joint, fault } => RobotMonitor::clear(self, &joint, fault).await,
+            RobotFault::ExternalTorque { joint, .. } => self.set_external_torque(&joint, 0.0).await,
+            RobotFault::BusLost { bus } => self.set_bus_lost(&bus, false).await,
+        }
+        .map_err(|e| e.to_string())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn layout() -> RobotLayout {
+        RobotLayout {
+            joints: vec![
+                ("left_knee".into(), Model::RS04),
+                ("left_ankle".into(), Model::RS02),
+            ],
+            buses: vec!["can0".into(), "can1".into()],
+        }
+    }
+
+    fn args(pairs: &[(&str, FaultArgValue)]) -> FaultArgs {
+        let mut args = FaultArgs::new();
+        for (name, value) in pairs {
+            args.push(*name, value.clone());
+        }
+        args
+    }
+
+    fn text(t: &str) -> FaultArgValue {
+        FaultArgValue::Text(t.into())
+    }
+
+    #[test]
+    fn faults_are_addressed_by_joint_and_bus_name() {
+        let l = layout();
+        assert_eq!(
+            l.build("gate_driver", &args(&[("joint", text("left_knee"))]), false),
+            Ok(RobotFault::Actuator {
+                joint: "left_knee".into(),
+                fault: Fault::GateDriver
+            })
+        );
+        assert_eq!(
+            l.build("bus_lost", &args(&[("bus", text("can1"))]), false),
+            Ok(RobotFault::BusLost { bus: "can1".into() })
+        );
+        let knee = l.build("gate_driver", &args(&[("joint", text("left_kne"))]), false);
+        assert_eq!(
+            knee.unwrap_err().message,
+            "no actuator drives joint `left_kne`; did you mean `left_knee`?"
+        );
+        let bus = l.build("bus_lost", &args(&[("bus", text("can7"))]), false);
+        assert!(
+            bus.unwrap_err().message.ends_with("its buses: can0, can1"),
+            "the robot's buses are listed"
+        );
+        let melt = l.build("melt", &args(&[("joint", text("left_knee"))]), false);
+        assert!(melt
+            .unwrap_err()
+            .message
+            .starts_with("no robot fault `melt`; known: over_temperature"));
+        let extra = l.build(
+            "gate_driver",
+            &args(&[("joint", text("left_knee")), ("bus", text("can0"))]),
+            false,
+        );
+        assert_eq!(extra.unwrap_err().arg.as_deref(), Some("bus"));
+    }
+
+    #[test]
+    fn a_push_is_bounded_by_the_joints_actuator_and_cleared_without_a_torque() {
+        let l = layout();
+        let push = |joint: &str, torque: f64| {
+            l.build(
+                EXTERNAL_TORQUE,
+                &args(&[
+                    ("joint", text(joint)),
+                    ("torque_nm", FaultArgValue::Number(torque)),
+                ]),
+                false,
+            )
+        };
+        assert_eq!(
+            push("left_knee", 5.0),
+            Ok(RobotFault::ExternalTorque {
+                joint: "left_knee".into(),
+                torque_nm: 5.0
+            })
+        );
+        // Ten times each model's peak torque: the knee's RS04 (120 N·m) takes what the
+        // ankle's RS02 (17 N·m) refuses.
+        let big = crate::robstride::faults::max_external_torque_nm(Model::RS02) + 1.0;
+        assert!(push("left_knee", big).is_ok());
+        let refused = push("left_ankle", big).unwrap_err();
+        assert_eq!(refused.arg.as_deref(), Some("torque_nm"));
+        assert!(
+            refused.message.contains("must be between"),
+            "{}",
+            refused.message
+        );
+        let needs = l.build(
+            EXTERNAL_TORQUE,
+            &args(&[("joint", text("left_knee"))]),
+            false,
+        );
+        assert_eq!(
+            needs.unwrap_err().message,
+            "`external_torque` needs `torque_nm`"
+        );
+        let clear = l.build(
+            EXTERNAL_TORQUE,
+            &args(&[("joint", text("left_knee"))]),
+            true,
+        );
+        assert_eq!(
+            clear,
+            Ok(RobotFault::ExternalTorque {
+                joint: "left_knee".into(),
+                torque_nm: 0.0
+            })
+        );
+    }
+
+    #[test]
+    fn the_table_suggests_the_first_joint_and_bus() {
+        let table = layout().fault_table();
+        assert_eq!(table.len(), Fault::ALL.len() + 2);
+        let bus = table.iter().find(|f| f.name == BUS_LOST).unwrap();
+        assert_eq!(bus.params[0].default, Some(text("can0")));
+        assert_eq!(table[0].params[0].default, Some(text("left_knee")));
+    }
+}
