@@ -6,6 +6,7 @@
 //! `reply_delay`, `over_temperature`, …).
 
 mod can_place;
+mod faults;
 mod piper;
 mod realman;
 mod robot;
@@ -13,8 +14,6 @@ mod robstride;
 
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyString};
-use sim::fault_args::{FaultArgValue, FaultArgs};
 use std::sync::Mutex;
 
 use piper::PiperEmulator;
@@ -30,32 +29,8 @@ pub(super) fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
     m.lock().unwrap_or_else(|p| p.into_inner())
 }
 
-/// Python's keyword arguments as an emulator's fault builder reads them
-/// (`sim::fault_args`): `str` is a word, anything else a number (`int`, `float`), or shown by
-/// its `str()` if it is not one (the builder then refuses it by name).
-pub(super) fn builder_args(kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<FaultArgs> {
-    let mut args = FaultArgs::new();
-    for (key, value) in kwargs.into_iter().flat_map(|k| k.iter()) {
-        let key: String = key.extract()?;
-        let value = if value.is_instance_of::<PyString>() {
-            FaultArgValue::Text(value.extract()?)
-        } else if let Ok(x) = value.extract::<f64>() {
-            FaultArgValue::Number(x)
-        } else {
-            FaultArgValue::Text(value.str()?.to_string())
-        };
-        args.push(key, value);
-    }
-    Ok(args)
-}
-
 pub(super) fn deg(rad: &[f64]) -> Vec<f64> {
     rad.iter().map(|r| r.to_degrees()).collect()
-}
-
-/// Returns false so an exception inside `with` propagates.
-pub(super) fn exit_false() -> bool {
-    false
 }
 
 /// Adds the emulator classes and constructors (`_armhil.sim_realman`, …).

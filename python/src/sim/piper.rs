@@ -7,17 +7,20 @@ use std::sync::{Arc, Mutex};
 use bus::virtual_bus::FaultId;
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyTuple};
-use sim::piper::{FaultKind, PiperConfig, PiperFault, PiperHandle};
+use pyo3::types::PyDict;
+use sim::fault_desk::{FaultAction, FaultDesk, Faults};
+use sim::piper::{PiperConfig, PiperHandle, PiperMonitor};
 
 use super::can_place::{open_place, CanPlace};
-use super::{builder_args, deg, exit_false, lock, value_err};
+use super::faults::{apply, builder_args, emulator_methods, Emulated};
+use super::{deg, lock, value_err};
 use crate::{block_on, sim_runtime};
 
 /// A Piper firmware emulator on a SocketCAN interface or behind a socketcand server.
 #[pyclass(module = "armhil.sim", frozen)]
 pub struct PiperEmulator {
     running: Mutex<Option<(PiperHandle, CanPlace)>>,
+    faults: FaultDesk<PiperMonitor>,
     silenced: Mutex<Option<FaultId>>,
     params: BTreeMap<&'static str, String>,
     addr: Option<SocketAddr>,
@@ -32,23 +35,29 @@ impl PiperEmulator {
     }
 }
 
-/// The fault `name` with `kwargs`, built by the emulator's one fault builder
-/// ([`FaultKind::build`]; [`FaultKind::build_to_clear`] when `clearing`: the site is needed,
-/// the values are not): the defaults, ranges and messages of scenario files.
-fn piper_fault(
-    name: &str,
-    kwargs: Option<&Bound<'_, PyDict>>,
-    clearing: bool,
-) -> PyResult<PiperFault> {
-    let args = builder_args(kwargs)?;
-    let kind = FaultKind::named(name).map_err(value_err)?;
-    let built = if clearing {
-        kind.build_to_clear(&args)
-    } else {
-        kind.build(&args)
-    };
-    built.map_err(value_err)
+impl Emulated for PiperEmulator {
+    const NAME: &'static str = "Piper";
+
+    fn desk(&self) -> &dyn Faults {
+        &self.faults
+    }
+
+    fn is_running(&self) -> bool {
+        lock(&self.running).is_some()
+    }
+
+    fn shut_down(&self, py: Python<'_>) {
+        let running = lock(&self.running).take();
+        if let Some((h, place)) = running {
+            block_on(py, sim_runtime(), async move {
+                h.shutdown().await;
+                place.close().await;
+            });
+        }
+    }
 }
+
+emulator_methods!(PiperEmulator);
 
 #[pymethods]
 impl PiperEmulator {
@@ -90,17 +99,27 @@ impl PiperEmulator {
     /// under_voltage(voltage_v=18), driver_error(joint), stall(joint),
     /// external_torque(joint, torque_nm), collision(joint), estop,
     /// ntc_over_temp(board="main"), gripper_sensor_fault, teach_button.
+    /// The emulator's fault builder checks the arguments (scenario files' defaults, ranges
+    /// and messages): `ValueError` when it refuses them.
     #[pyo3(signature = (name, **kwargs))]
-    fn inject(&self, name: &str, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<()> {
-        let fault = piper_fault(name, kwargs, false)?;
-        self.with(|h, _| h.inject(fault))?.map_err(value_err)
+    fn inject(
+        &self,
+        py: Python<'_>,
+        name: &str,
+        kwargs: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<()> {
+        apply(self, py, FaultAction::Inject, name, &builder_args(kwargs)?)
     }
 
-    /// Removes a fault's cause (joint faults need `joint=`).
+    /// Removes a fault's cause (joint faults need `joint=`; values may be left out).
     #[pyo3(signature = (name, **kwargs))]
-    fn clear(&self, name: &str, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<()> {
-        let fault = piper_fault(name, kwargs, true)?;
-        self.with(|h, _| h.clear(fault))?.map_err(value_err)
+    fn clear(
+        &self,
+        py: Python<'_>,
+        name: &str,
+        kwargs: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<()> {
+        apply(self, py, FaultAction::Clear, name, &builder_args(kwargs)?)
     }
 
     /// Drops every frame the emulator sends (the virtual bus's `silence_node`): the link
@@ -154,33 +173,6 @@ impl PiperEmulator {
         Ok(d)
     }
 
-    /// Whether it is running.
-    #[getter]
-    fn running(&self) -> bool {
-        lock(&self.running).is_some()
-    }
-
-    /// Stops the emulator and its server (idempotent).
-    fn stop(&self, py: Python<'_>) {
-        let running = lock(&self.running).take();
-        if let Some((h, place)) = running {
-            block_on(py, sim_runtime(), async move {
-                h.shutdown().await;
-                place.close().await;
-            });
-        }
-    }
-
-    fn __enter__(slf: Py<Self>) -> Py<Self> {
-        slf
-    }
-
-    #[pyo3(signature = (*_args))]
-    fn __exit__(&self, py: Python<'_>, _args: &Bound<'_, PyTuple>) -> bool {
-        self.stop(py);
-        exit_false()
-    }
-
     fn __repr__(&self) -> String {
         format!("PiperEmulator({:?})", self.params)
     }
@@ -221,6 +213,7 @@ pub(super) fn piper(
     })
     .map_err(|e| PyRuntimeError::new_err(format!("cannot start the Piper emulator: {e}")))?;
     Ok(PiperEmulator {
+        faults: FaultDesk::new(handle.monitor()),
         params: place.params(),
         addr: place.socketcand_addr(),
         running: Mutex::new(Some((handle, place))),

@@ -6,20 +6,23 @@ use std::sync::Mutex;
 
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyTuple};
+use pyo3::types::PyDict;
+use sim::fault_desk::{FaultAction, FaultDesk, Faults};
 use sim::realman::model::ArmModel;
 use sim::realman::{
-    ControllerConfig, EmulatorConfig, RealmanEmulator as RealmanSpawner, RealmanFault,
-    RealmanFaultKind, RealmanHandle, Transport,
+    ControllerConfig, EmulatorConfig, RealmanEmulator as RealmanSpawner, RealmanHandle,
+    RealmanMonitor, Transport,
 };
 
-use super::{builder_args, deg, exit_false, lock, value_err};
+use super::faults::{apply, builder_args, emulator_methods, stopped, Emulated};
+use super::{deg, lock, value_err};
 use crate::{block_on, sim_runtime};
 
 /// A Realman arm controller emulator on TCP (commands) and UDP (realtime push).
 #[pyclass(module = "armhil.sim", frozen)]
 pub struct RealmanEmulator {
     handle: Mutex<Option<RealmanHandle>>,
+    faults: FaultDesk<RealmanMonitor>,
     addr: SocketAddr,
 }
 
@@ -28,16 +31,30 @@ impl RealmanEmulator {
         lock(&self.handle)
             .as_ref()
             .map(f)
-            .ok_or_else(|| PyRuntimeError::new_err("the Realman emulator is stopped"))
+            .ok_or_else(stopped::<Self>)
     }
 }
 
-/// The fault `name` with `kwargs`, built by the emulator's one fault builder
-/// ([`sim::realman::build_fault`]): the ranges, required arguments and messages of scenario
-/// files (`peer_ip="10.0.0.2"` narrows `connection_drop` to one client).
-fn realman_fault(name: &str, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<RealmanFault> {
-    sim::realman::build_fault(name, &builder_args(kwargs)?).map_err(|e| value_err(e.message))
+impl Emulated for RealmanEmulator {
+    const NAME: &'static str = "Realman";
+
+    fn desk(&self) -> &dyn Faults {
+        &self.faults
+    }
+
+    fn is_running(&self) -> bool {
+        lock(&self.handle).is_some()
+    }
+
+    fn shut_down(&self, py: Python<'_>) {
+        let handle = lock(&self.handle).take();
+        if let Some(h) = handle {
+            block_on(py, sim_runtime(), h.shutdown());
+        }
+    }
 }
+
+emulator_methods!(RealmanEmulator);
 
 #[pymethods]
 impl RealmanEmulator {
@@ -88,16 +105,25 @@ impl RealmanEmulator {
     /// power_loss, collision, estop, gripper_fault(bits). Every argument but `peer_ip` is
     /// required, as in scenario files; a value out of range raises `ValueError`.
     #[pyo3(signature = (name, **kwargs))]
-    fn inject(&self, name: &str, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<()> {
-        let fault = realman_fault(name, kwargs)?;
-        self.with(|h| h.inject(fault))?.map_err(value_err)
+    fn inject(
+        &self,
+        py: Python<'_>,
+        name: &str,
+        kwargs: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<()> {
+        apply(self, py, FaultAction::Inject, name, &builder_args(kwargs)?)
     }
 
-    /// Removes a fault by name.
-    fn clear(&self, name: &str) -> PyResult<()> {
-        let kind = RealmanFaultKind::from_name(name)
-            .ok_or_else(|| value_err(format!("unknown Realman fault {name:?}")))?;
-        self.with(|h| h.clear(kind))
+    /// Removes a fault by name (the controller clears a fault by kind: arguments, if given,
+    /// are not needed).
+    #[pyo3(signature = (name, **kwargs))]
+    fn clear(
+        &self,
+        py: Python<'_>,
+        name: &str,
+        kwargs: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<()> {
+        apply(self, py, FaultAction::Clear, name, &builder_args(kwargs)?)
     }
 
     /// Measured joint angles, degrees.
@@ -126,30 +152,6 @@ impl RealmanEmulator {
     /// Open client connections.
     fn connections(&self) -> PyResult<usize> {
         self.with(|h| h.connections())
-    }
-
-    /// Whether it is serving.
-    #[getter]
-    fn running(&self) -> bool {
-        lock(&self.handle).is_some()
-    }
-
-    /// Stops serving and closes every connection (idempotent).
-    fn stop(&self, py: Python<'_>) {
-        let handle = lock(&self.handle).take();
-        if let Some(h) = handle {
-            block_on(py, sim_runtime(), h.shutdown());
-        }
-    }
-
-    fn __enter__(slf: Py<Self>) -> Py<Self> {
-        slf
-    }
-
-    #[pyo3(signature = (*_args))]
-    fn __exit__(&self, py: Python<'_>, _args: &Bound<'_, PyTuple>) -> bool {
-        self.stop(py);
-        exit_false()
     }
 
     fn __repr__(&self) -> String {
@@ -187,6 +189,7 @@ pub(super) fn realman(
     .map_err(|e| PyRuntimeError::new_err(format!("cannot start the Realman emulator: {e}")))?;
     let addr = handle.local_addr().unwrap_or(addr);
     Ok(RealmanEmulator {
+        faults: FaultDesk::new(handle.monitor()),
         handle: Mutex::new(Some(handle)),
         addr,
     })

@@ -11,12 +11,15 @@ use bus::socketcand::SocketcandServer;
 use bus::CanBus;
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyTuple};
+use pyo3::types::PyDict;
+use sim::fault_args::{FaultArgValue, FaultArgs};
+use sim::fault_desk::{FaultAction, FaultDesk, Faults};
+use sim::robot::faults::{BUS_LOST, EXTERNAL_TORQUE};
 use sim::robot::file::{load_robot_file, RobotFileError};
-use sim::robot::{RobotEmulator as Emulator, RobotError, RobotHandle, RobotSnapshot};
-use sim::robstride::Fault;
+use sim::robot::{RobotEmulator as Emulator, RobotError, RobotHandle, RobotMonitor, RobotSnapshot};
 
-use super::{exit_false, lock, value_err};
+use super::faults::{apply, emulator_methods, stopped, Emulated};
+use super::{lock, value_err};
 use crate::{block_on, sim_runtime};
 
 /// What serves the robot's buses.
@@ -40,6 +43,7 @@ impl Served {
 #[pyclass(module = "armhil.sim", frozen)]
 pub struct RobotEmulator {
     running: Mutex<Option<(RobotHandle, Served)>>,
+    faults: FaultDesk<RobotMonitor>,
     name: String,
     buses: Vec<String>,
     /// Per actuated joint: its bus and CAN id.
@@ -65,11 +69,38 @@ impl RobotEmulator {
         >,
     ) -> PyResult<R> {
         let guard = lock(&self.running);
-        let (h, _) = guard
-            .as_ref()
-            .ok_or_else(|| PyRuntimeError::new_err("the robot emulator is stopped"))?;
+        let (h, _) = guard.as_ref().ok_or_else(stopped::<Self>)?;
         block_on(py, sim_runtime(), f(h)).map_err(robot_err)
     }
+}
+
+impl Emulated for RobotEmulator {
+    const NAME: &'static str = "robot";
+
+    fn desk(&self) -> &dyn Faults {
+        &self.faults
+    }
+
+    fn is_running(&self) -> bool {
+        lock(&self.running).is_some()
+    }
+
+    fn shut_down(&self, py: Python<'_>) {
+        let running = lock(&self.running).take();
+        if let Some((h, served)) = running {
+            block_on(py, sim_runtime(), async move {
+                h.shutdown().await;
+                served.close().await;
+            });
+        }
+    }
+}
+
+emulator_methods!(RobotEmulator);
+
+/// A robot fault's arguments: one word (`joint`, `bus`).
+fn word(name: &str, value: String) -> FaultArgs {
+    FaultArgs::new().with(name, FaultArgValue::Text(value))
 }
 
 fn snapshot_dict<'py>(py: Python<'py>, s: &RobotSnapshot) -> PyResult<Bound<'py, PyDict>> {
@@ -136,19 +167,14 @@ impl RobotEmulator {
     /// Injects a RobStride fault on the actuator of `joint`: over_temperature,
     /// under_voltage, over_voltage, phase_a/b/c_over_current, encoder_not_calibrated,
     /// stall_overload, gate_driver.
+    /// (`external_torque` and `bus_lost` are `set_external_torque` and `bus_lost`.)
     fn inject(&self, py: Python<'_>, name: &str, joint: String) -> PyResult<()> {
-        let fault = Fault::named(name).map_err(value_err)?;
-        self.handle(py, move |h| {
-            Box::pin(async move { h.inject(&joint, fault).await })
-        })
+        apply(self, py, FaultAction::Inject, name, &word("joint", joint))
     }
 
     /// Removes a fault's cause on the actuator of `joint`.
     fn clear(&self, py: Python<'_>, name: &str, joint: String) -> PyResult<()> {
-        let fault = Fault::named(name).map_err(value_err)?;
-        self.handle(py, move |h| {
-            Box::pin(async move { h.clear(&joint, fault).await })
-        })
+        apply(self, py, FaultAction::Clear, name, &word("joint", joint))
     }
 
     /// Sets the winding temperature of `joint`'s actuator (°C); its thermal model goes on
@@ -159,20 +185,28 @@ impl RobotEmulator {
         })
     }
 
-    /// Pushes on `joint` with a torque from outside (N·m; 0 stops pushing).
+    /// Pushes on `joint` with a torque from outside (N·m, up to ten times its actuator's
+    /// peak torque; 0 stops pushing): the fault `external_torque`.
     fn set_external_torque(&self, py: Python<'_>, joint: String, torque_nm: f64) -> PyResult<()> {
-        self.handle(py, move |h| {
-            Box::pin(async move { h.set_external_torque(&joint, torque_nm).await })
-        })
+        let args = word("joint", joint);
+        if torque_nm == 0.0 {
+            apply(self, py, FaultAction::Clear, EXTERNAL_TORQUE, &args)
+        } else {
+            let args = args.with("torque_nm", FaultArgValue::Number(torque_nm));
+            apply(self, py, FaultAction::Inject, EXTERNAL_TORQUE, &args)
+        }
     }
 
     /// Cuts bus `bus` off (`lost=True`: no frame reaches or leaves its actuators) or
-    /// reconnects it.
+    /// reconnects it: the fault `bus_lost`.
     #[pyo3(signature = (bus, lost=true))]
     fn bus_lost(&self, py: Python<'_>, bus: String, lost: bool) -> PyResult<()> {
-        self.handle(py, move |h| {
-            Box::pin(async move { h.set_bus_lost(&bus, lost).await })
-        })
+        let action = if lost {
+            FaultAction::Inject
+        } else {
+            FaultAction::Clear
+        };
+        apply(self, py, action, BUS_LOST, &word("bus", bus))
     }
 
     /// The robot's state: `time_s`, `base_position_m`, `lost_buses` and `joints` (by URDF
@@ -181,33 +215,6 @@ impl RobotEmulator {
     fn state<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let snapshot = self.handle(py, |h| Box::pin(h.snapshot()))?;
         snapshot_dict(py, &snapshot)
-    }
-
-    /// Whether it is running.
-    #[getter]
-    fn running(&self) -> bool {
-        lock(&self.running).is_some()
-    }
-
-    /// Stops the robot and its servers (idempotent).
-    fn stop(&self, py: Python<'_>) {
-        let running = lock(&self.running).take();
-        if let Some((h, served)) = running {
-            block_on(py, sim_runtime(), async move {
-                h.shutdown().await;
-                served.close().await;
-            });
-        }
-    }
-
-    fn __enter__(slf: Py<Self>) -> Py<Self> {
-        slf
-    }
-
-    #[pyo3(signature = (*_args))]
-    fn __exit__(&self, py: Python<'_>, _args: &Bound<'_, PyTuple>) -> bool {
-        self.stop(py);
-        exit_false()
     }
 }
 
@@ -288,6 +295,7 @@ pub(super) fn robot(
     })
     .map_err(PyRuntimeError::new_err)?;
     Ok(RobotEmulator {
+        faults: FaultDesk::new(handle.monitor()),
         running: Mutex::new(Some((handle, served))),
         name,
         buses: names,

@@ -6,31 +6,56 @@ use std::sync::{Arc, Mutex};
 
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyTuple};
+use pyo3::types::PyDict;
 use sim::fault_args::{FaultArgValue, FaultArgs};
+use sim::fault_desk::{FaultAction, FaultDesk, Faults};
 use sim::robstride::{
-    build_fault, Model, MotorConfig, MotorFault, RobstrideBus, RobstrideConfig, RobstrideHandle,
+    Model, MotorConfig, RobstrideBus, RobstrideConfig, RobstrideHandle, RobstrideMonitor,
 };
 
 use super::can_place::{open_place, CanPlace};
-use super::{exit_false, lock, value_err};
+use super::faults::{apply, emulator_methods, stopped, Emulated};
+use super::{lock, value_err};
 use crate::{block_on, sim_runtime};
 
 /// RobStride actuators on a SocketCAN interface or behind a socketcand server.
 #[pyclass(module = "armhil.sim", frozen)]
 pub struct RobstrideEmulator {
     running: Mutex<Option<(RobstrideHandle, CanPlace)>>,
+    faults: FaultDesk<RobstrideMonitor>,
     params: BTreeMap<&'static str, String>,
     addr: Option<SocketAddr>,
 }
 
-/// The fault `name` on motor `can_id`, made by the emulator's one fault builder
-/// ([`build_fault`]): the names, the CAN ID range and the messages of scenario files.
-fn robstride_fault(name: &str, can_id: i64) -> PyResult<MotorFault> {
-    // Every i64 a CAN ID could be is exact in f64 up to 2^53; beyond, it is refused anyway.
-    let args = FaultArgs::new().with("motor", FaultArgValue::Number(can_id as f64));
-    build_fault(name, &args).map_err(value_err)
+/// The arguments of a fault on motor `can_id` (checked by the emulator's builder: every i64
+/// a CAN ID could be is exact in f64 up to 2^53; beyond, it is refused anyway).
+fn on_motor(can_id: i64) -> FaultArgs {
+    FaultArgs::new().with("motor", FaultArgValue::Number(can_id as f64))
 }
+
+impl Emulated for RobstrideEmulator {
+    const NAME: &'static str = "RobStride";
+
+    fn desk(&self) -> &dyn Faults {
+        &self.faults
+    }
+
+    fn is_running(&self) -> bool {
+        lock(&self.running).is_some()
+    }
+
+    fn shut_down(&self, py: Python<'_>) {
+        let running = lock(&self.running).take();
+        if let Some((h, place)) = running {
+            block_on(py, sim_runtime(), async move {
+                h.shutdown().await;
+                place.close().await;
+            });
+        }
+    }
+}
+
+emulator_methods!(RobstrideEmulator);
 
 impl RobstrideEmulator {
     /// Runs a request on the emulator task (it answers through a channel).
@@ -48,9 +73,7 @@ impl RobstrideEmulator {
         R: Send,
     {
         let guard = lock(&self.running);
-        let (h, _) = guard
-            .as_ref()
-            .ok_or_else(|| PyRuntimeError::new_err("the RobStride emulator is stopped"))?;
+        let (h, _) = guard.as_ref().ok_or_else(stopped::<Self>)?;
         block_on(py, sim_runtime(), f(h)).map_err(value_err)
     }
 }
@@ -78,14 +101,12 @@ impl RobstrideEmulator {
     /// Injects a fault on motor `can_id`: over_temperature, under_voltage, over_voltage,
     /// phase_a/b/c_over_current, encoder_not_calibrated, stall_overload, gate_driver.
     fn inject(&self, py: Python<'_>, name: &str, can_id: i64) -> PyResult<()> {
-        let MotorFault { motor, fault } = robstride_fault(name, can_id)?;
-        self.request(py, move |h| Box::pin(h.inject(motor, fault)))
+        apply(self, py, FaultAction::Inject, name, &on_motor(can_id))
     }
 
     /// Removes a fault's cause on motor `can_id`.
     fn clear(&self, py: Python<'_>, name: &str, can_id: i64) -> PyResult<()> {
-        let MotorFault { motor, fault } = robstride_fault(name, can_id)?;
-        self.request(py, move |h| Box::pin(h.clear(motor, fault)))
+        apply(self, py, FaultAction::Clear, name, &on_motor(can_id))
     }
 
     /// One dictionary per motor: CAN ID, model, mode, angle, speed, torque, temperature,
@@ -109,33 +130,6 @@ impl RobstrideEmulator {
                 Ok(d)
             })
             .collect()
-    }
-
-    /// Whether it is running.
-    #[getter]
-    fn running(&self) -> bool {
-        lock(&self.running).is_some()
-    }
-
-    /// Stops the emulator and its server (idempotent).
-    fn stop(&self, py: Python<'_>) {
-        let running = lock(&self.running).take();
-        if let Some((h, place)) = running {
-            block_on(py, sim_runtime(), async move {
-                h.shutdown().await;
-                place.close().await;
-            });
-        }
-    }
-
-    fn __enter__(slf: Py<Self>) -> Py<Self> {
-        slf
-    }
-
-    #[pyo3(signature = (*_args))]
-    fn __exit__(&self, py: Python<'_>, _args: &Bound<'_, PyTuple>) -> bool {
-        self.stop(py);
-        exit_false()
     }
 }
 
@@ -174,6 +168,7 @@ pub(super) fn robstride(
     })
     .map_err(|e| PyRuntimeError::new_err(format!("cannot start the RobStride emulator: {e}")))?;
     Ok(RobstrideEmulator {
+        faults: FaultDesk::new(handle.monitor()),
         params: place.params(),
         addr: place.socketcand_addr(),
         running: Mutex::new(Some((handle, place))),

@@ -1,7 +1,7 @@
 //! A robot's faults, the one builder behind the web view and the Python emulator
 //! ([`FaultTarget`] on [`RobotMonitor`]): RobStride's fault table on the actuator of a joint
-//! (addressed by URDF joint name), a push on a joint, and a bus cut off. Scenario files say
-//! the same with `actuator_fault`, `external_torque` and `bus_lost` steps of their own.
+//! (addressed by URDF joint name), a push on a joint, and a bus cut off. A scenario's
+//! `actuator_fault: {joint, fault}` names the same RobStride table.
 
 use crate::fault_args::{shown_word, FaultArgError, FaultArgValue, FaultArgs};
 use crate::fault_desk::{FaultInfo, FaultTarget, ParamInfo};
