@@ -7,7 +7,7 @@ use sim::fault_desk::{FaultDesk, Faults};
 use sim::robot::{RobotMonitor, RobotSnapshot};
 
 use super::bus_tap::BusTap;
-use super::robstride::{fault_names, mode_name};
+use super::robstride::fault_names;
 use super::{round3, LiveSource};
 use crate::harness::report::html::arm_model;
 
@@ -101,7 +101,7 @@ impl RobotLive {
                 ),
                 format!(
                     "{}, {:.1} °C, faults: {}",
-                    mode_name(m.mode),
+                    m.mode.name(),
                     m.temperature_c,
                     match fault_names(m.fault_word) {
                         names if names.is_empty() => "none".to_owned(),

@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use serde_json::{json, Value};
 use sim::fault_desk::{FaultDesk, Faults};
-use sim::robstride::{Fault, ModeState, MotorSnapshot, RobstrideMonitor};
+use sim::robstride::{Fault, MotorSnapshot, RobstrideMonitor};
 
 use super::bus_tap::BusTap;
 use super::{round3, LiveSource};
@@ -33,29 +33,16 @@ impl RobstrideLive {
     }
 }
 
-/// The mode's name on the page (also a robot's actuators').
-pub(super) fn mode_name(mode: ModeState) -> &'static str {
-    match mode {
-        ModeState::Reset => "reset",
-        ModeState::Calibration => "calibration",
-        ModeState::Run => "run",
-    }
-}
-
 /// Names of the injectable faults whose bit is set in `word` (also a robot's actuators').
 pub(super) fn fault_names(word: u32) -> Vec<&'static str> {
-    Fault::ALL
-        .iter()
-        .filter(|f| word & f.word_bit() != 0)
-        .map(|f| f.name())
-        .collect()
+    Fault::set_in(word).into_iter().map(Fault::name).collect()
 }
 
 fn motor_json(m: &MotorSnapshot) -> Value {
     json!({
         "id": m.can_id,
         "model": m.model.name(),
-        "mode": mode_name(m.mode),
+        "mode": m.mode.name(),
         "run_mode": m.run_mode,
         "angle_deg": round3(m.angle_rad.to_degrees()),
         "bus_voltage_v": round3(m.bus_voltage_v),

@@ -117,7 +117,7 @@ fn snapshot_dict<'py>(py: Python<'py>, s: &RobotSnapshot) -> PyResult<Bound<'py,
         jd.set_item("model", m.model.name())?;
         jd.set_item("position_rad", j.position_rad)?;
         jd.set_item("velocity_rad_s", j.velocity_rad_s)?;
-        jd.set_item("mode", format!("{:?}", m.mode).to_lowercase())?;
+        jd.set_item("mode", m.mode.name())?;
         jd.set_item("run_mode", m.run_mode)?;
         jd.set_item("angle_rad", m.angle_rad)?;
         jd.set_item("torque_nm", m.torque_nm)?;

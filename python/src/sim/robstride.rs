@@ -119,7 +119,7 @@ impl RobstrideEmulator {
                 let d = PyDict::new(py);
                 d.set_item("can_id", m.can_id)?;
                 d.set_item("model", m.model.name())?;
-                d.set_item("mode", format!("{:?}", m.mode).to_lowercase())?;
+                d.set_item("mode", m.mode.name())?;
                 d.set_item("run_mode", m.run_mode)?;
                 d.set_item("angle_rad", m.angle_rad)?;
                 d.set_item("speed_rad_s", m.speed_rad_s)?;

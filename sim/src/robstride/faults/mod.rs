@@ -114,6 +114,14 @@ impl Fault {
         )
     }
 
+    /// The injectable faults whose bit is set in a type-21 fault `word`, in table order.
+    pub fn set_in(word: u32) -> Vec<Fault> {
+        Fault::ALL
+            .into_iter()
+            .filter(|f| word & f.word_bit() != 0)
+            .collect()
+    }
+
     /// The bit of the type-21 fault word (spec §9.1).
     pub fn word_bit(self) -> u32 {
         match self {

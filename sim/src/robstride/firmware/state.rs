@@ -9,8 +9,10 @@ use super::{baud_code_bps, can_id_accepted, host_id_accepted, protocol_accepted,
 use crate::robstride::model::Model;
 use crate::state_file::InvalidField;
 
-/// Mode state in bits 23..22 of status frames.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+/// Mode state in bits 23..22 of status frames; [`ModeState::name`] is how the web view and
+/// Python show it (`reset`, `calibration`, `run`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, strum::IntoStaticStr)]
+#[strum(serialize_all = "snake_case")]
 pub enum ModeState {
     /// Torque off (power-on, after stop, fault or CAN timeout).
     Reset,
@@ -21,6 +23,11 @@ pub enum ModeState {
 }
 
 impl ModeState {
+    /// Its name: `reset`, `calibration` or `run`.
+    pub fn name(self) -> &'static str {
+        self.into()
+    }
+
     pub(super) fn bits(self) -> u16 {
         match self {
             ModeState::Reset => 0,
