@@ -131,6 +131,28 @@ pub fn shown_word(text: &str) -> String {
     }
 }
 
+/// The entry of `table` called `name`, or the error every front end shows for an unknown
+/// fault: `no <device> fault `name`; known: …` with the table's names in order.
+pub fn named<T: Copy>(
+    device: &str,
+    name: &str,
+    table: &[T],
+    name_of: impl Fn(T) -> &'static str,
+) -> Result<T, FaultArgError> {
+    table
+        .iter()
+        .copied()
+        .find(|entry| name_of(*entry) == name)
+        .ok_or_else(|| {
+            let known: Vec<&str> = table.iter().map(|entry| name_of(*entry)).collect();
+            FaultArgError::whole(format!(
+                "no {device} fault {}; known: {}",
+                shown_word(name),
+                known.join(", ")
+            ))
+        })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -3,7 +3,7 @@
 //! (addressed by URDF joint name), a push on a joint, and a bus cut off. A scenario's
 //! `actuator_fault: {joint, fault}` names the same RobStride table.
 
-use crate::fault_args::{shown_word, FaultArgError, FaultArgValue, FaultArgs};
+use crate::fault_args::{self, shown_word, FaultArgError, FaultArgValue, FaultArgs};
 use crate::fault_desk::{FaultInfo, FaultTarget, ParamInfo};
 use crate::piper::faults::Shown;
 use crate::robot::RobotMonitor;
@@ -102,7 +102,7 @@ impl RobotLayout {
         args: &FaultArgs,
         clearing: bool,
     ) -> Result<RobotFault, FaultArgError> {
-        match name {
+        match fault_args::named("robot", name, &Self::names(), |n| n)? {
             EXTERNAL_TORQUE => {
                 args.only(name, &["joint", "torque_nm"])?;
                 let (joint, model) = self.joint(name, args)?;
@@ -138,13 +138,8 @@ impl RobotLayout {
                 Ok(RobotFault::BusLost { bus })
             }
             _ => {
-                let fault = Fault::from_name(name).ok_or_else(|| {
-                    FaultArgError::whole(format!(
-                        "no robot fault {}; known: {}",
-                        shown_word(name),
-                        Self::names().join(", ")
-                    ))
-                })?;
+                // Every other name of the table is RobStride's.
+                let fault = Fault::named(name)?;
                 args.only(name, &["joint"])?;
                 let (joint, _) = self.joint(name, args)?;
                 Ok(RobotFault::Actuator { joint, fault })

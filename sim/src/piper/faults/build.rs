@@ -7,7 +7,7 @@
 use super::{
     FaultKind, FaultParam, NtcBoard, PiperFault, Shown, BOARD, JOINT, TEMP_C, TORQUE_NM, VOLTAGE_V,
 };
-use crate::fault_args::{shown_word as word, FaultArgError, FaultArgValue, FaultArgs};
+use crate::fault_args::{self, shown_word as word, FaultArgError, FaultArgValue, FaultArgs};
 
 /// The Piper fault called `name` built from `args` ([`FaultKind::build`]); an unknown name is
 /// refused with the list of known ones.
@@ -18,14 +18,7 @@ pub fn build_fault(name: &str, args: &FaultArgs) -> Result<PiperFault, FaultArgE
 impl FaultKind {
     /// The kind called `name`, or an error listing the known names.
     pub fn named(name: &str) -> Result<FaultKind, FaultArgError> {
-        FaultKind::from_name(name).ok_or_else(|| {
-            let known: Vec<&str> = FaultKind::ALL.iter().map(|k| k.name()).collect();
-            FaultArgError::whole(format!(
-                "no Piper fault {}; known: {}",
-                word(name),
-                known.join(", ")
-            ))
-        })
+        fault_args::named("Piper", name, &FaultKind::ALL, FaultKind::name)
     }
 
     /// The fault of this kind with `args`: an argument the kind does not take is refused, a

@@ -19,7 +19,7 @@ pub use target::{fault_table, RealmanFaultCommand};
 
 use std::net::IpAddr;
 
-use crate::fault_args::{shown_word, FaultArgError, FaultArgValue, FaultArgs};
+use crate::fault_args::{FaultArgError, FaultArgValue, FaultArgs};
 
 /// A fault injected into a running emulator. Joints are numbered from 1 as on the wire.
 #[derive(Debug, Clone, PartialEq)]
@@ -150,14 +150,7 @@ impl RealmanFaultKind {
 
     /// The kind called `name`, or an error listing the known names.
     pub fn named(name: &str) -> Result<Self, FaultArgError> {
-        Self::from_name(name).ok_or_else(|| {
-            let known: Vec<&str> = Self::ALL.iter().map(|k| k.name()).collect();
-            FaultArgError::whole(format!(
-                "no Realman fault {}; known: {}",
-                shown_word(name),
-                known.join(", ")
-            ))
-        })
+        crate::fault_args::named("Realman", name, &Self::ALL, Self::name)
     }
 }
 

@@ -8,7 +8,7 @@ mod target;
 
 use serde::{Deserialize, Serialize};
 
-use crate::fault_args::{shown_word, FaultArgError, FaultArgValue, FaultArgs};
+use crate::fault_args::{FaultArgError, FaultArgValue, FaultArgs};
 use crate::piper::faults::Shown;
 use crate::robstride::firmware::MAX_CAN_ID;
 use crate::robstride::model::Model;
@@ -79,14 +79,7 @@ impl Fault {
 
     /// The fault called `name`, or an error listing the known names.
     pub fn named(name: &str) -> Result<Fault, FaultArgError> {
-        Fault::from_name(name).ok_or_else(|| {
-            let known: Vec<&str> = Fault::ALL.iter().map(|f| f.name()).collect();
-            FaultArgError::whole(format!(
-                "no RobStride fault {}; known: {}",
-                shown_word(name),
-                known.join(", ")
-            ))
-        })
+        crate::fault_args::named("RobStride", name, &Fault::ALL, Fault::name)
     }
 
     /// Its arguments ([`MOTOR`] alone: what a fault does, and on which phase, is in its name).
