@@ -6,7 +6,7 @@
 //! `reply_delay`, `over_temperature`, …).
 
 mod can_place;
-mod faults;
+mod emulated;
 mod piper;
 mod realman;
 mod robot;

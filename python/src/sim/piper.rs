@@ -1,7 +1,9 @@
 //! The Piper firmware emulator under Python control.
 
 use std::collections::BTreeMap;
+use std::future::Future;
 use std::net::SocketAddr;
+use std::pin::Pin;
 use std::sync::{Arc, Mutex};
 
 use bus::virtual_bus::FaultId;
@@ -12,48 +14,40 @@ use sim::fault_desk::{FaultAction, FaultDesk, Faults};
 use sim::piper::{PiperConfig, PiperHandle, PiperMonitor};
 
 use super::can_place::{open_place, CanPlace};
-use super::faults::{apply, builder_args, emulator_methods, Emulated};
+use super::emulated::{apply, builder_args, emulator_methods, Emulated, Running, Stop};
 use super::{deg, lock, value_err};
 use crate::{block_on, sim_runtime};
 
 /// A Piper firmware emulator on a SocketCAN interface or behind a socketcand server.
 #[pyclass(module = "armhil.sim", frozen)]
 pub struct PiperEmulator {
-    running: Mutex<Option<(PiperHandle, CanPlace)>>,
+    running: Running<(PiperHandle, CanPlace)>,
     faults: FaultDesk<PiperMonitor>,
     silenced: Mutex<Option<FaultId>>,
     params: BTreeMap<&'static str, String>,
     addr: Option<SocketAddr>,
 }
 
-impl PiperEmulator {
-    fn with<R>(&self, f: impl FnOnce(&PiperHandle, &CanPlace) -> R) -> PyResult<R> {
-        lock(&self.running)
-            .as_ref()
-            .map(|(h, p)| f(h, p))
-            .ok_or_else(|| PyRuntimeError::new_err("the Piper emulator is stopped"))
+impl Stop for (PiperHandle, CanPlace) {
+    fn stop(self) -> Pin<Box<dyn Future<Output = ()> + Send>> {
+        let (handle, place) = self;
+        Box::pin(async move {
+            handle.shutdown().await;
+            place.close().await;
+        })
     }
 }
 
 impl Emulated for PiperEmulator {
+    type Parts = (PiperHandle, CanPlace);
     const NAME: &'static str = "Piper";
 
     fn desk(&self) -> &dyn Faults {
         &self.faults
     }
 
-    fn is_running(&self) -> bool {
-        lock(&self.running).is_some()
-    }
-
-    fn shut_down(&self, py: Python<'_>) {
-        let running = lock(&self.running).take();
-        if let Some((h, place)) = running {
-            block_on(py, sim_runtime(), async move {
-                h.shutdown().await;
-                place.close().await;
-            });
-        }
+    fn parts(&self) -> &Running<Self::Parts> {
+        &self.running
     }
 }
 
@@ -125,7 +119,7 @@ impl PiperEmulator {
     /// Drops every frame the emulator sends (the virtual bus's `silence_node`): the link
     /// reads as lost. Socketcand only.
     fn silence(&self) -> PyResult<()> {
-        let id = self.with(|_, p| {
+        let id = self.with_parts(|(_, p)| {
             p.virtual_bus
                 .as_ref()
                 .map(|b| b.faults().silence_node("piper"))
@@ -133,7 +127,7 @@ impl PiperEmulator {
         let id =
             id.ok_or_else(|| PyRuntimeError::new_err("silence needs the socketcand emulator"))?;
         if let Some(old) = lock(&self.silenced).replace(id) {
-            self.with(|_, p| p.virtual_bus.as_ref().map(|b| b.faults().remove(old)))?;
+            self.with_parts(|(_, p)| p.virtual_bus.as_ref().map(|b| b.faults().remove(old)))?;
         }
         Ok(())
     }
@@ -141,19 +135,19 @@ impl PiperEmulator {
     /// Ends `silence`.
     fn unsilence(&self) -> PyResult<()> {
         if let Some(id) = lock(&self.silenced).take() {
-            self.with(|_, p| p.virtual_bus.as_ref().map(|b| b.faults().remove(id)))?;
+            self.with_parts(|(_, p)| p.virtual_bus.as_ref().map(|b| b.faults().remove(id)))?;
         }
         Ok(())
     }
 
     /// Reported joint angles, degrees.
     fn joints_deg(&self) -> PyResult<Vec<f64>> {
-        self.with(|h, _| deg(&h.snapshot().reported_joints_rad))
+        self.with_parts(|(h, _)| deg(&h.snapshot().reported_joints_rad))
     }
 
     /// The simulation's ground truth: time, joints, flange pose, gripper, status bytes.
     fn state<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let s = self.with(|h, _| h.snapshot())?;
+        let s = self.with_parts(|(h, _)| h.snapshot())?;
         let d = PyDict::new(py);
         d.set_item("time_s", s.time_s)?;
         d.set_item("joints_deg", deg(&s.reported_joints_rad))?;
@@ -216,7 +210,7 @@ pub(super) fn piper(
         faults: FaultDesk::new(handle.monitor()),
         params: place.params(),
         addr: place.socketcand_addr(),
-        running: Mutex::new(Some((handle, place))),
+        running: Running::new((handle, place)),
         silenced: Mutex::new(None),
     })
 }

@@ -1,8 +1,9 @@
 //! The Realman controller emulator under Python control (TCP commands, UDP push).
 
 use std::collections::BTreeMap;
+use std::future::Future;
 use std::net::{IpAddr, SocketAddr};
-use std::sync::Mutex;
+use std::pin::Pin;
 
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
@@ -14,43 +15,34 @@ use sim::realman::{
     RealmanMonitor, Transport,
 };
 
-use super::faults::{apply, builder_args, emulator_methods, stopped, Emulated};
-use super::{deg, lock, value_err};
+use super::emulated::{apply, builder_args, emulator_methods, Emulated, Running, Stop};
+use super::{deg, value_err};
 use crate::{block_on, sim_runtime};
 
 /// A Realman arm controller emulator on TCP (commands) and UDP (realtime push).
 #[pyclass(module = "armhil.sim", frozen)]
 pub struct RealmanEmulator {
-    handle: Mutex<Option<RealmanHandle>>,
+    handle: Running<RealmanHandle>,
     faults: FaultDesk<RealmanMonitor>,
     addr: SocketAddr,
 }
 
-impl RealmanEmulator {
-    fn with<R>(&self, f: impl FnOnce(&RealmanHandle) -> R) -> PyResult<R> {
-        lock(&self.handle)
-            .as_ref()
-            .map(f)
-            .ok_or_else(stopped::<Self>)
+impl Stop for RealmanHandle {
+    fn stop(self) -> Pin<Box<dyn Future<Output = ()> + Send>> {
+        Box::pin(self.shutdown())
     }
 }
 
 impl Emulated for RealmanEmulator {
+    type Parts = RealmanHandle;
     const NAME: &'static str = "Realman";
 
     fn desk(&self) -> &dyn Faults {
         &self.faults
     }
 
-    fn is_running(&self) -> bool {
-        lock(&self.handle).is_some()
-    }
-
-    fn shut_down(&self, py: Python<'_>) {
-        let handle = lock(&self.handle).take();
-        if let Some(h) = handle {
-            block_on(py, sim_runtime(), h.shutdown());
-        }
+    fn parts(&self) -> &Running<Self::Parts> {
+        &self.handle
     }
 }
 
@@ -128,12 +120,12 @@ impl RealmanEmulator {
 
     /// Measured joint angles, degrees.
     fn joints_deg(&self) -> PyResult<Vec<f64>> {
-        self.with(|h| deg(&h.snapshot().joints_rad))
+        self.with_parts(|h| deg(&h.snapshot().joints_rad))
     }
 
     /// The simulation's ground truth: time, joints, pose, power, errors, status.
     fn state<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let s = self.with(|h| h.snapshot())?;
+        let s = self.with_parts(|h| h.snapshot())?;
         let d = PyDict::new(py);
         d.set_item("time_ms", s.time_ms)?;
         d.set_item("joints_deg", deg(&s.joints_rad))?;
@@ -151,7 +143,7 @@ impl RealmanEmulator {
 
     /// Open client connections.
     fn connections(&self) -> PyResult<usize> {
-        self.with(|h| h.connections())
+        self.with_parts(|h| h.connections())
     }
 
     fn __repr__(&self) -> String {
@@ -190,7 +182,7 @@ pub(super) fn realman(
     let addr = handle.local_addr().unwrap_or(addr);
     Ok(RealmanEmulator {
         faults: FaultDesk::new(handle.monitor()),
-        handle: Mutex::new(Some(handle)),
+        handle: Running::new(handle),
         addr,
     })
 }

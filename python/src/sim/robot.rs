@@ -3,9 +3,11 @@
 //! interface of its name.
 
 use std::collections::BTreeMap;
+use std::future::Future;
 use std::net::SocketAddr;
 use std::path::PathBuf;
-use std::sync::{Arc, Mutex};
+use std::pin::Pin;
+use std::sync::Arc;
 
 use bus::socketcand::SocketcandServer;
 use bus::CanBus;
@@ -18,12 +20,12 @@ use sim::robot::faults::{BUS_LOST, EXTERNAL_TORQUE};
 use sim::robot::file::{load_robot_file, RobotFileError};
 use sim::robot::{RobotEmulator as Emulator, RobotError, RobotHandle, RobotMonitor, RobotSnapshot};
 
-use super::faults::{apply, emulator_methods, stopped, Emulated};
-use super::{lock, value_err};
+use super::emulated::{apply, emulator_methods, Emulated, Running, Stop};
+use super::value_err;
 use crate::{block_on, sim_runtime};
 
 /// What serves the robot's buses.
-struct Served {
+pub(super) struct Served {
     nodes: Vec<Arc<dyn CanBus>>,
     server: Option<SocketcandServer>,
 }
@@ -42,7 +44,7 @@ impl Served {
 /// A whole robot from its robot file (`armhil sim robot FILE` in this process).
 #[pyclass(module = "armhil.sim", frozen)]
 pub struct RobotEmulator {
-    running: Mutex<Option<(RobotHandle, Served)>>,
+    running: Running<(RobotHandle, Served)>,
     faults: FaultDesk<RobotMonitor>,
     name: String,
     buses: Vec<String>,
@@ -58,41 +60,26 @@ fn robot_err(e: RobotError) -> PyErr {
     }
 }
 
-impl RobotEmulator {
-    fn handle<R: Send>(
-        &self,
-        py: Python<'_>,
-        f: impl for<'a> FnOnce(
-            &'a RobotHandle,
-        ) -> std::pin::Pin<
-            Box<dyn std::future::Future<Output = Result<R, RobotError>> + Send + 'a>,
-        >,
-    ) -> PyResult<R> {
-        let guard = lock(&self.running);
-        let (h, _) = guard.as_ref().ok_or_else(stopped::<Self>)?;
-        block_on(py, sim_runtime(), f(h)).map_err(robot_err)
+impl Stop for (RobotHandle, Served) {
+    fn stop(self) -> Pin<Box<dyn Future<Output = ()> + Send>> {
+        let (handle, served) = self;
+        Box::pin(async move {
+            handle.shutdown().await;
+            served.close().await;
+        })
     }
 }
 
 impl Emulated for RobotEmulator {
+    type Parts = (RobotHandle, Served);
     const NAME: &'static str = "robot";
 
     fn desk(&self) -> &dyn Faults {
         &self.faults
     }
 
-    fn is_running(&self) -> bool {
-        lock(&self.running).is_some()
-    }
-
-    fn shut_down(&self, py: Python<'_>) {
-        let running = lock(&self.running).take();
-        if let Some((h, served)) = running {
-            block_on(py, sim_runtime(), async move {
-                h.shutdown().await;
-                served.close().await;
-            });
-        }
+    fn parts(&self) -> &Running<Self::Parts> {
+        &self.running
     }
 }
 
@@ -180,9 +167,9 @@ impl RobotEmulator {
     /// Sets the winding temperature of `joint`'s actuator (°C); its thermal model goes on
     /// from there.
     fn set_temperature(&self, py: Python<'_>, joint: String, celsius: f64) -> PyResult<()> {
-        self.handle(py, move |h| {
-            Box::pin(async move { h.set_temperature(&joint, celsius).await })
-        })
+        let robot = self.faults.target();
+        self.ask(py, robot.set_temperature(&joint, celsius))?
+            .map_err(robot_err)
     }
 
     /// Pushes on `joint` with a torque from outside (N·m, up to ten times its actuator's
@@ -213,7 +200,9 @@ impl RobotEmulator {
     /// joint name: bus, CAN id, model, world position and speed, the actuator's mode, shaft
     /// angle, torque, temperature, fault word).
     fn state<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let snapshot = self.handle(py, |h| Box::pin(h.snapshot()))?;
+        let snapshot = self
+            .ask(py, self.faults.target().snapshot())?
+            .map_err(robot_err)?;
         snapshot_dict(py, &snapshot)
     }
 }
@@ -296,7 +285,7 @@ pub(super) fn robot(
     .map_err(PyRuntimeError::new_err)?;
     Ok(RobotEmulator {
         faults: FaultDesk::new(handle.monitor()),
-        running: Mutex::new(Some((handle, served))),
+        running: Running::new((handle, served)),
         name,
         buses: names,
         joints,

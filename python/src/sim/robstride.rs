@@ -1,8 +1,10 @@
 //! RobStride actuators under Python control.
 
 use std::collections::BTreeMap;
+use std::future::Future;
 use std::net::SocketAddr;
-use std::sync::{Arc, Mutex};
+use std::pin::Pin;
+use std::sync::Arc;
 
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
@@ -14,14 +16,14 @@ use sim::robstride::{
 };
 
 use super::can_place::{open_place, CanPlace};
-use super::faults::{apply, emulator_methods, stopped, Emulated};
-use super::{lock, value_err};
+use super::emulated::{apply, emulator_methods, Emulated, Running, Stop};
+use super::value_err;
 use crate::{block_on, sim_runtime};
 
 /// RobStride actuators on a SocketCAN interface or behind a socketcand server.
 #[pyclass(module = "armhil.sim", frozen)]
 pub struct RobstrideEmulator {
-    running: Mutex<Option<(RobstrideHandle, CanPlace)>>,
+    running: Running<(RobstrideHandle, CanPlace)>,
     faults: FaultDesk<RobstrideMonitor>,
     params: BTreeMap<&'static str, String>,
     addr: Option<SocketAddr>,
@@ -33,50 +35,30 @@ fn on_motor(can_id: i64) -> FaultArgs {
     FaultArgs::new().with("motor", FaultArgValue::Number(can_id as f64))
 }
 
+impl Stop for (RobstrideHandle, CanPlace) {
+    fn stop(self) -> Pin<Box<dyn Future<Output = ()> + Send>> {
+        let (handle, place) = self;
+        Box::pin(async move {
+            handle.shutdown().await;
+            place.close().await;
+        })
+    }
+}
+
 impl Emulated for RobstrideEmulator {
+    type Parts = (RobstrideHandle, CanPlace);
     const NAME: &'static str = "RobStride";
 
     fn desk(&self) -> &dyn Faults {
         &self.faults
     }
 
-    fn is_running(&self) -> bool {
-        lock(&self.running).is_some()
-    }
-
-    fn shut_down(&self, py: Python<'_>) {
-        let running = lock(&self.running).take();
-        if let Some((h, place)) = running {
-            block_on(py, sim_runtime(), async move {
-                h.shutdown().await;
-                place.close().await;
-            });
-        }
+    fn parts(&self) -> &Running<Self::Parts> {
+        &self.running
     }
 }
 
 emulator_methods!(RobstrideEmulator);
-
-impl RobstrideEmulator {
-    /// Runs a request on the emulator task (it answers through a channel).
-    fn request<F, R>(&self, py: Python<'_>, f: F) -> PyResult<R>
-    where
-        F: for<'a> FnOnce(
-            &'a RobstrideHandle,
-        ) -> std::pin::Pin<
-            Box<
-                dyn std::future::Future<Output = Result<R, sim::robstride::RobstrideError>>
-                    + Send
-                    + 'a,
-            >,
-        >,
-        R: Send,
-    {
-        let guard = lock(&self.running);
-        let (h, _) = guard.as_ref().ok_or_else(stopped::<Self>)?;
-        block_on(py, sim_runtime(), f(h)).map_err(value_err)
-    }
-}
 
 #[pymethods]
 impl RobstrideEmulator {
@@ -112,7 +94,9 @@ impl RobstrideEmulator {
     /// One dictionary per motor: CAN ID, model, mode, angle, speed, torque, temperature,
     /// voltage, fault word.
     fn state<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
-        let motors = self.request(py, |h| Box::pin(h.snapshot()))?;
+        let motors = self
+            .ask(py, self.faults.target().snapshot())?
+            .map_err(value_err)?;
         motors
             .iter()
             .map(|m| {
@@ -171,6 +155,6 @@ pub(super) fn robstride(
         faults: FaultDesk::new(handle.monitor()),
         params: place.params(),
         addr: place.socketcand_addr(),
-        running: Mutex::new(Some((handle, place))),
+        running: Running::new((handle, place)),
     })
 }

@@ -1,8 +1,12 @@
 //! What every Python emulator shares: its faults through the emulator's own desk
 //! (`sim::fault_desk`: the builder, table and messages of scenario files and the web view),
-//! and being a context manager that stops once. [`emulator_methods!`] adds the shared Python
-//! methods (`faults`, `active_faults`, `running`, `stop`, `with`) to a class implementing
-//! [`Emulated`].
+//! and being a context manager whose running parts stop once ([`Running`]).
+//! [`emulator_methods!`] adds the shared Python methods (`faults`, `active_faults`, `running`,
+//! `stop`, `with`) to a class implementing [`Emulated`].
+
+use std::future::Future;
+use std::pin::Pin;
+use std::sync::Mutex;
 
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
@@ -10,21 +14,79 @@ use pyo3::types::PyDict;
 use sim::fault_args::{FaultArgValue, FaultArgs};
 use sim::fault_desk::{FaultAction, FaultInfo, Faults};
 
+use super::lock;
 use crate::{block_on, sim_runtime};
 
+/// The parts of a running emulator that stop together: its handle and what serves it.
+pub(super) trait Stop: Send + 'static {
+    /// Shut the emulator down, then close what served it.
+    fn stop(self) -> Pin<Box<dyn Future<Output = ()> + Send>>;
+}
+
+/// What an emulator class holds while it runs; `stop` takes it, once.
+pub(super) struct Running<T>(Mutex<Option<T>>);
+
+impl<T: Stop> Running<T> {
+    /// Running with `parts`.
+    pub(super) fn new(parts: T) -> Self {
+        Self(Mutex::new(Some(parts)))
+    }
+
+    /// `f` on the parts while running; `None` once stopped.
+    pub(super) fn with<R>(&self, f: impl FnOnce(&T) -> R) -> Option<R> {
+        lock(&self.0).as_ref().map(f)
+    }
+
+    fn is_running(&self) -> bool {
+        lock(&self.0).is_some()
+    }
+
+    fn stop(&self, py: Python<'_>) {
+        let parts = lock(&self.0).take();
+        if let Some(parts) = parts {
+            block_on(py, sim_runtime(), parts.stop());
+        }
+    }
+}
+
 /// A Python emulator class: a running emulator with a fault desk, stopped once.
-pub(super) trait Emulated {
+pub(super) trait Emulated: Sized {
+    /// Its handle and what serves it.
+    type Parts: Stop;
+
     /// The emulator's name in messages (`the Piper emulator is stopped`).
     const NAME: &'static str;
 
     /// Its fault desk.
     fn desk(&self) -> &dyn Faults;
 
+    /// Its running parts.
+    fn parts(&self) -> &Running<Self::Parts>;
+
+    /// `f` on the running parts, or `RuntimeError: the <kind> emulator is stopped`.
+    fn with_parts<R>(&self, f: impl FnOnce(&Self::Parts) -> R) -> PyResult<R> {
+        self.parts().with(f).ok_or_else(stopped::<Self>)
+    }
+
+    /// `request` (a call on the emulator's monitor) run to its end while the emulator runs.
+    fn ask<F>(&self, py: Python<'_>, request: F) -> PyResult<F::Output>
+    where
+        F: Future + Send,
+        F::Output: Send,
+    {
+        self.with_parts(|_| ())?;
+        Ok(block_on(py, sim_runtime(), request))
+    }
+
     /// Whether it is still running.
-    fn is_running(&self) -> bool;
+    fn is_running(&self) -> bool {
+        self.parts().is_running()
+    }
 
     /// Stop it and close what serves it (idempotent).
-    fn shut_down(&self, py: Python<'_>);
+    fn shut_down(&self, py: Python<'_>) {
+        self.parts().stop(py);
+    }
 }
 
 /// Build the fault `name` from `args` and apply or clear it: a fault the builder refuses, or
@@ -124,24 +186,27 @@ macro_rules! emulator_methods {
                 &self,
                 py: pyo3::Python<'py>,
             ) -> pyo3::PyResult<Vec<pyo3::Bound<'py, pyo3::types::PyDict>>> {
-                $crate::sim::faults::table(py, &$crate::sim::faults::Emulated::desk(self).table())
+                $crate::sim::emulated::table(
+                    py,
+                    &$crate::sim::emulated::Emulated::desk(self).table(),
+                )
             }
 
             /// The faults injected from Python and not cleared, as labels (`stall joint 2`).
             #[getter]
             fn active_faults(&self) -> Vec<String> {
-                $crate::sim::faults::Emulated::desk(self).active()
+                $crate::sim::emulated::Emulated::desk(self).active()
             }
 
             /// Whether it is running.
             #[getter]
             fn running(&self) -> bool {
-                $crate::sim::faults::Emulated::is_running(self)
+                $crate::sim::emulated::Emulated::is_running(self)
             }
 
             /// Stops the emulator and what serves it (idempotent).
             fn stop(&self, py: pyo3::Python<'_>) {
-                $crate::sim::faults::Emulated::shut_down(self, py)
+                $crate::sim::emulated::Emulated::shut_down(self, py)
             }
 
             fn __enter__(slf: pyo3::Py<Self>) -> pyo3::Py<Self> {
@@ -155,7 +220,7 @@ macro_rules! emulator_methods {
                 py: pyo3::Python<'_>,
                 _args: &pyo3::Bound<'_, pyo3::types::PyTuple>,
             ) -> bool {
-                $crate::sim::faults::Emulated::shut_down(self, py);
+                $crate::sim::emulated::Emulated::shut_down(self, py);
                 false
             }
         }
