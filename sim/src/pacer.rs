@@ -6,7 +6,7 @@
 //! (`cargo bench --bench realtime_jitter`). In real time a [`Pacer`] instead runs one small
 //! thread that sleeps until each absolute deadline (`clock_nanosleep(CLOCK_MONOTONIC,
 //! TIMER_ABSTIME)` on Linux, 1 ns timer slack: the deadline does not drift with the time the
-//! loop itself takes) and wakes the clock task through a [`Notify`]: +0.05 ms idle. Under a
+//! loop itself takes) and wakes the clock task through a [`Notify`]. Under a
 //! paused tokio clock (virtual time, tests) there is no wall clock to keep: the pacer is
 //! tokio's `interval`, which the paused clock advances deterministically.
 //!
@@ -14,11 +14,21 @@
 //! multi-thread runtime (`armhil sim`, real-time scenario runs) the deadline thread, in the
 //! normal scheduling class (`ARMHIL_PACER=tokio` goes back to tokio's timer), else tokio's
 //! interval. With every core busy the thread still wakes on time (it barely runs, so the
-//! scheduler lets it in at once) but the step runs on a worker that waits its turn: p99 +0.5
-//! to +2.3 ms; `ARMHIL_REALTIME_PRIORITY=1` gives the thread and the workers a low real-time
-//! priority, which keeps a loaded machine under 0.2 ms (see [`prefer_punctual_thread`] for
-//! why not by default). Missed deadlines are skipped, not bunched: the clock task works out
-//! how many steps are due from elapsed time, so a wake-up is a prompt, not a count.
+//! scheduler lets it in at once) but the step runs on a worker that waits its turn;
+//! `ARMHIL_REALTIME_PRIORITY=1` gives the thread and the workers a low real-time priority (see
+//! [`prefer_punctual_thread`] for why not by default). Missed deadlines are skipped, not
+//! bunched: the clock task works out how many steps are due from elapsed time, so a wake-up
+//! is a prompt, not a count.
+//!
+//! What that buys depends on the host's scheduler more than on this code; p99 period errors
+//! measured by `cargo bench --bench realtime_jitter` on two 2-vCPU VM guests:
+//!
+//! | pacing | idle | every core busy |
+//! |---|---|---|
+//! | default, guest A | +0.01 to +0.07 ms | +0.26 to +2.1 ms |
+//! | default, guest B | +0.18 to +1.9 ms | +3.1 to +4.1 ms |
+//! | `ARMHIL_REALTIME_PRIORITY=1`, guest A | ≤ +0.04 ms | ≤ +0.04 ms |
+//! | `ARMHIL_REALTIME_PRIORITY=1`, guest B | 1 kHz +0.06 to +0.09, 200 Hz +0.24 to +0.26 ms | 1 kHz +0.06 to +0.09, 200 Hz +0.11 to +0.13 ms |
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -156,8 +166,9 @@ pub const REALTIME_PRIORITY_ENV: &str = "ARMHIL_REALTIME_PRIORITY";
 /// emulator's runtime (`Builder::on_thread_start`): the deadline thread wakes on time, but the
 /// step it prompts runs on a worker, which a busy core makes wait for its turn. Always: 1 ns
 /// timer slack. With `ARMHIL_REALTIME_PRIORITY=1` (and the privilege), also the low FIFO
-/// priority the deadline thread then takes too: loaded p99 period errors fall from +0.5..2.3
-/// ms to under 0.2 ms (`cargo bench --bench realtime_jitter`). Not by default: FIFO workers
+/// priority the deadline thread then takes too: loaded p99 period errors fall from
+/// milliseconds to a tenth of one or less (figures in the module's documentation). Not by
+/// default: FIFO workers
 /// doing a step's real work take the CPU from every normal thread, and on a machine too slow
 /// for real time (the project's two-vCPU emulated test VM) the emulator's clients starved
 /// and timed out.
