@@ -10,7 +10,7 @@ use std::net::TcpStream;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use super::support::{free_port, start_sim, Sim, ARMHIL};
+use super::support::{free_port, listens, start_sim, Sim, ARMHIL};
 
 const WAIT: Duration = Duration::from_secs(5);
 
@@ -31,7 +31,7 @@ fn start_realman(ui: bool, extra: &[&str]) -> (Sim, u16, u16) {
     let deadline = Instant::now() + Duration::from_secs(20);
     let ports: &[u16] = if ui { &[port, ui_port] } else { &[port] };
     for p in ports {
-        while TcpStream::connect(("127.0.0.1", *p)).is_err() {
+        while !listens(("127.0.0.1", *p)) {
             assert!(Instant::now() < deadline, "nothing listens on {p}");
             assert!(
                 sim.0.try_wait().ok().flatten().is_none(),
@@ -424,7 +424,7 @@ fn the_servers_raise_a_low_open_file_limit() {
         .expect("sh starts armhil");
     let sim = Sim(child);
     let deadline = Instant::now() + Duration::from_secs(20);
-    while TcpStream::connect(("127.0.0.1", port)).is_err() {
+    while !listens(("127.0.0.1", port)) {
         assert!(Instant::now() < deadline, "nothing listens on {port}");
         std::thread::sleep(Duration::from_millis(50));
     }

@@ -25,6 +25,20 @@ pub fn free_port() -> u16 {
         .expect("a free port")
 }
 
+/// Whether a server accepts connections on `addr`. A connection whose two ends are the same
+/// address is not one: connecting again and again to a free port of the ephemeral range can
+/// end in a TCP self-connect, which then holds the port the server is about to bind (it
+/// failed to start, and the test talked to itself), so it is dropped and counts as no.
+pub fn listens(addr: impl std::net::ToSocketAddrs) -> bool {
+    match TcpStream::connect(addr) {
+        Ok(stream) => match (stream.local_addr(), stream.peer_addr()) {
+            (Ok(local), Ok(peer)) => local != peer,
+            _ => false,
+        },
+        Err(_) => false,
+    }
+}
+
 /// `armhil sim <args> --socketcand 127.0.0.1:PORT`, once it accepts connections.
 pub fn start_sim(args: &[&str]) -> (Sim, String) {
     let addr = format!("127.0.0.1:{}", free_port());
@@ -38,7 +52,7 @@ pub fn start_sim(args: &[&str]) -> (Sim, String) {
         .expect("armhil sim starts");
     let mut sim = Sim(child);
     let deadline = Instant::now() + Duration::from_secs(20);
-    while TcpStream::connect(&addr).is_err() {
+    while !listens(&addr) {
         assert!(
             Instant::now() < deadline,
             "emulator never listened on {addr}"

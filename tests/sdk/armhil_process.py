@@ -27,6 +27,18 @@ def free_port(kind=socket.SOCK_STREAM):
         return s.getsockname()[1]
 
 
+def accepts(port):
+    """Whether a server accepts TCP connections on 127.0.0.1:PORT. A connection whose two
+    ends are one address is not one: connecting again and again to a free port of the
+    ephemeral range can end in a TCP self-connect, which holds the port the server is about
+    to bind."""
+    try:
+        with socket.create_connection(("127.0.0.1", port), timeout=0.2) as s:
+            return s.getsockname() != s.getpeername()
+    except OSError:
+        return False
+
+
 @contextlib.contextmanager
 def listening(args, port, start_timeout_s=20):
     """Run `armhil ARGS` until it accepts TCP connections on 127.0.0.1:PORT; yields the
@@ -36,15 +48,11 @@ def listening(args, port, start_timeout_s=20):
         [BIN, *args], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True
     )
     deadline = time.monotonic() + start_timeout_s
-    while True:
-        try:
-            socket.create_connection(("127.0.0.1", port), timeout=0.2).close()
-            break
-        except OSError:
-            if proc.poll() is not None or time.monotonic() > deadline:
-                proc.kill()
-                pytest.fail(f"emulator did not start: {proc.stderr.read()}")
-            time.sleep(0.05)
+    while not accepts(port):
+        if proc.poll() is not None or time.monotonic() > deadline:
+            proc.kill()
+            pytest.fail(f"emulator did not start: {proc.stderr.read()}")
+        time.sleep(0.05)
     try:
         yield proc
     finally:

@@ -10,12 +10,11 @@ Run (after `cargo build -p armhil`):
 """
 
 import os
-import socket
 import time
 
 import pytest
 
-from armhil_process import free_port, listening
+from armhil_process import accepts, free_port, listening
 
 if os.environ.get("CI"):
     # In CI both are installed by .ci/run: a missing package is a failure, not a skip.
@@ -28,14 +27,10 @@ else:
 
 def wait_listening(port, timeout_s=20):
     deadline = time.monotonic() + timeout_s
-    while True:
-        try:
-            socket.create_connection(("127.0.0.1", port), timeout=0.2).close()
-            return
-        except OSError:
-            if time.monotonic() > deadline:
-                pytest.fail(f"nothing listens on {port} after {timeout_s} s")
-            time.sleep(0.05)
+    while not accepts(port):
+        if time.monotonic() > deadline:
+            pytest.fail(f"nothing listens on {port} after {timeout_s} s")
+        time.sleep(0.05)
 
 
 @pytest.fixture(scope="module")
