@@ -9,7 +9,7 @@ use bus::socketcand::SocketcandBus;
 use bus::CanBus;
 use driver::robstride::{DriverConfig, Model, RobstrideDriver, RunMode};
 
-use super::support::{start_sim, ARMHIL};
+use super::support::{free_port, listens, start_sim, Sim, ARMHIL};
 
 #[test]
 fn armhil_run_drives_the_piper_emulator_over_socketcand() {
@@ -96,4 +96,65 @@ async fn a_robot_answers_on_each_of_its_buses_over_socketcand_channels() {
         assert!(Instant::now() < deadline, "never got there: {s:?} {w:?}");
         tokio::time::sleep(Duration::from_millis(20)).await;
     }
+}
+
+/// `armhil sim bench`: a leader Piper and its follower that name the same socketcand address
+/// are on one bus behind one server, as on a shared SocketCAN interface: one client sees the
+/// leader's control frames (0x155) and the follower's feedback (0x2A5) on the same connection,
+/// and a second bench address is a bus of its own.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn bench_devices_naming_one_socketcand_address_share_its_bus() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let (shared, alone) = (free_port(), free_port());
+    let file = dir.path().join("bimanual.yaml");
+    std::fs::write(
+        &file,
+        format!(
+            "devices:\n\
+             \x20 leader: {{kind: piper, socketcand: {shared}, role: leader}}\n\
+             \x20 follower: {{kind: piper, socketcand: {shared}}}\n\
+             \x20 other: {{kind: piper, socketcand: {alone}}}\n"
+        ),
+    )
+    .unwrap();
+    let mut child = Sim(Command::new(ARMHIL)
+        .args(["sim", "bench"])
+        .arg(&file)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .expect("armhil sim bench starts"));
+    let deadline = Instant::now() + Duration::from_secs(20);
+    for port in [shared, alone] {
+        while !listens(("127.0.0.1", port)) {
+            assert!(Instant::now() < deadline, "nothing listens on {port}");
+            assert!(child.0.try_wait().unwrap().is_none(), "the bench exited");
+            tokio::time::sleep(Duration::from_millis(50)).await;
+        }
+    }
+    let ids_on = |port: u16| async move {
+        let bus = SocketcandBus::connect(&format!("127.0.0.1:{port}"), "can0")
+            .await
+            .unwrap();
+        let mut ids = std::collections::BTreeSet::new();
+        let until = Instant::now() + Duration::from_secs(2);
+        while Instant::now() < until {
+            if let Ok(Ok(frame)) =
+                tokio::time::timeout(Duration::from_millis(100), bus.recv()).await
+            {
+                ids.insert(frame.frame.raw_id());
+            }
+        }
+        ids
+    };
+    let both = ids_on(shared).await;
+    assert!(both.contains(&0x155), "no leader frame: {both:x?}");
+    assert!(both.contains(&0x2A5), "no follower feedback: {both:x?}");
+    let other = ids_on(alone).await;
+    assert!(other.contains(&0x2A5), "{other:x?}");
+    assert!(
+        !other.contains(&0x155),
+        "the leader leaked onto another server's bus"
+    );
+    let _ = child.0.kill();
 }

@@ -11,6 +11,7 @@ use tokio::sync::watch;
 use tokio::task::JoinSet;
 
 use super::served::BenchEntry;
+use super::served_bus::BenchBuses;
 use super::StopSource;
 
 /// Arguments of `armhil sim bench`.
@@ -108,8 +109,12 @@ async fn serve(
     let (stop, stop_request) = watch::channel(None);
     let mut running = JoinSet::new();
     let count = devices.len();
+    let buses = std::sync::Arc::new(BenchBuses::default());
     for (name, kind, args) in devices {
-        let stop = StopSource::Bench(stop_request.clone());
+        let stop = StopSource::Bench {
+            request: stop_request.clone(),
+            buses: std::sync::Arc::clone(&buses),
+        };
         running.spawn(async move { (name, kind, args.serve(stop).await) });
     }
     eprintln!(
@@ -154,6 +159,26 @@ async fn serve(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn every_shipped_bench_file_loads_and_each_device_takes_its_options() {
+        let kinds: Vec<SimKind> = super::super::SERVED.iter().map(|(kind, _)| *kind).collect();
+        let rigs = Path::new(env!("CARGO_MANIFEST_DIR")).join("rigs");
+        let mut files = 0;
+        for entry in std::fs::read_dir(&rigs).unwrap() {
+            let path = entry.unwrap().path();
+            if path.extension().and_then(|e| e.to_str()) != Some("yaml") {
+                continue;
+            }
+            let bench = load_bench_file(&path, &kinds)
+                .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            for device in &bench.devices {
+                parse(device, bench.dir()).unwrap_or_else(|e| panic!("{e:#}"));
+            }
+            files += 1;
+        }
+        assert!(files >= 4, "only {files} bench files in {}", rigs.display());
+    }
 
     #[test]
     fn clap_words_become_the_file_s_keys() {

@@ -85,7 +85,7 @@ fn real_time_runtime() -> anyhow::Result<tokio::runtime::Runtime> {
 }
 
 /// `--socketcand` takes `HOST:PORT`; a bare port means loopback.
-fn socketcand_addr(text: &str) -> String {
+pub(crate) fn socketcand_addr(text: &str) -> String {
     match text.parse::<u16>() {
         Ok(port) => format!("127.0.0.1:{port}"),
         Err(_) => text.to_owned(),
@@ -183,8 +183,14 @@ pub(crate) enum StopSource {
     /// SIGINT / SIGTERM. Listened for before the emulator starts: a signal that arrived
     /// earlier would kill the process with its recording or state file unfinished.
     Signals(StopSignals),
-    /// The bench's stop request: the name of the signal (or reason) once it is sent.
-    Bench(tokio::sync::watch::Receiver<Option<&'static str>>),
+    /// The bench's stop request: the name of the signal (or reason) once it is sent; and the
+    /// socketcand buses the bench's devices share.
+    Bench {
+        /// The stop request.
+        request: tokio::sync::watch::Receiver<Option<&'static str>>,
+        /// The shared socketcand servers.
+        buses: std::sync::Arc<served_bus::BenchBuses>,
+    },
 }
 
 impl StopSource {
@@ -193,11 +199,19 @@ impl StopSource {
         Ok(Self::Signals(StopSignals::listen()?))
     }
 
+    /// The socketcand buses shared with the other devices of the bench, if on one.
+    pub(crate) fn bench_buses(&self) -> Option<&std::sync::Arc<served_bus::BenchBuses>> {
+        match self {
+            Self::Signals(_) => None,
+            Self::Bench { buses, .. } => Some(buses),
+        }
+    }
+
     /// Wait for the stop request and name it.
     pub(crate) async fn next(&mut self) -> &'static str {
         match self {
             Self::Signals(signals) => signals.next().await,
-            Self::Bench(request) => match request.wait_for(Option::is_some).await {
+            Self::Bench { request, .. } => match request.wait_for(Option::is_some).await {
                 Ok(reason) => reason.unwrap_or("stop"),
                 // The bench is gone: nobody is left to serve.
                 Err(_) => "stop",

@@ -119,7 +119,7 @@ pub(crate) async fn serve(args: Args, mut stop: super::StopSource) -> anyhow::Re
         }),
         ..PiperConfig::default()
     };
-    let served = ServedBus::open(&args.bus).await?;
+    let served = ServedBus::open(&args.bus, stop.bench_buses()).await?;
     let place = served.place();
     let bus = served.node("piper")?;
     let tap = args

@@ -165,7 +165,7 @@ fn config(args: &Args) -> anyhow::Result<RobstrideConfig> {
 /// Serve until `stop` asks (a signal, or the bench this device is part of stopping).
 pub(crate) async fn serve(args: Args, mut stop: super::StopSource) -> anyhow::Result<ExitCode> {
     let config = config(&args)?;
-    let served = ServedBus::open(&args.bus).await?;
+    let served = ServedBus::open(&args.bus, stop.bench_buses()).await?;
     let place = served.place();
     let bus = served.node("robstride")?;
     let ui_tap = args.ui.as_ref().map(|_| served.node("ui")).transpose()?;

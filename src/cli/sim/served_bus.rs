@@ -1,7 +1,10 @@
 //! Where a CAN emulator answers: one set of options (`--iface`, `--socketcand`,
 //! `--create-vxcan`) for every CAN device of `armhil sim`, and the bus they open. A new CAN
 //! device flattens [`ServeArgs`] into its arguments and asks [`ServedBus`] for its nodes.
+//! The devices of one bench that name the same socketcand address share its server and its
+//! bus ([`BenchBuses`]), as devices that name the same SocketCAN interface share that.
 
+use std::collections::HashMap;
 use std::sync::Arc;
 
 use bus::socketcand::SocketcandServer;
@@ -38,6 +41,49 @@ impl ServeArgs {
     }
 }
 
+/// The socketcand servers the devices of one bench (`armhil sim bench`) share: devices that
+/// name the same address are on one bus behind one server (a leader arm and its follower),
+/// as devices that name the same SocketCAN interface are. An address with port 0 (any free
+/// port) is never shared. The server stops when the last device on it does.
+#[derive(Default)]
+pub(crate) struct BenchBuses {
+    /// By address as given (a bare port is 127.0.0.1): the bus, its server, how many devices
+    /// use it.
+    servers: tokio::sync::Mutex<HashMap<String, (VirtualBus, SocketcandServer, usize)>>,
+}
+
+impl BenchBuses {
+    /// The bus behind the server on `addr`, started by the first device that names it.
+    async fn join(&self, addr: &str) -> anyhow::Result<(VirtualBus, std::net::SocketAddr)> {
+        let mut servers = self.servers.lock().await;
+        if let Some((bus, server, users)) = servers.get_mut(addr) {
+            *users += 1;
+            return Ok((bus.clone(), server.local_addr()));
+        }
+        let (bus, server) = super::socketcand_server(addr).await?;
+        let local = server.local_addr();
+        servers.insert(addr.to_owned(), (bus.clone(), server, 1));
+        Ok((bus, local))
+    }
+
+    /// One device fewer on `addr`; the last one stops the server.
+    async fn leave(&self, addr: &str) {
+        let mut servers = self.servers.lock().await;
+        let last = match servers.get_mut(addr) {
+            Some((_, _, users)) => {
+                *users -= 1;
+                *users == 0
+            }
+            None => false,
+        };
+        if last {
+            if let Some((_, server, _)) = servers.remove(addr) {
+                server.shutdown().await;
+            }
+        }
+    }
+}
+
 /// The bus an emulator serves, opened from [`ServeArgs`].
 pub(crate) struct ServedBus {
     medium: Medium,
@@ -49,16 +95,37 @@ enum Medium {
         bus: VirtualBus,
         server: SocketcandServer,
     },
+    /// The same, behind a server other devices of the bench use too.
+    SharedSocketcand {
+        bus: VirtualBus,
+        addr: String,
+        local: std::net::SocketAddr,
+        bench: Arc<BenchBuses>,
+    },
     /// A SocketCAN interface: every node is a socket of its own on it.
     SocketCan { iface: String },
 }
 
 impl ServedBus {
     /// Open the bus `args` names: start the socketcand server (warning if other machines can
-    /// reach it), or create the vxcan pair when asked and take the interface.
-    pub async fn open(args: &ServeArgs) -> anyhow::Result<Self> {
+    /// reach it) or, on a bench, join the one the bench's devices share on that address; or
+    /// create the vxcan pair when asked and take the interface.
+    pub async fn open(args: &ServeArgs, bench: Option<&Arc<BenchBuses>>) -> anyhow::Result<Self> {
         match args.link() {
             Link::Socketcand(addr) => {
+                let addr = super::socketcand_addr(&addr);
+                let any_port = addr.ends_with(":0");
+                if let (Some(bench), false) = (bench, any_port) {
+                    let (bus, local) = bench.join(&addr).await?;
+                    return Ok(Self {
+                        medium: Medium::SharedSocketcand {
+                            bus,
+                            addr,
+                            local,
+                            bench: Arc::clone(bench),
+                        },
+                    });
+                }
                 let (bus, server) = super::socketcand_server(&addr).await?;
                 Ok(Self {
                     medium: Medium::Socketcand { bus, server },
@@ -79,7 +146,9 @@ impl ServedBus {
     /// that never sends receives every frame, the emulator's and the clients'.
     pub fn node(&self, name: &str) -> anyhow::Result<Arc<dyn CanBus>> {
         match &self.medium {
-            Medium::Socketcand { bus, .. } => Ok(Arc::new(bus.attach(name))),
+            Medium::Socketcand { bus, .. } | Medium::SharedSocketcand { bus, .. } => {
+                Ok(Arc::new(bus.attach(name)))
+            }
             Medium::SocketCan { iface } => open_socketcan(iface),
         }
     }
@@ -88,6 +157,7 @@ impl ServedBus {
     pub fn place(&self) -> String {
         match &self.medium {
             Medium::Socketcand { server, .. } => format!("socketcand {}", server.local_addr()),
+            Medium::SharedSocketcand { local, .. } => format!("socketcand {local}"),
             Medium::SocketCan { iface } => iface.clone(),
         }
     }
@@ -95,16 +165,19 @@ impl ServedBus {
     /// One word for a candump log's interface column: the interface, or `socketcand`.
     pub fn channel(&self) -> &str {
         match &self.medium {
-            Medium::Socketcand { .. } => "socketcand",
+            Medium::Socketcand { .. } | Medium::SharedSocketcand { .. } => "socketcand",
             Medium::SocketCan { iface } => iface,
         }
     }
 
-    /// Stop serving: the socketcand server's clients are disconnected (nothing to do on a
-    /// SocketCAN interface, whose sockets close with their nodes).
+    /// Stop serving: the socketcand server's clients are disconnected (a shared server's
+    /// when its last device stops; nothing to do on a SocketCAN interface, whose sockets
+    /// close with their nodes).
     pub async fn shutdown(self) {
-        if let Medium::Socketcand { server, .. } = self.medium {
-            server.shutdown().await;
+        match self.medium {
+            Medium::Socketcand { server, .. } => server.shutdown().await,
+            Medium::SharedSocketcand { addr, bench, .. } => bench.leave(&addr).await,
+            Medium::SocketCan { .. } => {}
         }
     }
 }
