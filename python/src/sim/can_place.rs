@@ -2,7 +2,9 @@
 //! server in front of a real-time virtual bus.
 
 use std::collections::BTreeMap;
+use std::future::Future;
 use std::net::SocketAddr;
+use std::pin::Pin;
 use std::sync::Arc;
 
 use bus::socketcand::SocketcandServer;
@@ -11,6 +13,7 @@ use bus::CanBus;
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 
+use super::emulated::Stop;
 use crate::{block_on, sim_runtime};
 
 /// The bus a CAN emulator answers on.
@@ -100,5 +103,12 @@ impl CanPlace {
             (None, Some(i)) => BTreeMap::from([("can_interface", i.clone())]),
             (None, None) => BTreeMap::new(),
         }
+    }
+}
+
+/// What serves a CAN emulator closes after the emulator has stopped.
+impl Stop for CanPlace {
+    fn stop(self) -> Pin<Box<dyn Future<Output = ()> + Send>> {
+        Box::pin(self.close())
     }
 }

@@ -17,10 +17,21 @@ use sim::fault_desk::{FaultAction, FaultInfo, Faults};
 use super::lock;
 use crate::{block_on, sim_runtime};
 
-/// The parts of a running emulator that stop together: its handle and what serves it.
+/// A part of a running emulator that stops: its handle, or what serves it.
 pub(super) trait Stop: Send + 'static {
-    /// Shut the emulator down, then close what served it.
+    /// Shut it down.
     fn stop(self) -> Pin<Box<dyn Future<Output = ()> + Send>>;
+}
+
+/// An emulator's handle and what serves it: the emulator stops first, then its server.
+impl<H: Stop, S: Stop> Stop for (H, S) {
+    fn stop(self) -> Pin<Box<dyn Future<Output = ()> + Send>> {
+        let (handle, served) = self;
+        Box::pin(async move {
+            handle.stop().await;
+            served.stop().await;
+        })
+    }
 }
 
 /// What an emulator class holds while it runs; `stop` takes it, once.

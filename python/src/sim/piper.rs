@@ -28,13 +28,9 @@ pub struct PiperEmulator {
     addr: Option<SocketAddr>,
 }
 
-impl Stop for (PiperHandle, CanPlace) {
+impl Stop for PiperHandle {
     fn stop(self) -> Pin<Box<dyn Future<Output = ()> + Send>> {
-        let (handle, place) = self;
-        Box::pin(async move {
-            handle.shutdown().await;
-            place.close().await;
-        })
+        Box::pin(self.shutdown())
     }
 }
 

@@ -60,13 +60,15 @@ fn robot_err(e: RobotError) -> PyErr {
     }
 }
 
-impl Stop for (RobotHandle, Served) {
+impl Stop for RobotHandle {
     fn stop(self) -> Pin<Box<dyn Future<Output = ()> + Send>> {
-        let (handle, served) = self;
-        Box::pin(async move {
-            handle.shutdown().await;
-            served.close().await;
-        })
+        Box::pin(self.shutdown())
+    }
+}
+
+impl Stop for Served {
+    fn stop(self) -> Pin<Box<dyn Future<Output = ()> + Send>> {
+        Box::pin(self.close())
     }
 }
 

@@ -35,13 +35,9 @@ fn on_motor(can_id: i64) -> FaultArgs {
     FaultArgs::new().with("motor", FaultArgValue::Number(can_id as f64))
 }
 
-impl Stop for (RobstrideHandle, CanPlace) {
+impl Stop for RobstrideHandle {
     fn stop(self) -> Pin<Box<dyn Future<Output = ()> + Send>> {
-        let (handle, place) = self;
-        Box::pin(async move {
-            handle.shutdown().await;
-            place.close().await;
-        })
+        Box::pin(self.shutdown())
     }
 }
 
