@@ -66,9 +66,15 @@
       desc.textContent = f ? f.description : "";
       for (const p of (f ? f.params : [])) {
         params.appendChild(el("label", { for: "fault-arg-" + p.name, text: p.name + (p.required ? " *" : "") }));
-        params.appendChild(el("input", { id: "fault-arg-" + p.name, "data-param": p.name, title: p.description,
-          placeholder: p.default === null ? "" : String(p.default),
-          value: p.required && p.default !== null ? String(p.default) : p.name === "joint" ? "1" : "" }));
+        // The emulator's fault table says what a value may be: a range, or a list of words.
+        const words = p.words || [];
+        const range = p.min != null && p.max != null ? p.min + " … " + p.max : "";
+        const accepts = words.length ? words.join(" | ") : range;
+        params.appendChild(el("input", { id: "fault-arg-" + p.name, "data-param": p.name,
+          "data-word": words.length ? "1" : "",
+          title: p.description + (accepts ? " (" + accepts + ")" : ""),
+          placeholder: p.default == null ? accepts : String(p.default),
+          value: p.required && p.default != null ? String(p.default) : p.name === "joint" ? "1" : "" }));
       }
     }
     function send(type) {
@@ -76,7 +82,7 @@
       for (const input of params.querySelectorAll("input")) {
         if (input.value.trim() === "") continue;
         const n = Number(input.value);
-        args[input.dataset.param] = isFinite(n) && input.dataset.param !== "board" ? n : input.value.trim();
+        args[input.dataset.param] = isFinite(n) && !input.dataset.word ? n : input.value.trim();
       }
       if (ws && ws.readyState === 1) ws.send(JSON.stringify({ type, fault: select.value, args }));
     }

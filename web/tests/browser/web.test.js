@@ -144,6 +144,11 @@ test("the live view follows a MOVE J and injects and clears a fault", async (t) 
   // A malformed command is refused, not fatal.
   const acks = await page.evaluate(() => window.armhilLive.acks.length);
   await page.selectOption("#fault-kind", "external_torque");
+  // The field says what the emulator's fault table accepts.
+  assert.match(await page.getAttribute("#fault-arg-torque_nm", "title"), /\(-320 … 320\)$/);
+  await page.selectOption("#fault-kind", "ntc_over_temp");
+  assert.equal(await page.getAttribute("#fault-arg-board", "placeholder"), "main | brake_resistor");
+  await page.selectOption("#fault-kind", "external_torque");
   await page.fill("#fault-arg-joint", "9");
   await page.click("#fault-inject");
   const refusal = await until("the refusal", () => page.evaluate((n) => window.armhilLive.acks[n], acks), 5000);
