@@ -2,7 +2,7 @@
 //!
 //! Layers, each depending only on those above it: [`scenario`] (the grammar core: spans,
 //! errors, one-key mappings, the validation context), [`devices`] (the device kinds and their
-//! contract, built on [`bench`]: clock, links, run options), [`harness`] (loading whole scenarios, the runner, reports).
+//! contract, built on [`bench`](mod@bench): clock, links, run options), [`harness`] (loading whole scenarios, the runner, reports).
 //!
 //! The CLI (`armhil run`, `armhil check`) is a thin layer over this library; [`ui`] is the live
 //! web view of `armhil sim ... --ui`; [`robots`] reads robot files for `armhil sim robot`,

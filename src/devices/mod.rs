@@ -1,6 +1,6 @@
-//! Device kinds: one folder per kind, registered once, in [`device_kinds!`] below.
+//! Device kinds: one folder per kind, registered once, in `device_kinds!` below.
 //!
-//! What a kind provides is the [`KindSpec`] trait in [`contract`] (its scenario vocabulary,
+//! What a kind provides is the `KindSpec` trait in [`contract`] (its scenario vocabulary,
 //! how it is built on a bench, its URDF and frame decoder for the views) and the [`Device`] it
 //! builds; the registry generates the enums the harness holds (`DeviceKind`, `Action`,
 //! `Check`, `DeviceFault`) and dispatches every call through the trait. The folder layout of a
@@ -94,12 +94,12 @@ macro_rules! device_kinds {
                 match self { $( Self::$variant(s) => <$module::Kind as KindSpec>::parts(s), )* }
             }
 
-            /// The CAN buses the device sits on ([`KindSpec::buses`]); `at` is its entry.
+            /// The CAN buses the device sits on (`KindSpec::buses`); `at` is its entry.
             pub fn buses(&self, at: Pos) -> Vec<BusUse> {
                 match self { $( Self::$variant(s) => <$module::Kind as KindSpec>::buses(s, at), )* }
             }
 
-            /// How the 3D views draw this device ([`KindSpec::drawing`]).
+            /// How the 3D views draw this device (`KindSpec::drawing`).
             pub fn drawing(&self) -> Option<Drawing> {
                 match self { $( Self::$variant(s) => <$module::Kind as KindSpec>::drawing(s), )* }
             }

@@ -1,10 +1,10 @@
 //! The scenario grammar core: what the harness and every device kind build their part of the
 //! scenario language from, so that a kind depends on this module and never on the runner.
 //!
-//! - [`S`] and [`pos`]: values with their place in the file (serde-saphyr spans);
+//! - `S` and `pos`: values with their place in the file (serde-saphyr spans);
 //! - [`Pos`], [`ScenarioError`], [`LoadError`]: errors that name file, line and column;
-//! - [`OneKey`](onekey::OneKey): one-key mappings (`- move_j: {...}` or a bare `- estop`);
-//! - [`Ctx`] and [`Res`]: what layer 2 (validation) knows while it walks a file, and the checks
+//! - `OneKey`: one-key mappings (`- move_j: {...}` or a bare `- estop`);
+//! - `Ctx` and `Res`: what layer 2 (validation) knows while it walks a file, and the checks
 //!   every key shares (durations, finite numbers, arrays, word choices, device names);
 //! - [`vocab`]: the words every kind shares ([`Signal`], [`ErrorClass`], [`Near`]).
 //!

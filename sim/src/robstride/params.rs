@@ -69,7 +69,7 @@ pub mod index {
 /// How a parameter's value is laid out in bytes 4..7 of types 17/18.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ParamType {
-    /// One byte at data[4].
+    /// One byte at `data[4]`.
     U8,
     /// Little-endian u16 at data[4..6].
     U16,

@@ -1,6 +1,6 @@
 //! A group of RobStride actuators addressed by joint name (`kind: actuator_group`): the
 //! actuators of one limb on one bus, each driving its joint. Built on the RobStride emulator
-//! and driver, and added through the device-kind contract alone ([`KindSpec`]): its folder and
+//! and driver, and added through the device-kind contract alone (`KindSpec`): its folder and
 //! one registration line.
 
 mod device;

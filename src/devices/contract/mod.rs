@@ -1,6 +1,6 @@
 //! The contract of a device kind: what every kind provides, checked by the compiler.
 //!
-//! A kind is a folder under `src/devices/` whose `mod.rs` implements [`KindSpec`] for a unit
+//! A kind is a folder under `src/devices/` whose `mod.rs` implements `KindSpec` for a unit
 //! struct `Kind`, and one line in the registry (`device_kinds!` in `src/devices/mod.rs`). The
 //! harness, the report, the web view, `armhil decode` and the Python emulators reach a kind
 //! only through this trait and the [`Device`] it builds:
@@ -8,10 +8,10 @@
 //! - its **scenario vocabulary**: the file shapes (`Raw*`, layer 1) and their validation into
 //!   `Settings`, actions, checks and faults (layer 2, errors with file:line:col), built from
 //!   the grammar core in [`crate::scenario`];
-//! - **how to build it on a bench** ([`KindSpec::build`]): emulator (in-process runs) and
+//! - **how to build it on a bench** (`KindSpec::build`): emulator (in-process runs) and
 //!   driver, on the transport the device speaks;
-//! - what the **views** need: the URDF to draw and the trace columns that pose it ([`KindSpec::drawing`]) and a decoder for its
-//!   frames in reports ([`KindSpec::frame_decoder`]);
+//! - what the **views** need: the URDF to draw and the trace columns that pose it (`KindSpec::drawing`) and a decoder for its
+//!   frames in reports (`KindSpec::frame_decoder`);
 //! - its **trace columns**, observations and fault injection, through [`Device`].
 
 mod device;

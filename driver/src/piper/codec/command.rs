@@ -230,7 +230,7 @@ impl LeaderHome {
     }
 }
 
-/// 0x121 LED control ([DOC] only; no SDK implements it).
+/// 0x121 LED control ((DOC) only; no SDK implements it).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub struct LedCtrl {
     /// Apply (true) or ignore.

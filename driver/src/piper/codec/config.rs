@@ -47,7 +47,7 @@ impl LeaderFollowerConfig {
 pub enum MotorSelect {
     /// One joint, 1–6.
     Joint(u8),
-    /// All joints (7; the gripper follows per [DOC]/[PC]).
+    /// All joints (7; the gripper follows per DOC/PC).
     All,
     /// 0xFF: all including the gripper (SDK message class reading, spec §14 #6).
     AllWithGripper,
@@ -343,7 +343,7 @@ impl CollisionLevels {
     }
 }
 
-/// Joint assistance levels ([AGX] only; semantics undocumented).
+/// Joint assistance levels (AGX only; semantics undocumented).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub struct AssistLevels {
     /// Level per joint.
@@ -371,7 +371,7 @@ impl AssistLevels {
 pub struct JointMaxAcc {
     /// Joint 1–6.
     pub joint: u8,
-    /// Max acceleration, 0.01 rad/s² ([AGX] unit; spec §14 #2).
+    /// Max acceleration, 0.01 rad/s² (AGX unit; spec §14 #2).
     pub max_acc_crad_s2: u16,
 }
 

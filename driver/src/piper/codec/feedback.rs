@@ -176,7 +176,7 @@ pub struct HighSpeedFeedback {
     pub speed_mrad_s: i16,
     /// Motor current, 0.001 A (signed).
     pub current_ma: i16,
-    /// Motor position, 0.001 rad (unit per [AGX]; see the spec §4.5).
+    /// Motor position, 0.001 rad (unit per AGX; see the spec §4.5).
     pub position_mrad: i32,
 }
 

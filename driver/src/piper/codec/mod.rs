@@ -5,6 +5,10 @@
 //! `_mrad_s` …). The client API never shows them: `si` converts to and from the SI types of
 //! the public API, and decides the "unchanged" codes and per-firmware MIT codes. This module
 //! is public for tools and byte-level tests; applications use [`super::Piper`].
+//!
+//! Where a comment says where a fact comes from: DOC is AgileX's CAN protocol document, SDK
+//! the vendor's Python SDK (piper_sdk), AGX AgileX's newer Python SDK (pyAgxArm), PC the
+//! third-party piper_control library.
 
 mod command;
 mod config;

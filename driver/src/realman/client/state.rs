@@ -228,7 +228,7 @@ impl StateFeed {
 
     /// Receives the datagrams that `controller` (its command address) pushes to `addr`,
     /// sharing the socket with every other feed of this process on the same `addr` (see
-    /// [`route`] for which datagrams each feed gets). Port 0 binds a fresh port, never shared.
+    /// `route` for which datagrams each feed gets). Port 0 binds a fresh port, never shared.
     /// The socket closes with its last feed.
     ///
     /// The receiving task runs on the runtime of the feed that bound the socket, so feeds

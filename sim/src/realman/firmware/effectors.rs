@@ -35,7 +35,7 @@ pub struct Gripper {
     pub route: (i64, i64),
     /// Grip force setting.
     pub force: i64,
-    /// `mode` (see [`gripper_mode`]).
+    /// `mode` (see `gripper_mode`).
     pub mode: u8,
     /// Error bits.
     pub error_bits: u8,
