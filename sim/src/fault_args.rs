@@ -114,6 +114,12 @@ impl FaultArgError {
             message: message.into(),
         }
     }
+
+    /// Fault `fault` was given without its required argument `arg`: an error about the fault
+    /// as a whole (the argument has no place in the file to point at).
+    pub fn missing(fault: &str, arg: &str) -> Self {
+        Self::whole(format!("`{fault}` needs `{arg}`"))
+    }
 }
 
 /// Longest word a message repeats whole; a longer one (a pasted blob) is cut, so a message

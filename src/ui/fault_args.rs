@@ -6,7 +6,7 @@ use sim::fault_args::{FaultArgValue, FaultArgs};
 
 /// A page command's arguments as a fault builder reads them: numbers, and words; a number
 /// typed into a text box (`"1.5"`) is a number, an empty box or `null` is not given.
-pub(crate) fn fault_args(args: &Map<String, Value>) -> FaultArgs {
+pub fn page_fault_args(args: &Map<String, Value>) -> FaultArgs {
     let mut out = FaultArgs::new();
     for (name, value) in args {
         let value = match value {
@@ -40,7 +40,7 @@ mod tests {
         else {
             unreachable!()
         };
-        let read = fault_args(&args);
+        let read = page_fault_args(&args);
         assert_eq!(read.get("joint"), Some(&FaultArgValue::Number(2.0)));
         assert_eq!(read.get("celsius"), Some(&FaultArgValue::Number(95.5)));
         assert_eq!(read.get("board"), Some(&FaultArgValue::Text("main".into())));

@@ -39,11 +39,11 @@ use axum::Router;
 use serde::Deserialize;
 use serde_json::{json, Value};
 
-use sim::fault_args::FaultArgs;
 use sim::fault_desk::{FaultAction, Faults};
 
 use crate::harness::elide_long_tokens;
 use crate::harness::report::html::{live_page, LIVE_JS};
+pub use fault_args::page_fault_args;
 pub use listener::Limits;
 
 /// How often the page gets a state message (50 Hz: the page draws at its own frame rate and
@@ -95,11 +95,6 @@ pub async fn state_message(source: &dyn LiveSource) -> Value {
             .or_insert_with(|| json!(source.faults().active()));
     }
     state
-}
-
-/// A page command's arguments as the emulators' fault builders read them.
-pub fn page_fault_args(args: &serde_json::Map<String, Value>) -> FaultArgs {
-    fault_args::fault_args(args)
 }
 
 /// Apply a page's fault command through the emulator's desk; `Ok` is the line the page
@@ -415,7 +410,7 @@ mod tests {
             &self,
             action: FaultAction,
             name: &str,
-            _args: &FaultArgs,
+            _args: &sim::fault_args::FaultArgs,
         ) -> Result<String, sim::fault_desk::FaultCommandError> {
             let verb = match action {
                 FaultAction::Inject => "inject",

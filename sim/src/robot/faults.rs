@@ -108,7 +108,7 @@ impl RobotLayout {
                 let (joint, model) = self.joint(name, args)?;
                 let torque_nm = match args.get("torque_nm") {
                     None if clearing => 0.0,
-                    None => return Err(needs(name, "torque_nm")),
+                    None => return Err(FaultArgError::missing(name, "torque_nm")),
                     Some(FaultArgValue::Number(x)) => check_external_torque_nm(model, *x)
                         .map_err(|e| FaultArgError::at("torque_nm", e.to_string()))?,
                     Some(other) => {
@@ -167,15 +167,11 @@ impl RobotLayout {
     }
 }
 
-fn needs(fault: &str, arg: &str) -> FaultArgError {
-    FaultArgError::whole(format!("`{fault}` needs `{arg}`"))
-}
-
 /// A name argument: a word, or a whole number written where a name was meant (a form's box
 /// reads `1` as a number).
 fn word(fault: &str, args: &FaultArgs, arg: &str) -> Result<String, FaultArgError> {
     match args.get(arg) {
-        None => Err(needs(fault, arg)),
+        None => Err(FaultArgError::missing(fault, arg)),
         Some(FaultArgValue::Text(text)) => Ok(text.trim().to_owned()),
         Some(FaultArgValue::Number(x)) => Ok(Shown(*x).to_string()),
     }

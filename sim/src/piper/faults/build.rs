@@ -134,7 +134,7 @@ impl Reader<'_> {
 
     /// `Err` when a required parameter is omitted.
     fn missing(&self, param: &FaultParam) -> FaultArgError {
-        FaultArgError::whole(format!("`{}` needs `{}`", self.kind.name(), param.name))
+        FaultArgError::missing(self.kind.name(), param.name)
     }
 
     /// The joint: a whole number 1–6 ([`JOINT`]'s range).

@@ -314,7 +314,7 @@ impl RealmanFaultParam {
     fn read(&self, fault: &str, args: &FaultArgs) -> Result<u64, FaultArgError> {
         let name = self.name;
         let value = match args.get(name) {
-            None => return Err(FaultArgError::whole(format!("`{fault}` needs `{name}`"))),
+            None => return Err(FaultArgError::missing(fault, name)),
             Some(FaultArgValue::Text(text)) => {
                 return Err(FaultArgError::at(
                     name,

@@ -169,10 +169,7 @@ impl FaultParam {
     fn read(&self, fault: Fault, args: &FaultArgs) -> Result<u8, FaultArgError> {
         let name = self.name;
         let Some(given) = args.get(name) else {
-            return Err(FaultArgError::whole(format!(
-                "`{}` needs `{name}`",
-                fault.name()
-            )));
+            return Err(FaultArgError::missing(fault.name(), name));
         };
         let value = match given {
             FaultArgValue::Number(v) if v.is_finite() && v.fract() == 0.0 => *v,
