@@ -23,12 +23,11 @@ pub struct RobotLive {
 }
 
 impl RobotLive {
-    /// A source for `monitor`: `urdf` is the robot's, `joints` its actuated joints (strips,
-    /// in configuration order), `taps` a tap per bus by name.
+    /// A source for `monitor` (a strip per actuated joint, in configuration order): `urdf`
+    /// is the robot's, `taps` a tap per bus by name.
     pub fn new(
         monitor: RobotMonitor,
         urdf: &str,
-        joints: &[String],
         taps: Vec<(String, BusTap)>,
         title: &str,
     ) -> Self {
@@ -42,6 +41,12 @@ impl RobotLive {
                 .map(|j| j.name.clone())
                 .collect()
         });
+        let joints: Vec<&str> = monitor
+            .layout()
+            .joints
+            .iter()
+            .map(|(j, _)| j.as_str())
+            .collect();
         let hello = json!({"type": "hello", "device": "robot", "title": title, "model": model,
                            "strip_names": joints});
         Self {
@@ -209,10 +214,9 @@ mod tests {
                 )
             })
             .collect();
-        let joints: Vec<String> = config.actuators.iter().map(|a| a.joint.clone()).collect();
         let urdf = config.urdf.clone();
         let robot = RobotEmulator::spawn(config, nodes).unwrap();
-        let live = RobotLive::new(robot.monitor(), &urdf, &joints, taps, "arm6");
+        let live = RobotLive::new(robot.monitor(), &urdf, taps, "arm6");
 
         let hello = hello_message(&live);
         assert_eq!(hello["strip_names"][3], "wrist_roll");
