@@ -22,6 +22,7 @@
 pub mod bounded_read;
 pub mod can_runner;
 pub mod cpu_budget;
+pub mod description;
 pub mod fault_args;
 pub mod fault_desk;
 pub mod kinematics;

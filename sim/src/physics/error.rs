@@ -50,6 +50,22 @@ pub enum PhysicsError {
         /// The links that have no parent joint.
         roots: Vec<String>,
     },
+    /// Joint limits that are not finite or the wrong way round.
+    #[error("joint {joint}: limits [{lower}, {upper}] are not a range")]
+    InvalidLimits {
+        /// The joint's name.
+        joint: String,
+        /// Lower limit as given.
+        lower: f64,
+        /// Upper limit as given.
+        upper: f64,
+    },
+    /// A joint's origin or axis holds a number that is not finite.
+    #[error("joint {joint}: its origin or axis is not finite")]
+    NonFiniteFrame {
+        /// The joint's name.
+        joint: String,
+    },
     /// A joint axis of zero length.
     #[error("joint {joint}: axis has zero length")]
     ZeroAxis {

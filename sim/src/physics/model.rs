@@ -153,7 +153,8 @@ fn inertial_of(link: &urdf_rs::Link) -> Result<LinkInertial, PhysicsError> {
         i.iyz,
         i.izz,
     ];
-    if values.iter().any(|v| !v.is_finite()) {
+    let frame = inertial.origin.xyz.0.iter().chain(&inertial.origin.rpy.0);
+    if values.iter().chain(frame).any(|v| !v.is_finite()) {
         return Err(PhysicsError::InvalidInertial {
             link: link.name.clone(),
             reason: "non-finite value".to_owned(),
@@ -248,6 +249,29 @@ impl ArmModel {
                     })
                 }
             };
+            // What `description::checks` refuses with a line number, refused here too for
+            // callers that build a model from text directly: a NaN limit panics a clamp later.
+            if matches!(kind, TreeJointKind::Revolute | TreeJointKind::Prismatic)
+                && (lower.is_nan() || upper.is_nan() || lower > upper)
+            {
+                return Err(PhysicsError::InvalidLimits {
+                    joint: j.name.clone(),
+                    lower,
+                    upper,
+                });
+            }
+            let frame = j
+                .origin
+                .xyz
+                .0
+                .iter()
+                .chain(&j.origin.rpy.0)
+                .chain(&j.axis.xyz.0);
+            if frame.into_iter().any(|v| !v.is_finite()) {
+                return Err(PhysicsError::NonFiniteFrame {
+                    joint: j.name.clone(),
+                });
+            }
             let axis = Vector3::from(j.axis.xyz.0);
             let axis = match kind {
                 TreeJointKind::Fixed => Vector3::z(),
@@ -365,9 +389,14 @@ impl ArmModel {
         &self.tree
     }
 
-    /// The root link (URDF link index).
+    /// The root link (URDF link index): the one link no joint moves.
     pub(crate) fn root_link(&self) -> usize {
         self.root
+    }
+
+    /// The root link's name: the robot's base, whichever place the URDF lists it in.
+    pub fn root_link_name(&self) -> &str {
+        &self.link_names[self.root]
     }
 
     /// The robot's name (`<robot name>`).

@@ -1,8 +1,11 @@
-//! Ground contact for the articulated-body solver: a link's URDF collision primitives
-//! touching the plane z = 0 through springs and dampers (normal) and anchored springs capped
-//! by Coulomb's law (tangential), so a foot at rest stays where it stands.
+//! Ground contact for the articulated-body solver: a link's collision shapes (primitives,
+//! and meshes as their hulls' contact points) touching the plane z = 0 through springs and
+//! dampers (normal) and anchored springs capped by Coulomb's law (tangential), so a foot at
+//! rest stays where it stands.
 
 use nalgebra::{Isometry3, Point3, Vector3};
+
+use crate::description::{CollisionGeometry, CollisionShape};
 
 /// Normal stiffness of one contact point (N/m): 40 kg on eight foot corners sink ~0.5 mm.
 const NORMAL_STIFFNESS_N_M: f64 = 1.0e5;
@@ -30,6 +33,8 @@ enum Feature {
 pub(super) struct GroundContacts {
     /// Per feature: its link and shape.
     features: Vec<(usize, Feature)>,
+    /// Per run of one link's features, the sphere that holds them.
+    bounds: Vec<Bound>,
     /// Per feature, where its tangential spring is anchored on the ground (x, y), while it
     /// touches.
     anchors: Vec<Option<[f64; 2]>>,
@@ -48,11 +53,12 @@ pub(super) struct LinkForce {
     pub force_n: Vector3<f64>,
 }
 
-fn features_of(geometry: &urdf_rs::Geometry, origin: &Isometry3<f64>) -> Vec<Feature> {
+fn features_of(shape: &CollisionShape, origin: &Isometry3<f64>) -> Vec<Feature> {
     let at = |x: f64, y: f64, z: f64| origin * Point3::new(x, y, z);
-    match geometry {
-        urdf_rs::Geometry::Box { size } => {
-            let [hx, hy, hz] = size.0.map(|s| s / 2.0);
+    match shape {
+        CollisionShape::Box {
+            half_m: [hx, hy, hz],
+        } => {
             let mut corners = Vec::with_capacity(8);
             for sx in [-1.0, 1.0] {
                 for sy in [-1.0, 1.0] {
@@ -63,56 +69,91 @@ fn features_of(geometry: &urdf_rs::Geometry, origin: &Isometry3<f64>) -> Vec<Fea
             }
             corners
         }
-        urdf_rs::Geometry::Cylinder { radius, length } => {
+        CollisionShape::Cylinder { radius_m, length_m } => {
             let mut rims = Vec::with_capacity(2 * CYLINDER_RIM_POINTS);
-            for z in [-length / 2.0, length / 2.0] {
+            for z in [-length_m / 2.0, length_m / 2.0] {
                 for k in 0..CYLINDER_RIM_POINTS {
                     let angle = std::f64::consts::TAU * k as f64 / CYLINDER_RIM_POINTS as f64;
                     rims.push(Feature::Point(at(
-                        radius * angle.cos(),
-                        radius * angle.sin(),
+                        radius_m * angle.cos(),
+                        radius_m * angle.sin(),
                         z,
                     )));
                 }
             }
             rims
         }
-        urdf_rs::Geometry::Capsule { radius, length } => vec![
-            Feature::Sphere(at(0.0, 0.0, -length / 2.0), *radius),
-            Feature::Sphere(at(0.0, 0.0, length / 2.0), *radius),
+        CollisionShape::Capsule { radius_m, length_m } => vec![
+            Feature::Sphere(at(0.0, 0.0, -length_m / 2.0), *radius_m),
+            Feature::Sphere(at(0.0, 0.0, length_m / 2.0), *radius_m),
         ],
-        urdf_rs::Geometry::Sphere { radius } => vec![Feature::Sphere(at(0.0, 0.0, 0.0), *radius)],
-        // Meshes are not read (as in the rapier world).
-        urdf_rs::Geometry::Mesh { .. } => Vec::new(),
+        CollisionShape::Sphere { radius_m } => {
+            vec![Feature::Sphere(at(0.0, 0.0, 0.0), *radius_m)]
+        }
+        CollisionShape::Hull { points_m } => points_m
+            .iter()
+            .map(|p| Feature::Point(origin * p))
+            .collect(),
     }
 }
 
-fn isometry(pose: &urdf_rs::Pose) -> Isometry3<f64> {
-    let [x, y, z] = pose.xyz.0;
-    let [r, p, w] = pose.rpy.0;
-    Isometry3::from_parts(
-        nalgebra::Translation3::new(x, y, z),
-        nalgebra::UnitQuaternion::from_euler_angles(r, p, w),
-    )
+/// A sphere in a link's frame that holds all of its features: a link whose sphere is above
+/// the ground has no feature touching it, and its features are not looked at.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Bound {
+    link: usize,
+    centre: Point3<f64>,
+    radius_m: f64,
+    /// Its features: `features[first..end]`.
+    first: usize,
+    end: usize,
 }
 
 impl GroundContacts {
-    /// The contact features of every link of `robot` (link indices in URDF order).
-    pub(super) fn new(robot: &urdf_rs::Robot, friction: f64) -> Self {
-        let mut features = Vec::new();
-        for (link, l) in robot.links.iter().enumerate() {
-            for collision in &l.collision {
-                let origin = isometry(&collision.origin);
-                features.extend(
-                    features_of(&collision.geometry, &origin)
-                        .into_iter()
-                        .map(|f| (link, f)),
-                );
+    /// The contact features of every link's collision shapes (link indices in URDF order).
+    pub(super) fn new(geometry: &CollisionGeometry, friction: f64) -> Self {
+        let mut features: Vec<(usize, Feature)> = Vec::new();
+        let mut bounds: Vec<Bound> = Vec::new();
+        // Shapes come link by link (URDF order); a link's features stay together.
+        for shape in &geometry.shapes {
+            let first = features.len();
+            features.extend(
+                features_of(&shape.shape, &shape.origin)
+                    .into_iter()
+                    .map(|f| (shape.link, f)),
+            );
+            match bounds.last_mut() {
+                Some(b) if b.link == shape.link => b.end = features.len(),
+                _ => bounds.push(Bound {
+                    link: shape.link,
+                    centre: Point3::origin(),
+                    radius_m: 0.0,
+                    first,
+                    end: features.len(),
+                }),
             }
+        }
+        for b in &mut bounds {
+            let points: Vec<(Point3<f64>, f64)> = features[b.first..b.end]
+                .iter()
+                .map(|(_, f)| match f {
+                    Feature::Point(p) => (*p, 0.0),
+                    Feature::Sphere(c, r) => (*c, *r),
+                })
+                .collect();
+            let n = points.len().max(1) as f64;
+            let sum: Vector3<f64> = points.iter().map(|(p, _)| p.coords).sum();
+            let centre = Point3::from(sum / n);
+            b.centre = centre;
+            b.radius_m = points
+                .iter()
+                .map(|(p, r)| (p - centre).norm() + r)
+                .fold(0.0, f64::max);
         }
         let anchors = vec![None; features.len()];
         Self {
             features,
+            bounds,
             anchors,
             friction,
         }
@@ -127,7 +168,37 @@ impl GroundContacts {
         velocity_of: impl Fn(usize, &Vector3<f64>) -> Vector3<f64>,
     ) -> Vec<LinkForce> {
         let mut out = Vec::new();
-        for ((link, feature), anchor) in self.features.iter().zip(&mut self.anchors) {
+        for bound in &self.bounds {
+            let centre_z = (poses[bound.link] * bound.centre).z;
+            let range = bound.first..bound.end;
+            if centre_z > bound.radius_m {
+                self.anchors[range].fill(None);
+                continue;
+            }
+            let features = &self.features[range.clone()];
+            let anchors = &mut self.anchors[range];
+            Self::touching(
+                features,
+                anchors,
+                self.friction,
+                poses,
+                &velocity_of,
+                &mut out,
+            );
+        }
+        out
+    }
+
+    /// The forces of the features of one link that may touch the ground.
+    fn touching(
+        features: &[(usize, Feature)],
+        anchors: &mut [Option<[f64; 2]>],
+        friction: f64,
+        poses: &[Isometry3<f64>],
+        velocity_of: &impl Fn(usize, &Vector3<f64>) -> Vector3<f64>,
+        out: &mut Vec<LinkForce>,
+    ) {
+        for ((link, feature), anchor) in features.iter().zip(anchors) {
             let (point, depth) = match feature {
                 Feature::Point(p) => {
                     let w = (poses[*link] * p).coords;
@@ -150,7 +221,7 @@ impl GroundContacts {
                 -TANGENT_STIFFNESS_N_M * stretch[0] - TANGENT_DAMPING_N_S_M * v.x,
                 -TANGENT_STIFFNESS_N_M * stretch[1] - TANGENT_DAMPING_N_S_M * v.y,
             ];
-            let limit = self.friction * normal;
+            let limit = friction * normal;
             let size = tangent[0].hypot(tangent[1]);
             if size > limit {
                 // Sliding: the force is Coulomb's, and the anchor moves with the foot so that
@@ -168,6 +239,5 @@ impl GroundContacts {
                 force_n: Vector3::new(tangent[0], tangent[1], normal),
             });
         }
-        out
     }
 }

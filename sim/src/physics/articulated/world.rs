@@ -6,6 +6,7 @@ use super::contact::GroundContacts;
 use super::spatial::{
     angular, cross_force, cross_motion, linear, motion_transform, spatial, spatial_inertia,
 };
+use crate::description::{CollisionGeometry, Description, MissingMeshes, PackagePaths};
 use crate::physics::error::Divergence;
 use crate::physics::model::{TreeJoint, TreeJointKind};
 use crate::physics::{ArmModel, JointInfo, PhysicsError, WorldConfig};
@@ -121,19 +122,38 @@ fn child_in_parent(joint: &TreeJoint, q: f64) -> Isometry3<f64> {
 }
 
 impl ArticulatedWorld {
-    /// Loads URDF text (primitive collision shapes only; meshes are not read). A floating
-    /// base (`config.floating_base_height_m`) stands on the ground, the plane z = 0.
+    /// Loads URDF text whose collision shapes are primitives or meshes named by absolute
+    /// paths (relative names have no folder to start from: use
+    /// [`ArticulatedWorld::from_description`]). A floating base
+    /// (`config.floating_base_height_m`) stands on the ground, the plane z = 0.
     pub fn from_urdf_str(xml: &str, config: WorldConfig) -> Result<Self, PhysicsError> {
-        let robot = urdf_rs::read_from_string(xml).map_err(|e| PhysicsError::Parse {
-            message: e.to_string(),
-        })?;
-        let model = ArmModel::from_robot(&robot)?;
+        let description =
+            Description::parse(xml.to_owned(), PackagePaths::default()).map_err(|e| {
+                PhysicsError::Parse {
+                    message: e.to_string(),
+                }
+            })?;
+        let geometry = description
+            .collision_geometry(MissingMeshes::Refuse)
+            .map_err(|e| PhysicsError::Parse {
+                message: e.to_string(),
+            })?;
+        Self::from_description(&description, &geometry, config)
+    }
+
+    /// The world of a checked URDF with its collision geometry (meshes read and hulled).
+    pub fn from_description(
+        description: &Description,
+        geometry: &CollisionGeometry,
+        config: WorldConfig,
+    ) -> Result<Self, PhysicsError> {
+        let model = ArmModel::from_robot(description.robot())?;
         let inertia = model.inertials().iter().map(spatial_inertia).collect();
         let n = model.joints().len();
         let root_pose =
             Isometry3::translation(0.0, 0.0, config.floating_base_height_m.unwrap_or(0.0));
         Ok(Self {
-            contacts: GroundContacts::new(&robot, GROUND_FRICTION),
+            contacts: GroundContacts::new(geometry, GROUND_FRICTION),
             model,
             config,
             inertia,

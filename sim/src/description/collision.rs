@@ -1,0 +1,160 @@
+//! Each link's collision geometry as the physics uses it: primitives as the URDF gives them,
+//! meshes as the contact points of their convex hulls.
+
+use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion};
+
+use super::hull::contact_points;
+use super::mesh::MeshCache;
+use super::{Description, DescriptionError};
+
+/// What to do with a collision mesh that cannot be found or read.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum MissingMeshes {
+    /// Refuse the robot, naming the mesh and every place searched (the default).
+    #[default]
+    Refuse,
+    /// Go on without that collision shape, with a warning naming it.
+    Skip,
+}
+
+/// One collision shape of a link, in the link's frame.
+#[derive(Debug, Clone, PartialEq)]
+pub enum CollisionShape {
+    /// A box of half extents (m).
+    Box {
+        /// Half extents along x, y, z (m).
+        half_m: [f64; 3],
+    },
+    /// A cylinder along z (m).
+    Cylinder {
+        /// Radius (m).
+        radius_m: f64,
+        /// Length (m).
+        length_m: f64,
+    },
+    /// A sphere (m).
+    Sphere {
+        /// Radius (m).
+        radius_m: f64,
+    },
+    /// A capsule along z: a cylinder with hemispherical ends (m).
+    Capsule {
+        /// Radius (m).
+        radius_m: f64,
+        /// Length of the cylinder between the ends' centres (m).
+        length_m: f64,
+    },
+    /// A mesh: the contact points of its convex hull (scaled, m).
+    Hull {
+        /// The points.
+        points_m: Vec<Point3<f64>>,
+    },
+}
+
+/// A collision shape placed on its link.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LinkShape {
+    /// The link (URDF link index).
+    pub link: usize,
+    /// The shape's frame in the link's frame (`<collision><origin>`).
+    pub origin: Isometry3<f64>,
+    /// The shape.
+    pub shape: CollisionShape,
+}
+
+/// Every link's collision shapes.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct CollisionGeometry {
+    /// The shapes, links in URDF order.
+    pub shapes: Vec<LinkShape>,
+    /// Meshes left out ([`MissingMeshes::Skip`]): one line each, for the user.
+    pub skipped: Vec<String>,
+}
+
+/// The frame of a URDF `<origin>`.
+pub fn isometry(pose: &urdf_rs::Pose) -> Isometry3<f64> {
+    let [x, y, z] = pose.xyz.0;
+    let [roll, pitch, yaw] = pose.rpy.0;
+    Isometry3::from_parts(
+        Translation3::new(x, y, z),
+        UnitQuaternion::from_euler_angles(roll, pitch, yaw),
+    )
+}
+
+impl Description {
+    /// Every link's collision shapes, meshes read and hulled (each file once).
+    pub fn collision_geometry(
+        &self,
+        missing: MissingMeshes,
+    ) -> Result<CollisionGeometry, DescriptionError> {
+        let mut cache = MeshCache::default();
+        let mut geometry = CollisionGeometry::default();
+        for (link, l) in self.robot().links.iter().enumerate() {
+            for collision in &l.collision {
+                let origin = isometry(&collision.origin);
+                let shape = match &collision.geometry {
+                    urdf_rs::Geometry::Box { size } => CollisionShape::Box {
+                        half_m: size.0.map(|s| s / 2.0),
+                    },
+                    urdf_rs::Geometry::Cylinder { radius, length } => CollisionShape::Cylinder {
+                        radius_m: *radius,
+                        length_m: *length,
+                    },
+                    urdf_rs::Geometry::Capsule { radius, length } => CollisionShape::Capsule {
+                        radius_m: *radius,
+                        length_m: *length,
+                    },
+                    urdf_rs::Geometry::Sphere { radius } => {
+                        CollisionShape::Sphere { radius_m: *radius }
+                    }
+                    urdf_rs::Geometry::Mesh { filename, scale } => {
+                        let scale = scale.as_ref().map_or([1.0; 3], |s| s.0);
+                        match self.mesh_hull(&mut cache, filename, scale) {
+                            Ok(points_m) => CollisionShape::Hull { points_m },
+                            Err(problem) if missing == MissingMeshes::Skip => {
+                                geometry.skipped.push(format!(
+                                    "link `{}`: collision mesh left out: {}",
+                                    l.name, problem.message
+                                ));
+                                continue;
+                            }
+                            Err(problem) => {
+                                return Err(DescriptionError::at(
+                                    problem.line,
+                                    format!(
+                                        "link `{}`'s collision mesh: {}",
+                                        l.name, problem.message
+                                    ),
+                                ))
+                            }
+                        }
+                    }
+                };
+                geometry.shapes.push(LinkShape {
+                    link,
+                    origin,
+                    shape,
+                });
+            }
+        }
+        Ok(geometry)
+    }
+
+    /// The hull contact points of the mesh `uri`, scaled.
+    fn mesh_hull(
+        &self,
+        cache: &mut MeshCache,
+        uri: &str,
+        scale: [f64; 3],
+    ) -> Result<Vec<Point3<f64>>, DescriptionError> {
+        let line = self.line_mentioning(uri);
+        let fail = |message: String| DescriptionError::at(line, message);
+        let path = self.paths().resolve(uri).map_err(|e| fail(e.to_string()))?;
+        let points = cache.points(&path).map_err(|e| fail(e.to_string()))?;
+        let scaled: Vec<Point3<f64>> = points
+            .iter()
+            .map(|p| Point3::new(p.x * scale[0], p.y * scale[1], p.z * scale[2]))
+            .collect();
+        contact_points(&scaled).map_err(|e| fail(format!("`{uri}`: {e}")))
+    }
+}
