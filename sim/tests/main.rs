@@ -7,6 +7,7 @@
 //! - `codec_props`: property tests of the emulators' codecs.
 
 mod codec_props;
+mod corpus;
 mod piper;
 mod realman;
 mod robot;

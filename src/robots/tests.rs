@@ -38,7 +38,11 @@ start_rad:
 
 fn error_of(text: &str) -> String {
     let (_dir, file) = write(text);
-    match load_robot_file(&file) {
+    error_of_file(&file)
+}
+
+fn error_of_file(file: &Path) -> String {
+    match load_robot_file(file) {
         Err(RobotFileError::Invalid(e)) => {
             format!("{}:{}: {}", e.at.line, e.at.column, e.message)
         }
@@ -97,8 +101,11 @@ fn each_mistake_is_named_at_its_line_and_column() {
             "8:71: `direction` must be 1 or -1, got 2",
         ),
         (
-            ARM.replace("rad: 0.5", "rad: 5.0"),
-            "12:34: 5 rad is outside joint `shoulder_pitch`'s limits",
+            ARM.replace(
+                "  - {joint: shoulder_pitch, rad: 0.5}\n",
+                "  - {joint: shoulder_pitch, rad: 0.5}\n  - {joint: shoulder_pitch, rad: 0.2}\n",
+            ),
+            "13:13: joint `shoulder_pitch` is given a start twice",
         ),
         (
             ARM.replace("urdf: arm.urdf", "urdf: missing.urdf"),
@@ -134,6 +141,142 @@ fn an_actuator_weaker_than_its_joints_urdf_effort_is_a_warning() {
             "{}:8:36: RS03 peaks at 60 N·m, below joint `shoulder_pitch`'s URDF effort of 120 N·m",
             file.display()
         )
+    );
+}
+
+#[test]
+fn a_start_outside_the_limits_given_or_default_starts_at_the_nearest_limit_with_a_warning() {
+    let (dir, file) = write(&ARM.replace("rad: 0.5", "rad: 5.0"));
+    let robot = load_robot_file(&file).unwrap();
+    assert_eq!(
+        robot.warnings.iter().map(|w| format!("{}:{}: {}", w.at.line, w.at.column, w.message)).collect::<Vec<_>>(),
+        ["12:34: joint `shoulder_pitch` starts at 2 rad, its nearest limit: the given start 5 rad is outside its limits [-2, 2]"]
+    );
+    assert_eq!(
+        robot.config.start_positions_rad,
+        [("shoulder_pitch".to_string(), 2.0)]
+    );
+    // A joint whose limits exclude 0 and that the file does not name: the same rule.
+    let urdf = std::fs::read_to_string(dir.path().join("arm.urdf")).unwrap();
+    let shifted = urdf.replace(
+        "<limit lower=\"-2.5\" upper=\"2.5\"",
+        "<limit lower=\"0.82\" upper=\"2.5\"",
+    );
+    std::fs::write(dir.path().join("arm.urdf"), shifted).unwrap();
+    let robot = load_robot_file(&file).unwrap();
+    assert!(
+        robot.warnings.iter().any(|w| w.message
+            == "joint `elbow_pitch` starts at 0.82 rad, its nearest limit: the default start 0 rad is outside its limits [0.82, 2.5]"),
+        "{:?}",
+        robot.warnings
+    );
+    assert!(robot
+        .config
+        .start_positions_rad
+        .contains(&("elbow_pitch".to_string(), 0.82)));
+}
+
+#[test]
+fn a_problem_inside_the_urdf_names_the_urdfs_line() {
+    let (dir, file) = write(ARM);
+    let urdf = std::fs::read_to_string(dir.path().join("arm.urdf")).unwrap();
+    let reversed = urdf.replace(
+        "<limit lower=\"-2.5\" upper=\"2.5\"",
+        "<limit lower=\"2.5\" upper=\"-2.5\"",
+    );
+    std::fs::write(dir.path().join("arm.urdf"), reversed).unwrap();
+    let error = error_of_file(&file);
+    assert_eq!(
+        error,
+        "2:7: the URDF `arm.urdf` line 40: joint `elbow_pitch`'s limits are the wrong way round (lower 2.5 > upper -2.5)"
+    );
+}
+
+#[test]
+fn an_actuator_on_a_mimic_follower_is_refused_and_unused_elements_are_summed_up() {
+    let (dir, file) = write(ARM);
+    let urdf = std::fs::read_to_string(dir.path().join("arm.urdf")).unwrap();
+    let mimic = urdf
+        .replace(
+            "<dynamics damping=\"0.05\" friction=\"0.0\"/>\n  </joint>\n</robot>",
+            "<dynamics damping=\"0.05\" friction=\"0.0\"/>\n    <mimic joint=\"wrist_roll\" multiplier=\"-1\"/>\n    <safety_controller k_velocity=\"1\"/>\n  </joint>\n  <transmission name=\"t\"/>\n  <gazebo/>\n  <gazebo/>\n</robot>",
+        );
+    std::fs::write(dir.path().join("arm.urdf"), mimic).unwrap();
+    let with_flange = ARM.replace(
+        "  - {joint: wrist_pitch, model: RS02, id: 1, bus: can1}\n",
+        "  - {joint: wrist_pitch, model: RS02, id: 1, bus: can1}\n  - {joint: flange_roll, model: RS02, id: 2, bus: can1}\n",
+    );
+    std::fs::write(&file, &with_flange).unwrap();
+    assert_eq!(
+        error_of_file(&file),
+        "11:13: joint `flange_roll` follows `wrist_roll` through the URDF's <mimic>: it moves with its leader; put the actuator on `wrist_roll`"
+    );
+    std::fs::write(&file, ARM).unwrap();
+    let robot = load_robot_file(&file).unwrap();
+    let messages: Vec<&str> = robot.warnings.iter().map(|w| w.message.as_str()).collect();
+    assert_eq!(
+        messages,
+        ["the URDF `arm.urdf`: not simulated: 2 <gazebo>, 1 <joint><safety_controller>, 1 <transmission>"]
+    );
+}
+
+#[test]
+fn collision_meshes_are_found_through_the_packages_map_or_named_with_every_place_searched() {
+    let (dir, file) = write(ARM);
+    let urdf = std::fs::read_to_string(dir.path().join("arm.urdf")).unwrap();
+    let meshed = urdf.replacen(
+        "<geometry><cylinder radius=\"0.03\" length=\"0.1\"/></geometry>",
+        "<geometry><mesh filename=\"package://arm_description/meshes/flange.stl\" scale=\"0.5 0.5 0.5\"/></geometry>",
+        1,
+    );
+    std::fs::write(dir.path().join("arm.urdf"), meshed).unwrap();
+    let error = error_of_file(&file);
+    assert!(
+        error.starts_with("2:7: the URDF `arm.urdf` line 67: link `flange`'s collision mesh: `package://arm_description/meshes/flange.stl` is not found (no folder is known for package `arm_description`: name it in the robot file's `packages:`, or set ROS_PACKAGE_PATH or AMENT_PREFIX_PATH)"),
+        "{error}"
+    );
+    // Said to go on without it: a warning instead.
+    std::fs::write(&file, format!("{ARM}missing_meshes: skip\n")).unwrap();
+    let robot = load_robot_file(&file).unwrap();
+    assert!(
+        robot.warnings[0]
+            .message
+            .contains("collision mesh left out"),
+        "{:?}",
+        robot.warnings
+    );
+    // Found through the robot file's map, read and hulled: a cube of 0.1 m scaled by 0.5.
+    let meshes = dir.path().join("desc/meshes");
+    std::fs::create_dir_all(&meshes).unwrap();
+    let mut stl = String::from("solid c\n");
+    for tri in [
+        [[-0.1, -0.1, -0.1], [0.1, -0.1, -0.1], [0.1, 0.1, -0.1]],
+        [[-0.1, -0.1, 0.1], [0.1, 0.1, 0.1], [-0.1, 0.1, 0.1]],
+    ] {
+        stl.push_str("facet normal 0 0 0\nouter loop\n");
+        for v in tri {
+            stl.push_str(&format!("vertex {} {} {}\n", v[0], v[1], v[2]));
+        }
+        stl.push_str("endloop\nendfacet\n");
+    }
+    stl.push_str("endsolid c\n");
+    std::fs::write(meshes.join("flange.stl"), stl).unwrap();
+    std::fs::write(&file, format!("{ARM}packages: {{arm_description: desc}}\n")).unwrap();
+    let robot = load_robot_file(&file).unwrap();
+    assert!(robot.warnings.is_empty(), "{:?}", robot.warnings);
+    let geometry = robot.config.collision.as_ref().unwrap();
+    let hull = geometry
+        .shapes
+        .iter()
+        .find_map(|s| match &s.shape {
+            sim::description::CollisionShape::Hull { points_m } => Some(points_m),
+            _ => None,
+        })
+        .expect("the flange's mesh");
+    assert_eq!(hull.len(), 6);
+    assert!(
+        hull.iter().all(|p| (p.x.abs() - 0.05).abs() < 1e-6),
+        "{hull:?}"
     );
 }
 

@@ -23,7 +23,7 @@ pub struct PackagePaths {
 
 /// A file a URDF names that is nowhere to be found.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("`{uri}` is not found (looked in: {})", searched_list(.searched))]
+#[error("`{uri}` is not found ({})", searched_list(.uri, .searched))]
 pub struct NotFound {
     /// The name as the URDF gives it.
     pub uri: String,
@@ -31,15 +31,18 @@ pub struct NotFound {
     pub searched: Vec<PathBuf>,
 }
 
-fn searched_list(searched: &[PathBuf]) -> String {
+fn searched_list(uri: &str, searched: &[PathBuf]) -> String {
     if searched.is_empty() {
-        return "nowhere: the URDF has no folder and no package folders are known".to_owned();
+        return match uri.strip_prefix("package://") {
+            Some(rest) => format!(
+                "no folder is known for package `{}`: name it in the robot file's `packages:`, or set ROS_PACKAGE_PATH or AMENT_PREFIX_PATH",
+                rest.trim_start_matches('/').split('/').next().unwrap_or_default()
+            ),
+            None => "a relative name, and the URDF has no folder to start from".to_owned(),
+        };
     }
-    searched
-        .iter()
-        .map(|p| p.display().to_string())
-        .collect::<Vec<_>>()
-        .join(", ")
+    let places: Vec<String> = searched.iter().map(|p| p.display().to_string()).collect();
+    format!("looked in: {}", places.join(", "))
 }
 
 /// How deep below a `ROS_PACKAGE_PATH` folder a `package.xml` is looked for (rospack

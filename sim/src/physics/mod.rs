@@ -41,7 +41,8 @@ pub mod articulated;
 pub use error::PhysicsError;
 pub use friction::KineticFriction;
 pub use model::{
-    ArmModel, JointInfo, JointKind, LinkInertial, Mimic, DEFAULT_GRAVITY_M_S2, MAX_URDF_BYTES,
+    read_urdf, ArmModel, JointInfo, JointKind, LinkInertial, Mimic, DEFAULT_GRAVITY_M_S2,
+    MAX_URDF_BYTES,
 };
 pub use obstacle::{Contact, ObstacleId, ObstacleShape};
 pub use world::{ArmWorld, WorldConfig};

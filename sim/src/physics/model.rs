@@ -126,8 +126,8 @@ pub struct ArmModel {
     joints: Vec<JointInfo>,
     /// URDF index of each actuated joint.
     urdf_joint_index: Vec<usize>,
-    /// For each link, the actuated joints between the root and it.
-    ancestors: Vec<Vec<usize>>,
+    /// For each link, the index in `tree` of the joint that moves it (`None` for the root).
+    parent_joint: Vec<Option<usize>>,
 }
 
 fn pose_to_isometry(pose: &urdf_rs::Pose) -> Isometry3<f64> {
@@ -201,10 +201,16 @@ impl ArmModel {
     /// rejected.
     pub fn from_robot(robot: &urdf_rs::Robot) -> Result<Self, PhysicsError> {
         let link_names: Vec<String> = robot.links.iter().map(|l| l.name.clone()).collect();
+        // By name, once: a 5,000-link URDF must not cost a scan per joint.
+        let by_name: std::collections::HashMap<&str, usize> = link_names
+            .iter()
+            .enumerate()
+            .map(|(i, n)| (n.as_str(), i))
+            .collect();
         let link_index = |joint: &str, name: &str| {
-            link_names
-                .iter()
-                .position(|n| n == name)
+            by_name
+                .get(name)
+                .copied()
                 .ok_or_else(|| PhysicsError::UnknownLink {
                     joint: joint.to_owned(),
                     link: name.to_owned(),
@@ -351,18 +357,19 @@ impl ArmModel {
         let root = roots[0];
 
         // Order joints root → leaves with an explicit stack (deterministic: URDF order).
+        let mut children = vec![Vec::new(); link_names.len()];
+        for (u, j) in raw.iter().enumerate() {
+            children[j.parent].push(u);
+        }
         let mut tree = Vec::with_capacity(raw.len());
-        let mut ancestors = vec![Vec::new(); link_names.len()];
+        let mut parent_joint = vec![None; link_names.len()];
         let mut reached = vec![false; link_names.len()];
         reached[root] = true;
         let mut stack = vec![root];
         while let Some(link) = stack.pop() {
-            for j in raw.iter().filter(|j| j.parent == link) {
-                let mut chain = ancestors[link].clone();
-                if let Some(a) = j.actuated {
-                    chain.push(a);
-                }
-                ancestors[j.child] = chain;
+            for &u in &children[link] {
+                let j = &raw[u];
+                parent_joint[j.child] = Some(tree.len());
                 reached[j.child] = true;
                 tree.push(j.clone());
                 stack.push(j.child);
@@ -380,8 +387,21 @@ impl ArmModel {
             tree,
             joints,
             urdf_joint_index,
-            ancestors,
+            parent_joint,
         })
+    }
+
+    /// The actuated joints between the root and link `link`, nearest the root first.
+    fn ancestors(&self, link: usize) -> Vec<usize> {
+        let mut chain = Vec::new();
+        let mut at = self.parent_joint[link];
+        while let Some(k) = at {
+            let joint = &self.tree[k];
+            chain.extend(joint.actuated);
+            at = self.parent_joint[joint.parent];
+        }
+        chain.reverse();
+        chain
     }
 
     /// The joints from the root to the leaves (a parent link's joint before its children's).
@@ -516,6 +536,9 @@ impl ArmModel {
         gravity_m_s2: [f64; 3],
     ) -> Result<Vec<f64>, PhysicsError> {
         let poses = self.link_poses(q)?;
+        let ancestors: Vec<Vec<usize>> = (0..self.link_names.len())
+            .map(|l| self.ancestors(l))
+            .collect();
         let g = Vector3::from(gravity_m_s2);
         let mut tau = vec![0.0; self.joints.len()];
         for j in &self.tree {
@@ -524,7 +547,7 @@ impl ArmModel {
             let axis_w = joint_frame.rotation * j.axis;
             let pivot_w = joint_frame.translation.vector;
             for (l, inertial) in self.inertials.iter().enumerate() {
-                if !self.ancestors[l].contains(&a) {
+                if !ancestors[l].contains(&a) {
                     continue;
                 }
                 let weight = g * inertial.mass_kg;
@@ -565,7 +588,7 @@ impl ArmModel {
             let inertia_w = rot.matrix() * inertial.inertia_kg_m2 * rot.matrix().transpose();
             let mut jv = DMatrix::zeros(3, n);
             let mut jw = DMatrix::zeros(3, n);
-            for &a in &self.ancestors[l] {
+            for a in self.ancestors(l) {
                 let (kind, axis, pivot) = axes[a];
                 let (lin, ang) = match kind {
                     TreeJointKind::Revolute => (axis.cross(&(com_w - pivot)), axis),
@@ -594,8 +617,8 @@ impl ArmModel {
 /// whole into memory.
 pub const MAX_URDF_BYTES: u64 = 16 * 1024 * 1024;
 
-/// The text of the URDF file `path`: a regular file of at most [`MAX_URDF_BYTES`].
-pub(crate) fn read_urdf(path: &std::path::Path) -> Result<String, PhysicsError> {
+/// The text of the URDF file `path`: a regular file of at most [`MAX_URDF_BYTES`], UTF-8.
+pub fn read_urdf(path: &std::path::Path) -> Result<String, PhysicsError> {
     use crate::bounded_read::{read_regular_file, BoundedReadError};
     let fail = |source| PhysicsError::Io {
         path: path.to_owned(),

@@ -4,6 +4,9 @@
 
 use std::path::PathBuf;
 
+use std::sync::Arc;
+
+use crate::description::{CollisionGeometry, MissingMeshes, PackagePaths};
 use crate::robstride::MotorConfig;
 
 /// How the robot's root link meets the world.
@@ -52,13 +55,21 @@ pub struct RobotConfig {
     pub name: String,
     /// The URDF text.
     pub urdf: String,
+    /// Where the files the URDF names (meshes) are looked for.
+    pub urdf_paths: PackagePaths,
+    /// What a collision mesh that cannot be found or read does.
+    pub missing_meshes: MissingMeshes,
+    /// The collision geometry when already read (a robot file reads it while checking);
+    /// `None`: read from the URDF when the world is built.
+    pub collision: Option<Arc<CollisionGeometry>>,
     /// Fixed or floating base.
     pub base: Base,
     /// The buses.
     pub buses: Vec<BusConfig>,
     /// The actuated joints; joints not listed are passive.
     pub actuators: Vec<JointActuator>,
-    /// Joint positions at start (rad), by URDF joint name; unnamed joints start at 0.
+    /// Joint positions at start (rad), by URDF joint name; unnamed joints start at 0. A start
+    /// outside the joint's limits starts at the nearest limit (robot files warn about it).
     pub start_positions_rad: Vec<(String, f64)>,
     /// Where the actuators' flash (saved parameters, ids, zeros) lives across restarts.
     pub state_file: Option<PathBuf>,

@@ -372,14 +372,11 @@ struct Runner {
     base: Arc<std::sync::Mutex<BasePose>>,
 }
 
-/// Pose of the URDF root link in the world.
+/// Pose of the URDF root link (the tree's root, wherever the file lists it) in the world.
 fn base_pose(world: &RobotWorld) -> BasePose {
     let world = world.world();
     world
-        .model()
-        .link_names()
-        .first()
-        .and_then(|root| world.link_pose(root))
+        .link_pose(world.model().root_link_name())
         .map_or_else(BasePose::default, |pose| BasePose::of(&pose))
 }
 
@@ -387,10 +384,7 @@ fn base_pose(world: &RobotWorld) -> BasePose {
 fn base_rotation(world: &RobotWorld) -> [[f64; 3]; 3] {
     let world = world.world();
     let rotation = world
-        .model()
-        .link_names()
-        .first()
-        .and_then(|root| world.link_pose(root))
+        .link_pose(world.model().root_link_name())
         .map(|pose| pose.rotation.to_rotation_matrix().into_inner());
     match rotation {
         Some(m) => std::array::from_fn(|r| std::array::from_fn(|c| m[(r, c)])),

@@ -1,5 +1,6 @@
 //! One physics world for a whole robot, its actuated joints bound to the actuators' plants.
 
+use crate::description::{Description, DescriptionError};
 use crate::physics::articulated::ArticulatedWorld;
 use crate::physics::{PhysicsError, WorldConfig};
 
@@ -34,6 +35,9 @@ pub enum RobotWorldError {
     /// The URDF did not load into the physics world.
     #[error(transparent)]
     Physics(#[from] PhysicsError),
+    /// The URDF, or a mesh it names, is not one the physics can run.
+    #[error("the URDF: {0}")]
+    Description(#[from] DescriptionError),
     /// An actuator or start position names a joint the URDF does not have (or one that is
     /// fixed).
     #[error("joint `{joint}` is not a revolute, continuous or prismatic joint of the URDF (its movable joints: {known})")]
@@ -60,7 +64,12 @@ impl RobotWorld {
             },
             ..WorldConfig::default()
         };
-        let mut world = ArticulatedWorld::from_urdf_str(&config.urdf, world_config)?;
+        let description = Description::parse(config.urdf.clone(), config.urdf_paths.clone())?;
+        let geometry = match &config.collision {
+            Some(geometry) => std::sync::Arc::clone(geometry),
+            None => std::sync::Arc::new(description.collision_geometry(config.missing_meshes)?),
+        };
+        let mut world = ArticulatedWorld::from_description(&description, &geometry, world_config)?;
         let index_of = |name: &str| {
             world
                 .joint_index(name)
@@ -87,7 +96,7 @@ impl RobotWorld {
             world.set_armature(index, actuator.motor.model.spec().rotor_inertia_kg_m2);
         }
         world.set_joint_positions(&q)?;
-        let inertia = world.model().mass_matrix_diagonal(&q)?;
+        let inertia = world.mass_matrix_diagonal();
         let mut joints = Vec::with_capacity(indices.len());
         let mut plants = Vec::with_capacity(indices.len());
         for (actuator, &index) in config.actuators.iter().zip(&indices) {
@@ -124,7 +133,7 @@ impl RobotWorld {
         let qd = self.world.joint_velocities();
         let refresh = self.world.steps().is_multiple_of(INERTIA_REFRESH_STEPS);
         let inertia = if refresh {
-            Some(self.world.model().mass_matrix_diagonal(&q)?)
+            Some(self.world.mass_matrix_diagonal())
         } else {
             None
         };

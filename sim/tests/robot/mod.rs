@@ -29,6 +29,9 @@ fn arm_config(start: &[(&str, f64)]) -> RobotConfig {
     RobotConfig {
         name: "robstride_arm6".into(),
         urdf: ARM_URDF.into(),
+        urdf_paths: Default::default(),
+        missing_meshes: Default::default(),
+        collision: None,
         base: Base::Fixed,
         buses: ["can0", "can1"]
             .iter()

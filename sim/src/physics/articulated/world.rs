@@ -60,10 +60,10 @@ impl Default for JointPass {
 /// What it simulates, and how it differs from the rapier world ([`crate::physics::ArmWorld`]):
 /// - joints: motor and external torques, each joint's armature (on the articulated
 ///   inertia), URDF damping and dry friction (both implicit), stops at the URDF limits
-///   (a stiff implicit spring; observed positions are clamped to the limits); `<mimic>` couplings are not
-///   (robot files have none), and there are no obstacles but the ground;
+///   (a stiff implicit spring; observed positions are clamped to the limits); `<mimic>`
+///   followers placed by their leaders after every substep; no obstacles but the ground;
 /// - a free root: gravity on every link and the ground plane z = 0 touching the links'
-///   collision primitives (boxes by their corners, cylinders by points on their rims,
+///   collision shapes (meshes by their hulls' contact points) and primitives (boxes by their corners, cylinders by points on their rims,
 ///   spheres and capsule ends as spheres) through stiff springs, friction anchored where a
 ///   point lands so a standing robot does not creep; no self-collision.
 ///
@@ -81,6 +81,10 @@ pub struct ArticulatedWorld {
     /// The root link's spatial velocity in its own coordinates (zero for a fixed root).
     root_velocity: Vector6<f64>,
     external_torques: Vec<f64>,
+    /// Per `<mimic>` follower: (follower, leader, multiplier, offset), actuated indices.
+    followers: Vec<(usize, usize, f64, f64)>,
+    /// Per actuated joint, whether it follows another through `<mimic>`.
+    is_follower: Vec<bool>,
     steps: u64,
     /// The first joint whose state stopped being finite, and when.
     diverged: Divergence,
@@ -152,7 +156,22 @@ impl ArticulatedWorld {
         let n = model.joints().len();
         let root_pose =
             Isometry3::translation(0.0, 0.0, config.floating_base_height_m.unwrap_or(0.0));
+        let followers: Vec<(usize, usize, f64, f64)> = model
+            .joints()
+            .iter()
+            .enumerate()
+            .filter_map(|(f, j)| {
+                let m = j.mimic.as_ref()?;
+                Some((f, m.leader_index, m.multiplier, m.offset))
+            })
+            .collect();
+        let mut is_follower = vec![false; n];
+        for &(f, ..) in &followers {
+            is_follower[f] = true;
+        }
         Ok(Self {
+            followers,
+            is_follower,
             contacts: GroundContacts::new(geometry, GROUND_FRICTION),
             model,
             config,
@@ -205,6 +224,7 @@ impl ArticulatedWorld {
             self.q[i] = value.clamp(info.lower, info.upper);
         }
         self.qd.fill(0.0);
+        self.follow_leaders();
         Ok(())
     }
 
@@ -365,6 +385,36 @@ impl ArticulatedWorld {
         (force, implicit)
     }
 
+    /// Puts every `<mimic>` follower where its leader says: `q = multiplier · q_leader +
+    /// offset`, and its speed likewise. A follower is carried rigidly by its parent within a
+    /// substep (its subtree's mass counts on the parent, its motor and stop do not act) and
+    /// placed here after each one: exact in position, stable however light the follower.
+    fn follow_leaders(&mut self) {
+        for &(f, leader, multiplier, offset) in &self.followers {
+            self.q[f] = multiplier * self.q[leader] + offset;
+            self.qd[f] = multiplier * self.qd[leader];
+        }
+    }
+
+    /// The diagonal of the joint-space mass matrix at the current positions with the base
+    /// held (kg·m², kg), armature included: per joint, the inertia its motor drives when the
+    /// others are held still. One pass of composite inertias from the leaves, `O(links)`.
+    pub fn mass_matrix_diagonal(&self) -> Vec<f64> {
+        let mut composite = self.inertia.clone();
+        let tree = self.model.tree();
+        let mut diagonal = vec![0.0; self.q.len()];
+        for joint in tree.iter().rev() {
+            let q = joint.actuated.map_or(0.0, |a| self.q[a]);
+            let x = motion_transform(&child_in_parent(joint, q));
+            let child = composite[joint.child];
+            if let (Some(s), Some(a)) = (motion_subspace(joint), joint.actuated) {
+                diagonal[a] = s.dot(&(child * s)) + self.model.joints()[a].armature;
+            }
+            composite[joint.parent] += x.transpose() * child * x;
+        }
+        diagonal
+    }
+
     fn substep(&mut self, tau: &[f64], dt: f64) {
         let (qdd, root_acceleration) = self.accelerations(tau, dt);
         // Semi-implicit Euler: velocities, then positions with the new velocities.
@@ -372,6 +422,7 @@ impl ArticulatedWorld {
             *qd += acceleration * dt;
             *q += *qd * dt;
         }
+        self.follow_leaders();
         if self.config.floating_base_height_m.is_some() {
             // The root's velocity is in its own coordinates; for spatial vectors their rate
             // there is the acceleration in them (v × v = 0).
@@ -446,7 +497,8 @@ impl ArticulatedWorld {
         for (k, joint) in tree.iter().enumerate().rev() {
             let i = joint.child;
             let pass = &mut passes[k];
-            let (ia, pa) = match (motion_subspace(joint), joint.actuated) {
+            let driven = joint.actuated.filter(|&a| !self.is_follower[a]);
+            let (ia, pa) = match (motion_subspace(joint), driven) {
                 (Some(s), Some(a)) => {
                     let u_vec = articulated[i] * s;
                     let (force, implicit) = self.joint_terms(a, tau[a], dt);
@@ -478,7 +530,8 @@ impl ArticulatedWorld {
         for (k, joint) in tree.iter().enumerate() {
             let pass = &passes[k];
             let a_prime = pass.x * acceleration[joint.parent] + pass.c;
-            acceleration[joint.child] = match (motion_subspace(joint), joint.actuated) {
+            let driven = joint.actuated.filter(|&a| !self.is_follower[a]);
+            acceleration[joint.child] = match (motion_subspace(joint), driven) {
                 (Some(s), Some(a)) => {
                     qdd[a] = (pass.u - pass.u_vec.dot(&a_prime)) / pass.d;
                     a_prime + s * qdd[a]

@@ -6,7 +6,8 @@ use std::path::{Path, PathBuf};
 use super::error::{FileError, Position as Pos};
 use super::raw::{RawRobot, S};
 use crate::bounded_read::read_text_file;
-use crate::physics::{ArmModel, JointKind};
+use crate::description::{Description, DescriptionError, MissingMeshes, PackagePaths};
+use crate::physics::{read_urdf, ArmModel, JointKind};
 use crate::robot::{Base, BusConfig, JointActuator, RobotConfig};
 use crate::robstride::{baud_code_bps, Model, MotorConfig, DEFAULT_HOST_ID};
 use crate::yaml_words::suggestion;
@@ -80,21 +81,44 @@ impl Checker<'_> {
     fn check(&self, raw: RawRobot) -> Res<LoadedRobot> {
         let dir = self.file.parent().unwrap_or(Path::new("."));
         let urdf_path = dir.join(&raw.urdf.value);
-        let model = ArmModel::from_urdf_file(&urdf_path).map_err(|e| {
+        let urdf_name = &raw.urdf.value;
+        let urdf = read_urdf(&urdf_path).map_err(|e| {
             self.err(
                 pos(&raw.urdf),
-                format!("the URDF `{}` does not load: {e}", raw.urdf.value),
+                format!("the URDF `{urdf_name}` does not load: {e}"),
             )
         })?;
-        let urdf = std::fs::read_to_string(&urdf_path).map_err(|e| {
+        // A problem inside the URDF names the URDF's own line.
+        let in_urdf = |e: DescriptionError| {
+            let line = e.line.map(|l| format!(" line {l}")).unwrap_or_default();
             self.err(
                 pos(&raw.urdf),
-                format!("cannot read `{}`: {e}", raw.urdf.value),
+                format!("the URDF `{urdf_name}`{line}: {}", e.message),
+            )
+        };
+        let packages = self.packages(&raw, dir)?;
+        let paths = PackagePaths::for_urdf(&urdf_path, packages);
+        let description = Description::parse(urdf, paths.clone()).map_err(in_urdf)?;
+        let model = ArmModel::from_robot(description.robot()).map_err(|e| {
+            self.err(
+                pos(&raw.urdf),
+                format!("the URDF `{urdf_name}` does not load: {e}"),
             )
         })?;
+        let missing_meshes = self.missing_meshes(&raw)?;
+        let collision = description
+            .collision_geometry(missing_meshes)
+            .map_err(in_urdf)?;
+        let mut warnings = Vec::new();
+        for skipped in &collision.skipped {
+            warnings.push(*self.err(pos(&raw.urdf), format!("the URDF `{urdf_name}`: {skipped}")));
+        }
+        if let Some(summary) = description.unused_summary() {
+            warnings.push(*self.err(pos(&raw.urdf), format!("the URDF `{urdf_name}`: {summary}")));
+        }
+        let urdf = description.text().to_owned();
         let base = self.base(&raw)?;
         let buses = self.buses(&raw)?;
-        let mut warnings = Vec::new();
         let mut actuators: Vec<JointActuator> = Vec::new();
         let movable: Vec<&str> = model.joints().iter().map(|j| j.name.as_str()).collect();
         for a in &raw.actuators.value {
@@ -107,6 +131,15 @@ impl Checker<'_> {
                     format!(
                         "joint `{}` is prismatic; a RobStride actuator turns",
                         info.name
+                    ),
+                ));
+            }
+            if let Some(mimic) = &info.mimic {
+                return Err(self.err(
+                    pos(&a.joint),
+                    format!(
+                        "joint `{}` follows `{}` through the URDF's <mimic>: it moves with its leader; put the actuator on `{}`",
+                        info.name, mimic.leader, mimic.leader
                     ),
                 ));
             }
@@ -203,27 +236,15 @@ impl Checker<'_> {
                 ));
             }
         }
-        let mut start_positions_rad = Vec::new();
-        for s in raw.start_rad.iter().flat_map(|s| &s.value) {
-            let s = &s.value;
-            let joint = self.joint(&s.joint, &movable)?;
-            let info = &model.joints()[joint];
-            if !(s.rad.value.is_finite() && info.within_limits(s.rad.value)) {
-                return Err(self.err(
-                    pos(&s.rad),
-                    format!(
-                        "{} rad is outside joint `{}`'s limits [{}, {}]",
-                        s.rad.value, info.name, info.lower, info.upper
-                    ),
-                ));
-            }
-            start_positions_rad.push((info.name.clone(), s.rad.value));
-        }
+        let start_positions_rad = self.start_positions(&raw, &model, &movable, &mut warnings)?;
         self.masses(&model, &raw)?;
         Ok(LoadedRobot {
             config: RobotConfig {
                 name: raw.robot.value.clone(),
                 urdf,
+                urdf_paths: paths,
+                missing_meshes,
+                collision: Some(std::sync::Arc::new(collision)),
                 base,
                 buses,
                 actuators,
@@ -235,6 +256,90 @@ impl Checker<'_> {
             urdf_path,
             warnings,
         })
+    }
+
+    /// Every movable joint's start: as given, or 0; one outside its limits starts at the
+    /// nearest limit with a warning naming it (the same rule for given and default starts,
+    /// so a URDF whose joint cannot be at 0 runs without a `start_rad` entry for it).
+    fn start_positions(
+        &self,
+        raw: &RawRobot,
+        model: &ArmModel,
+        movable: &[&str],
+        warnings: &mut Vec<FileError>,
+    ) -> Res<Vec<(String, f64)>> {
+        let mut given: Vec<(usize, f64, Pos)> = Vec::new();
+        for s in raw.start_rad.iter().flat_map(|s| &s.value) {
+            let s = &s.value;
+            let joint = self.joint(&s.joint, movable)?;
+            if given.iter().any(|(j, ..)| *j == joint) {
+                return Err(self.err(
+                    pos(&s.joint),
+                    format!("joint `{}` is given a start twice", s.joint.value),
+                ));
+            }
+            if !s.rad.value.is_finite() {
+                return Err(self.err(
+                    pos(&s.rad),
+                    format!("a start must be a finite number, got {}", s.rad.value),
+                ));
+            }
+            given.push((joint, s.rad.value, pos(&s.rad)));
+        }
+        let mut starts = Vec::new();
+        for (joint, info) in model.joints().iter().enumerate() {
+            if info.mimic.is_some() {
+                continue;
+            }
+            let (value, at, how) = match given.iter().find(|(j, ..)| *j == joint) {
+                Some((_, value, at)) => (*value, *at, "given"),
+                None => (0.0, pos(&raw.urdf), "default"),
+            };
+            let start = value.clamp(info.lower, info.upper);
+            if start != value {
+                warnings.push(*self.err(
+                    at,
+                    format!(
+                        "joint `{}` starts at {start} rad, its nearest limit: the {how} start {value} rad is outside its limits [{}, {}]",
+                        info.name, info.lower, info.upper
+                    ),
+                ));
+            }
+            if how == "given" || start != value {
+                starts.push((info.name.clone(), start));
+            }
+        }
+        Ok(starts)
+    }
+
+    /// The robot file's `packages` map, folders relative to the robot file.
+    fn packages(&self, raw: &RawRobot, dir: &Path) -> Res<Vec<(String, PathBuf)>> {
+        let Some(map) = &raw.packages else {
+            return Ok(Vec::new());
+        };
+        let mut packages = Vec::new();
+        for (name, folder) in &map.value {
+            let path = dir.join(&folder.value);
+            if !path.is_dir() {
+                return Err(self.err(
+                    pos(folder),
+                    format!("package `{name}`: `{}` is not a folder", path.display()),
+                ));
+            }
+            packages.push((name.clone(), path));
+        }
+        Ok(packages)
+    }
+
+    fn missing_meshes(&self, raw: &RawRobot) -> Res<MissingMeshes> {
+        match raw.missing_meshes.as_ref().map(|m| (m.value.as_str(), m)) {
+            None | Some(("refuse", _)) => Ok(MissingMeshes::Refuse),
+            Some(("skip", _)) => Ok(MissingMeshes::Skip),
+            Some((other, at)) => Err(self.err(
+                pos(at),
+                format!("`missing_meshes` must be `refuse` or `skip`, got `{other}`"),
+            )),
+        }
     }
 
     fn base(&self, raw: &RawRobot) -> Res<Base> {

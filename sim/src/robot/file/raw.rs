@@ -13,6 +13,11 @@ pub(super) struct RawRobot {
     pub robot: S<String>,
     /// The URDF, relative to the robot file.
     pub urdf: S<String>,
+    /// ROS packages the URDF's `package://` names point into: name → folder (relative to
+    /// the robot file); searched before `ROS_PACKAGE_PATH` and `AMENT_PREFIX_PATH`.
+    pub packages: Option<S<std::collections::BTreeMap<String, S<String>>>>,
+    /// `refuse` (default) or `skip`: what a collision mesh that cannot be found does.
+    pub missing_meshes: Option<S<String>>,
     /// `fixed` (default) or `floating`.
     pub base: Option<S<String>>,
     /// Floating base: the root link's height above the ground at start (m).
