@@ -147,9 +147,38 @@ async fn open_buses(args: &Args, config: &RobotConfig) -> anyhow::Result<Served>
     })
 }
 
+/// Loads the robot file on a thread of its own while listening for `stop`: a large URDF
+/// with many meshes takes a while, and Ctrl-C must end the process then too. `None`: a stop
+/// came first (the loading thread is left behind; the process is about to exit).
+async fn load_until_stopped(
+    file: &std::path::Path,
+    stop: &mut super::StopSource,
+) -> anyhow::Result<Option<sim::robot::file::LoadedRobot>> {
+    let (done, loaded) = tokio::sync::oneshot::channel();
+    let path = file.to_owned();
+    std::thread::Builder::new()
+        .name("load-robot".into())
+        .spawn(move || {
+            // The receiver is gone only when a stop came first: nothing to report to.
+            let _ = done.send(load_robot_file(&path));
+        })?;
+    tokio::select! {
+        loaded = loaded => {
+            let loaded = loaded.map_err(|_| anyhow::anyhow!("loading {} stopped unexpectedly", file.display()))?;
+            Ok(Some(loaded?))
+        }
+        signal = stop.next() => {
+            eprintln!("{signal} while loading {}: stopped", file.display());
+            Ok(None)
+        }
+    }
+}
+
 /// Serve until `stop` asks (a signal, or the bench this device is part of stopping).
 pub(crate) async fn serve(args: Args, mut stop: super::StopSource) -> anyhow::Result<ExitCode> {
-    let loaded = load_robot_file(&args.file)?;
+    let Some(loaded) = load_until_stopped(&args.file, &mut stop).await? else {
+        return Ok(ExitCode::from(130));
+    };
     for warning in &loaded.warnings {
         eprintln!("warning: {warning}");
     }

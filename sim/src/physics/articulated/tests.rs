@@ -279,3 +279,123 @@ fn absurd_torques_never_panic_and_a_diverged_world_says_which_joint() {
         Err(other) => panic!("unexpected error {other}"),
     }
 }
+
+/// A free cube of 2 kg whose only collision shape is `collision`.
+fn cube_urdf(collision: &str) -> String {
+    format!(
+        r#"<robot name="cube"><link name="body">
+  <inertial><mass value="2"/><inertia ixx="0.013" ixy="0" ixz="0" iyy="0.013" iyz="0" izz="0.013"/></inertial>
+  <collision>{collision}</collision></link></robot>"#
+    )
+}
+
+#[test]
+fn a_body_whose_collision_is_a_mesh_rests_on_it_as_on_the_same_box() {
+    let tmp = tempfile::tempdir().unwrap();
+    for (name, bytes) in [
+        (
+            "cube.stl",
+            crate::description::mesh::tests::box_stl_binary([1.0; 3]),
+        ),
+        (
+            "cube_ascii.STL",
+            crate::description::mesh::tests::box_stl_ascii([1.0; 3]).into_bytes(),
+        ),
+    ] {
+        std::fs::write(tmp.path().join(name), bytes).unwrap();
+    }
+    let rest_height = |collision: &str| {
+        let mut world = floating(&cube_urdf(collision), 0.3, [0.0, 0.0, -9.81]);
+        for _ in 0..1500 {
+            world.step(&[]);
+        }
+        world.check_finite().unwrap();
+        world.link_pose("body").unwrap().translation.z
+    };
+    let box_height = rest_height(r#"<geometry><box size="0.2 0.2 0.2"/></geometry>"#);
+    assert!((box_height - 0.1).abs() < 1e-3, "{box_height}");
+    for name in ["cube.stl", "cube_ascii.STL"] {
+        // A unit cube scaled to 0.2 m, rotated about z (the ground cares not).
+        let mesh = format!(
+            r#"<origin rpy="0 0 0.3"/><geometry><mesh filename="{}" scale="0.1 0.1 0.1"/></geometry>"#,
+            tmp.path().join(name).display()
+        );
+        let height = rest_height(&mesh);
+        assert!(
+            (height - box_height).abs() < 1e-6,
+            "{name}: {height} vs {box_height}"
+        );
+    }
+}
+
+#[test]
+fn a_mimic_follower_moves_with_its_leader() {
+    // A gripper: two fingers on a fixed palm, the right one mirroring the left.
+    let urdf = r#"<robot name="gripper">
+  <link name="palm"><inertial><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>
+  <link name="left"><inertial><origin xyz="0 0 0.05"/><mass value="0.05"/><inertia ixx="1e-5" ixy="0" ixz="0" iyy="1e-5" iyz="0" izz="1e-6"/></inertial></link>
+  <link name="right"><inertial><origin xyz="0 0 0.05"/><mass value="0.05"/><inertia ixx="1e-5" ixy="0" ixz="0" iyy="1e-5" iyz="0" izz="1e-6"/></inertial></link>
+  <joint name="left_finger" type="revolute"><parent link="palm"/><child link="left"/><origin xyz="0 0.02 0"/><axis xyz="1 0 0"/><limit lower="-1" upper="1" effort="5" velocity="5"/></joint>
+  <joint name="right_finger" type="revolute"><parent link="palm"/><child link="right"/><origin xyz="0 -0.02 0"/><axis xyz="1 0 0"/><limit lower="-1" upper="1" effort="5" velocity="5"/>
+    <mimic joint="left_finger" multiplier="-1" offset="0.1"/></joint>
+</robot>"#;
+    let mut world = fixed(urdf);
+    world.set_joint_positions(&[0.2, 0.0]).unwrap();
+    assert_eq!(world.joint_positions(), vec![0.2, -0.1]);
+    let mut moved = 0.0f64;
+    for _ in 0..100 {
+        // The follower's own torque does nothing: it has no motor of its own.
+        world.step(&[0.002, 5.0]);
+        let q = world.joint_positions();
+        assert!((q[1] - (-q[0] + 0.1)).abs() < 1e-12, "{q:?}");
+        moved = moved.max((q[0] - 0.2).abs());
+    }
+    world.check_finite().unwrap();
+    assert!(moved > 0.02, "the leader moved {moved} rad");
+}
+
+#[test]
+fn the_mass_matrix_diagonal_by_composite_inertias_is_the_models() {
+    let mut world = fixed(ARM6);
+    let q = [0.3, -0.7, 1.1, 0.4, -0.2, 0.9];
+    world.set_armature(2, 0.04);
+    world.set_joint_positions(&q).unwrap();
+    let reference = world.model().mass_matrix_diagonal(&q).unwrap();
+    for (got, want) in world.mass_matrix_diagonal().iter().zip(&reference) {
+        assert!(
+            (got - want).abs() < 1e-12 * want.max(1.0),
+            "{got} vs {want}"
+        );
+    }
+}
+
+#[test]
+fn the_base_is_the_trees_root_wherever_the_file_lists_it() {
+    // TALOS lists its torso before its base link.
+    let urdf = r#"<robot name="r">
+  <link name="torso"><inertial><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>
+  <link name="base"><inertial><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>
+  <joint name="waist" type="revolute"><parent link="base"/><child link="torso"/><origin xyz="0 0 0.072"/><axis xyz="0 1 0"/><limit lower="-1" upper="1" effort="5" velocity="5"/></joint>
+</robot>"#;
+    let world = floating(urdf, 1.0, [0.0, 0.0, 0.0]);
+    assert_eq!(world.model().root_link_name(), "base");
+    assert_eq!(world.link_pose("base").unwrap().translation.z, 1.0);
+}
+
+#[test]
+fn a_long_chain_loads_and_steps() {
+    // 2,000 links in a chain: building the tree and the effective inertias is linear.
+    let mut urdf = String::from("<robot name=\"chain\">\n");
+    for i in 0..2000 {
+        urdf.push_str(&format!("<link name=\"l{i}\"><inertial><mass value=\"0.1\"/><inertia ixx=\"1e-4\" ixy=\"0\" ixz=\"0\" iyy=\"1e-4\" iyz=\"0\" izz=\"1e-4\"/></inertial></link>\n"));
+        if i > 0 {
+            urdf.push_str(&format!("<joint name=\"j{i}\" type=\"revolute\"><parent link=\"l{}\"/><child link=\"l{i}\"/><origin xyz=\"0 0 0.01\"/><axis xyz=\"0 1 0\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/></joint>\n", i - 1));
+        }
+    }
+    urdf.push_str("</robot>\n");
+    let mut world = fixed(&urdf);
+    assert_eq!(world.joints().len(), 1999);
+    assert_eq!(world.mass_matrix_diagonal().len(), 1999);
+    world.step(&[]);
+    world.check_finite().unwrap();
+}
