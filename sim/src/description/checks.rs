@@ -27,31 +27,52 @@ pub fn check_urdf_text(text: &str) -> Result<roxmltree::Document<'_>, Descriptio
             format!("not well-formed XML: {e}"),
         )
     })?;
+    let lines = Lines::of(text);
     let root = doc.root_element();
     if root.tag_name().name() != "robot" {
         return Err(DescriptionError::at(
-            Some(line_of(&doc, root)),
+            Some(line_of(&lines, root)),
             format!(
                 "the root element is <{}>, not <robot>",
                 root.tag_name().name()
             ),
         ));
     }
-    check_names(&doc, "link")?;
-    check_names(&doc, "joint")?;
+    check_names(&lines, root, "link")?;
+    check_names(&lines, root, "joint")?;
     for node in root.children().filter(|n| n.is_element()) {
         match node.tag_name().name() {
-            "link" => check_link(&doc, node)?,
-            "joint" => check_joint(&doc, node)?,
+            "link" => check_link(&lines, node)?,
+            "joint" => check_joint(&lines, node)?,
             _ => {}
         }
     }
     Ok(doc)
 }
 
+/// Where each line of the text starts, to name a node's line without rescanning the text
+/// (roxmltree's own `text_pos_at` counts from the start at every call: quadratic over a
+/// 5,000-link file).
+pub(super) struct Lines {
+    newlines: Vec<usize>,
+}
+
+impl Lines {
+    fn of(text: &str) -> Self {
+        Self {
+            newlines: text
+                .bytes()
+                .enumerate()
+                .filter(|(_, b)| *b == b'\n')
+                .map(|(i, _)| i)
+                .collect(),
+        }
+    }
+}
+
 /// 1-based line of `node` in the text.
-pub(super) fn line_of(doc: &roxmltree::Document<'_>, node: roxmltree::Node<'_, '_>) -> usize {
-    doc.text_pos_at(node.range().start).row as usize
+pub(super) fn line_of(doc: &Lines, node: roxmltree::Node<'_, '_>) -> usize {
+    doc.newlines.partition_point(|&n| n < node.range().start) + 1
 }
 
 /// Nesting depth of the text, counted without building a tree: tags, skipping comments,
@@ -118,13 +139,13 @@ fn check_depth(text: &str) -> Result<(), DescriptionError> {
     Ok(())
 }
 
-fn check_names(doc: &roxmltree::Document<'_>, tag: &str) -> Result<(), DescriptionError> {
+fn check_names(
+    doc: &Lines,
+    root: roxmltree::Node<'_, '_>,
+    tag: &str,
+) -> Result<(), DescriptionError> {
     let mut seen = std::collections::HashMap::new();
-    for node in doc
-        .root_element()
-        .children()
-        .filter(|n| n.has_tag_name(tag))
-    {
+    for node in root.children().filter(|n| n.has_tag_name(tag)) {
         let line = line_of(doc, node);
         let Some(name) = node.attribute("name").filter(|n| !n.is_empty()) else {
             return Err(DescriptionError::at(
@@ -144,7 +165,7 @@ fn check_names(doc: &roxmltree::Document<'_>, tag: &str) -> Result<(), Descripti
 
 /// The numbers of attribute `attr` of `node`, which must be `count` finite numbers.
 fn numbers(
-    doc: &roxmltree::Document<'_>,
+    doc: &Lines,
     node: roxmltree::Node<'_, '_>,
     attr: &str,
     count: usize,
@@ -174,10 +195,7 @@ fn numbers(
     Ok(Some(values))
 }
 
-fn check_origins(
-    doc: &roxmltree::Document<'_>,
-    node: roxmltree::Node<'_, '_>,
-) -> Result<(), DescriptionError> {
+fn check_origins(doc: &Lines, node: roxmltree::Node<'_, '_>) -> Result<(), DescriptionError> {
     for origin in node.descendants().filter(|n| n.has_tag_name("origin")) {
         numbers(doc, origin, "xyz", 3)?;
         numbers(doc, origin, "rpy", 3)?;
@@ -185,10 +203,7 @@ fn check_origins(
     Ok(())
 }
 
-fn check_link(
-    doc: &roxmltree::Document<'_>,
-    link: roxmltree::Node<'_, '_>,
-) -> Result<(), DescriptionError> {
+fn check_link(doc: &Lines, link: roxmltree::Node<'_, '_>) -> Result<(), DescriptionError> {
     check_origins(doc, link)?;
     for scale in link.descendants().filter(|n| n.has_tag_name("mesh")) {
         numbers(doc, scale, "scale", 3)?;
@@ -231,10 +246,7 @@ fn check_link(
     Ok(())
 }
 
-fn check_joint(
-    doc: &roxmltree::Document<'_>,
-    joint: roxmltree::Node<'_, '_>,
-) -> Result<(), DescriptionError> {
+fn check_joint(doc: &Lines, joint: roxmltree::Node<'_, '_>) -> Result<(), DescriptionError> {
     check_origins(doc, joint)?;
     let name = joint.attribute("name").unwrap_or_default();
     let kind = joint.attribute("type").unwrap_or_default();
