@@ -64,6 +64,7 @@ struct Row {
     problem: Option<String>,
 }
 
+/// Prints the table of the corpus named by the first argument or `ARMHIL_URDF_CORPUS`.
 fn main() {
     let root = std::env::args_os()
         .nth(1)
@@ -125,10 +126,12 @@ fn main() {
     }
 }
 
+/// `d` in milliseconds.
 fn ms(d: Duration) -> f64 {
     d.as_secs_f64() * 1000.0
 }
 
+/// Prints one table row.
 fn print_row(row: &Row) {
     let or_dash = |v: Option<String>| v.unwrap_or_else(|| "—".to_owned());
     let count = |n: Option<usize>| or_dash(n.map(|n| n.to_string()));
@@ -186,6 +189,7 @@ fn package_paths(root: &Path, file: &Path) -> PackagePaths {
     }
 }
 
+/// A world fixed (`None`) or free, its root `height` above the ground.
 fn config(height: Option<f64>) -> WorldConfig {
     WorldConfig {
         floating_base_height_m: height,
@@ -284,7 +288,7 @@ fn short(text: &str) -> String {
 /// Drops the robot: joints at 0 (clamped to their limits), its lowest collision point
 /// [`DROP_HEIGHT_M`] above the ground, no torque, [`DROP_STEPS`] ms. The root's height and
 /// the lowest collision point's at the end (m), and the speed (× real time).
-fn drop(
+fn drop_on_the_ground(
     description: &Description,
     geometry: &CollisionGeometry,
 ) -> Result<(f64, f64, f64), String> {
