@@ -284,11 +284,19 @@ fn collision_meshes_are_found_through_the_packages_map_or_named_with_every_place
 fn a_massless_moving_link_is_refused() {
     let (dir, file) = write(ARM);
     let urdf = std::fs::read_to_string(dir.path().join("arm.urdf")).unwrap();
+    // A massless link in the middle of the arm is carried by the links beyond it: fine.
     let massless = urdf.replacen("<mass value=\"1.28\"/>", "<mass value=\"0\"/>", 1);
-    std::fs::write(dir.path().join("arm.urdf"), massless).unwrap();
+    std::fs::write(dir.path().join("arm.urdf"), &massless).unwrap();
+    load_robot_file(&file).unwrap();
+    // The last link massless and without inertia: its joint moves nothing.
+    let flange = massless.replace(
+        "<mass value=\"0.3\"/><inertia ixx=\"0.000318\" iyy=\"0.000318\" izz=\"0.000135\"",
+        "<mass value=\"0\"/><inertia ixx=\"0\" iyy=\"0\" izz=\"0\"",
+    );
+    std::fs::write(dir.path().join("arm.urdf"), flange).unwrap();
     let error = load_robot_file(&file).unwrap_err().to_string();
     assert!(
-        error.contains("link `upper_arm` (moved by joint `shoulder_pitch`) has no mass"),
+        error.contains("the URDF `arm.urdf` does not load: joint flange_roll moves nothing with mass or inertia"),
         "{error}"
     );
 }

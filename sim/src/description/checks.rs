@@ -232,9 +232,11 @@ fn check_link(doc: &Lines, link: roxmltree::Node<'_, '_>) -> Result<(), Descript
     let [ixx, ixy, ixz, iyy, iyz, izz] = v;
     let tensor = Matrix3::new(ixx, ixy, ixz, ixy, iyy, iyz, ixz, iyz, izz);
     let eigen = tensor.symmetric_eigenvalues();
-    // Exported inertias carry round-off: a tolerance of a millionth of the largest moment.
+    // Exported inertias carry round-off: a tolerance of a millionth of the largest moment,
+    // and 1e-7 kg·m² however small the part (a published 1 mg antenna has a principal moment
+    // of -4e-8 kg·m², which no simulation can tell from zero).
     let scale = eigen.iter().fold(0.0f64, |m, e| m.max(e.abs()));
-    let tolerance = 1e-6 * scale + 1e-12;
+    let tolerance = 1e-6 * scale + 1e-7;
     if let Some(low) = eigen.iter().copied().find(|e| *e < -tolerance) {
         return Err(DescriptionError::at(
             Some(line_of(doc, inertia)),
@@ -385,6 +387,19 @@ mod tests {
         // Positive diagonal, but a product of inertia larger than the moments: still no body.
         let text = robot("<link name=\"a\"><inertial><mass value=\"1\"/><inertia ixx=\"0.1\" ixy=\"0.5\" ixz=\"0\" iyy=\"0.1\" iyz=\"0\" izz=\"0.1\"/></inertial></link>");
         assert!(error(&text).contains("not positive semi-definite"));
+        // Round-off on a milligram part is not refused.
+        let text = robot("<link name=\"a\"><inertial><mass value=\"1e-6\"/><inertia ixx=\"2.4e-8\" ixy=\"6.1e-8\" ixz=\"0\" iyy=\"2.4e-8\" iyz=\"0\" izz=\"1e-8\"/></inertial></link>");
+        check_urdf_text(&text).unwrap();
+    }
+
+    #[test]
+    fn a_texture_without_a_file_is_taken_as_ros_takes_it() {
+        let text = robot(&format!(
+            "{}\n<material name=\"m\"><color rgba=\"1 0 0 1\"/><texture/></material>",
+            link("a")
+        ));
+        let description = crate::description::Description::parse(text, Default::default()).unwrap();
+        assert_eq!(description.robot().links.len(), 1);
     }
 
     #[test]

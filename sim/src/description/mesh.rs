@@ -78,6 +78,7 @@ pub fn read_mesh_points(path: &Path) -> Result<Vec<Point3<f64>>, MeshError> {
             "`.{extension}` is not a mesh format armhil reads (STL, OBJ, COLLADA .dae)"
         )));
     }
+    let bytes = binary_stl_without_solid(bytes, &extension);
     let loader = mesh_loader::Loader::with_custom_reader(bounded_reader).merge_meshes(true);
     // mesh-loader parses untrusted bytes; a panic in it must not take the emulator down.
     let scene = std::panic::catch_unwind(|| loader.load_from_slice(&bytes, path))
@@ -97,6 +98,20 @@ pub fn read_mesh_points(path: &Path) -> Result<Vec<Point3<f64>>, MeshError> {
         return Err(fail("no vertices".to_owned()));
     }
     Ok(points)
+}
+
+/// A binary STL whose 80-byte header starts with `solid` (CAD exporters write that) is read
+/// as ASCII by mesh-loader when a byte of its triangle count happens to be a line end; its
+/// size gives it away as binary (84 + 50 bytes a triangle), and a blanked first byte makes
+/// the reader see it so.
+fn binary_stl_without_solid(mut bytes: Vec<u8>, extension: &str) -> Vec<u8> {
+    if extension == "stl" && bytes.len() >= 84 && bytes.starts_with(b"solid") {
+        let count = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]);
+        if bytes.len() as u64 == 84 + 50 * u64::from(count) {
+            bytes[0] = b' ';
+        }
+    }
+    bytes
 }
 
 #[cfg(test)]
@@ -202,7 +217,19 @@ pub(crate) mod tests {
         let binary = tmp.path().join("b.STL");
         std::fs::write(&ascii, box_stl_ascii([0.1, 0.2, 0.3])).unwrap();
         std::fs::write(&binary, box_stl_binary([0.1, 0.2, 0.3])).unwrap();
-        for path in [ascii, binary] {
+        // A triangle count whose low byte is a carriage return, after a `solid` header.
+        let tricky = tmp.path().join("c.stl");
+        let mut bytes = box_stl_binary([0.1, 0.2, 0.3]);
+        let triangles = bytes[84..].to_vec();
+        let count = 0x0d_u32 + 256;
+        bytes.truncate(80);
+        bytes.extend_from_slice(&count.to_le_bytes());
+        for k in 0..count as usize {
+            let t = k % 12;
+            bytes.extend_from_slice(&triangles[t * 50..t * 50 + 50]);
+        }
+        std::fs::write(&tricky, bytes).unwrap();
+        for path in [ascii, binary, tricky] {
             let points = read_mesh_points(&path).unwrap();
             assert_eq!(
                 extent(&points),

@@ -16,6 +16,7 @@ pub mod hull;
 pub mod mesh;
 pub mod packages;
 mod unused;
+pub mod visual;
 
 pub use checks::{MAX_XML_DEPTH, MAX_XML_ELEMENTS};
 pub use collision::{CollisionGeometry, CollisionShape, LinkShape, MissingMeshes};
@@ -51,9 +52,29 @@ pub struct Description {
 impl Description {
     /// Checks and parses URDF text; `paths` says where the files it names are.
     pub fn parse(text: String, paths: PackagePaths) -> Result<Self, DescriptionError> {
-        checks::check_urdf_text(&text)?;
-        let robot = urdf_rs::read_from_string(&text)
-            .map_err(|e| DescriptionError::at(None, format!("invalid URDF: {e}")))?;
+        let doc = checks::check_urdf_text(&text)?;
+        // urdf-rs refuses a `<texture/>` without `filename`, which ROS's own parser takes
+        // (published robots have them); textures are not simulated, so they are cut out of
+        // what urdf-rs reads. Line numbers in messages still come from the text as given.
+        let textures: Vec<std::ops::Range<usize>> = doc
+            .descendants()
+            .filter(|n| n.has_tag_name("texture") && n.attribute("filename").is_none())
+            .map(|n| n.range())
+            .collect();
+        drop(doc);
+        let parsed = if textures.is_empty() {
+            urdf_rs::read_from_string(&text)
+        } else {
+            let mut kept = String::with_capacity(text.len());
+            let mut from = 0;
+            for range in textures {
+                kept.push_str(&text[from..range.start]);
+                from = range.end;
+            }
+            kept.push_str(&text[from..]);
+            urdf_rs::read_from_string(&kept)
+        };
+        let robot = parsed.map_err(|e| DescriptionError::at(None, format!("invalid URDF: {e}")))?;
         Ok(Self { text, robot, paths })
     }
 

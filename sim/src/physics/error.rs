@@ -37,7 +37,7 @@ pub enum PhysicsError {
         link: String,
     },
     /// A `<mimic>` element names a joint that is not a revolute or prismatic joint of the model.
-    #[error("joint {joint}: mimic leader {leader} is not a movable joint")]
+    #[error("joint {joint}: its <mimic> leader `{leader}` is not a movable joint of the URDF (no such revolute, continuous or prismatic joint)")]
     UnknownMimicLeader {
         /// The follower joint.
         joint: String,
@@ -63,6 +63,13 @@ pub enum PhysicsError {
     /// A joint's origin or axis holds a number that is not finite.
     #[error("joint {joint}: its origin or axis is not finite")]
     NonFiniteFrame {
+        /// The joint's name.
+        joint: String,
+    },
+    /// A joint that moves nothing with mass or inertia about its axis: the physics cannot
+    /// accelerate it (links with no inertial at the end of a chain).
+    #[error("joint {joint} moves nothing with mass or inertia about its axis (its links have no <inertial>); the physics cannot accelerate it")]
+    MasslessJoint {
         /// The joint's name.
         joint: String,
     },

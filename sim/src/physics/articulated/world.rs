@@ -169,7 +169,7 @@ impl ArticulatedWorld {
         for &(f, ..) in &followers {
             is_follower[f] = true;
         }
-        Ok(Self {
+        let world = Self {
             followers,
             is_follower,
             contacts: GroundContacts::new(geometry, GROUND_FRICTION),
@@ -183,7 +183,18 @@ impl ArticulatedWorld {
             external_torques: vec![0.0; n],
             steps: 0,
             diverged: Divergence::default(),
-        })
+        };
+        // Every driven joint must move something: a zero effective inertia is a division by
+        // zero at the first step (public URDFs have hands of massless links).
+        let diagonal = world.mass_matrix_diagonal();
+        for (a, joint) in world.model.joints().iter().enumerate() {
+            if !world.is_follower[a] && diagonal[a] <= 1e-12 {
+                return Err(PhysicsError::MasslessJoint {
+                    joint: joint.name.clone(),
+                });
+            }
+        }
+        Ok(world)
     }
 
     /// The model (kinematics, inertials, limits).

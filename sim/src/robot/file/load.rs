@@ -7,7 +7,8 @@ use super::error::{FileError, Position as Pos};
 use super::raw::{RawRobot, S};
 use crate::bounded_read::read_text_file;
 use crate::description::{Description, DescriptionError, MissingMeshes, PackagePaths};
-use crate::physics::{read_urdf, ArmModel, JointKind};
+use crate::physics::articulated::ArticulatedWorld;
+use crate::physics::{read_urdf, ArmModel, JointKind, WorldConfig};
 use crate::robot::{Base, BusConfig, JointActuator, RobotConfig};
 use crate::robstride::{baud_code_bps, Model, MotorConfig, DEFAULT_HOST_ID};
 use crate::yaml_words::suggestion;
@@ -109,6 +110,14 @@ impl Checker<'_> {
         let collision = description
             .collision_geometry(missing_meshes)
             .map_err(in_urdf)?;
+        // What the physics refuses (a joint that moves nothing with mass), said now.
+        ArticulatedWorld::from_description(&description, &collision, WorldConfig::default())
+            .map_err(|e| {
+                self.err(
+                    pos(&raw.urdf),
+                    format!("the URDF `{urdf_name}` does not load: {e}"),
+                )
+            })?;
         let mut warnings = Vec::new();
         for skipped in &collision.skipped {
             warnings.push(*self.err(pos(&raw.urdf), format!("the URDF `{urdf_name}`: {skipped}")));
@@ -237,7 +246,6 @@ impl Checker<'_> {
             }
         }
         let start_positions_rad = self.start_positions(&raw, &model, &movable, &mut warnings)?;
-        self.masses(&model, &raw)?;
         Ok(LoadedRobot {
             config: RobotConfig {
                 name: raw.robot.value.clone(),
@@ -438,25 +446,5 @@ impl Checker<'_> {
                     ),
                 )
             })
-    }
-
-    /// A link moved by a joint must have mass: the physics cannot accelerate a massless body.
-    fn masses(&self, model: &ArmModel, raw: &RawRobot) -> Res<()> {
-        for joint in model.joints() {
-            let Some(link) = model.link_index(&joint.child_link) else {
-                continue;
-            };
-            let mass = model.inertials().get(link).map_or(0.0, |i| i.mass_kg);
-            if mass <= 0.0 {
-                return Err(self.err(
-                    pos(&raw.urdf),
-                    format!(
-                        "link `{}` (moved by joint `{}`) has no mass in the URDF; the physics cannot move a massless link",
-                        joint.child_link, joint.name
-                    ),
-                ));
-            }
-        }
-        Ok(())
     }
 }
