@@ -23,6 +23,47 @@ pub enum Base {
     },
 }
 
+/// A stand holding a floating robot's base where it starts, as a humanoid hangs on a gantry
+/// during bring-up: the joints move, the base does not, until the stand lets go.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Gantry {
+    /// No stand: the base is free from the start (a robot that is not held up falls).
+    #[default]
+    Off,
+    /// Held until every actuator is enabled (each for the first time; the stand does not
+    /// come back), or until released.
+    UntilEnabled,
+    /// Held until released, never on its own (a scenario's `group: {do: release_gantry}`,
+    /// the web view's `gantry_release`, Python's `inject("gantry_release")`): a robot on its
+    /// stand, legs in the air, for as long as the user wants.
+    UntilReleased,
+}
+
+impl Gantry {
+    /// Every gantry as robot files and `armhil sim robot --gantry` write it.
+    pub const WORDS: [(&'static str, Gantry); 3] = [
+        ("off", Gantry::Off),
+        ("until_enabled", Gantry::UntilEnabled),
+        ("until_released", Gantry::UntilReleased),
+    ];
+
+    /// The gantry written `word`.
+    pub fn named(word: &str) -> Option<Self> {
+        Self::WORDS
+            .iter()
+            .find(|(w, _)| *w == word)
+            .map(|(_, g)| *g)
+    }
+
+    /// How robot files write it.
+    pub fn word(self) -> &'static str {
+        Self::WORDS
+            .iter()
+            .find(|(_, g)| *g == self)
+            .map_or("off", |(w, _)| w)
+    }
+}
+
 /// One CAN bus of the robot.
 #[derive(Debug, Clone, PartialEq)]
 pub struct BusConfig {
@@ -64,6 +105,8 @@ pub struct RobotConfig {
     pub collision: Option<Arc<CollisionGeometry>>,
     /// Fixed or floating base.
     pub base: Base,
+    /// A floating base's stand at start (ignored for a fixed base).
+    pub gantry: Gantry,
     /// The buses.
     pub buses: Vec<BusConfig>,
     /// The actuated joints; joints not listed are passive.

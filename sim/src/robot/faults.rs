@@ -15,6 +15,8 @@ use crate::yaml_words::suggestion;
 pub const EXTERNAL_TORQUE: &str = "external_torque";
 /// The bus fault's name.
 pub const BUS_LOST: &str = "bus_lost";
+/// The name of the gantry's release (an event: the stand does not come back).
+pub const GANTRY_RELEASE: &str = "gantry_release";
 
 /// A fault on a running robot.
 #[derive(Debug, Clone, PartialEq)]
@@ -39,6 +41,8 @@ pub enum RobotFault {
         /// The bus's name.
         bus: String,
     },
+    /// The stand holding the base lets go ([`crate::robot::Gantry`]); an event.
+    GantryRelease,
 }
 
 /// What a robot's faults are addressed by: its actuated joints (with their actuators'
@@ -55,7 +59,7 @@ impl RobotLayout {
     /// Every fault name: RobStride's table, then the push and the bus cut.
     fn names() -> Vec<&'static str> {
         let mut names: Vec<&str> = Fault::ALL.iter().map(|f| f.name()).collect();
-        names.extend([EXTERNAL_TORQUE, BUS_LOST]);
+        names.extend([EXTERNAL_TORQUE, BUS_LOST, GANTRY_RELEASE]);
         names
     }
 
@@ -92,6 +96,12 @@ impl RobotLayout {
             params: vec![ParamInfo::required("bus", "bus name")
                 .suggesting(self.buses.first().cloned().map(FaultArgValue::Text))],
         });
+        table.push(FaultInfo {
+            name: GANTRY_RELEASE,
+            description: "the stand holding a floating base lets go: the robot stands or falls"
+                .into(),
+            params: Vec::new(),
+        });
         table
     }
 
@@ -119,6 +129,10 @@ impl RobotLayout {
                     }
                 };
                 Ok(RobotFault::ExternalTorque { joint, torque_nm })
+            }
+            GANTRY_RELEASE => {
+                args.only(name, &[])?;
+                Ok(RobotFault::GantryRelease)
             }
             BUS_LOST => {
                 args.only(name, &["bus"])?;
@@ -198,7 +212,12 @@ impl FaultTarget for RobotMonitor {
             RobotFault::Actuator { joint, fault } => format!("{} on {joint}", fault.name()),
             RobotFault::ExternalTorque { joint, .. } => format!("{EXTERNAL_TORQUE} on {joint}"),
             RobotFault::BusLost { bus } => format!("{BUS_LOST} {bus}"),
+            RobotFault::GantryRelease => GANTRY_RELEASE.to_owned(),
         }
+    }
+
+    fn lasts(&self, fault: &RobotFault) -> bool {
+        !matches!(fault, RobotFault::GantryRelease)
     }
 
     fn same_site(&self, a: &RobotFault, b: &RobotFault) -> bool {
@@ -214,6 +233,7 @@ impl FaultTarget for RobotMonitor {
                 self.set_external_torque(&joint, torque_nm).await
             }
             RobotFault::BusLost { bus } => self.set_bus_lost(&bus, true).await,
+            RobotFault::GantryRelease => self.release_gantry().await.map(|_| ()),
         }
         .map_err(|e| e.to_string())
     }
@@ -223,6 +243,8 @@ impl FaultTarget for RobotMonitor {
             RobotFault::Actuator { joint, fault } => RobotMonitor::clear(self, &joint, fault).await,
             RobotFault::ExternalTorque { joint, .. } => self.set_external_torque(&joint, 0.0).await,
             RobotFault::BusLost { bus } => self.set_bus_lost(&bus, false).await,
+            // An event: nothing is left to clear (the stand does not come back).
+            RobotFault::GantryRelease => Ok(()),
         }
         .map_err(|e| e.to_string())
     }
@@ -348,7 +370,7 @@ mod tests {
     #[test]
     fn the_table_suggests_the_first_joint_and_bus() {
         let table = layout().fault_table();
-        assert_eq!(table.len(), Fault::ALL.len() + 2);
+        assert_eq!(table.len(), Fault::ALL.len() + 3);
         let bus = table.iter().find(|f| f.name == BUS_LOST).unwrap();
         assert_eq!(bus.params[0].default, Some(text("can0")));
         assert_eq!(table[0].params[0].default, Some(text("left_knee")));

@@ -20,7 +20,7 @@ mod runner;
 mod world;
 
 pub use base_pose::BasePose;
-pub use config::{Base, BusConfig, JointActuator, RobotConfig, RobotConfigError};
+pub use config::{Base, BusConfig, Gantry, JointActuator, RobotConfig, RobotConfigError};
 pub use faults::{RobotFault, RobotLayout};
 pub use runner::{
     JointSnapshot, RobotEmulator, RobotError, RobotHandle, RobotMonitor, RobotSnapshot,

@@ -9,7 +9,7 @@ use tokio::sync::{mpsc, oneshot};
 use tokio::task::JoinHandle;
 
 use super::base_pose::BasePose;
-use super::config::{RobotConfig, RobotConfigError};
+use super::config::{Gantry, RobotConfig, RobotConfigError};
 use super::world::{RobotWorld, RobotWorldError};
 use crate::can_runner::{receive_frames, StepClock, TxBacklog, STEP};
 use crate::pacer::Pacer;
@@ -97,6 +97,8 @@ pub struct RobotSnapshot {
     pub joints: Vec<JointSnapshot>,
     /// The buses currently cut off (a `bus_lost` fault).
     pub lost_buses: Vec<String>,
+    /// Whether a stand still holds the base ([`crate::robot::Gantry`]).
+    pub gantry_holds: bool,
 }
 
 impl RobotSnapshot {
@@ -113,6 +115,7 @@ enum Request {
     SetExternalTorque(String, f64, oneshot::Sender<Result<(), RobotError>>),
     SetBusLost(String, bool, oneshot::Sender<Result<(), RobotError>>),
     Snapshot(oneshot::Sender<RobotSnapshot>),
+    ReleaseGantry(oneshot::Sender<bool>),
     Shutdown(oneshot::Sender<()>),
 }
 
@@ -203,6 +206,7 @@ impl RobotEmulator {
             state,
             state_path: config.state_file,
             base: Arc::clone(&base),
+            gantry: config.gantry,
         };
         let (supervisor, death) = Supervisor::new();
         let task = supervisor.spawn(
@@ -285,6 +289,12 @@ impl RobotMonitor {
     /// The robot's state now.
     pub async fn snapshot(&self) -> Result<RobotSnapshot, RobotError> {
         self.ask(Request::Snapshot).await
+    }
+
+    /// Lets the stand go of the base (see [`crate::robot::Gantry`]): from then on the robot
+    /// stands or falls. `false` when nothing held it.
+    pub async fn release_gantry(&self) -> Result<bool, RobotError> {
+        self.ask(Request::ReleaseGantry).await
     }
 }
 
@@ -370,6 +380,8 @@ struct Runner {
     state_path: Option<PathBuf>,
     /// Shared with the monitors: the root link's pose after the latest step.
     base: Arc<std::sync::Mutex<BasePose>>,
+    /// When the stand lets go of the base.
+    gantry: Gantry,
 }
 
 /// Pose of the URDF root link (the tree's root, wherever the file lists it) in the world.
@@ -516,6 +528,13 @@ impl Runner {
             Request::Snapshot(reply) => {
                 let _ = reply.send(self.snapshot());
             }
+            Request::ReleaseGantry(reply) => {
+                let released = self.world.release_base();
+                if released {
+                    tracing::info!("robot: the gantry let go of the base");
+                }
+                let _ = reply.send(released);
+            }
             Request::Shutdown(done) => {
                 let _ = done.send(());
             }
@@ -553,6 +572,7 @@ impl Runner {
                 .filter(|p| p.lost)
                 .map(|p| p.name.clone())
                 .collect(),
+            gantry_holds: world.root_held(),
         }
     }
 
@@ -574,6 +594,14 @@ impl Runner {
         for a in &mut self.actuators {
             let bus = a.bus;
             out.extend(a.firmware.tick().into_iter().map(|f| (bus, f)));
+        }
+        let held = self.world.world().root_held();
+        if held
+            && self.gantry == Gantry::UntilEnabled
+            && self.actuators.iter().all(|a| a.firmware.is_running())
+        {
+            self.world.release_base();
+            tracing::info!("robot: every actuator is enabled; the gantry let go of the base");
         }
         self.world.step()?;
         *self.base.lock().unwrap_or_else(|e| e.into_inner()) = base_pose(&self.world);

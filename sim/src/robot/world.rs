@@ -4,7 +4,7 @@ use crate::description::{Description, DescriptionError};
 use crate::physics::articulated::ArticulatedWorld;
 use crate::physics::{PhysicsError, WorldConfig};
 
-use super::config::{Base, RobotConfig};
+use super::config::{Base, Gantry, RobotConfig};
 use super::joint_plant::{joint_pair, JointLink, JointPlant};
 
 /// World steps between two refreshes of the joints' effective inertia: it changes with the
@@ -96,6 +96,8 @@ impl RobotWorld {
             world.set_armature(index, actuator.motor.model.spec().rotor_inertia_kg_m2);
         }
         world.set_joint_positions(&q)?;
+        let floating = matches!(config.base, Base::Floating { .. });
+        world.set_root_held(floating && config.gantry != Gantry::Off);
         let inertia = world.mass_matrix_diagonal();
         let mut joints = Vec::with_capacity(indices.len());
         let mut plants = Vec::with_capacity(indices.len());
@@ -142,6 +144,13 @@ impl RobotWorld {
             link.sync_from_world(q[i], qd[i], inertia.as_ref().map(|m| m[i]));
         }
         Ok(())
+    }
+
+    /// Lets the stand go of the base (see [`Gantry`]); `false` when it held nothing.
+    pub fn release_base(&mut self) -> bool {
+        let held = self.world.root_held();
+        self.world.set_root_held(false);
+        held
     }
 
     /// The physics world (positions, link poses for views and checks).

@@ -33,6 +33,7 @@ fn arm_config(start: &[(&str, f64)]) -> RobotConfig {
         missing_meshes: Default::default(),
         collision: None,
         base: Base::Fixed,
+        gantry: Default::default(),
         buses: ["can0", "can1"]
             .iter()
             .map(|name| BusConfig {
@@ -292,5 +293,71 @@ async fn configuration_mistakes_are_named() {
             }
         ),
         "{error}"
+    );
+}
+
+/// The shipped humanoid (20 actuators on four buses, floating base) with `gantry`.
+fn humanoid(gantry: sim::robot::Gantry) -> RobotConfig {
+    let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../robots/humanoid.yaml");
+    let mut config = sim::robot::file::load_robot_file(&file)
+        .expect("the humanoid loads")
+        .config;
+    config.gantry = gantry;
+    config
+}
+
+/// Type 3: enable motor `motor`.
+fn enable(motor: u32) -> CanFrame {
+    ext(0x03, HOST, motor, [0; 8])
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_humanoid_on_its_gantry_hangs_until_every_actuator_is_enabled() {
+    let config = humanoid(sim::robot::Gantry::UntilEnabled);
+    let ids: Vec<(usize, u32)> = config
+        .actuators
+        .iter()
+        .map(|a| (a.bus, u32::from(a.motor.can_id)))
+        .collect();
+    let rig = spawn(config);
+    tokio::time::sleep(Duration::from_millis(1000)).await;
+    let hanging = rig.robot.snapshot().await.unwrap();
+    assert!(hanging.gantry_holds);
+    // Unpowered, its legs hang and swing; the pelvis stays where the stand holds it.
+    assert_eq!(hanging.base_position_m[2], 0.81);
+    // Every actuator but the last enabled: still held.
+    for &(bus, id) in &ids[..ids.len() - 1] {
+        send(&rig.hosts[bus], enable(id)).await;
+    }
+    tokio::time::sleep(Duration::from_millis(50)).await;
+    assert!(rig.robot.snapshot().await.unwrap().gantry_holds);
+    let (bus, id) = ids[ids.len() - 1];
+    send(&rig.hosts[bus], enable(id)).await;
+    tokio::time::sleep(Duration::from_millis(10)).await;
+    let released = rig.robot.snapshot().await.unwrap();
+    assert!(!released.gantry_holds, "released once all 20 are enabled");
+    // Enabled where they hung, the actuators hold that pose; the base now moves.
+    tokio::time::sleep(Duration::from_millis(500)).await;
+    let after = rig.robot.snapshot().await.unwrap();
+    assert_ne!(after.base_position_m[2], 0.81);
+    assert!(
+        !rig.robot.monitor().release_gantry().await.unwrap(),
+        "nothing holds it any more"
+    );
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_humanoid_held_until_released_falls_when_let_go() {
+    let rig = spawn(humanoid(sim::robot::Gantry::UntilReleased));
+    tokio::time::sleep(Duration::from_millis(500)).await;
+    assert_eq!(rig.robot.snapshot().await.unwrap().base_position_m[2], 0.81);
+    assert!(rig.robot.monitor().release_gantry().await.unwrap());
+    tokio::time::sleep(Duration::from_millis(1500)).await;
+    let fallen = rig.robot.snapshot().await.unwrap();
+    assert!(!fallen.gantry_holds);
+    assert!(
+        fallen.base_position_m[2] < 0.5,
+        "{:?}",
+        fallen.base_position_m
     );
 }

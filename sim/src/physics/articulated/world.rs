@@ -81,6 +81,8 @@ pub struct ArticulatedWorld {
     /// The root link's spatial velocity in its own coordinates (zero for a fixed root).
     root_velocity: Vector6<f64>,
     external_torques: Vec<f64>,
+    /// A floating root held where it is (a robot on its stand): it moves as a fixed root.
+    root_held: bool,
     /// Per `<mimic>` follower: (follower, leader, multiplier, offset), actuated indices.
     followers: Vec<(usize, usize, f64, f64)>,
     /// Per actuated joint, whether it follows another through `<mimic>`.
@@ -170,6 +172,7 @@ impl ArticulatedWorld {
             is_follower[f] = true;
         }
         let world = Self {
+            root_held: false,
             followers,
             is_follower,
             contacts: GroundContacts::new(geometry, GROUND_FRICTION),
@@ -237,6 +240,20 @@ impl ArticulatedWorld {
         self.qd.fill(0.0);
         self.follow_leaders();
         Ok(())
+    }
+
+    /// Holds a floating root where it is now (`true`: a stand takes its weight, it moves no
+    /// more) or lets it go from rest (`false`). No effect on a fixed root.
+    pub fn set_root_held(&mut self, held: bool) {
+        if held != self.root_held {
+            self.root_velocity = Vector6::zeros();
+        }
+        self.root_held = held;
+    }
+
+    /// Whether a stand holds the root (see [`ArticulatedWorld::set_root_held`]).
+    pub fn root_held(&self) -> bool {
+        self.root_held
     }
 
     /// Disturbance torques (N·m, N) added to every step's motor torques until changed.
@@ -434,7 +451,7 @@ impl ArticulatedWorld {
             *q += *qd * dt;
         }
         self.follow_leaders();
-        if self.config.floating_base_height_m.is_some() {
+        if self.config.floating_base_height_m.is_some() && !self.root_held {
             // The root's velocity is in its own coordinates; for spatial vectors their rate
             // there is the acceleration in them (v × v = 0).
             self.root_velocity += root_acceleration * dt;
@@ -453,6 +470,9 @@ impl ArticulatedWorld {
         let links = self.inertia.len();
         let root = self.model.root_link();
         let floating = self.config.floating_base_height_m.is_some();
+        // Held on its stand, a floating root moves as a fixed one; the ground still pushes
+        // on feet that reach it.
+        let free = floating && !self.root_held;
         let gravity = Vector3::from(self.config.gravity_m_s2);
 
         // Pass 1, root to leaves: poses, velocities, bias forces.
@@ -460,7 +480,7 @@ impl ArticulatedWorld {
         let mut velocity = vec![Vector6::zeros(); links];
         let mut passes = vec![JointPass::default(); tree.len()];
         poses[root] = self.root_pose;
-        velocity[root] = if floating {
+        velocity[root] = if free {
             self.root_velocity
         } else {
             Vector6::zeros()
@@ -531,7 +551,7 @@ impl ArticulatedWorld {
 
         // Pass 3, root to leaves: accelerations.
         let mut acceleration = vec![Vector6::zeros(); links];
-        if floating {
+        if free {
             acceleration[root] = match articulated[root].cholesky() {
                 Some(c) => -c.solve(&bias[root]),
                 None => Vector6::repeat(f64::NAN),

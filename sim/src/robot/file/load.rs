@@ -9,7 +9,7 @@ use crate::bounded_read::read_text_file;
 use crate::description::{Description, DescriptionError, MissingMeshes, PackagePaths};
 use crate::physics::articulated::ArticulatedWorld;
 use crate::physics::{read_urdf, ArmModel, JointKind, WorldConfig};
-use crate::robot::{Base, BusConfig, JointActuator, RobotConfig};
+use crate::robot::{Base, BusConfig, Gantry, JointActuator, RobotConfig};
 use crate::robstride::{baud_code_bps, Model, MotorConfig, DEFAULT_HOST_ID};
 use crate::yaml_words::suggestion;
 
@@ -127,6 +127,7 @@ impl Checker<'_> {
         }
         let urdf = description.text().to_owned();
         let base = self.base(&raw)?;
+        let gantry = self.gantry(&raw, base)?;
         let buses = self.buses(&raw)?;
         let mut actuators: Vec<JointActuator> = Vec::new();
         let movable: Vec<&str> = model.joints().iter().map(|j| j.name.as_str()).collect();
@@ -254,6 +255,7 @@ impl Checker<'_> {
                 missing_meshes,
                 collision: Some(std::sync::Arc::new(collision)),
                 base,
+                gantry,
                 buses,
                 actuators,
                 start_positions_rad,
@@ -337,6 +339,31 @@ impl Checker<'_> {
             packages.push((name.clone(), path));
         }
         Ok(packages)
+    }
+
+    /// The floating base's stand (none for a fixed base).
+    fn gantry(&self, raw: &RawRobot, base: Base) -> Res<Gantry> {
+        let Some(word) = &raw.gantry else {
+            return Ok(Gantry::Off);
+        };
+        if base == Base::Fixed {
+            return Err(self.err(
+                pos(word),
+                "`gantry` holds a floating base; a fixed base is bolted down already",
+            ));
+        }
+        Gantry::named(&word.value).ok_or_else(|| {
+            let words: Vec<&str> = Gantry::WORDS.iter().map(|(w, _)| *w).collect();
+            self.err(
+                pos(word),
+                format!(
+                    "`gantry` must be one of {}, got `{}`{}",
+                    words.join(", "),
+                    word.value,
+                    suggestion(&word.value, &words)
+                ),
+            )
+        })
     }
 
     fn missing_meshes(&self, raw: &RawRobot) -> Res<MissingMeshes> {

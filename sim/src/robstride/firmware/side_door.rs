@@ -66,6 +66,11 @@ impl Actuator {
         self.plant.set_external_torque_nm(torque_nm);
     }
 
+    /// Whether the motor is enabled (run mode): its loops drive the joint.
+    pub fn is_running(&self) -> bool {
+        self.mode == ModeState::Run
+    }
+
     /// A view of the motor's state.
     pub fn snapshot(&self) -> MotorSnapshot {
         MotorSnapshot {
