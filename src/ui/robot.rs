@@ -31,9 +31,12 @@ impl RobotLive {
         taps: Vec<(String, BusTap)>,
         title: &str,
     ) -> Self {
-        let model = arm_model(urdf)
-            .inspect_err(|e| tracing::warn!("the web view cannot draw the robot: {e}"))
-            .ok();
+        let model = arm_model((
+            urdf,
+            crate::harness::report::html::arm::urdf_paths_for(urdf),
+        ))
+        .inspect_err(|e| tracing::warn!("the web view cannot draw the robot: {e}"))
+        .ok();
         let drawn = model.as_ref().map_or_else(Vec::new, |m| {
             m.joints
                 .iter()

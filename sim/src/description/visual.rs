@@ -59,9 +59,22 @@ pub fn read_mesh_triangles(path: &Path) -> Result<TriMesh, MeshError> {
     // part's indices by its last face's last index instead of its vertex count.
     let loader = mesh_loader::Loader::with_custom_reader(bounded_reader);
     // mesh-loader parses untrusted bytes; a panic in it must not take the caller down.
-    let scene = std::panic::catch_unwind(|| loader.load_from_slice(&bytes, path))
-        .map_err(|_| fail("the mesh reader failed on this file".to_owned()))?
-        .map_err(|e| fail(e.to_string()))?;
+    let load = |bytes: &[u8]| {
+        std::panic::catch_unwind(|| loader.load_from_slice(bytes, path))
+            .map_err(|_| fail("the mesh reader failed on this file".to_owned()))?
+            .map_err(|e| fail(e.to_string()))
+    };
+    let scene = match load(&bytes) {
+        // A binary STL whose header starts with "solid" and whose triangle count holds a
+        // line break byte is taken for ASCII by mesh-loader (a public quadruped's feet): when
+        // the size is exactly a binary STL's for its count, read it as one.
+        Err(e) if extension == "stl" && is_binary_stl_size(&bytes) => {
+            let mut binary = bytes.clone();
+            binary[..5].copy_from_slice(b"SOLID");
+            load(&binary).map_err(|_| e)?
+        }
+        other => other?,
+    };
     let mut out = TriMesh::default();
     // COLLADA gives one material per part, in order; OBJ's table does not say which part uses
     // which, so only a lone material is taken.
@@ -106,6 +119,15 @@ pub fn read_mesh_triangles(path: &Path) -> Result<TriMesh, MeshError> {
         return Err(fail("no triangles".to_owned()));
     }
     Ok(out)
+}
+
+/// Whether `bytes` are as long as a binary STL with the triangle count its header gives.
+fn is_binary_stl_size(bytes: &[u8]) -> bool {
+    let Some(count) = bytes.get(80..84) else {
+        return false;
+    };
+    let count = u32::from_le_bytes([count[0], count[1], count[2], count[3]]);
+    bytes.starts_with(b"solid") && bytes.len() as u64 == 84 + 50 * u64::from(count)
 }
 
 /// The finest grid [`TriMesh::simplified`] clusters on: cells of 1/4096 of the mesh's
@@ -340,6 +362,26 @@ mod tests {
         // The unit applies: 11 mm is the far corner.
         assert!((mesh.bounds().unwrap().1[0] - 0.011).abs() < 1e-6);
         assert_eq!(mesh.color, Some([1.0, 0.0, 0.0, 1.0]));
+    }
+
+    #[test]
+    fn a_binary_stl_whose_header_reads_as_ascii_is_read_as_binary() {
+        // "solid foot", spaces, and a count of 13 (0x0D, a carriage return): mesh-loader
+        // alone reads a solid named "foot …" and fails on the first triangle's bytes.
+        let mut bytes = box_stl_binary([0.1, 0.1, 0.1]);
+        let header = format!("{:<80}", "solid foot");
+        bytes[..80].copy_from_slice(header.as_bytes());
+        bytes[80..84].copy_from_slice(&13u32.to_le_bytes());
+        let first = bytes[84..134].to_vec();
+        bytes.extend_from_slice(&first);
+        let tmp = tempfile::tempdir().unwrap();
+        let path = tmp.path().join("foot.stl");
+        std::fs::write(&path, &bytes).unwrap();
+        assert_eq!(read_mesh_triangles(&path).unwrap().triangles.len(), 13);
+        // A broken file of another size still fails.
+        bytes.push(0);
+        std::fs::write(&path, &bytes).unwrap();
+        assert!(read_mesh_triangles(&path).is_err());
     }
 
     #[test]

@@ -12,7 +12,7 @@ use armhil::ui::bus_tap::BusTap;
 use armhil::ui::robot::RobotLive;
 use bus::socketcand::SocketcandServer;
 use bus::CanBus;
-use sim::robot::{RobotConfig, RobotEmulator};
+use sim::robot::{Base, Gantry, RobotConfig, RobotEmulator};
 
 /// Arguments of `armhil sim robot`.
 #[derive(Debug, clap::Args)]
@@ -39,6 +39,20 @@ pub struct Args {
     /// e.g. `127.0.0.1:8000` (a bare port means 127.0.0.1).
     #[arg(long, value_name = "HOST:PORT")]
     pub ui: Option<String>,
+    /// A floating robot's stand: `until_enabled` (the default unless the robot file says: the
+    /// robot hangs at its start pose until every actuator is enabled, as on a bring-up
+    /// gantry), `until_released` (until the web view's or Python's `gantry_release`) or `off`
+    /// (free from power-on: an unpowered humanoid falls before a host connects).
+    #[arg(long, value_name = "WHEN", value_parser = parse_gantry)]
+    pub gantry: Option<Gantry>,
+}
+
+/// `--gantry`'s word (`until_enabled` or `until-enabled`).
+fn parse_gantry(word: &str) -> Result<Gantry, String> {
+    Gantry::named(&word.replace('-', "_")).ok_or_else(|| {
+        let words: Vec<&str> = Gantry::WORDS.iter().map(|(w, _)| *w).collect();
+        format!("expected one of {}", words.join(", "))
+    })
 }
 
 /// The prefix of the emulator's end of a vxcan pair.
@@ -184,6 +198,22 @@ pub(crate) async fn serve(args: Args, mut stop: super::StopSource) -> anyhow::Re
     }
     let mut config = loaded.config;
     config.host_id = args.host_id;
+    // A user bringing a robot up expects it on its stand until its actuators hold it.
+    config.gantry = match (args.gantry, loaded.gantry_given, config.base) {
+        (Some(gantry), ..) => gantry,
+        (None, true, _) | (None, false, Base::Fixed) => config.gantry,
+        (None, false, Base::Floating { .. }) => Gantry::UntilEnabled,
+    };
+    if config.gantry != Gantry::Off && matches!(config.base, Base::Floating { .. }) {
+        eprintln!(
+            "the robot hangs on its gantry ({}): {}",
+            config.gantry.word(),
+            match config.gantry {
+                Gantry::UntilEnabled => "released once every actuator is enabled",
+                _ => "released by the web view's or Python's gantry_release",
+            }
+        );
+    }
     config.state_file = args.state_file.clone();
     let summary = summary(&config);
     let served = open_buses(&args, &config).await?;

@@ -451,6 +451,27 @@ impl Device for GroupDevice {
                         .map_err(|e| self.error(target.actuator, e))?;
                 }
             }
+            GroupAction::ReleaseGantry => {
+                let robot = self.floating_robot().ok_or_else(|| {
+                    DeviceError::unsupported(format!(
+                        "release_gantry: actuator group `{}` is not a robot with a floating base",
+                        self.name
+                    ))
+                })?;
+                let released = robot
+                    .release_gantry()
+                    .await
+                    .map_err(|e| DeviceError::new(ErrorClass::Rejected, e.to_string()))?;
+                if !released {
+                    return Err(DeviceError::new(
+                        ErrorClass::Rejected,
+                        format!(
+                            "release_gantry: nothing holds `{}`'s base: its gantry let go already, or it has none",
+                            self.name
+                        ),
+                    ));
+                }
+            }
             GroupAction::Watchdog { window } => {
                 let window = *window;
                 self.on_every_motor(|m| async move { m.set_can_timeout(window).await.map(|_| ()) })

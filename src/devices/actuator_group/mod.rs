@@ -170,6 +170,7 @@ impl KindSpec for Kind {
         Some(Drawing {
             urdf: robot.urdf.clone().into(),
             posed_by: Posing::Joints { joints, base },
+            paths: Some(robot.urdf_paths.clone()),
         })
     }
 

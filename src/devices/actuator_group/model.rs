@@ -69,6 +69,9 @@ pub enum GroupAction {
         /// Speed limit (rad/s).
         speed_rad_s: f64,
     },
+    /// The robot's gantry lets go of its base (the bench's doing, not a frame on the bus):
+    /// from then on the robot stands on its actuators or falls.
+    ReleaseGantry,
     /// Arm every actuator's CAN watchdog (canTimeout): an actuator that receives no command
     /// for `window` resets (torque off).
     Watchdog {

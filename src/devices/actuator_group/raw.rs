@@ -34,6 +34,8 @@ pub(crate) struct RawSettings {
     pub actuators: Option<S<Vec<S<RawActuator>>>>,
     /// Or a whole robot: a robot file (`robots/*.yaml`), relative to the scenario.
     pub robot: Option<S<String>>,
+    /// The robot's gantry, instead of its file's: `off`, `until_enabled`, `until_released`.
+    pub gantry: Option<S<String>>,
 }
 
 /// The `group:` step: `do:` names the command (`enable`, `disable`, `hold`, `watchdog`,

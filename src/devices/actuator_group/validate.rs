@@ -15,7 +15,7 @@ const CAN_IDS: std::ops::RangeInclusive<i64> = 1..=127;
 pub(crate) fn settings(ctx: &Ctx<'_>, raw: &RawSettings, at: Pos) -> Res<GroupSettings> {
     let list = match (&raw.actuators, &raw.robot) {
         (Some(list), None) => list,
-        (None, Some(file)) => return robot_settings(ctx, file),
+        (None, Some(file)) => return robot_settings(ctx, file, raw.gantry.as_ref()),
         (Some(_), Some(file)) => {
             return Err(ctx.err(
                 pos(file),
@@ -27,6 +27,12 @@ pub(crate) fn settings(ctx: &Ctx<'_>, raw: &RawSettings, at: Pos) -> Res<GroupSe
             "an actuator group needs `actuators` (one bus, a rig each) or `robot` (a robot file)",
         )),
     };
+    if let Some(gantry) = &raw.gantry {
+        return Err(ctx.err(
+            pos(gantry),
+            "`gantry` holds a robot's base: give it with `robot`, not `actuators`",
+        ));
+    }
     if list.value.is_empty() {
         return Err(ctx.err(
             pos(list),
@@ -83,7 +89,11 @@ pub(crate) fn settings(ctx: &Ctx<'_>, raw: &RawSettings, at: Pos) -> Res<GroupSe
 
 /// `robot: FILE`: the robot file, relative to the scenario, loaded with its own errors (which
 /// name the robot file's line and column) reported at the `robot:` key.
-fn robot_settings(ctx: &Ctx<'_>, file: &S<String>) -> Res<GroupSettings> {
+fn robot_settings(
+    ctx: &Ctx<'_>,
+    file: &S<String>,
+    gantry: Option<&S<String>>,
+) -> Res<GroupSettings> {
     let dir = ctx.file.parent().unwrap_or(std::path::Path::new("."));
     let path = dir.join(&file.value);
     let loaded = crate::robots::load_robot_file(&path).map_err(|e| {
@@ -93,7 +103,29 @@ fn robot_settings(ctx: &Ctx<'_>, file: &S<String>) -> Res<GroupSettings> {
         };
         ctx.err(pos(file), format!("robot file `{}`: {shown}", file.value))
     })?;
-    let config = loaded.config;
+    let mut config = loaded.config;
+    if let Some(word) = gantry {
+        config.gantry = sim::robot::Gantry::named(&word.value).ok_or_else(|| {
+            let words: Vec<&str> = sim::robot::Gantry::WORDS.iter().map(|(w, _)| *w).collect();
+            ctx.err(
+                pos(word),
+                format!(
+                    "`gantry` must be one of {}, got `{}`",
+                    words.join(", "),
+                    word.value
+                ),
+            )
+        })?;
+        if config.base == sim::robot::Base::Fixed && config.gantry != sim::robot::Gantry::Off {
+            return Err(ctx.err(
+                pos(word),
+                format!(
+                    "`gantry`: robot `{}` has a fixed base; a gantry holds a floating one",
+                    config.name
+                ),
+            ));
+        }
+    }
     let actuators = config
         .actuators
         .iter()
@@ -235,11 +267,15 @@ pub(crate) fn step(
             )?;
             ("group watchdog", GroupAction::Watchdog { window })
         }
+        "release_gantry" => {
+            ctx.only_arguments(&present, &[], "release_gantry", "no arguments")?;
+            ("group release_gantry", GroupAction::ReleaseGantry)
+        }
         other => {
             return Err(ctx.err(
                 pos(command),
                 format!(
-                    "`do`: unknown group command `{other}`; expected one of: enable, disable, hold, watchdog, mode, move"
+                    "`do`: unknown group command `{other}`; expected one of: enable, disable, hold, watchdog, mode, move, release_gantry"
                 ),
             ))
         }

@@ -9,6 +9,9 @@ pub struct Drawing {
     pub urdf: Cow<'static, str>,
     /// Which trace columns pose it.
     pub posed_by: Posing,
+    /// Where the files the URDF names (meshes) are: a robot's `urdf_paths`; `None` for a
+    /// bundled model (no meshes, or only absolute names).
+    pub paths: Option<sim::description::PackagePaths>,
 }
 
 /// Which trace columns give the drawn model its pose.
@@ -56,6 +59,7 @@ impl Drawing {
         Self {
             urdf: Cow::Borrowed(urdf),
             posed_by: Posing::ArmColumns,
+            paths: None,
         }
     }
 }

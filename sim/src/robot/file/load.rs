@@ -29,6 +29,8 @@ pub struct LoadedRobot {
     pub file: PathBuf,
     /// The URDF file it names.
     pub urdf_path: PathBuf,
+    /// Whether the file says `gantry:` (else a front end may choose its own default).
+    pub gantry_given: bool,
     /// Choices that run but are probably wrong (an actuator weaker than its joint's URDF
     /// effort), each at its place in the file.
     pub warnings: Vec<FileError>,
@@ -263,6 +265,7 @@ impl Checker<'_> {
                 host_id: DEFAULT_HOST_ID,
             },
             file: self.file.to_owned(),
+            gantry_given: raw.gantry.is_some(),
             urdf_path,
             warnings,
         })

@@ -1,7 +1,11 @@
-//! The arm drawn by the web pages: joint origins, axes and limits read from a URDF, as JSON.
-//! The pages compute the forward kinematics themselves (web/common/arm3d.js).
+//! The arm drawn by the web pages: joint origins, axes and limits read from a URDF, as JSON,
+//! with each link's visual geometry ([`super::visuals`]). The pages compute the forward
+//! kinematics themselves (web/common/arm3d.js).
 
 use serde::Serialize;
+use sim::description::PackagePaths;
+
+pub use super::visuals::{FallbackJson, GeometryJson, MeshJson, VisualJson};
 
 /// Why a URDF could not be turned into a drawable model.
 #[derive(Debug, thiserror::Error)]
@@ -59,7 +63,8 @@ pub struct JointJson {
     pub mimic: Option<MimicJson>,
 }
 
-/// The drawn model: joints ordered from the root outwards.
+/// The drawn model: joints ordered from the root outwards, and the links' visuals. The visual
+/// lists are left out of the JSON when empty (a URDF without `<visual>`: a stick figure).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ArmModelJson {
     /// `<robot name>`.
@@ -68,6 +73,15 @@ pub struct ArmModelJson {
     pub root: String,
     /// Joints, each after the joint that moves its parent link.
     pub joints: Vec<JointJson>,
+    /// Every `<visual>` of the links drawn with their geometry.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub visuals: Vec<VisualJson>,
+    /// The meshes the visuals use, simplified and quantised (see [`super::visuals`]).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub meshes: Vec<MeshJson>,
+    /// Links with visuals that are drawn as the stick figure instead, and why.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub fallbacks: Vec<FallbackJson>,
 }
 
 fn kind_name(kind: &urdf_rs::JointType) -> &'static str {
@@ -100,8 +114,57 @@ fn joint_json(j: &urdf_rs::Joint) -> JointJson {
     }
 }
 
-/// The drawable model of a URDF.
-pub fn arm_model(urdf: &str) -> Result<ArmModelJson, ArmModelError> {
+/// URDF text and where the files it names are: what [`arm_model`] takes.
+#[derive(Debug, Clone)]
+pub struct UrdfSource<'a> {
+    /// The URDF text.
+    pub text: &'a str,
+    /// Where its meshes are looked for.
+    pub paths: std::borrow::Cow<'a, PackagePaths>,
+}
+
+/// Text alone: meshes, if any, must have absolute names (the bundled arms have none).
+impl<'a> From<&'a str> for UrdfSource<'a> {
+    fn from(text: &'a str) -> Self {
+        Self {
+            text,
+            paths: std::borrow::Cow::Owned(PackagePaths::default()),
+        }
+    }
+}
+
+impl<'a> From<(&'a str, &'a PackagePaths)> for UrdfSource<'a> {
+    fn from((text, paths): (&'a str, &'a PackagePaths)) -> Self {
+        Self {
+            text,
+            paths: std::borrow::Cow::Borrowed(paths),
+        }
+    }
+}
+
+impl<'a> From<(&'a str, PackagePaths)> for UrdfSource<'a> {
+    fn from((text, paths): (&'a str, PackagePaths)) -> Self {
+        Self {
+            text,
+            paths: std::borrow::Cow::Owned(paths),
+        }
+    }
+}
+
+/// The drawable model of a URDF: `arm_model(text)` for a bundled arm, `arm_model((text,
+/// paths))` for a robot whose meshes are found through `paths` ([`arm_model_with_paths`]).
+pub fn arm_model<'a>(urdf: impl Into<UrdfSource<'a>>) -> Result<ArmModelJson, ArmModelError> {
+    let source = urdf.into();
+    arm_model_with_paths(source.text, &source.paths)
+}
+
+/// The drawable model of a URDF, its meshes found through `paths` (a robot's `urdf_paths`).
+/// A mesh that cannot be found or read leaves its link to the stick figure, said in
+/// [`ArmModelJson::fallbacks`]; only a URDF that cannot be read at all is an error.
+pub fn arm_model_with_paths(
+    urdf: &str,
+    paths: &PackagePaths,
+) -> Result<ArmModelJson, ArmModelError> {
     let robot = urdf_rs::read_from_string(urdf).map_err(|e| ArmModelError::Parse {
         message: e.to_string(),
     })?;
@@ -134,12 +197,45 @@ pub fn arm_model(urdf: &str) -> Result<ArmModelJson, ArmModelError> {
             root,
         });
     }
+    let visuals = super::visuals::visuals_json(&robot, paths);
     Ok(ArmModelJson {
         name: robot.name,
         root,
         joints,
+        visuals: visuals.visuals,
+        meshes: visuals.meshes,
+        fallbacks: visuals.fallbacks,
     })
 }
+
+/// Where the live view of a robot looks for its meshes: the paths its robot file gave
+/// ([`remember_urdf_paths`], by URDF text), else `ROS_PACKAGE_PATH` and `AMENT_PREFIX_PATH`
+/// from the environment (relative names then have no folder to start from).
+pub fn urdf_paths_for(urdf: &str) -> PackagePaths {
+    let known = KNOWN_PATHS
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
+        .iter()
+        .find(|(text, _)| text == urdf)
+        .map(|(_, paths)| paths.clone());
+    known.unwrap_or_else(|| PackagePaths {
+        urdf_dir: None,
+        ..PackagePaths::for_urdf(std::path::Path::new("."), Vec::new())
+    })
+}
+
+/// Says where the files of the URDF `urdf` are (a robot's `urdf_paths`), for a view that is
+/// given only the text ([`urdf_paths_for`]). Kept for the process's life, a few per run.
+pub fn remember_urdf_paths(urdf: &str, paths: &PackagePaths) {
+    let mut known = KNOWN_PATHS
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    known.retain(|(text, _)| text != urdf);
+    known.push((urdf.to_owned(), paths.clone()));
+}
+
+static KNOWN_PATHS: std::sync::Mutex<Vec<(String, PackagePaths)>> =
+    std::sync::Mutex::new(Vec::new());
 
 #[cfg(test)]
 mod tests {

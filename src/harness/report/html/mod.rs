@@ -8,12 +8,15 @@
 
 pub mod arm;
 mod data;
+pub mod visuals;
 
 use std::borrow::Cow;
 use std::fmt::Write as _;
 
-pub use arm::{arm_model, ArmModelError, ArmModelJson};
+pub use arm::{arm_model, arm_model_with_paths, ArmModelError, ArmModelJson};
 pub use data::{report_json, MAX_FRAMES};
+
+use sim::description::PackagePaths;
 
 use crate::harness::result::{Outcome, ScenarioResult, Verdict};
 
@@ -140,20 +143,26 @@ pub fn live_page(title: &str, script: &str) -> String {
 /// The model JSON of the arm or robot a run drove, if it has one that can be read.
 fn model_value(result: &ScenarioResult) -> Option<serde_json::Value> {
     // Every report of a suite draws one of a few URDFs (the bundled ones, a robot's): parse
-    // each once. Keyed by the text, which a robot file's scenarios each hold a copy of.
-    static MODELS: std::sync::Mutex<Vec<(Cow<'static, str>, Option<serde_json::Value>)>> =
+    // each once, and read its meshes once. Keyed by the text, which a robot file's scenarios
+    // each hold a copy of, and where its files are.
+    type Key = (Cow<'static, str>, PackagePaths);
+    static MODELS: std::sync::Mutex<Vec<(Key, Option<serde_json::Value>)>> =
         std::sync::Mutex::new(Vec::new());
-    let urdf = &result.bench_info.drawing.as_ref()?.urdf;
+    let drawing = result.bench_info.drawing.as_ref()?;
+    let paths = drawing.paths.clone().unwrap_or_default();
     let mut models = MODELS
         .lock()
         .unwrap_or_else(std::sync::PoisonError::into_inner);
-    if let Some((_, model)) = models.iter().find(|(u, _)| u == urdf) {
+    if let Some((_, model)) = models
+        .iter()
+        .find(|((u, p), _)| *u == drawing.urdf && *p == paths)
+    {
         return model.clone();
     }
-    let model = arm_model(urdf)
+    let model = arm_model_with_paths(&drawing.urdf, &paths)
         .ok()
         .and_then(|m| serde_json::to_value(m).ok());
-    models.push((urdf.clone(), model.clone()));
+    models.push(((drawing.urdf.clone(), paths), model.clone()));
     model
 }
 
