@@ -35,6 +35,10 @@ pub fn seeds(target: &str, root: &Path) -> std::io::Result<Vec<Seed>> {
         "realman_framing" => transcripts(&fixtures, |req, rep| [&[0u8][..], req, rep].concat())?,
         "realman_command" => transcripts(&fixtures, |req, _| req.to_vec())?,
         "realman_reply" => transcripts(&fixtures, |_, rep| [&[0u8][..], rep].concat())?,
+        "urdf_reader" => files(&root.join("urdf"), &["urdf"])?
+            .into_iter()
+            .map(|p| Ok((name_of(&p), std::fs::read(&p)?)))
+            .collect::<std::io::Result<_>>()?,
         _ => Vec::new(),
     })
 }

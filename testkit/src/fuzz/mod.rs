@@ -18,12 +18,14 @@ mod realman;
 mod robstride;
 mod scenario;
 pub mod smoke;
+mod urdf;
 
 pub use logs::{candump_reader, pcap_reader};
 pub use piper::{piper_driver_decode, piper_emulator};
 pub use realman::{realman_command, realman_framing, realman_reply};
 pub use robstride::{robstride_driver_decode, robstride_emulator};
 pub use scenario::scenario_check;
+pub use urdf::urdf_reader;
 
 /// One fuzz entry point: takes the raw input, panics when an invariant fails.
 pub type Entry = fn(&[u8]);
@@ -41,6 +43,7 @@ pub const TARGETS: &[(&str, Entry)] = &[
     ("realman_framing", realman_framing),
     ("realman_command", realman_command),
     ("realman_reply", realman_reply),
+    ("urdf_reader", urdf_reader),
 ];
 
 /// The entry point of target `name`, if there is one.
