@@ -81,16 +81,20 @@ def robot(
     socketcand: str = "127.0.0.1:0",
     interfaces: bool = False,
     state_file: Optional[Union[str, "os.PathLike[str]"]] = None,
+    gantry: Optional[str] = None,
 ) -> RobotEmulator:
     """A whole robot from its robot file (``armhil sim robot FILE``): one physics world, a
     RobStride actuator per actuated joint, every bus served at once — as channels of one
     socketcand server on ``socketcand`` (HOST:PORT, port 0 = a free port; see ``emu.host`` /
     ``emu.port``, channels ``emu.buses``), or with ``interfaces=True`` each on the SocketCAN
-    interface of its name. A bad robot file raises ``ValueError`` naming file:line:column;
-    one that cannot be read, ``OSError``."""
+    interface of its name. A floating robot hangs on its gantry (``gantry``: ``"until_enabled"``,
+    the default unless the robot file says, ``"until_released"`` — see ``release_gantry()`` —
+    or ``"off"``). A bad robot file raises ``ValueError`` naming file:line:column; one that
+    cannot be read, ``OSError``."""
     return _robot(
         os.fspath(file),
         socketcand,
         interfaces,
         None if state_file is None else os.fspath(state_file),
+        gantry,
     )

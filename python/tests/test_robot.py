@@ -111,3 +111,25 @@ def test_a_bad_robot_file_is_named_with_its_line(tmp_path):
         armhil.sim.robot(typo)
     with pytest.raises(OSError, match="nosuch.yaml"):
         armhil.sim.robot(tmp_path / "nosuch.yaml")
+
+
+HUMANOID = ROBOTS / "humanoid.yaml"
+
+
+def test_a_humanoid_hangs_on_its_gantry_until_released():
+    # The default for a floating robot: held until every actuator is enabled.
+    with armhil.sim.robot(HUMANOID) as robot:
+        time.sleep(0.3)
+        state = robot.state()
+        assert state["gantry_holds"]
+        assert state["base_position_m"][2] == pytest.approx(0.81, abs=1e-9)
+    with armhil.sim.robot(HUMANOID, gantry="until_released") as robot:
+        robot.release_gantry()
+        time.sleep(1.5)
+        state = robot.state()
+        assert not state["gantry_holds"]
+        assert state["base_position_m"][2] < 0.6, "unpowered and let go, it falls"
+    with armhil.sim.robot(HUMANOID, gantry="off") as robot:
+        assert not robot.state()["gantry_holds"]
+    with pytest.raises(ValueError, match="gantry must be one of off, until_enabled, until_released"):
+        armhil.sim.robot(HUMANOID, gantry="sometimes")

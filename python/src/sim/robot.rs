@@ -11,14 +11,16 @@ use std::sync::Arc;
 
 use bus::socketcand::SocketcandServer;
 use bus::CanBus;
-use pyo3::exceptions::PyRuntimeError;
+use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use sim::fault_args::{FaultArgValue, FaultArgs};
 use sim::fault_desk::{FaultAction, FaultDesk, Faults};
-use sim::robot::faults::{BUS_LOST, EXTERNAL_TORQUE};
+use sim::robot::faults::{BUS_LOST, EXTERNAL_TORQUE, GANTRY_RELEASE};
 use sim::robot::file::{load_robot_file, RobotFileError};
-use sim::robot::{RobotEmulator as Emulator, RobotError, RobotHandle, RobotMonitor, RobotSnapshot};
+use sim::robot::{
+    Base, Gantry, RobotEmulator as Emulator, RobotError, RobotHandle, RobotMonitor, RobotSnapshot,
+};
 
 use super::emulated::{apply, emulator_methods, Emulated, Running, Stop};
 use super::value_err;
@@ -97,6 +99,7 @@ fn snapshot_dict<'py>(py: Python<'py>, s: &RobotSnapshot) -> PyResult<Bound<'py,
     d.set_item("time_s", s.time_s)?;
     d.set_item("base_position_m", s.base_position_m.to_vec())?;
     d.set_item("lost_buses", s.lost_buses.clone())?;
+    d.set_item("gantry_holds", s.gantry_holds)?;
     let joints = PyDict::new(py);
     for j in &s.joints {
         let m = &j.motor;
@@ -198,7 +201,14 @@ impl RobotEmulator {
         apply(self, py, action, BUS_LOST, &word("bus", bus))
     }
 
-    /// The robot's state: `time_s`, `base_position_m`, `lost_buses` and `joints` (by URDF
+    /// The gantry lets go of the base (the fault `gantry_release`, an event): from then on
+    /// the robot stands on its actuators or falls. Nothing happens when nothing holds it.
+    fn release_gantry(&self, py: Python<'_>) -> PyResult<()> {
+        apply(self, py, FaultAction::Inject, GANTRY_RELEASE, &FaultArgs::new())
+    }
+
+    /// The robot's state: `time_s`, `base_position_m`, `lost_buses`, `gantry_holds` and
+    /// `joints` (by URDF
     /// joint name: bus, CAN id, model, world position and speed, the actuator's mode, shaft
     /// angle, torque, temperature, fault word).
     fn state<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
@@ -250,13 +260,14 @@ async fn serve_buses(
 /// `socketcand` (default, port 0 = a free port), or with `interfaces=True` each on the
 /// SocketCAN interface of its name.
 #[pyfunction]
-#[pyo3(signature = (file, socketcand="127.0.0.1:0", interfaces=false, state_file=None))]
+#[pyo3(signature = (file, socketcand="127.0.0.1:0", interfaces=false, state_file=None, gantry=None))]
 pub(super) fn robot(
     py: Python<'_>,
     file: PathBuf,
     socketcand: &str,
     interfaces: bool,
     state_file: Option<PathBuf>,
+    gantry: Option<&str>,
 ) -> PyResult<RobotEmulator> {
     let loaded = load_robot_file(&file).map_err(|e| match e {
         RobotFileError::Read { .. } => PyErr::new::<pyo3::exceptions::PyOSError, _>(e.to_string()),
@@ -264,6 +275,19 @@ pub(super) fn robot(
     })?;
     let mut config = loaded.config;
     config.state_file = state_file;
+    // As `armhil sim robot`: a floating robot hangs on its gantry until every actuator is
+    // enabled unless the robot file or the caller says otherwise.
+    config.gantry = match (gantry, loaded.gantry_given, config.base) {
+        (Some(word), ..) => Gantry::named(word).ok_or_else(|| {
+            let words: Vec<&str> = Gantry::WORDS.iter().map(|(w, _)| *w).collect();
+            PyValueError::new_err(format!(
+                "gantry must be one of {}, got {word:?}",
+                words.join(", ")
+            ))
+        })?,
+        (None, true, _) | (None, false, Base::Fixed) => config.gantry,
+        (None, false, Base::Floating { .. }) => Gantry::UntilEnabled,
+    };
     let names: Vec<String> = config.buses.iter().map(|b| b.name.clone()).collect();
     let joints = config
         .actuators
