@@ -204,7 +204,13 @@ impl RobotEmulator {
     /// The gantry lets go of the base (the fault `gantry_release`, an event): from then on
     /// the robot stands on its actuators or falls. Nothing happens when nothing holds it.
     fn release_gantry(&self, py: Python<'_>) -> PyResult<()> {
-        apply(self, py, FaultAction::Inject, GANTRY_RELEASE, &FaultArgs::new())
+        apply(
+            self,
+            py,
+            FaultAction::Inject,
+            GANTRY_RELEASE,
+            &FaultArgs::new(),
+        )
     }
 
     /// The robot's state: `time_s`, `base_position_m`, `lost_buses`, `gantry_holds` and
