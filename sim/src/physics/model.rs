@@ -391,6 +391,15 @@ impl ArmModel {
         })
     }
 
+    /// The link whose joint carries link `link` (URDF link indices); `None` for the root.
+    pub(crate) fn parent_link(&self, link: usize) -> Option<usize> {
+        self.parent_joint
+            .get(link)
+            .copied()
+            .flatten()
+            .map(|k| self.tree[k].parent)
+    }
+
     /// The actuated joints between the root and link `link`, nearest the root first.
     fn ancestors(&self, link: usize) -> Vec<usize> {
         let mut chain = Vec::new();

@@ -495,3 +495,48 @@ fn a_joint_without_a_kinetic_figure_keeps_its_urdf_friction_at_every_speed() {
     assert_friction(&split, 0, 1.0);
     assert_eq!(split.friction_in_effect(7), None);
 }
+
+#[test]
+fn a_collision_mesh_meets_obstacles_as_its_hull_where_its_primitive_would() {
+    // The pendulum's bob as a 10 cm STL cube instead of a 5 cm sphere: it rests on the same
+    // table with its lower edge, so a little further round (its corner reaches 0.05·√2).
+    let tmp = tempfile::tempdir().unwrap();
+    let cube = tmp.path().join("bob.stl");
+    std::fs::write(
+        &cube,
+        crate::description::mesh::tests::box_stl_ascii([0.05, 0.05, 0.05]),
+    )
+    .unwrap();
+    let urdf = PENDULUM.replace(
+        r#"<geometry><sphere radius="0.05"/></geometry>"#,
+        &format!(
+            r#"<geometry><mesh filename="{}"/></geometry>"#,
+            cube.display()
+        ),
+    );
+    let mut world = ArmWorld::from_urdf_str(&urdf, WorldConfig::default()).unwrap();
+    let table = world.add_obstacle(
+        ObstacleShape::Box {
+            half_extents_m: [0.2, 0.5, 0.4],
+        },
+        [0.5, 0.0, 0.4],
+    );
+    run(&mut world, 1500, &[0.0]);
+    let contacts = world.contacts();
+    assert_eq!(contacts.len(), 1, "{contacts:?}");
+    assert_eq!(
+        (contacts[0].link.as_str(), contacts[0].obstacle),
+        ("arm", table)
+    );
+    let q = world.joint_positions()[0];
+    // Without its mesh the bob would swing through the table to the 1 rad stop.
+    assert!(q > 0.2 && q < 0.4, "resting at {q}");
+    // The mesh adds no mass (a water-dense cube would add 1 kg): the table carries the 2 kg
+    // bob's weight, as for the sphere.
+    let weight = 2.0 * 9.81;
+    assert!(
+        (contacts[0].normal_force_n - weight).abs() < 0.2 * weight,
+        "{} N",
+        contacts[0].normal_force_n
+    );
+}

@@ -15,6 +15,9 @@ use super::error::{Divergence, PhysicsError};
 use super::friction::KineticFriction;
 use super::model::{ArmModel, JointInfo, JointKind, DEFAULT_GRAVITY_M_S2};
 use super::obstacle::{Contact, ObstacleId, ObstacleShape};
+use crate::description::{
+    CollisionGeometry, CollisionShape, Description, DescriptionError, MissingMeshes, PackagePaths,
+};
 
 /// Configuration of an [`ArmWorld`] (and of the articulated-body solver's world,
 /// [`super::articulated::ArticulatedWorld`]).
@@ -111,6 +114,60 @@ impl std::fmt::Debug for ArmWorld {
     }
 }
 
+/// A collider per collision mesh of `geometry` (its hull's points), on the body of its link
+/// or, for a link rapier3d-urdf merged into its parent over a fixed joint, on that body where
+/// the link sits. Massless: the link's mass is its `<inertial>`'s.
+fn add_mesh_hulls(
+    physics: &mut PhysicsWorld,
+    model: &ArmModel,
+    bodies: &[(usize, RigidBodyHandle)],
+    geometry: &CollisionGeometry,
+) -> Result<(), PhysicsError> {
+    let hulls: Vec<_> = geometry
+        .shapes
+        .iter()
+        .filter_map(|s| match &s.shape {
+            CollisionShape::Hull { points_m } => Some((s, points_m)),
+            _ => None,
+        })
+        .collect();
+    if hulls.is_empty() {
+        return Ok(());
+    }
+    let rest = model.link_poses(&vec![0.0; model.joints().len()])?;
+    for (shape, points_m) in hulls {
+        // The link itself, or the nearest ancestor that has a body (fixed joints between).
+        let mut link = shape.link;
+        let body = loop {
+            if let Some((_, body)) = bodies.iter().find(|(l, _)| *l == link) {
+                break Some(*body);
+            }
+            match model.parent_link(link) {
+                Some(parent) => link = parent,
+                None => break None,
+            }
+        };
+        let Some(body) = body else { continue };
+        let in_body = rest[link].inverse() * rest[shape.link] * shape.origin;
+        let points: Vec<Vector> = points_m
+            .iter()
+            .map(|p| {
+                let p = in_body * p;
+                Vector::new(p.x as Real, p.y as Real, p.z as Real)
+            })
+            .collect();
+        // Fewer than four points off a plane make no convex body for rapier: a plate's
+        // collision mesh then collides as nothing here (the articulated world still has it).
+        let Some(collider) = ColliderBuilder::convex_hull(&points) else {
+            continue;
+        };
+        physics
+            .colliders
+            .insert_with_parent(collider.density(0.0), body, &mut physics.bodies);
+    }
+    Ok(())
+}
+
 fn vec3(v: [f64; 3]) -> Vector {
     Vector::new(v[0] as Real, v[1] as Real, v[2] as Real)
 }
@@ -123,14 +180,43 @@ fn finite_in_physics(value: f64) -> Option<f64> {
 }
 
 impl ArmWorld {
-    /// Loads a URDF file (at most [`super::MAX_URDF_BYTES`]). Mesh geometry is ignored (only
-    /// primitive collision shapes are used).
+    /// Loads a URDF file (at most [`super::MAX_URDF_BYTES`]); its collision meshes are found
+    /// from its folder and `ROS_PACKAGE_PATH` / `AMENT_PREFIX_PATH`, and collide with
+    /// obstacles as their convex hulls.
     pub fn from_urdf_file(path: &Path, config: WorldConfig) -> Result<Self, PhysicsError> {
-        Self::from_urdf_str(&super::model::read_urdf(path)?, config)
+        let text = super::model::read_urdf(path)?;
+        let paths = PackagePaths::for_urdf(path, Vec::new());
+        Self::from_text(text, paths, config)
     }
 
-    /// Loads URDF text. See [`ArmWorld`] for what is simulated.
+    /// Loads URDF text (collision meshes only by absolute paths: text has no folder). See
+    /// [`ArmWorld`] for what is simulated.
     pub fn from_urdf_str(xml: &str, config: WorldConfig) -> Result<Self, PhysicsError> {
+        Self::from_text(xml.to_owned(), PackagePaths::default(), config)
+    }
+
+    fn from_text(
+        text: String,
+        paths: PackagePaths,
+        config: WorldConfig,
+    ) -> Result<Self, PhysicsError> {
+        let parse = |e: DescriptionError| PhysicsError::Parse {
+            message: e.to_string(),
+        };
+        let description = Description::parse(text, paths).map_err(parse)?;
+        let geometry = description
+            .collision_geometry(MissingMeshes::Refuse)
+            .map_err(parse)?;
+        Self::from_description(&description, &geometry, config)
+    }
+
+    /// The world of a checked URDF with its collision geometry: rapier3d-urdf's bodies,
+    /// joints and primitive colliders, plus a convex-hull collider per collision mesh.
+    pub fn from_description(
+        description: &Description,
+        geometry: &CollisionGeometry,
+        config: WorldConfig,
+    ) -> Result<Self, PhysicsError> {
         if !(config.step_s.is_finite() && config.step_s > 0.0) {
             return Err(PhysicsError::InvalidConfig {
                 reason: format!("step_s must be positive and finite, got {}", config.step_s),
@@ -141,10 +227,8 @@ impl ArmWorld {
                 reason: format!("gravity must be finite, got {:?}", config.gravity_m_s2),
             });
         }
-        let robot = urdf_rs::read_from_string(xml).map_err(|e| PhysicsError::Parse {
-            message: e.to_string(),
-        })?;
-        let model = ArmModel::from_robot(&robot)?;
+        let robot = description.robot();
+        let model = ArmModel::from_robot(robot)?;
 
         let mut physics = PhysicsWorld::new();
         physics.gravity = vec3(config.gravity_m_s2);
@@ -183,7 +267,8 @@ impl ArmWorld {
             rigid_body_blueprint: RigidBodyBuilder::dynamic().can_sleep(false),
             ..UrdfLoaderOptions::default()
         };
-        let urdf_robot = UrdfRobot::from_robot(&robot, options, Path::new("."));
+        let urdf_robot = UrdfRobot::from_robot(robot, options, Path::new("."));
+        let body_links: Vec<usize> = urdf_robot.links.iter().map(|l| l.urdf_link_index).collect();
         let link_names: Vec<String> = urdf_robot
             .links
             .iter()
@@ -206,6 +291,12 @@ impl ArmWorld {
             .zip(link_names)
             .map(|(l, name)| (l.body, name))
             .collect();
+        let bodies: Vec<(usize, RigidBodyHandle)> = body_links
+            .iter()
+            .zip(&handles.links)
+            .map(|(&urdf, l)| (urdf, l.body))
+            .collect();
+        add_mesh_hulls(&mut physics, &model, &bodies, geometry)?;
 
         let mut bindings = Vec::with_capacity(model.joints().len());
         for (info, &u) in model.joints().iter().zip(model.urdf_joint_indices()) {
