@@ -24,19 +24,17 @@ pub struct RobotLive {
 
 impl RobotLive {
     /// A source for `monitor` (a strip per actuated joint, in configuration order): `urdf`
-    /// is the robot's, `taps` a tap per bus by name.
+    /// is the robot's and `paths` where its meshes are (its config's `urdf_paths`), `taps`
+    /// a tap per bus by name.
     pub fn new(
         monitor: RobotMonitor,
-        urdf: &str,
+        (urdf, paths): (&str, &sim::description::PackagePaths),
         taps: Vec<(String, BusTap)>,
         title: &str,
     ) -> Self {
-        let model = arm_model((
-            urdf,
-            crate::harness::report::html::arm::urdf_paths_for(urdf),
-        ))
-        .inspect_err(|e| tracing::warn!("the web view cannot draw the robot: {e}"))
-        .ok();
+        let model = arm_model((urdf, paths))
+            .inspect_err(|e| tracing::warn!("the web view cannot draw the robot: {e}"))
+            .ok();
         let drawn = model.as_ref().map_or_else(Vec::new, |m| {
             m.joints
                 .iter()
@@ -217,9 +215,9 @@ mod tests {
                 )
             })
             .collect();
-        let urdf = config.urdf.clone();
+        let (urdf, paths) = (config.urdf.clone(), config.urdf_paths.clone());
         let robot = RobotEmulator::spawn(config, nodes).unwrap();
-        let live = RobotLive::new(robot.monitor(), &urdf, taps, "arm6");
+        let live = RobotLive::new(robot.monitor(), (&urdf, &paths), taps, "arm6");
 
         let hello = hello_message(&live);
         assert_eq!(hello["strip_names"][3], "wrist_roll");

@@ -62,13 +62,13 @@ fn bounded_reader(path: &Path) -> std::io::Result<Vec<u8>> {
     })
 }
 
-/// Reads every vertex of the mesh file at `path` (format from its content and extension).
-pub fn read_mesh_points(path: &Path) -> Result<Vec<Point3<f64>>, MeshError> {
+/// The scene of the mesh file at `path` as mesh-loader reads it (format from its content and
+/// extension), its parts kept apart: the one way the physics and the views open a mesh.
+pub(crate) fn load_scene(path: &Path) -> Result<mesh_loader::Scene, MeshError> {
     let fail = |message: String| MeshError {
         path: path.to_owned(),
         message,
     };
-    let bytes = bounded_reader(path).map_err(|e| fail(e.to_string()))?;
     let extension = path
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
@@ -78,12 +78,22 @@ pub fn read_mesh_points(path: &Path) -> Result<Vec<Point3<f64>>, MeshError> {
             "`.{extension}` is not a mesh format armhil reads (STL, OBJ, COLLADA .dae)"
         )));
     }
+    let bytes = bounded_reader(path).map_err(|e| fail(e.to_string()))?;
     let bytes = binary_stl_without_solid(bytes, &extension);
-    let loader = mesh_loader::Loader::with_custom_reader(bounded_reader).merge_meshes(true);
+    let loader = mesh_loader::Loader::with_custom_reader(bounded_reader);
     // mesh-loader parses untrusted bytes; a panic in it must not take the emulator down.
-    let scene = std::panic::catch_unwind(|| loader.load_from_slice(&bytes, path))
+    std::panic::catch_unwind(|| loader.load_from_slice(&bytes, path))
         .map_err(|_| fail("the mesh reader failed on this file".to_owned()))?
-        .map_err(|e| fail(e.to_string()))?;
+        .map_err(|e| fail(e.to_string()))
+}
+
+/// Reads every vertex of the mesh file at `path`.
+pub fn read_mesh_points(path: &Path) -> Result<Vec<Point3<f64>>, MeshError> {
+    let fail = |message: String| MeshError {
+        path: path.to_owned(),
+        message,
+    };
+    let scene = load_scene(path)?;
     let mut points = Vec::new();
     for mesh in &scene.meshes {
         for v in &mesh.vertices {
@@ -305,7 +315,9 @@ pub(crate) mod tests {
         std::fs::write(&png, b"\x89PNG").unwrap();
         let e = read_mesh_points(&png).unwrap_err();
         assert!(e.message.contains("not a mesh format"), "{e}");
-        let e = read_mesh_points(tmp.path()).unwrap_err();
+        let folder = tmp.path().join("folder.stl");
+        std::fs::create_dir(&folder).unwrap();
+        let e = read_mesh_points(&folder).unwrap_err();
         assert!(e.message.contains("not a regular file"), "{e}");
     }
 

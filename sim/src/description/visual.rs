@@ -7,8 +7,7 @@
 use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
-use super::mesh::{MeshError, MAX_MESH_BYTES};
-use crate::bounded_read::{read_regular_file, BoundedReadError};
+use super::mesh::{load_scene, MeshError};
 
 /// A triangle mesh in its file's frame and unit (metres for STL and OBJ; COLLADA's
 /// `<unit meter>` applied, its `<up_axis>` not, as [`super::mesh`] reads it).
@@ -23,20 +22,6 @@ pub struct TriMesh {
     pub color: Option<[f32; 4]>,
 }
 
-/// mesh-loader's file reader (it opens an OBJ's `.mtl` files itself), bounded like the mesh.
-fn bounded_reader(path: &Path) -> std::io::Result<Vec<u8>> {
-    read_regular_file(path, MAX_MESH_BYTES).map_err(|e| match e {
-        BoundedReadError::Io(e) => e,
-        BoundedReadError::NotAFile => {
-            std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a regular file")
-        }
-        BoundedReadError::TooLarge { .. } => std::io::Error::new(
-            std::io::ErrorKind::InvalidData,
-            "larger than 64 MiB, the limit for a mesh file",
-        ),
-    })
-}
-
 /// Reads the triangles of the mesh file at `path` (format from its content and extension).
 /// Every part of the file is kept, in one vertex list; faces naming a vertex the file lacks
 /// are dropped.
@@ -45,36 +30,9 @@ pub fn read_mesh_triangles(path: &Path) -> Result<TriMesh, MeshError> {
         path: path.to_owned(),
         message,
     };
-    let extension = path
-        .extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase())
-        .unwrap_or_default();
-    if !matches!(extension.as_str(), "stl" | "obj" | "dae") {
-        return Err(fail(format!(
-            "`.{extension}` is not a mesh format armhil reads (STL, OBJ, COLLADA .dae)"
-        )));
-    }
-    let bytes = bounded_reader(path).map_err(|e| fail(e.to_string()))?;
     // Parts are joined here rather than by mesh-loader's `merge_meshes`, which offsets each
     // part's indices by its last face's last index instead of its vertex count.
-    let loader = mesh_loader::Loader::with_custom_reader(bounded_reader);
-    // mesh-loader parses untrusted bytes; a panic in it must not take the caller down.
-    let load = |bytes: &[u8]| {
-        std::panic::catch_unwind(|| loader.load_from_slice(bytes, path))
-            .map_err(|_| fail("the mesh reader failed on this file".to_owned()))?
-            .map_err(|e| fail(e.to_string()))
-    };
-    let scene = match load(&bytes) {
-        // A binary STL whose header starts with "solid" and whose triangle count holds a
-        // line break byte is taken for ASCII by mesh-loader (a public quadruped's feet): when
-        // the size is exactly a binary STL's for its count, read it as one.
-        Err(e) if extension == "stl" && is_binary_stl_size(&bytes) => {
-            let mut binary = bytes.clone();
-            binary[..5].copy_from_slice(b"SOLID");
-            load(&binary).map_err(|_| e)?
-        }
-        other => other?,
-    };
+    let scene = load_scene(path)?;
     let mut out = TriMesh::default();
     // COLLADA gives one material per part, in order; OBJ's table does not say which part uses
     // which, so only a lone material is taken.
@@ -119,15 +77,6 @@ pub fn read_mesh_triangles(path: &Path) -> Result<TriMesh, MeshError> {
         return Err(fail("no triangles".to_owned()));
     }
     Ok(out)
-}
-
-/// Whether `bytes` are as long as a binary STL with the triangle count its header gives.
-fn is_binary_stl_size(bytes: &[u8]) -> bool {
-    let Some(count) = bytes.get(80..84) else {
-        return false;
-    };
-    let count = u32::from_le_bytes([count[0], count[1], count[2], count[3]]);
-    bytes.starts_with(b"solid") && bytes.len() as u64 == 84 + 50 * u64::from(count)
 }
 
 /// The finest grid [`TriMesh::simplified`] clusters on: cells of 1/4096 of the mesh's
@@ -202,8 +151,8 @@ impl TriMesh {
         let mut sums = vec![([0.0f64; 3], 0u32); cluster_of_key.len()];
         for (v, &c) in self.vertices.iter().zip(&cluster) {
             let s = &mut sums[c as usize];
-            for i in 0..3 {
-                s.0[i] += f64::from(v[i]);
+            for (sum, x) in s.0.iter_mut().zip(v) {
+                *sum += f64::from(*x);
             }
             s.1 += 1;
         }

@@ -228,7 +228,7 @@ pub(crate) async fn serve(args: Args, mut stop: super::StopSource) -> anyhow::Re
         None => Vec::new(),
     };
     nodes.extend(ui_taps.iter().map(|(_, node, _)| Arc::clone(node)));
-    let urdf = config.urdf.clone();
+    let (urdf, urdf_paths) = (config.urdf.clone(), config.urdf_paths.clone());
     let robot = RobotEmulator::spawn(config, served.nodes.clone())
         .with_context(|| format!("cannot start the robot of {}", args.file.display()))?;
     let ui = match &args.ui {
@@ -238,7 +238,7 @@ pub(crate) async fn serve(args: Args, mut stop: super::StopSource) -> anyhow::Re
                 .map(|(name, node, bitrate)| (name, BusTap::spawn(node, bitrate)))
                 .collect();
             let title = format!("{summary} on {}", served.place);
-            let live = RobotLive::new(robot.monitor(), &urdf, taps, &title);
+            let live = RobotLive::new(robot.monitor(), (&urdf, &urdf_paths), taps, &title);
             let server = armhil::ui::serve(addr, Arc::new(live)).await?;
             super::announce_ui("robot", &server);
             Some(server)

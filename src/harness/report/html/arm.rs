@@ -208,35 +208,6 @@ pub fn arm_model_with_paths(
     })
 }
 
-/// Where the live view of a robot looks for its meshes: the paths its robot file gave
-/// ([`remember_urdf_paths`], by URDF text), else `ROS_PACKAGE_PATH` and `AMENT_PREFIX_PATH`
-/// from the environment (relative names then have no folder to start from).
-pub fn urdf_paths_for(urdf: &str) -> PackagePaths {
-    let known = KNOWN_PATHS
-        .lock()
-        .unwrap_or_else(std::sync::PoisonError::into_inner)
-        .iter()
-        .find(|(text, _)| text == urdf)
-        .map(|(_, paths)| paths.clone());
-    known.unwrap_or_else(|| PackagePaths {
-        urdf_dir: None,
-        ..PackagePaths::for_urdf(std::path::Path::new("."), Vec::new())
-    })
-}
-
-/// Says where the files of the URDF `urdf` are (a robot's `urdf_paths`), for a view that is
-/// given only the text ([`urdf_paths_for`]). Kept for the process's life, a few per run.
-pub fn remember_urdf_paths(urdf: &str, paths: &PackagePaths) {
-    let mut known = KNOWN_PATHS
-        .lock()
-        .unwrap_or_else(std::sync::PoisonError::into_inner);
-    known.retain(|(text, _)| text != urdf);
-    known.push((urdf.to_owned(), paths.clone()));
-}
-
-static KNOWN_PATHS: std::sync::Mutex<Vec<(String, PackagePaths)>> =
-    std::sync::Mutex::new(Vec::new());
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -312,6 +283,30 @@ mod tests {
             "{} is stale: run with ARMHIL_UPDATE_WEB_FIXTURES=1",
             path.display()
         );
+    }
+
+    #[test]
+    fn a_live_view_finds_a_robots_meshes_where_its_file_said() {
+        let tmp = tempfile::tempdir().unwrap();
+        std::fs::write(
+            tmp.path().join("m.obj"),
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n",
+        )
+        .unwrap();
+        let urdf = r#"<robot name="live_paths_test"><link name="a"><visual><geometry>
+            <mesh filename="m.obj"/></geometry></visual></link></robot>"#;
+        // Text alone: a relative name has no folder to start from.
+        let alone = arm_model(urdf).unwrap();
+        assert!(alone.visuals.is_empty() && alone.fallbacks.len() == 1);
+        let paths = PackagePaths {
+            urdf_dir: Some(tmp.path().to_owned()),
+            ..Default::default()
+        };
+        let model = arm_model((urdf, &paths)).unwrap();
+        assert_eq!((model.visuals.len(), model.meshes.len()), (1, 1));
+        // Without visuals the JSON is as it always was.
+        let piper = serde_json::to_value(arm_model(sim::piper::BUNDLED_URDF).unwrap()).unwrap();
+        assert!(piper.get("visuals").is_none() && piper.get("fallbacks").is_none());
     }
 
     #[test]

@@ -5,16 +5,19 @@
 //! # Size budget
 //!
 //! - each distinct mesh file is simplified to at most [`MAX_MESH_TRIANGLES`] triangles
-//!   (vertex clustering, `sim::description::visual`), and all of a model's meshes together
-//!   to at most [`MAX_MODEL_TRIANGLES`] (each mesh's cap shrinks in proportion when the sum
-//!   would exceed it); a file named by several links (a quadruped's four legs) is sent once;
+//!   (vertex clustering, `sim::description::visual`); a file named by several links (a
+//!   quadruped's four legs) is sent once;
+//! - the meshes as drawn, every use counted, come to at most [`MAX_MODEL_TRIANGLES`]
+//!   triangles: when they would exceed it every mesh's cap shrinks in proportion. This bounds
+//!   the page's work (a 2D canvas fills about 1 µs a triangle on a CPU: 16,000 keep a
+//!   frame near 25 ms) as well as the size;
 //! - vertices are quantised to integers 0..=[`QUANT_STEPS`] on a cubic grid over the mesh's
 //!   box (1/1023 of its longest side: 0.3 mm on a 30 cm link), indices are plain integers.
 //!
-//! A triangle costs about 22 bytes of JSON (half a vertex of three ≤ 4-digit numbers, three
-//! indices), so a model's meshes stay under about 530 kB whatever the robot: a 30-link robot
+//! A triangle costs about 17 bytes of JSON (half a vertex of three ≤ 4-digit numbers, three
+//! indices), so a model's meshes stay under about 300 kB whatever the robot: a 30-link robot
 //! with meshes yields a report.html well within 3 MB (the trace, at most `MAX_FRAMES` rows,
-//! is the rest). The page draws at most that many filled triangles a frame.
+//! is most of the rest). Primitives are sent as their sizes and tessellated by the page.
 
 use std::collections::HashMap;
 use std::path::PathBuf;
@@ -26,8 +29,8 @@ use sim::description::PackagePaths;
 
 /// Most triangles one mesh file is drawn with.
 pub const MAX_MESH_TRIANGLES: usize = 1500;
-/// Most triangles of all of a model's meshes together.
-pub const MAX_MODEL_TRIANGLES: usize = 24_000;
+/// Most triangles of a model's meshes as drawn, a mesh counted at each of its uses.
+pub const MAX_MODEL_TRIANGLES: usize = 16_000;
 /// Quantisation steps along a mesh's longest side: coordinates are integers 0..=1023.
 pub const QUANT_STEPS: u32 = 1023;
 
@@ -163,6 +166,9 @@ fn primitive(g: &urdf_rs::Geometry) -> Result<GeometryJson, String> {
 /// A mesh read once per file: its triangles, or why not.
 type Read = Result<Arc<TriMesh>, String>;
 
+/// A mesh a visual uses: the file as the URDF names it, where it was found, what it holds.
+type Used = (String, PathBuf, Arc<TriMesh>);
+
 /// Quantises `mesh` (already simplified) on a grid over its box.
 fn quantised(file: &str, mesh: &TriMesh, source_triangles: usize) -> MeshJson {
     let (lo, hi) = mesh.bounds().unwrap_or_default();
@@ -209,7 +215,7 @@ pub fn visuals_json(robot: &urdf_rs::Robot, paths: &PackagePaths) -> VisualsJson
     let mut read: HashMap<PathBuf, Read> = HashMap::new();
     let mut out = VisualsJson::default();
     // Meshes used, by file, in first-use order: (file as named, path, mesh).
-    let mut used: Vec<(String, PathBuf, Arc<TriMesh>)> = Vec::new();
+    let mut used: Vec<Used> = Vec::new();
     for link in &robot.links {
         let mut mine = Vec::new();
         let mut failed = None;
@@ -285,7 +291,7 @@ pub fn visuals_json(robot: &urdf_rs::Robot, paths: &PackagePaths) -> VisualsJson
             *mesh = *keep[*mesh].get_or_insert(next);
         }
     }
-    let mut kept: Vec<(usize, &(String, PathBuf, Arc<TriMesh>))> = used
+    let mut kept: Vec<(usize, &Used)> = used
         .iter()
         .enumerate()
         .filter_map(|(k, u)| Some((keep[k]?, u)))
@@ -295,7 +301,13 @@ pub fn visuals_json(robot: &urdf_rs::Robot, paths: &PackagePaths) -> VisualsJson
         .iter()
         .map(|(_, (_, _, m))| m.triangles.len().min(MAX_MESH_TRIANGLES))
         .collect();
-    let total: usize = caps.iter().sum();
+    let mut uses = vec![0usize; kept.len()];
+    for v in &out.visuals {
+        if let GeometryJson::Mesh { mesh, .. } = v.geometry {
+            uses[mesh] += 1;
+        }
+    }
+    let total: usize = caps.iter().zip(&uses).map(|(c, u)| c * u).sum();
     for ((_, (file, _, mesh)), cap) in kept.iter().zip(caps) {
         let cap = if total > MAX_MODEL_TRIANGLES {
             cap * MAX_MODEL_TRIANGLES / total
@@ -452,6 +464,39 @@ mod tests {
                 .contains("a relative name, and the URDF has no folder")));
     }
 
+    /// Mesh triangles as a page draws them: each mesh at each of its uses.
+    fn drawn_triangles(visuals: &[VisualJson], meshes: &[MeshJson]) -> usize {
+        visuals
+            .iter()
+            .filter_map(|v| match v.geometry {
+                GeometryJson::Mesh { mesh, .. } => Some(meshes[mesh].triangles.len() / 3),
+                _ => None,
+            })
+            .sum()
+    }
+
+    #[test]
+    fn a_mesh_used_by_every_link_counts_at_each_use() {
+        let tmp = tempfile::tempdir().unwrap();
+        std::fs::write(tmp.path().join("s.stl"), sphere_stl(0.05, 40)).unwrap();
+        let mut urdf = String::from("<robot name=\"same\">");
+        for k in 0..40 {
+            urdf.push_str(&format!(
+                "<link name=\"l{k}\"><visual><geometry><mesh filename=\"s.stl\"/></geometry></visual></link>"
+            ));
+        }
+        urdf.push_str("</robot>");
+        let paths = PackagePaths {
+            urdf_dir: Some(tmp.path().to_owned()),
+            ..Default::default()
+        };
+        let v = visuals_json(&robot(&urdf), &paths);
+        assert_eq!((v.meshes.len(), v.visuals.len()), (1, 40));
+        let drawn = drawn_triangles(&v.visuals, &v.meshes);
+        assert!(drawn <= MAX_MODEL_TRIANGLES, "{drawn}");
+        assert!(v.meshes[0].triangles.len() / 3 <= MAX_MODEL_TRIANGLES / 40);
+    }
+
     #[test]
     fn meshes_keep_within_the_budget() {
         let tmp = tempfile::tempdir().unwrap();
@@ -487,6 +532,69 @@ mod tests {
         assert!(bytes < 26 * triangles, "{bytes} bytes for {triangles}");
     }
 
+    /// A robot file's report finds the meshes through the file's own folder and `packages:`
+    /// (the actuator_group kind's drawing carries its paths), and says which link it could
+    /// not draw.
+    #[test]
+    fn a_robot_files_report_draws_its_meshes_through_its_paths() {
+        use crate::harness::result::{ScenarioResult, Verdict};
+        let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("web/tests/fixtures/meshed/meshed_arm.yaml");
+        let robot = sim::robot::file::load_robot_file(&file).unwrap().config;
+        let settings = crate::devices::actuator_group::model::GroupSettings {
+            actuators: Vec::new(),
+            buses: Vec::new(),
+            robot: Some(robot),
+        };
+        let drawing = crate::devices::DeviceKind::ActuatorGroup(settings)
+            .drawing()
+            .unwrap();
+        assert!(drawing.paths.is_some());
+        let mut run =
+            ScenarioResult::not_run("meshed", "meshed.yaml".into(), Verdict::Passed, "virtual");
+        run.bench_info.drawing = Some(drawing);
+        let html = super::super::report_html(&run);
+        let start = html.find("id=\"armhil-data\">").unwrap() + "id=\"armhil-data\">".len();
+        let end = start + html[start..].find("</script>").unwrap();
+        let data: serde_json::Value = serde_json::from_str(&html[start..end]).unwrap();
+        let model = &data["model"];
+        let files: Vec<&str> = model["meshes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|m| m["file"].as_str().unwrap())
+            .collect();
+        assert_eq!(
+            files,
+            [
+                "package://meshed_fixture/meshes/base.stl",
+                "meshes/upper.obj",
+                "meshes/wrist.dae"
+            ]
+        );
+        // The COLLADA file's own blue; the OBJ's colour from its <material>.
+        assert_eq!(
+            model["meshes"][2]["color"],
+            serde_json::json!([0.2, 0.4, 0.85, 1.0])
+        );
+        let kinds: Vec<&str> = model["visuals"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v["geometry"]["type"].as_str().unwrap())
+            .collect();
+        assert_eq!(kinds, ["mesh", "mesh", "cylinder", "sphere", "mesh"]);
+        assert_eq!(
+            model["visuals"][1]["color"],
+            serde_json::json!([0.9, 0.5, 0.1, 1.0])
+        );
+        assert_eq!(model["fallbacks"][0]["link"], "tool");
+        assert!(model["fallbacks"][0]["reason"]
+            .as_str()
+            .unwrap()
+            .contains("gripper_missing.stl` is not found"));
+    }
+
     /// Public robots' meshes (example-robot-data: STL, OBJ, COLLADA) within the budget, when
     /// `ARMHIL_URDF_CORPUS` names its `share/example-robot-data` folder. Prints each model's
     /// JSON size; `ARMHIL_MODEL_OUT=folder` also writes each model there (for a page).
@@ -520,9 +628,10 @@ mod tests {
             let json = serde_json::to_string(&model).unwrap();
             let triangles: usize = model.meshes.iter().map(|m| m.triangles.len() / 3).sum();
             let source: usize = model.meshes.iter().map(|m| m.source_triangles).sum();
+            let drawn = drawn_triangles(&model.visuals, &model.meshes);
             println!(
-                "{file}: {} links with visuals, {} meshes, {triangles} of {source} triangles, \
-                 {} fallbacks, {} bytes of JSON, {:.2} s",
+                "{file}: {} links with visuals, {} meshes, {triangles} of {source} triangles \
+                 ({drawn} drawn), {} fallbacks, {} bytes of JSON, {:.2} s",
                 model
                     .visuals
                     .iter()
@@ -538,8 +647,8 @@ mod tests {
                 println!("  fallback {}: {}", f.link, f.reason);
             }
             assert!(model.fallbacks.is_empty(), "{file}");
-            assert!(triangles <= MAX_MODEL_TRIANGLES);
-            assert!(json.len() < 700_000, "{file}: {} bytes", json.len());
+            assert!(drawn <= MAX_MODEL_TRIANGLES);
+            assert!(json.len() < 400_000, "{file}: {} bytes", json.len());
             if let Some(dir) = &out {
                 let name = std::path::Path::new(file).file_stem().unwrap();
                 std::fs::write(dir.join(name).with_extension("json"), &json).unwrap();
