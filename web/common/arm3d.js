@@ -1,9 +1,18 @@
-// Forward kinematics of a URDF arm (sent as JSON by armhil) and a wire-frame view of it on a
-// 2D canvas with its own perspective projection: no WebGL, no library.
+// Forward kinematics of a URDF arm (sent as JSON by armhil) and a view of it on a 2D canvas
+// with its own perspective projection — its links' visual geometry as flat-shaded triangles,
+// and a stick figure of its joints — no WebGL, no library.
 //
 // The model JSON: { name, joints: [{ name, type, parent, child, xyz, rpy, axis, lower, upper,
 // mimic: { joint, multiplier, offset } | null }] } with joints ordered from the root to the
-// leaves, so one pass computes every link frame.
+// leaves, so one pass computes every link frame. A URDF with <visual>s adds
+//   visuals: [{ link, xyz, rpy, color: [r, g, b, a] | null, geometry: { type: "box", size }
+//     | { type: "cylinder" | "capsule", radius, length } | { type: "sphere", radius }
+//     | { type: "mesh", mesh: index into meshes, scale } }],
+//   meshes: [{ file, min, step, positions: [3 integers a vertex], triangles: [3 indices each],
+//     color }] (vertex k = min + step * positions[3k..3k+3]),
+//   fallbacks: [{ link, reason }] (links drawn as the stick figure: their mesh is unreadable).
+// The visuals are drawn as flat-shaded filled triangles, farthest first (painter's order), the
+// stick figure thin on top of them and as it always was for links without visuals.
 (function (root, factory) {
   const api = factory();
   if (typeof module === "object" && module.exports) module.exports = api;
@@ -155,7 +164,7 @@
   }
 
   // A camera orbiting `target`: yaw/pitch in rad, distance in m. Returns a projector from world
-  // points to [x, y, depth] in canvas pixels.
+  // points to [x, y, depth] in canvas pixels (its `camera` property holds the camera's axes).
   function projector(cam, width, height) {
     const cy = Math.cos(cam.yaw), sy = Math.sin(cam.yaw);
     const cp = Math.cos(cam.pitch), sp = Math.sin(cam.pitch);
@@ -173,7 +182,7 @@
       cam.target[2] - fwd[2] * cam.distance,
     ];
     const focal = Math.min(width, height) * 1.4;
-    return function (p) {
+    const project = function (p) {
       const d = [p[0] - eye[0], p[1] - eye[1], p[2] - eye[2]];
       const z = d[0] * fwd[0] + d[1] * fwd[1] + d[2] * fwd[2];
       const x = d[0] * right[0] + d[1] * right[1] + d[2] * right[2];
@@ -181,6 +190,9 @@
       const zz = Math.max(z, 1e-3);
       return [width / 2 + (x * focal) / zz, height / 2 - (y * focal) / zz, z];
     };
+    // The camera's axes and eye, for lighting.
+    project.camera = { fwd, right, up, eye };
+    return project;
   }
 
   const LINK_COLORS = ["#4a5568", "#2b6cb0", "#2f855a", "#c05621", "#6b46c1", "#b83280", "#2c7a7b", "#975a16"];
@@ -197,15 +209,277 @@
       segs.push({ a, b, joint: j, width: finger ? 4 : 9, color: finger ? "#444" : LINK_COLORS[i % LINK_COLORS.length] });
       if (finger) {
         // A finger: a short bar along the joint's child z axis.
-        segs.push({ a: b, b: apply(m, [0, 0, 0.04]), joint: j, width: 4, color: "#444" });
+        segs.push({ a: b, b: apply(m, [0, 0, 0.04]), joint: j, width: 4, color: "#444", bar: true });
       }
     });
     return { frames, segs };
   }
 
+  // ---- Visual geometry ------------------------------------------------------------------
+
+  // A mesh's vertices in its file's frame: [x0, y0, z0, x1, ...] from the quantised integers.
+  function decodeMesh(mesh) {
+    const q = mesh.positions || [];
+    const out = new Float64Array(q.length);
+    for (let i = 0; i < q.length; i++) out[i] = mesh.min[i % 3] + mesh.step * q[i];
+    return out;
+  }
+
+  // Triangles of a primitive (or a mesh of `meshes`) in the visual's frame:
+  // { positions: [x, y, z, ...], triangles: [a, b, c, ...] }, or null if it cannot be drawn.
+  // Round shapes use `segments` around (16 by default).
+  function tessellate(geometry, meshes, segments) {
+    const n = Math.max(3, segments || 16);
+    const P = [], T = [];
+    const vertex = (x, y, z) => { P.push(x, y, z); return P.length / 3 - 1; };
+    // Rings of a solid of revolution about z: each ring [radius, z]; the first and last may
+    // have radius 0 (poles). Consecutive rings are joined by quads; end rings are capped.
+    function lathe(rings) {
+      const starts = rings.map(([r, z]) => {
+        const start = P.length / 3;
+        if (r === 0) vertex(0, 0, z);
+        else for (let k = 0; k < n; k++) vertex(r * Math.cos((2 * Math.PI * k) / n), r * Math.sin((2 * Math.PI * k) / n), z);
+        return start;
+      });
+      const at = (i, k) => (rings[i][0] === 0 ? starts[i] : starts[i] + (k % n));
+      for (let i = 0; i + 1 < rings.length; i++) {
+        for (let k = 0; k < n; k++) {
+          const a = at(i, k), b = at(i, k + 1), c = at(i + 1, k + 1), d = at(i + 1, k);
+          if (a !== b) T.push(a, b, c);
+          if (c !== d) T.push(a, c, d);
+        }
+      }
+      for (const i of [0, rings.length - 1]) {
+        if (rings[i][0] === 0) continue;
+        const centre = vertex(0, 0, rings[i][1]);
+        for (let k = 0; k < n; k++) {
+          if (i === 0) T.push(centre, at(i, k + 1), at(i, k));
+          else T.push(centre, at(i, k), at(i, k + 1));
+        }
+      }
+    }
+    // Half-sphere rings from the equator (z0) to the pole, upwards (+1) or downwards (-1).
+    function dome(r, z0, dir, steps) {
+      const rings = [];
+      for (let i = 0; i <= steps; i++) {
+        const a = ((Math.PI / 2) * i) / steps;
+        rings.push([i === steps ? 0 : r * Math.cos(a), z0 + dir * r * Math.sin(a)]);
+      }
+      return rings;
+    }
+    const g = geometry || {};
+    if (g.type === "box") {
+      const [x, y, z] = (g.size || [0, 0, 0]).map((v) => v / 2);
+      for (const c of [[-x, -y, -z], [x, -y, -z], [x, y, -z], [-x, y, -z], [-x, -y, z], [x, -y, z], [x, y, z], [-x, y, z]]) vertex(...c);
+      T.push(0, 2, 1, 0, 3, 2, 4, 5, 6, 4, 6, 7, 0, 1, 5, 0, 5, 4, 1, 2, 6, 1, 6, 5, 2, 3, 7, 2, 7, 6, 3, 0, 4, 3, 4, 7);
+    } else if (g.type === "cylinder") {
+      lathe([[g.radius, -g.length / 2], [g.radius, g.length / 2]]);
+    } else if (g.type === "sphere") {
+      const half = Math.max(2, Math.round(n / 4));
+      lathe(dome(g.radius, 0, -1, half).reverse().concat(dome(g.radius, 0, 1, half).slice(1)));
+    } else if (g.type === "capsule") {
+      const half = Math.max(2, Math.round(n / 4));
+      lathe(dome(g.radius, -g.length / 2, -1, half).reverse().concat(dome(g.radius, g.length / 2, 1, half)));
+    } else if (g.type === "mesh") {
+      const mesh = meshes && meshes[g.mesh];
+      if (!mesh) return null;
+      const p = decodeMesh(mesh);
+      const s = g.scale || [1, 1, 1];
+      for (let i = 0; i < p.length; i++) p[i] *= s[i % 3];
+      return { positions: p, triangles: mesh.triangles || [] };
+    } else {
+      return null;
+    }
+    return { positions: P, triangles: T };
+  }
+
+  // Whether a shape's triangles face outwards (+1: counter-clockwise seen from outside),
+  // inwards (-1), or cannot be told (0: an open or inconsistently wound mesh, whose faces must
+  // all be drawn). Told by nearly every edge being met in both directions (a closed, evenly
+  // wound surface) and by the sign of the volume it encloses.
+  function orientation(positions, triangles) {
+    const n = positions.length / 3;
+    const edges = new Set();
+    for (let i = 0; i + 2 < triangles.length; i += 3) {
+      for (let k = 0; k < 3; k++) edges.add(triangles[i + k] * n + triangles[i + ((k + 1) % 3)]);
+    }
+    let matched = 0, volume = 0;
+    for (let i = 0; i + 2 < triangles.length; i += 3) {
+      for (let k = 0; k < 3; k++) if (edges.has(triangles[i + ((k + 1) % 3)] * n + triangles[i + k])) matched++;
+      const a = 3 * triangles[i], b = 3 * triangles[i + 1], c = 3 * triangles[i + 2];
+      const P = positions;
+      volume += P[a] * (P[b + 1] * P[c + 2] - P[b + 2] * P[c + 1])
+        - P[a + 1] * (P[b] * P[c + 2] - P[b + 2] * P[c])
+        + P[a + 2] * (P[b] * P[c + 1] - P[b + 1] * P[c]);
+    }
+    if (!triangles.length || matched < 0.95 * triangles.length) return 0;
+    return volume > 0 ? 1 : volume < 0 ? -1 : 0;
+  }
+
+  const DEFAULT_VISUAL_COLOR = [0.62, 0.66, 0.72, 1];
+
+  // Every visual of `model` ready to draw: { link, origin (16 numbers: the visual's pose in
+  // its link), positions, triangles, color [r, g, b, a], facing (see `orientation`) }.
+  // Computed once per view.
+  function visualParts(model) {
+    const parts = [];
+    // Round primitives get 16 segments around, fewer when there are many (a URDF of a
+    // thousand spheres stays within a few thousand triangles, as meshes are capped).
+    const round = (model.visuals || []).filter((v) => ["cylinder", "sphere", "capsule"].includes(v.geometry.type)).length;
+    const segments = round <= 30 ? 16 : Math.max(6, Math.round(16 * Math.sqrt(30 / round)));
+    for (const v of model.visuals || []) {
+      const shape = tessellate(v.geometry, model.meshes, segments);
+      if (!shape || !shape.triangles.length) continue;
+      const mesh = v.geometry.type === "mesh" ? model.meshes[v.geometry.mesh] : null;
+      const color = (v.color || (mesh && mesh.color) || DEFAULT_VISUAL_COLOR).slice();
+      parts.push({
+        link: v.link, origin: fromXyzRpy(v.xyz, v.rpy), positions: shape.positions, triangles: shape.triangles, color,
+        facing: orientation(shape.positions, shape.triangles),
+      });
+    }
+    return parts;
+  }
+
+  // Shading levels of a triangle's colour (flat shading is quantised so canvas fill styles
+  // can be reused).
+  const SHADES = 24;
+
+  // The triangles of `parts` posed by `frames` and seen through `proj` (a projector: it has
+  // the camera's axes), farthest first: { count, order (triangle numbers), depth, x, y (3
+  // screen points each), part, shade (0..SHADES) }. Lit from over the viewer's shoulder;
+  // both sides of a triangle are lit alike. The back faces of a closed part whose winding is
+  // known are left out (half the work, and none can cover a front face).
+  function shadedTriangles(parts, frames, proj) {
+    const cam = proj.camera || { fwd: [0, 0, -1], up: [0, 1, 0], right: [1, 0, 0], eye: [0, 0, 1e9] };
+    const eye = cam.eye;
+    const L = [0, 1, 2].map((i) => -cam.fwd[i] + 0.6 * cam.up[i] - 0.35 * cam.right[i]);
+    const ln = Math.hypot(...L);
+    for (let i = 0; i < 3; i++) L[i] /= ln;
+    let total = 0;
+    for (const p of parts) total += p.triangles.length / 3;
+    const xs = new Float64Array(total * 3), ys = new Float64Array(total * 3);
+    const depth = new Float64Array(total), shade = new Uint8Array(total), part = new Uint32Array(total);
+    let count = 0;
+    parts.forEach((p, pi) => {
+      const frame = frames[p.link];
+      if (!frame) return;
+      const m = mul(frame, p.origin);
+      const n = p.positions.length / 3;
+      const w = new Float64Array(n * 3), s = new Float64Array(n * 3);
+      for (let k = 0; k < n; k++) {
+        const x = p.positions[3 * k], y = p.positions[3 * k + 1], z = p.positions[3 * k + 2];
+        const wx = m[0] * x + m[1] * y + m[2] * z + m[3];
+        const wy = m[4] * x + m[5] * y + m[6] * z + m[7];
+        const wz = m[8] * x + m[9] * y + m[10] * z + m[11];
+        w[3 * k] = wx; w[3 * k + 1] = wy; w[3 * k + 2] = wz;
+        const q = proj([wx, wy, wz]);
+        s[3 * k] = q[0]; s[3 * k + 1] = q[1]; s[3 * k + 2] = q[2];
+      }
+      const t = p.triangles;
+      for (let i = 0; i + 2 < t.length; i += 3) {
+        const a = t[i], b = t[i + 1], c = t[i + 2];
+        if (a >= n || b >= n || c >= n) continue;
+        // Behind the camera: not drawn.
+        if (s[3 * a + 2] <= 1e-3 || s[3 * b + 2] <= 1e-3 || s[3 * c + 2] <= 1e-3) continue;
+        const ux = w[3 * b] - w[3 * a], uy = w[3 * b + 1] - w[3 * a + 1], uz = w[3 * b + 2] - w[3 * a + 2];
+        const vx = w[3 * c] - w[3 * a], vy = w[3 * c + 1] - w[3 * a + 1], vz = w[3 * c + 2] - w[3 * a + 2];
+        const nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
+        const len = Math.hypot(nx, ny, nz);
+        if (!(len > 0)) continue;
+        if (p.facing && p.facing * (nx * (eye[0] - w[3 * a]) + ny * (eye[1] - w[3 * a + 1]) + nz * (eye[2] - w[3 * a + 2])) <= 0) continue;
+        const lambert = Math.abs(nx * L[0] + ny * L[1] + nz * L[2]) / len;
+        shade[count] = Math.min(SHADES, Math.round((0.35 + 0.65 * lambert) * SHADES));
+        depth[count] = (s[3 * a + 2] + s[3 * b + 2] + s[3 * c + 2]) / 3;
+        xs[3 * count] = s[3 * a]; ys[3 * count] = s[3 * a + 1];
+        xs[3 * count + 1] = s[3 * b]; ys[3 * count + 1] = s[3 * b + 1];
+        xs[3 * count + 2] = s[3 * c]; ys[3 * count + 2] = s[3 * c + 1];
+        part[count] = pi;
+        count++;
+      }
+    });
+    const order = new Uint32Array(count);
+    for (let i = 0; i < count; i++) order[i] = i;
+    order.sort((i, j) => depth[j] - depth[i]);
+    return { count, order, depth, x: xs, y: ys, part, shade };
+  }
+
+  // The box holding every visual of `parts` posed by `frames`: { min, max }, or null.
+  function visualBounds(parts, frames) {
+    const min = [Infinity, Infinity, Infinity], max = [-Infinity, -Infinity, -Infinity];
+    for (const p of parts) {
+      if (!frames[p.link]) continue;
+      const m = mul(frames[p.link], p.origin);
+      for (let k = 0; k + 2 < p.positions.length; k += 3) {
+        const q = apply(m, [p.positions[k], p.positions[k + 1], p.positions[k + 2]]);
+        for (let i = 0; i < 3; i++) { min[i] = Math.min(min[i], q[i]); max[i] = Math.max(max[i], q[i]); }
+      }
+    }
+    return min[0] <= max[0] ? { min, max } : null;
+  }
+
+  // Fills the triangles of `shadedTriangles` on a 2D context, each with its part's colour at
+  // its shade. Each is grown by half a pixel (every edge moved out, corners mitred up to
+  // 2 px), which closes the seams anti-aliasing leaves between neighbours (an outline would
+  // too, at twice the cost).
+  function fillTriangles(ctx, parts, tris) {
+    const styles = parts.map((p) => {
+      const alpha = p.color.length > 3 ? p.color[3] : 1;
+      const out = [];
+      for (let k = 0; k <= SHADES; k++) {
+        const f = k / SHADES;
+        // Lifted a little off black, so a black part still shows its shape.
+        const c = [0, 1, 2].map((i) => Math.round(255 * (0.1 + 0.9 * Math.min(1, Math.max(0, p.color[i]))) * f));
+        out.push(alpha < 1 ? `rgba(${c[0]},${c[1]},${c[2]},${alpha})` : `rgb(${c[0]},${c[1]},${c[2]})`);
+      }
+      return out;
+    });
+    const X = tris.x, Y = tris.y;
+    const grown = new Float64Array(6);
+    let style = null;
+    for (let o = 0; o < tris.count; o++) {
+      const i = tris.order[o];
+      const next = styles[tris.part[i]][tris.shade[i]];
+      if (next !== style) { style = next; ctx.fillStyle = style; }
+      growTriangle(X, Y, 3 * i, 0.5, grown);
+      ctx.beginPath();
+      ctx.moveTo(grown[0], grown[1]);
+      ctx.lineTo(grown[2], grown[3]);
+      ctx.lineTo(grown[4], grown[5]);
+      ctx.fill();
+    }
+  }
+
+  // The triangle at X[at..at+3], Y[at..at+3] with every edge moved out by `d` (its corners
+  // mitred, each moved at most 4·d), into out = [x0, y0, x1, y1, x2, y2].
+  function growTriangle(X, Y, at, d, out) {
+    // Which way is out: the winding's sign.
+    const area = (X[at + 1] - X[at]) * (Y[at + 2] - Y[at]) - (X[at + 2] - X[at]) * (Y[at + 1] - Y[at]);
+    const side = area >= 0 ? 1 : -1;
+    for (let k = 0; k < 3; k++) {
+      const a = at + ((k + 2) % 3), b = at + k, c = at + ((k + 1) % 3);
+      // Outward unit normals of the edges a→b and b→c.
+      let ux = Y[b] - Y[a], uy = X[a] - X[b];
+      let vx = Y[c] - Y[b], vy = X[b] - X[c];
+      const lu = Math.hypot(ux, uy) || 1, lv = Math.hypot(vx, vy) || 1;
+      ux = (side * ux) / lu; uy = (side * uy) / lu;
+      vx = (side * vx) / lv; vy = (side * vy) / lv;
+      // The corner moves along the sum of the normals, far enough for both edges to move d.
+      const mx = ux + vx, my = uy + vy;
+      const dot = 1 + ux * vx + uy * vy;
+      let f = dot > 1e-9 ? d / dot : 4 * d;
+      const len = Math.hypot(mx, my) * f;
+      if (len > 4 * d) f *= (4 * d) / len;
+      out[2 * k] = X[b] + mx * f;
+      out[2 * k + 1] = Y[b] + my * f;
+    }
+    return out;
+  }
+
   // A view of `model` on `canvas`. Drag to orbit, wheel to zoom. `set(anglesDeg, gripperM,
   // base)` changes the pose (`base`: the root link's pose in the world, for a floating robot); `renderedDeg()` returns the angles last drawn; the canvas's data-angles and data-root
-  // attributes hold them and the root link's position (tests read them).
+  // attributes hold them and the root link's position (tests read them), data-triangles the
+  // visual triangles last filled and data-fallbacks the links whose geometry could not be
+  // drawn (their reasons are the canvas's title, and a line at its foot).
   function createArmView(canvas, model) {
     const ctx = canvas.getContext("2d");
     // Frame the model whatever its pose: no link is further from the root than the longest
@@ -217,8 +491,28 @@
       size = Math.max(size, reach[j.child]);
     }
     const cam = { yaw: 0.9, pitch: 0.4, distance: 1.3 * size, target: [0, 0, 0.3 * size] };
+    // Visual geometry, tessellated once; links with some are drawn solid, the stick figure
+    // thin over them.
+    const parts = visualParts(model);
+    const solid = new Set(parts.map((p) => p.link));
+    // Links with a moving joint at or below them: over solid links the thin chain leaves out
+    // fixed joints to leaves (sensors, frames), which would only criss-cross the body.
+    const moving = new Set();
+    for (let i = model.joints.length - 1; i >= 0; i--) {
+      const j = model.joints[i];
+      if (j.type !== "fixed" || moving.has(j.child)) moving.add(j.parent), moving.add(j.child);
+    }
+    const fallbacks = model.fallbacks || [];
+    if (fallbacks.length) {
+      canvas.title = "Drawn as sticks (geometry not drawable):\n" + fallbacks.map((f) => f.link + ": " + f.reason).join("\n");
+    }
+    canvas.dataset.fallbacks = String(fallbacks.length);
+    const fellBack = new Set(fallbacks.map((f) => f.link));
     let pose = { deg: [], gripperM: undefined, base: undefined };
     let framedOnBase = false;
+    // A model with visuals is framed on them where it first stands (its meshes, not its
+    // joint offsets, say how big it is).
+    let framedOnVisuals = false;
     let drawn = [];
     let dirty = true;
     let frames = 0;
@@ -243,6 +537,17 @@
       ctx.clearRect(0, 0, w, h);
       ctx.fillStyle = "#f7fafc";
       ctx.fillRect(0, 0, w, h);
+      const values = valuesFromDeg(model, pose.deg, pose.gripperM);
+      const { frames: fr, segs } = segments(model, values, pose.base);
+      if (parts.length && !framedOnVisuals) {
+        framedOnVisuals = true;
+        const box = visualBounds(parts, fr);
+        if (box) {
+          cam.target = [0, 1, 2].map((i) => (box.min[i] + box.max[i]) / 2);
+          const radius = Math.hypot(...[0, 1, 2].map((i) => box.max[i] - box.min[i])) / 2;
+          cam.distance = Math.max(0.3, Math.min(8, 3.2 * radius));
+        }
+      }
       const proj = projector(cam, w, h);
       // Floor grid, 0.1 m pitch.
       ctx.strokeStyle = "#e2e8f0";
@@ -254,17 +559,31 @@
           ctx.beginPath(); ctx.moveTo(p[0], p[1]); ctx.lineTo(q[0], q[1]); ctx.stroke();
         }
       }
-      const values = valuesFromDeg(model, pose.deg, pose.gripperM);
-      const { frames: fr, segs } = segments(model, values, pose.base);
-      const items = segs.map((s) => {
+      let triangles = 0;
+      if (parts.length) {
+        const tris = shadedTriangles(parts, fr, proj);
+        fillTriangles(ctx, parts, tris);
+        triangles = tris.count;
+      }
+      const items = [];
+      for (const s of segs) {
+        // A link drawn solid keeps a thin line of its chain on top; the line to a link whose
+        // geometry could not be drawn stays as it was, standing in for it.
+        const thin = solid.has(s.bar ? s.joint.child : s.joint.parent) && !(fellBack.has(s.joint.child) && !s.bar);
+        if (thin && !s.bar && !moving.has(s.joint.child)) continue;
         const a = proj(s.a), b = proj(s.b);
-        return { s, a, b, depth: (a[2] + b[2]) / 2 };
-      });
+        items.push({ s, a, b, thin, depth: (a[2] + b[2]) / 2 });
+      }
       items.sort((x, y) => y.depth - x.depth);
       ctx.lineCap = "round";
       for (const it of items) {
-        ctx.strokeStyle = it.s.color;
-        ctx.lineWidth = Math.max(2, (it.s.width * 1.6) / Math.max(it.depth, 0.2));
+        if (it.thin) {
+          ctx.strokeStyle = "rgba(26, 32, 44, 0.55)";
+          ctx.lineWidth = 1.5;
+        } else {
+          ctx.strokeStyle = it.s.color;
+          ctx.lineWidth = Math.max(2, (it.s.width * 1.6) / Math.max(it.depth, 0.2));
+        }
         ctx.beginPath(); ctx.moveTo(it.a[0], it.a[1]); ctx.lineTo(it.b[0], it.b[1]); ctx.stroke();
       }
       // Joints: a dot and a short line along the rotation axis.
@@ -284,6 +603,12 @@
       const root = fr[model.joints.length ? model.joints[0].parent : model.root];
       if (root) canvas.dataset.root = origin(root).map((v) => v.toFixed(3)).join(",");
       canvas.dataset.frames = String(frames);
+      canvas.dataset.triangles = String(triangles);
+      if (fallbacks.length) {
+        ctx.fillStyle = "#744210"; ctx.font = "12px sans-serif";
+        const n = fallbacks.length;
+        ctx.fillText(n + (n === 1 ? " link" : " links") + " drawn as sticks: geometry not readable (hover for why)", 8, h - 8);
+      }
     }
 
     function loop() {
@@ -298,6 +623,7 @@
           // A floating robot: look at its root where it first stands, from far enough that
           // the limbs above and below it (the longest chain each way) fit.
           framedOnBase = true;
+          framedOnVisuals = false;
           cam.target = [base[3], base[7], base[11]];
           cam.distance = 2.8 * size;
         }
@@ -355,5 +681,6 @@
     createDialsView,
     mul, fromXyzRpy, rotation, translation, apply, origin,
     linkFrames, valuesFromDeg, poseFromColumns, armJoints, actuatedJoints, projector, segments, createArmView,
+    decodeMesh, tessellate, orientation, visualParts, visualBounds, shadedTriangles, fillTriangles, growTriangle,
   };
 });

@@ -1,7 +1,8 @@
 // Browser tests in headless Chromium (playwright-core, the system's /usr/bin/chromium):
 // the live view of `armhil sim piper --ui` follows a MOVE J and injects/clears a fault, and a
 // failing scenario's report.html opened from disk shows the failure and replays with the
-// slider. Screenshots go to $ARMHIL_SCREENSHOTS (default out/web).
+// slider, and a meshed robot's report draws its links' visuals. Screenshots go to
+// $ARMHIL_SCREENSHOTS (default out/web).
 //
 // Needs ARMHIL_BIN (the armhil binary); scripts/ci/web.sh sets it.
 const test = require("node:test");
@@ -181,7 +182,8 @@ test("the RobStride live view shows each motor's dial and reports an injected fa
 test("the robot live view draws the fallen humanoid at its base pose and cuts a bus from the panel", async (t) => {
   const can = await freePort();
   const ui = await freePort();
-  const page = await livePage(t, ["robot", path.join(ROOT, "robots", "humanoid.yaml"), "--socketcand", `127.0.0.1:${can}`], ui);
+  // No gantry (a floating robot hangs on one until enabled by default).
+  const page = await livePage(t, ["robot", path.join(ROOT, "robots", "humanoid.yaml"), "--gantry", "off", "--socketcand", `127.0.0.1:${can}`], ui);
   // Never enabled, the humanoid falls: its pelvis ends near the ground, and the page draws
   // the root where the emulator says (the base pose's z is the pelvis height).
   await until("the humanoid to fall", () => page.evaluate(() => window.armhilLive.state.base_position_m[2] < 0.5), 10000);
@@ -261,6 +263,57 @@ test("a robot's report replays the whole humanoid at its base pose as it falls",
   await until("the replay at the end", async () => (await root()).every((v, k) => Math.abs(v - traced[k]) < 0.002), 3000);
   assert.deepEqual(errors, []);
   await page.screenshot({ path: path.join(SHOTS, "report_robot.png"), fullPage: false });
+});
+
+test("a meshed robot's report draws its links' visual geometry and says which link it could not", async (t) => {
+  const out = fs.mkdtempSync(path.join(os.tmpdir(), "armhil-report-"));
+  // fixtures/meshed/: STL, OBJ and COLLADA meshes, primitives, and a tool whose mesh is missing.
+  const r = spawnSync(BIN, ["run", "--out", out, path.join(FIXTURES, "meshed_move.yaml")], { encoding: "utf8" });
+  assert.equal(r.status, 0, "the scenario passes: " + r.stdout + r.stderr);
+  const { context, profile } = await browser();
+  t.after(async () => {
+    await context.close();
+    fs.rmSync(profile, { recursive: true, force: true });
+    fs.rmSync(out, { recursive: true, force: true });
+  });
+  const page = await context.newPage();
+  const errors = [];
+  page.on("pageerror", (e) => errors.push(String(e)));
+  await page.goto("file://" + path.join(out, "meshed_move", "report.html"));
+  await page.waitForFunction(() => document.getElementById("arm-view") && document.getElementById("arm-view").dataset.frames);
+  const model = await page.evaluate(() => window.armhilReport.data.model);
+  assert.deepEqual(model.meshes.map((m) => m.file), ["package://meshed_fixture/meshes/base.stl", "meshes/upper.obj", "meshes/wrist.dae"]);
+  assert.deepEqual(model.fallbacks.map((f) => f.link), ["tool"]);
+  // At the end the arm is drawn where the trace has it: shoulder near 0.8 rad, elbow 0.7.
+  const end = await page.evaluate(() => window.armhilReport.data.duration);
+  await page.fill("#time-slider", String(end));
+  const traced = await page.evaluate((t) => {
+    const d = window.armhilReport.data;
+    const i = window.ArmHil.nearestIndex(d.trace.t, t);
+    const deg = (n) => { const c = d.trace.columns.find((x) => x.name === n); return (c.values[i] * c.quantum * 180) / Math.PI; };
+    return [deg("shoulder_rad"), deg("elbow_rad")];
+  }, end);
+  assert.ok(Math.abs(traced[0] - 45.8) < 4 && Math.abs(traced[1] - 40.1) < 4, `traced ${traced}`);
+  await until("the replay at the end", async () => {
+    const a = (await page.getAttribute("#arm-view", "data-angles")).split(",").map(Number);
+    return a.every((v, k) => Math.abs(v - traced[k]) < 0.5);
+  }, 3000);
+  // Filled triangles are drawn (back faces left out), and the missing mesh is said.
+  const triangles = Number(await page.getAttribute("#arm-view", "data-triangles"));
+  assert.ok(triangles > 30 && triangles < 400, `${triangles} triangles drawn`);
+  assert.equal(await page.getAttribute("#arm-view", "data-fallbacks"), "1");
+  assert.match(await page.getAttribute("#arm-view", "title"), /tool: `meshes\/gripper_missing\.stl` is not found/);
+  // The base's steel box is drawn, shaded, where the canvas shows the arm's foot.
+  const lit = await page.evaluate(() => {
+    const c = document.getElementById("arm-view");
+    const px = c.getContext("2d").getImageData(0, 0, c.width, c.height).data;
+    let orange = 0;
+    for (let i = 0; i < px.length; i += 4) if (px[i] > 150 && px[i + 1] > 60 && px[i + 1] < 140 && px[i + 2] < 60) orange++;
+    return orange;
+  });
+  assert.ok(lit > 200, `the orange upper arm covers ${lit} pixels`);
+  assert.deepEqual(errors, []);
+  await page.screenshot({ path: path.join(SHOTS, "report_meshed.png"), fullPage: false });
 });
 
 test("a failing scenario's report.html shows the failure and replays with the slider", async (t) => {
