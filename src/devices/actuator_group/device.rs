@@ -292,16 +292,36 @@ impl GroupDevice {
         }
     }
 
-    /// Runs `each` on every motor in order; the first failure names its joint.
+    /// Runs `each` on every motor: the buses at the same time, as a host with a thread per
+    /// bus does, the motors of one bus one after the other (one request in flight per bus).
+    /// A robot of 32 actuators on four buses enables in a quarter of the time it took one
+    /// motor at a time, its legs no longer unpowered while its arms are enabled. The first
+    /// failure (in configuration order) names its joint.
     async fn on_every_motor<'a, F, Fut>(&'a self, each: F) -> Result<(), DeviceError>
     where
         F: Fn(&'a Motor) -> Fut,
         Fut: std::future::Future<Output = Result<(), RobstrideError>>,
     {
-        for (index, motor) in self.motors.iter().enumerate() {
-            each(motor).await.map_err(|e| self.error(index, e))?;
+        let each = &each;
+        let buses = self.settings.buses.len().max(1);
+        let per_bus = (0..buses).map(|bus| async move {
+            let mut failed = None;
+            for (index, motor) in self.motors.iter().enumerate() {
+                if self.settings.actuators[index].bus != bus {
+                    continue;
+                }
+                if let Err(e) = each(motor).await {
+                    failed = Some((index, e));
+                    break;
+                }
+            }
+            failed
+        });
+        let failures = futures::future::join_all(per_bus).await;
+        match failures.into_iter().flatten().min_by_key(|(index, _)| *index) {
+            Some((index, e)) => Err(self.error(index, e)),
+            None => Ok(()),
         }
-        Ok(())
     }
 
     fn error(&self, index: usize, e: RobstrideError) -> DeviceError {
