@@ -140,7 +140,7 @@ enum Decoder {
         host_id: u8,
         model: driver::robstride::Model,
     },
-    Bench(armhil::harness::result::BenchInfo),
+    Bench(Box<armhil::harness::result::BenchInfo>),
 }
 
 impl Decoder {
@@ -155,7 +155,7 @@ impl Decoder {
                 "{}: no device on its bench speaks CAN",
                 path.display()
             );
-            return Ok(Self::Bench(bench));
+            return Ok(Self::Bench(Box::new(bench)));
         }
         let model = driver::robstride::Model::parse(&args.model)
             .with_context(|| format!("unknown RobStride model {:?}", args.model))?;
