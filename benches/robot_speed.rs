@@ -6,12 +6,17 @@
 //!   ground), one and two humanoids in one process (20 and 40 actuators), and a one-actuator
 //!   robot (the arm with only its shoulder actuated is not a robot file; the arm with all six
 //!   is the smallest shipped).
+//! - The Unitree G1 of the public corpus (example-robot-data 6.0.0, when `ARMHIL_URDF_CORPUS`
+//!   points at it; skipped with one line otherwise): 29 actuators from
+//!   `testkit::corpus::robot_file_for`, its feet's and body's collision shapes (mesh hulls),
+//!   standing on its gantry-released feet at the gains of `testkit::corpus::LEGGED`; the world
+//!   alone and in virtual time, measured as the humanoid is.
 //! - Real time: the humanoid for a few wall seconds on a two-worker runtime (as `armhil sim
 //!   robot` runs it), with a host sending every actuator a 1 kHz operation-control stream on
 //!   its bus; the process's CPU time per wall second, and each bus's load against its
 //!   1 Mbit/s.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -33,14 +38,90 @@ fn robot(name: &str) -> RobotConfig {
         .config
 }
 
+/// A robot to measure: its name in the output, what the emulator runs, and each actuator's
+/// hold gains (kp N·m/rad, kd N·m·s/rad; configuration order).
+#[derive(Clone)]
+struct Subject {
+    name: String,
+    config: RobotConfig,
+    gains: Vec<(f64, f64)>,
+}
+
+/// A shipped robot (`robots/NAME.yaml`): legs (every actuator but the arms' RS02, ankles
+/// included) at kp 300, kd 5; arms at kp 50, kd 1, as `scenarios/robot/humanoid_stand.yaml`.
+fn shipped(name: &str) -> Subject {
+    let config = robot(name);
+    let gains = config
+        .actuators
+        .iter()
+        .map(|a| {
+            let leg = a.motor.model != sim::robstride::Model::RS02 || a.joint.contains("ankle");
+            if leg {
+                (300.0, 5.0)
+            } else {
+                (50.0, 1.0)
+            }
+        })
+        .collect();
+    Subject {
+        name: name.to_owned(),
+        config,
+        gains,
+    }
+}
+
+/// The corpus's G1 (29 actuators), as `testkit::corpus` writes its robot file, with the
+/// standing gains of `testkit::corpus::LEGGED`; `None` (after one line) without the corpus.
+fn corpus_g1() -> Option<Subject> {
+    const NAME: &str = "g1_29dof_rev_1_0";
+    let Some(root) = std::env::var_os(testkit::corpus::CORPUS_ENV).filter(|v| !v.is_empty()) else {
+        println!(
+            "skipped: robot_speed: {NAME}: {} not set — pip install example-robot-data==6.0.0 \
+             and point it at …/cmeel.prefix/share/example-robot-data",
+            testkit::corpus::CORPUS_ENV
+        );
+        return None;
+    };
+    let root = PathBuf::from(root);
+    let legged = testkit::corpus::LEGGED
+        .iter()
+        .find(|l| l.name() == NAME)
+        .expect("the G1 is a legged robot of testkit::corpus");
+    let urdf = root.join(legged.urdf);
+    let text = testkit::corpus::robot_file_for(&urdf, &root, &legged.options());
+    let plan = legged.plan(&root).expect("the G1 plans");
+    let dir = tempfile::tempdir().expect("a temporary folder");
+    let file = dir.path().join(format!("{NAME}.yaml"));
+    std::fs::write(&file, text).expect("the robot file is written");
+    let config = armhil::robots::load_robot_file(&file)
+        .expect("the generated robot file loads")
+        .config;
+    let gains = config
+        .actuators
+        .iter()
+        .map(|a| {
+            plan.actuator(&a.joint)
+                .expect("every actuator is planned")
+                .gains(legged.kp_per_nm, legged.kd_per_nm)
+        })
+        .collect();
+    Some(Subject {
+        name: NAME.to_owned(),
+        config,
+        gains,
+    })
+}
+
 struct Running {
     handle: RobotHandle,
     hosts: Vec<VirtualNode>,
     config: RobotConfig,
+    gains: Vec<(f64, f64)>,
     _buses: Vec<VirtualBus>,
 }
 
-fn spawn(config: RobotConfig, bus_config: VirtualBusConfig) -> Running {
+fn spawn(subject: &Subject, bus_config: VirtualBusConfig) -> Running {
+    let config = subject.config.clone();
     let buses: Vec<VirtualBus> = config
         .buses
         .iter()
@@ -56,13 +137,14 @@ fn spawn(config: RobotConfig, bus_config: VirtualBusConfig) -> Running {
         handle,
         hosts,
         config,
+        gains: subject.gains.clone(),
         _buses: buses,
     }
 }
 
-/// A type-1 operation-control frame holding `angle_rad` with kp/kd (manual scaling: angle
-/// ±4π, speed and torque at their midpoints = 0, kp 0..500 or 0..5000, kd 0..5 or 0..100;
-/// the models here use the first range for RS02 and the second for RS03/RS04).
+/// A type-1 operation-control frame holding `angle_rad` with kp/kd (the manual's scaling
+/// of the model: angle ±4π, speed and torque at their midpoints = 0, kp and kd from 0 to the
+/// model's maximum).
 fn hold_frame(
     motor: u8,
     model: sim::robstride::Model,
@@ -70,16 +152,15 @@ fn hold_frame(
     kp: f64,
     kd: f64,
 ) -> CanFrame {
-    let big = !matches!(model, sim::robstride::Model::RS02);
-    let (kp_max, kd_max) = if big { (5000.0, 100.0) } else { (500.0, 5.0) };
+    let ranges = model.ranges(sim::robstride::RangeTable::Manual);
     let scale =
         |v: f64, lo: f64, hi: f64| (((v - lo) / (hi - lo)).clamp(0.0, 1.0) * 65535.0) as u16;
-    let pi4 = 4.0 * std::f64::consts::PI;
+    let angle = f64::from(ranges.angle_rad);
     let mut data = [0u8; 8];
-    data[0..2].copy_from_slice(&scale(angle_rad, -pi4, pi4).to_be_bytes());
+    data[0..2].copy_from_slice(&scale(angle_rad, -angle, angle).to_be_bytes());
     data[2..4].copy_from_slice(&0x7FFFu16.to_be_bytes());
-    data[4..6].copy_from_slice(&scale(kp, 0.0, kp_max).to_be_bytes());
-    data[6..8].copy_from_slice(&scale(kd, 0.0, kd_max).to_be_bytes());
+    data[4..6].copy_from_slice(&scale(kp, 0.0, f64::from(ranges.kp_max)).to_be_bytes());
+    data[6..8].copy_from_slice(&scale(kd, 0.0, f64::from(ranges.kd_max)).to_be_bytes());
     let torque_mid = 0x7FFFu32;
     CanFrame::extended((1 << 24) | (torque_mid << 8) | u32::from(motor), &data).expect("a frame")
 }
@@ -88,19 +169,18 @@ fn enable_frame(motor: u8) -> CanFrame {
     CanFrame::extended((3 << 24) | (HOST << 8) | u32::from(motor), &[0; 8]).expect("a frame")
 }
 
-/// The hold frame of every actuator, with the bus it goes on.
+/// The hold frame of every actuator (where it is, at its gains), with the bus it goes on.
 fn hold_frames(running: &Running, start: &sim::robot::RobotSnapshot) -> Vec<(usize, CanFrame)> {
     running
         .config
         .actuators
         .iter()
         .zip(&start.joints)
-        .map(|(a, j)| {
-            let leg = a.motor.model != sim::robstride::Model::RS02 || j.joint.contains("ankle");
-            let (kp, kd) = if leg { (300.0, 5.0) } else { (50.0, 1.0) };
+        .zip(&running.gains)
+        .map(|((a, j), (kp, kd))| {
             (
                 a.bus,
-                hold_frame(a.motor.can_id, a.motor.model, j.motor.angle_rad, kp, kd),
+                hold_frame(a.motor.can_id, a.motor.model, j.motor.angle_rad, *kp, *kd),
             )
         })
         .collect()
@@ -112,13 +192,19 @@ async fn send(host: &VirtualNode, frame: CanFrame) {
     }
 }
 
-/// Enable every actuator and send it one hold command.
+/// Send every actuator one hold command, enable it, and send the command again. The firmware
+/// keeps an operation-control command it gets while disabled, so a robot whose gantry lets
+/// go at the last enable (the G1) lands with every joint already holding.
 async fn hold_all(running: &Running) {
     let start = running.handle.snapshot().await.expect("a snapshot");
+    let frames = hold_frames(running, &start);
+    for (bus, frame) in &frames {
+        send(&running.hosts[*bus], *frame).await;
+    }
     for a in &running.config.actuators {
         send(&running.hosts[a.bus], enable_frame(a.motor.can_id)).await;
     }
-    for (bus, frame) in hold_frames(running, &start) {
+    for (bus, frame) in frames {
         send(&running.hosts[bus], frame).await;
     }
 }
@@ -134,8 +220,9 @@ fn drain(hosts: &[VirtualNode]) -> Vec<tokio::task::JoinHandle<()>> {
         .collect()
 }
 
-/// Emulated seconds per wall second for `count` copies of `name` in one process.
-fn virtual_speed(name: &str, count: usize) -> (f64, usize) {
+/// Emulated seconds per wall second for `count` copies of `subject` in one process, its
+/// actuators, and the first copy's base height at the end (m).
+fn virtual_speed(subject: &Subject, count: usize) -> (f64, usize, f64) {
     let runtime = tokio::runtime::Builder::new_current_thread()
         .enable_all()
         .start_paused(true)
@@ -143,7 +230,7 @@ fn virtual_speed(name: &str, count: usize) -> (f64, usize) {
         .expect("a runtime");
     runtime.block_on(async {
         let robots: Vec<Running> = (0..count)
-            .map(|_| spawn(robot(name), VirtualBusConfig::default()))
+            .map(|_| spawn(subject, VirtualBusConfig::default()))
             .collect();
         let mut drains = Vec::new();
         for r in &robots {
@@ -154,9 +241,13 @@ fn virtual_speed(name: &str, count: usize) -> (f64, usize) {
         let wall = Instant::now();
         tokio::time::sleep(VIRTUAL_RUN).await;
         let speed = VIRTUAL_RUN.as_secs_f64() / wall.elapsed().as_secs_f64();
+        let mut base_m = f64::NAN;
         for r in &robots {
             let s = r.handle.snapshot().await.expect("a snapshot");
             assert!(s.base_position_m[2].is_finite());
+            if base_m.is_nan() {
+                base_m = s.base_position_m[2];
+            }
         }
         for d in drains {
             d.abort();
@@ -164,7 +255,7 @@ fn virtual_speed(name: &str, count: usize) -> (f64, usize) {
         for r in robots {
             r.handle.shutdown().await;
         }
-        (speed, actuators)
+        (speed, actuators, base_m)
     })
 }
 
@@ -198,7 +289,7 @@ fn real_time_humanoid() {
             .duration_since(std::time::UNIX_EPOCH)
             .unwrap_or_default();
         let running = spawn(
-            robot("humanoid"),
+            &shipped("humanoid"),
             VirtualBusConfig {
                 epoch,
                 ..VirtualBusConfig::default()
@@ -277,8 +368,8 @@ fn real_time_humanoid() {
 
 /// The physics alone: the robot's world stepped with zero torques (no firmware, no buses),
 /// µs per 1 ms step (after 200 steps).
-fn world_step_us(name: &str) -> f64 {
-    let (mut world, _plants) = sim::robot::RobotWorld::new(&robot(name)).expect("a world");
+fn world_step_us(subject: &Subject) -> f64 {
+    let (mut world, _plants) = sim::robot::RobotWorld::new(&subject.config).expect("a world");
     for _ in 0..200 {
         world.step().expect("finite");
     }
@@ -294,20 +385,38 @@ fn main() {
     if std::env::args().any(|a| a == "--list") {
         return;
     }
-    for name in ["robstride_arm6", "humanoid"] {
+    let arm = shipped("robstride_arm6");
+    let humanoid = shipped("humanoid");
+    let g1 = corpus_g1();
+    for subject in [Some(&arm), Some(&humanoid), g1.as_ref()]
+        .into_iter()
+        .flatten()
+    {
         println!(
-            "{name}: the world alone (no firmware, zero torques) {:.0} µs per 1 ms step",
-            world_step_us(name)
+            "{}: the world alone (no firmware, zero torques) {:.0} µs per 1 ms step",
+            subject.name,
+            world_step_us(subject)
         );
     }
     println!(
         "virtual time ({} s emulated per run, one core):",
         VIRTUAL_RUN.as_secs()
     );
-    for (name, count) in [("robstride_arm6", 1), ("humanoid", 1), ("humanoid", 2)] {
-        let (speed, actuators) = virtual_speed(name, count);
+    let mut runs = vec![(&arm, 1), (&humanoid, 1), (&humanoid, 2)];
+    if let Some(g1) = &g1 {
+        runs.push((g1, 1));
+    }
+    for (subject, count) in runs {
+        let (speed, actuators, base_m) = virtual_speed(subject, count);
+        let base = if subject.config.base == sim::robot::Base::Fixed {
+            String::new()
+        } else {
+            format!(", base at {base_m:.3} m at the end")
+        };
         println!(
-            "  {count} × {name}: {actuators} actuators, {speed:.1}× real time ({:.0} µs per 1 ms step)",
+            "  {count} × {}: {actuators} actuators, {speed:.1}× real time ({:.0} µs per 1 ms \
+             step){base}",
+            subject.name,
             1000.0 / speed
         );
     }

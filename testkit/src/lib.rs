@@ -18,6 +18,8 @@ pub mod tools;
 pub mod transcript;
 
 #[cfg(feature = "emulators")]
+pub mod corpus;
+#[cfg(feature = "emulators")]
 pub mod emulators;
 #[cfg(feature = "fuzz")]
 pub mod fuzz;

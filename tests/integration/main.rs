@@ -12,6 +12,7 @@ mod abuse;
 mod arm_api;
 mod cli_errors;
 mod codec_cross_props;
+mod corpus_robots;
 mod dbc;
 mod decode_cli;
 mod deps;
