@@ -11,7 +11,7 @@
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use nalgebra::{Isometry3, Point3, Vector3};
+use nalgebra::Isometry3;
 use sim::description::{
     CollisionGeometry, CollisionShape, Description, MissingMeshes, PackagePaths,
 };
@@ -326,40 +326,5 @@ fn drop_on_the_ground(
 
 /// The lowest point (z, m) of all collision shapes at the link poses `poses`.
 fn lowest_z(geometry: &CollisionGeometry, poses: &[Isometry3<f64>]) -> Option<f64> {
-    geometry
-        .shapes
-        .iter()
-        .map(|s| {
-            let frame = poses[s.link] * s.origin;
-            let z = |x: f64, y: f64, z: f64| (frame * Point3::new(x, y, z)).z;
-            match &s.shape {
-                CollisionShape::Box {
-                    half_m: [hx, hy, hz],
-                } => {
-                    let mut low = f64::INFINITY;
-                    for sx in [-1.0, 1.0] {
-                        for sy in [-1.0, 1.0] {
-                            for sz in [-1.0, 1.0] {
-                                low = low.min(z(sx * hx, sy * hy, sz * hz));
-                            }
-                        }
-                    }
-                    low
-                }
-                CollisionShape::Cylinder { radius_m, length_m } => {
-                    let axis_z = (frame.rotation * Vector3::z()).z;
-                    let ends = z(0.0, 0.0, -length_m / 2.0).min(z(0.0, 0.0, length_m / 2.0));
-                    ends - radius_m * (1.0 - axis_z * axis_z).max(0.0).sqrt()
-                }
-                CollisionShape::Sphere { radius_m } => z(0.0, 0.0, 0.0) - radius_m,
-                CollisionShape::Capsule { radius_m, length_m } => {
-                    z(0.0, 0.0, -length_m / 2.0).min(z(0.0, 0.0, length_m / 2.0)) - radius_m
-                }
-                CollisionShape::Hull { points_m } => points_m
-                    .iter()
-                    .map(|p| (frame * p).z)
-                    .fold(f64::INFINITY, f64::min),
-            }
-        })
-        .min_by(f64::total_cmp)
+    geometry.lowest_point(poses).map(|(_, z)| z)
 }

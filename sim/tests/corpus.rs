@@ -15,15 +15,10 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use nalgebra::{Isometry3, Point3, Vector3};
-use sim::description::{
-    CollisionGeometry, CollisionShape, Description, MissingMeshes, PackagePaths,
-};
+use nalgebra::Isometry3;
+use sim::description::{CollisionGeometry, Description, MissingMeshes, PackagePaths};
 use sim::physics::articulated::ArticulatedWorld;
 use sim::physics::WorldConfig;
-
-/// The variable naming the corpus folder (`…/cmeel.prefix/share/example-robot-data`).
-const CORPUS_ENV: &str = "ARMHIL_URDF_CORPUS";
 
 /// Where loading a file stopped.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -95,40 +90,9 @@ const DROP_HEIGHT_M: f64 = 0.02;
 /// How far below the ground any collision point may be at the end (m).
 const MAX_SINK_M: f64 = 0.02;
 
-/// The corpus folder, or `None` (after one `skipped:` line) when the variable is unset;
-/// under `ARMHIL_REQUIRE_TOOLS=1` an unset variable fails the test.
+/// The corpus folder, or `None` after one `skipped:` line (see [`testkit::corpus::corpus_root`]).
 fn corpus_root() -> Option<PathBuf> {
-    match std::env::var_os(CORPUS_ENV).filter(|v| !v.is_empty()) {
-        Some(root) => {
-            let root = PathBuf::from(root);
-            assert!(
-                root.join("robots").is_dir(),
-                "{CORPUS_ENV}={} has no `robots` folder: point it at \
-                 …/cmeel.prefix/share/example-robot-data",
-                root.display()
-            );
-            Some(root)
-        }
-        None => {
-            let reason = format!(
-                "urdf_corpus: {CORPUS_ENV} not set — pip install example-robot-data==6.0.0 \
-                 and point it at …/cmeel.prefix/share/example-robot-data"
-            );
-            if testkit::tools::tools_required() {
-                panic!(
-                    "{reason} ({} is set, so a missing corpus is a failure)",
-                    testkit::tools::REQUIRE_TOOLS_ENV
-                );
-            }
-            // Once for both tests, and straight to stderr: libtest captures the output of a
-            // passing test.
-            static NOTICE: std::sync::Once = std::sync::Once::new();
-            NOTICE.call_once(|| {
-                let _ = writeln!(std::io::stderr(), "skipped: {reason}");
-            });
-            None
-        }
-    }
+    testkit::corpus::corpus_root("urdf_corpus")
 }
 
 /// Every `*.urdf` below `root`, relative to it, sorted.
@@ -223,43 +187,7 @@ fn run_fixed(loaded: &Loaded) -> Result<(), (Stage, String)> {
 /// lowest corner, a cylinder's lowest rim point, a sphere's or a capsule's bottom, a hull's
 /// lowest contact point.
 fn lowest_points(geometry: &CollisionGeometry, poses: &[Isometry3<f64>]) -> Vec<(usize, f64)> {
-    geometry
-        .shapes
-        .iter()
-        .map(|s| {
-            let frame = poses[s.link] * s.origin;
-            let z = |x: f64, y: f64, z: f64| (frame * Point3::new(x, y, z)).z;
-            let lowest = match &s.shape {
-                CollisionShape::Box {
-                    half_m: [hx, hy, hz],
-                } => {
-                    let mut low = f64::INFINITY;
-                    for sx in [-1.0, 1.0] {
-                        for sy in [-1.0, 1.0] {
-                            for sz in [-1.0, 1.0] {
-                                low = low.min(z(sx * hx, sy * hy, sz * hz));
-                            }
-                        }
-                    }
-                    low
-                }
-                CollisionShape::Cylinder { radius_m, length_m } => {
-                    let axis_z = (frame.rotation * Vector3::z()).z;
-                    let ends = z(0.0, 0.0, -length_m / 2.0).min(z(0.0, 0.0, length_m / 2.0));
-                    ends - radius_m * (1.0 - axis_z * axis_z).max(0.0).sqrt()
-                }
-                CollisionShape::Sphere { radius_m } => z(0.0, 0.0, 0.0) - radius_m,
-                CollisionShape::Capsule { radius_m, length_m } => {
-                    z(0.0, 0.0, -length_m / 2.0).min(z(0.0, 0.0, length_m / 2.0)) - radius_m
-                }
-                CollisionShape::Hull { points_m } => points_m
-                    .iter()
-                    .map(|p| (frame * p).z)
-                    .fold(f64::INFINITY, f64::min),
-            };
-            (s.link, lowest)
-        })
-        .collect()
+    geometry.lowest_points(poses)
 }
 
 /// The lowest of `points` and its link's name.

@@ -27,9 +27,7 @@ use std::fmt::Write as _;
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
-use sim::description::{
-    CollisionGeometry, CollisionShape, Description, MissingMeshes, PackagePaths,
-};
+use sim::description::{CollisionGeometry, Description, MissingMeshes, PackagePaths};
 use sim::physics::articulated::ArticulatedWorld;
 use sim::physics::{JointKind, WorldConfig};
 use sim::robstride::{Model, RangeTable};
@@ -387,41 +385,9 @@ pub fn model_for(effort_nm: f64) -> Model {
         .unwrap_or(models[models.len() - 1])
 }
 
-/// The lowest collision point of `world` as it stands: its link and height (m). A point `p`
-/// of a shape's frame is at height `t.z + R[2,·]·p` (the frame's translation and rotation).
+/// The lowest collision point of `world` as it stands: its link and height (m).
 fn lowest_point(geometry: &CollisionGeometry, world: &ArticulatedWorld) -> Option<(usize, f64)> {
-    let poses = world.link_poses();
-    let mut lowest: Option<(usize, f64)> = None;
-    for shape in &geometry.shapes {
-        let frame = poses[shape.link] * shape.origin;
-        let centre_z = frame.translation.vector.z;
-        let rotation = frame.rotation.to_rotation_matrix();
-        let row = |c: usize| rotation.matrix()[(2, c)];
-        // How far a shape reaches below its centre along a local axis `c` of half length h.
-        let reach = |c: usize, half: f64| row(c).abs() * half;
-        // A disc of radius r normal to the local z axis reaches r·sin(tilt) below its centre.
-        let rim = |r: f64| r * (1.0 - row(2) * row(2)).max(0.0).sqrt();
-        let z = match &shape.shape {
-            CollisionShape::Box { half_m } => {
-                centre_z - reach(0, half_m[0]) - reach(1, half_m[1]) - reach(2, half_m[2])
-            }
-            CollisionShape::Cylinder { radius_m, length_m } => {
-                centre_z - reach(2, length_m / 2.0) - rim(*radius_m)
-            }
-            CollisionShape::Sphere { radius_m } => centre_z - radius_m,
-            CollisionShape::Capsule { radius_m, length_m } => {
-                centre_z - reach(2, length_m / 2.0) - radius_m
-            }
-            CollisionShape::Hull { points_m } => points_m
-                .iter()
-                .map(|p| (frame * p).z)
-                .fold(f64::INFINITY, f64::min),
-        };
-        if lowest.is_none_or(|(_, low)| z < low) {
-            lowest = Some((shape.link, z));
-        }
-    }
-    lowest
+    geometry.lowest_point(&world.link_poses())
 }
 
 /// A part of the robot on one bus: its actuated joints (world indices) and, when it can be cut

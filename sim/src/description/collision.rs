@@ -62,6 +62,37 @@ pub struct LinkShape {
     pub shape: CollisionShape,
 }
 
+impl LinkShape {
+    /// The height (m) of the shape's lowest point when its link is at `link_pose` in the
+    /// world: where it would first meet a floor at z = 0. A point `p` of the shape's frame is
+    /// at `t.z + R[2,·]·p`; a disc of radius r normal to the frame's z axis reaches
+    /// r·sin(tilt) below its centre.
+    pub fn lowest_z_m(&self, link_pose: &Isometry3<f64>) -> f64 {
+        let frame = link_pose * self.origin;
+        let centre_z = frame.translation.vector.z;
+        let rotation = frame.rotation.to_rotation_matrix();
+        let row = |c: usize| rotation.matrix()[(2, c)];
+        let reach = |c: usize, half: f64| row(c).abs() * half;
+        let rim = |r: f64| r * (1.0 - row(2) * row(2)).max(0.0).sqrt();
+        match &self.shape {
+            CollisionShape::Box { half_m } => {
+                centre_z - reach(0, half_m[0]) - reach(1, half_m[1]) - reach(2, half_m[2])
+            }
+            CollisionShape::Cylinder { radius_m, length_m } => {
+                centre_z - reach(2, length_m / 2.0) - rim(*radius_m)
+            }
+            CollisionShape::Sphere { radius_m } => centre_z - radius_m,
+            CollisionShape::Capsule { radius_m, length_m } => {
+                centre_z - reach(2, length_m / 2.0) - radius_m
+            }
+            CollisionShape::Hull { points_m } => points_m
+                .iter()
+                .map(|p| (frame * p).z)
+                .fold(f64::INFINITY, f64::min),
+        }
+    }
+}
+
 /// Every link's collision shapes.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct CollisionGeometry {
@@ -69,6 +100,24 @@ pub struct CollisionGeometry {
     pub shapes: Vec<LinkShape>,
     /// Meshes left out ([`MissingMeshes::Skip`]): one line each, for the user.
     pub skipped: Vec<String>,
+}
+
+impl CollisionGeometry {
+    /// The lowest point of every shape with its links at `poses` (URDF link order): the
+    /// shape's link and the point's height (m), shape by shape.
+    pub fn lowest_points(&self, poses: &[Isometry3<f64>]) -> Vec<(usize, f64)> {
+        self.shapes
+            .iter()
+            .map(|s| (s.link, s.lowest_z_m(&poses[s.link])))
+            .collect()
+    }
+
+    /// The lowest of [`CollisionGeometry::lowest_points`]: its link and height (m).
+    pub fn lowest_point(&self, poses: &[Isometry3<f64>]) -> Option<(usize, f64)> {
+        self.lowest_points(poses)
+            .into_iter()
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+    }
 }
 
 /// The frame of a URDF `<origin>`.

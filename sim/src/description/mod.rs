@@ -78,6 +78,22 @@ impl Description {
         Ok(Self { text, robot, paths })
     }
 
+    /// Checks and parses URDF text and reads its collision geometry (a mesh that is not
+    /// found refused): what a physics world is built from, as one [`crate::physics::PhysicsError`].
+    pub fn load_for_physics(
+        text: String,
+        paths: PackagePaths,
+    ) -> Result<(Self, CollisionGeometry), crate::physics::PhysicsError> {
+        let parse = |e: DescriptionError| crate::physics::PhysicsError::Parse {
+            message: e.to_string(),
+        };
+        let description = Self::parse(text, paths).map_err(parse)?;
+        let geometry = description
+            .collision_geometry(MissingMeshes::Refuse)
+            .map_err(parse)?;
+        Ok((description, geometry))
+    }
+
     /// The URDF text.
     pub fn text(&self) -> &str {
         &self.text

@@ -15,9 +15,7 @@ use super::error::{Divergence, PhysicsError};
 use super::friction::KineticFriction;
 use super::model::{ArmModel, JointInfo, JointKind, DEFAULT_GRAVITY_M_S2};
 use super::obstacle::{Contact, ObstacleId, ObstacleShape};
-use crate::description::{
-    CollisionGeometry, CollisionShape, Description, DescriptionError, MissingMeshes, PackagePaths,
-};
+use crate::description::{CollisionGeometry, CollisionShape, Description, PackagePaths};
 
 /// Configuration of an [`ArmWorld`] (and of the articulated-body solver's world,
 /// [`super::articulated::ArticulatedWorld`]).
@@ -200,13 +198,7 @@ impl ArmWorld {
         paths: PackagePaths,
         config: WorldConfig,
     ) -> Result<Self, PhysicsError> {
-        let parse = |e: DescriptionError| PhysicsError::Parse {
-            message: e.to_string(),
-        };
-        let description = Description::parse(text, paths).map_err(parse)?;
-        let geometry = description
-            .collision_geometry(MissingMeshes::Refuse)
-            .map_err(parse)?;
+        let (description, geometry) = Description::load_for_physics(text, paths)?;
         Self::from_description(&description, &geometry, config)
     }
 

@@ -6,7 +6,7 @@ use super::contact::GroundContacts;
 use super::spatial::{
     angular, cross_force, cross_motion, linear, motion_transform, spatial, spatial_inertia,
 };
-use crate::description::{CollisionGeometry, Description, MissingMeshes, PackagePaths};
+use crate::description::{CollisionGeometry, Description, PackagePaths};
 use crate::physics::error::Divergence;
 use crate::physics::model::{TreeJoint, TreeJointKind};
 use crate::physics::{ArmModel, JointInfo, PhysicsError, WorldConfig};
@@ -133,17 +133,8 @@ impl ArticulatedWorld {
     /// [`ArticulatedWorld::from_description`]). A floating base
     /// (`config.floating_base_height_m`) stands on the ground, the plane z = 0.
     pub fn from_urdf_str(xml: &str, config: WorldConfig) -> Result<Self, PhysicsError> {
-        let description =
-            Description::parse(xml.to_owned(), PackagePaths::default()).map_err(|e| {
-                PhysicsError::Parse {
-                    message: e.to_string(),
-                }
-            })?;
-        let geometry = description
-            .collision_geometry(MissingMeshes::Refuse)
-            .map_err(|e| PhysicsError::Parse {
-                message: e.to_string(),
-            })?;
+        let (description, geometry) =
+            Description::load_for_physics(xml.to_owned(), PackagePaths::default())?;
         Self::from_description(&description, &geometry, config)
     }
 
