@@ -335,3 +335,35 @@ fn a_huge_bad_value_is_cut_short_in_the_message_and_its_line_not_shown() {
     assert!(!e.message.contains(&"j".repeat(41)), "{}", e.message);
     assert_eq!(e.source_line, None, "a 500-character line is not shown");
 }
+
+#[test]
+fn self_collision_is_off_on_or_on_without_the_pairs_named() {
+    let (_dir, file) = write(ARM);
+    assert_eq!(load_robot_file(&file).unwrap().config.self_collision, None);
+    std::fs::write(&file, format!("{ARM}self_collision: true\n")).unwrap();
+    assert_eq!(
+        load_robot_file(&file).unwrap().config.self_collision,
+        Some(Vec::new())
+    );
+    std::fs::write(
+        &file,
+        format!("{ARM}self_collision: [[upper_arm, flange], [base, forearm]]\n"),
+    )
+    .unwrap();
+    assert_eq!(
+        load_robot_file(&file).unwrap().config.self_collision,
+        Some(vec![
+            ("upper_arm".to_string(), "flange".to_string()),
+            ("base".to_string(), "forearm".to_string())
+        ])
+    );
+    std::fs::write(
+        &file,
+        format!("{ARM}self_collision: [[upper_arm, flang]]\n"),
+    )
+    .unwrap();
+    assert_eq!(
+        error_of_file(&file),
+        "13:17: `self_collision`: the URDF has no link `flang`; did you mean `flange`?"
+    );
+}

@@ -100,6 +100,9 @@ pub struct RobotConfig {
     pub urdf_paths: PackagePaths,
     /// What a collision mesh that cannot be found or read does.
     pub missing_meshes: MissingMeshes,
+    /// Links touching links (off when `None`): the pairs of link names left out besides
+    /// those a joint joins and those that overlap as the robot starts.
+    pub self_collision: Option<Vec<(String, String)>>,
     /// The collision geometry when already read (a robot file reads it while checking);
     /// `None`: read from the URDF when the world is built.
     pub collision: Option<Arc<CollisionGeometry>>,

@@ -70,6 +70,9 @@ impl RobotWorld {
             None => std::sync::Arc::new(description.collision_geometry(config.missing_meshes)?),
         };
         let mut world = ArticulatedWorld::from_description(&description, &geometry, world_config)?;
+        if let Some(excluded) = &config.self_collision {
+            world.enable_self_collision(&geometry, excluded)?;
+        }
         let index_of = |name: &str| {
             world
                 .joint_index(name)

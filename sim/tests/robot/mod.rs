@@ -32,6 +32,7 @@ fn arm_config(start: &[(&str, f64)]) -> RobotConfig {
         urdf_paths: Default::default(),
         missing_meshes: Default::default(),
         collision: None,
+        self_collision: None,
         base: Base::Fixed,
         gantry: Default::default(),
         buses: ["can0", "can1"]

@@ -318,7 +318,11 @@ impl GroupDevice {
             failed
         });
         let failures = futures::future::join_all(per_bus).await;
-        match failures.into_iter().flatten().min_by_key(|(index, _)| *index) {
+        match failures
+            .into_iter()
+            .flatten()
+            .min_by_key(|(index, _)| *index)
+        {
             Some((index, e)) => Err(self.error(index, e)),
             None => Ok(()),
         }

@@ -9,6 +9,7 @@
 //! - `spatial`: the 6D vector algebra it is written in.
 
 mod contact;
+mod self_contact;
 mod spatial;
 mod world;
 

@@ -399,3 +399,63 @@ fn a_long_chain_loads_and_steps() {
     world.step(&[]);
     world.check_finite().unwrap();
 }
+
+#[test]
+fn with_self_collision_a_swinging_link_stops_on_another_instead_of_passing_through() {
+    // A fixed post and, hinged beside it at its top, an arm that falls across it: the arm
+    // (a 0.3 m box) swings down on the post's side and, with self-collision on, stops on a
+    // stub fixed to the base (a link no joint joins to the arm).
+    let urdf = r#"<robot name="stop">
+  <link name="base"><inertial><mass value="5"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial></link>
+  <link name="stub"><inertial><mass value="0.1"/><inertia ixx="1e-4" ixy="0" ixz="0" iyy="1e-4" iyz="0" izz="1e-4"/></inertial>
+    <collision><origin xyz="0.2 0 0.8"/><geometry><box size="0.1 0.1 0.1"/></geometry></collision></link>
+  <link name="arm"><inertial><origin xyz="0.15 0 0"/><mass value="1"/><inertia ixx="1e-3" ixy="0" ixz="0" iyy="1e-2" iyz="0" izz="1e-2"/></inertial>
+    <collision><origin xyz="0.15 0 0"/><geometry><box size="0.3 0.04 0.04"/></geometry></collision></link>
+  <joint name="stub_mount" type="fixed"><parent link="base"/><child link="stub"/></joint>
+  <joint name="hinge" type="revolute"><parent link="base"/><child link="arm"/><origin xyz="0 0 1"/><axis xyz="0 1 0"/><limit lower="-3" upper="3" effort="10" velocity="10"/><dynamics damping="0.3"/></joint>
+</robot>"#;
+    let settle = |self_collision: bool| {
+        let description =
+            crate::description::Description::parse(urdf.to_owned(), Default::default()).unwrap();
+        let geometry = description
+            .collision_geometry(crate::description::MissingMeshes::Refuse)
+            .unwrap();
+        let mut world =
+            ArticulatedWorld::from_description(&description, &geometry, WorldConfig::default())
+                .unwrap();
+        if self_collision {
+            assert_eq!(world.enable_self_collision(&geometry, &[]).unwrap(), 1);
+        }
+        for _ in 0..3000 {
+            world.step(&[]);
+        }
+        world.check_finite().unwrap();
+        world.joint_positions()[0]
+    };
+    // Without: the arm falls to hang straight down (+π/2 about y turns +x onto -z).
+    let free = settle(false);
+    assert!((free - std::f64::consts::FRAC_PI_2).abs() < 0.05, "{free}");
+    // With: it rests on the stub's corner (0.25 m out, 0.15 m below the hinge): the arm's
+    // underside (0.02 m below its axis) meets it at atan(0.15/0.25) - asin(0.02/0.2915).
+    let stopped = settle(true);
+    let corner = (0.15f64 / 0.25).atan() - (0.02f64 / 0.15f64.hypot(0.25)).asin();
+    assert!((stopped - corner).abs() < 0.01, "{stopped} vs {corner}");
+    // Excluding the pair lets it through again.
+    let description =
+        crate::description::Description::parse(urdf.to_owned(), Default::default()).unwrap();
+    let geometry = description
+        .collision_geometry(crate::description::MissingMeshes::Refuse)
+        .unwrap();
+    let mut world =
+        ArticulatedWorld::from_description(&description, &geometry, WorldConfig::default())
+            .unwrap();
+    let pairs = world
+        .enable_self_collision(&geometry, &[("arm".into(), "stub".into())])
+        .unwrap();
+    assert_eq!(pairs, 0);
+    assert!(world
+        .enable_self_collision(&geometry, &[("arm".into(), "nope".into())])
+        .unwrap_err()
+        .to_string()
+        .contains("nope"));
+}

@@ -3,6 +3,7 @@
 use nalgebra::{Isometry3, Matrix6, Translation3, UnitQuaternion, Vector3, Vector6};
 
 use super::contact::GroundContacts;
+use super::self_contact::SelfContacts;
 use super::spatial::{
     angular, cross_force, cross_motion, linear, motion_transform, spatial, spatial_inertia,
 };
@@ -83,6 +84,8 @@ pub struct ArticulatedWorld {
     external_torques: Vec<f64>,
     /// A floating root held where it is (a robot on its stand): it moves as a fixed root.
     root_held: bool,
+    /// Links touching links, when asked for ([`ArticulatedWorld::enable_self_collision`]).
+    self_contacts: Option<SelfContacts>,
     /// Per `<mimic>` follower: (follower, leader, multiplier, offset), actuated indices.
     followers: Vec<(usize, usize, f64, f64)>,
     /// Per actuated joint, whether it follows another through `<mimic>`.
@@ -163,6 +166,7 @@ impl ArticulatedWorld {
             is_follower[f] = true;
         }
         let world = Self {
+            self_contacts: None,
             root_held: false,
             followers,
             is_follower,
@@ -231,6 +235,38 @@ impl ArticulatedWorld {
         self.qd.fill(0.0);
         self.follow_leaders();
         Ok(())
+    }
+
+    /// Makes the links of `geometry` (this world's collision geometry) touch each other:
+    /// every pair of shapes on two links that no joint joins and that `excluded` (pairs of
+    /// link names, either order) does not name; pairs that overlap in the pose of the first
+    /// step are left out (neighbours' published meshes often do). Returns the pairs watched
+    /// before that pruning; an unknown link name is an error naming it.
+    pub fn enable_self_collision(
+        &mut self,
+        geometry: &CollisionGeometry,
+        excluded: &[(String, String)],
+    ) -> Result<usize, PhysicsError> {
+        let model = &self.model;
+        let mut pairs = Vec::with_capacity(excluded.len());
+        for (a, b) in excluded {
+            let index = |name: &str| {
+                model
+                    .link_index(name)
+                    .ok_or_else(|| PhysicsError::UnknownLink {
+                        joint: "self-collision exclusion".to_owned(),
+                        link: name.to_owned(),
+                    })
+            };
+            pairs.push((index(a)?, index(b)?));
+        }
+        let joined =
+            |a: usize, b: usize| model.parent_link(a) == Some(b) || model.parent_link(b) == Some(a);
+        let excluded = |a: usize, b: usize| pairs.contains(&(a, b)) || pairs.contains(&(b, a));
+        let contacts = SelfContacts::new(geometry, joined, excluded);
+        let count = contacts.pair_count();
+        self.self_contacts = Some(contacts);
+        Ok(count)
     }
 
     /// Holds a floating root where it is now (`true`: a stand takes its weight, it moves no
@@ -496,19 +532,25 @@ impl ArticulatedWorld {
             let g = poses[l].rotation.inverse() * (gravity * inertial.mass_kg);
             external[l] = spatial(inertial.com_m.cross(&g), g);
         }
+        // A point of a link moving with it (world, m/s).
+        let velocity_of = |link: usize, point: &Vector3<f64>| {
+            let pose = &poses[link];
+            let r = pose.rotation.inverse() * (point - pose.translation.vector);
+            let v = &velocity[link];
+            pose.rotation * (linear(v) + angular(v).cross(&r))
+        };
+        let mut forces = Vec::new();
         if floating {
-            let forces = self.contacts.forces(&poses, |link, point| {
-                let pose = &poses[link];
-                let r = pose.rotation.inverse() * (point - pose.translation.vector);
-                let v = &velocity[link];
-                pose.rotation * (linear(v) + angular(v).cross(&r))
-            });
-            for f in forces {
-                let pose = &poses[f.link];
-                let force = pose.rotation.inverse() * f.force_n;
-                let r = pose.rotation.inverse() * (f.at_m - pose.translation.vector);
-                external[f.link] += spatial(r.cross(&force), force);
-            }
+            forces = self.contacts.forces(&poses, velocity_of);
+        }
+        if let Some(self_contacts) = &mut self.self_contacts {
+            forces.extend(self_contacts.forces(&poses, velocity_of));
+        }
+        for f in forces {
+            let pose = &poses[f.link];
+            let force = pose.rotation.inverse() * f.force_n;
+            let r = pose.rotation.inverse() * (f.at_m - pose.translation.vector);
+            external[f.link] += spatial(r.cross(&force), force);
         }
         let mut articulated: Vec<Matrix6<f64>> = self.inertia.clone();
         let mut bias: Vec<Vector6<f64>> = (0..links)

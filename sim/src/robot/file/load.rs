@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use super::error::{FileError, Position as Pos};
-use super::raw::{RawRobot, S};
+use super::raw::{RawRobot, RawSelfCollision, S};
 use crate::bounded_read::read_text_file;
 use crate::description::{Description, DescriptionError, MissingMeshes, PackagePaths};
 use crate::physics::articulated::ArticulatedWorld;
@@ -127,6 +127,7 @@ impl Checker<'_> {
         if let Some(summary) = description.unused_summary() {
             warnings.push(*self.err(pos(&raw.urdf), format!("the URDF `{urdf_name}`: {summary}")));
         }
+        let self_collision = self.self_collision(&raw, &model)?;
         let urdf = description.text().to_owned();
         let base = self.base(&raw)?;
         let gantry = self.gantry(&raw, base)?;
@@ -255,6 +256,7 @@ impl Checker<'_> {
                 urdf,
                 urdf_paths: paths,
                 missing_meshes,
+                self_collision,
                 collision: Some(std::sync::Arc::new(collision)),
                 base,
                 gantry,
@@ -367,6 +369,40 @@ impl Checker<'_> {
                 ),
             )
         })
+    }
+
+    /// `self_collision:`: off, on, or on without the pairs it lists (links of the URDF).
+    fn self_collision(
+        &self,
+        raw: &RawRobot,
+        model: &ArmModel,
+    ) -> Res<Option<Vec<(String, String)>>> {
+        // The names' own places are lost inside the untagged choice: the key's is used.
+        let at = raw.self_collision.as_ref().map(pos).unwrap_or_default();
+        match raw.self_collision.as_ref().map(|s| &s.value) {
+            None | Some(RawSelfCollision::Switch(false)) => Ok(None),
+            Some(RawSelfCollision::Switch(true)) => Ok(Some(Vec::new())),
+            Some(RawSelfCollision::Except(pairs)) => {
+                let links: Vec<&str> = model.link_names().iter().map(String::as_str).collect();
+                let mut out = Vec::with_capacity(pairs.len());
+                for [a, b] in pairs {
+                    for name in [a, b] {
+                        if !links.contains(&name.value.as_str()) {
+                            return Err(self.err(
+                                at,
+                                format!(
+                                    "`self_collision`: the URDF has no link `{}`{}",
+                                    name.value,
+                                    suggestion(&name.value, &links)
+                                ),
+                            ));
+                        }
+                    }
+                    out.push((a.value.clone(), b.value.clone()));
+                }
+                Ok(Some(out))
+            }
+        }
     }
 
     fn missing_meshes(&self, raw: &RawRobot) -> Res<MissingMeshes> {

@@ -16,6 +16,9 @@ pub(super) struct RawRobot {
     /// ROS packages the URDF's `package://` names point into: name → folder (relative to
     /// the robot file); searched before `ROS_PACKAGE_PATH` and `AMENT_PREFIX_PATH`.
     pub packages: Option<S<std::collections::BTreeMap<String, S<String>>>>,
+    /// Links touching links: `true`, or the pairs of links to leave out (`[[a, b], …]`);
+    /// off when left out or `false`.
+    pub self_collision: Option<S<RawSelfCollision>>,
     /// `refuse` (default) or `skip`: what a collision mesh that cannot be found does.
     pub missing_meshes: Option<S<String>>,
     /// `fixed` (default) or `floating`.
@@ -30,6 +33,16 @@ pub(super) struct RawRobot {
     pub actuators: S<Vec<S<RawActuator>>>,
     /// Joint positions at start (rad), as a list of one-key mappings in file order.
     pub start_rad: Option<S<Vec<S<RawStart>>>>,
+}
+
+/// `self_collision:` as written.
+#[derive(Debug, Deserialize)]
+#[serde(untagged)]
+pub(super) enum RawSelfCollision {
+    /// On (`true`) or off (`false`).
+    Switch(bool),
+    /// On, leaving these pairs of links out.
+    Except(Vec<[S<String>; 2]>),
 }
 
 /// One bus.
