@@ -260,7 +260,7 @@ fn load(
         .collision_geometry(MissingMeshes::Refuse)
         .map_err(|e| format!("collision geometry: {e}"))?;
     let hulls = geometry.shapes.iter().filter_map(|s| match &s.shape {
-        CollisionShape::Hull { points_m } => Some(points_m.len()),
+        CollisionShape::Hull { points_m, .. } => Some(points_m.len()),
         _ => None,
     });
     row.meshes = Some(hulls.clone().count());

@@ -269,7 +269,7 @@ fn collision_meshes_are_found_through_the_packages_map_or_named_with_every_place
         .shapes
         .iter()
         .find_map(|s| match &s.shape {
-            sim::description::CollisionShape::Hull { points_m } => Some(points_m),
+            sim::description::CollisionShape::Hull { points_m, .. } => Some(points_m),
             _ => None,
         })
         .expect("the flange's mesh");
@@ -278,6 +278,29 @@ fn collision_meshes_are_found_through_the_packages_map_or_named_with_every_place
         hull.iter().all(|p| (p.x.abs() - 0.05).abs() < 1e-6),
         "{hull:?}"
     );
+    // Split into convex parts when asked (this test mesh is two loose triangles: V-HACD
+    // makes a part of each).
+    std::fs::write(
+        &file,
+        format!("{ARM}packages: {{arm_description: desc}}\nconvex_decomposition: [flange]\n"),
+    )
+    .unwrap();
+    let robot = load_robot_file(&file).unwrap();
+    let parts = robot
+        .config
+        .collision
+        .as_ref()
+        .unwrap()
+        .shapes
+        .iter()
+        .find_map(|s| match &s.shape {
+            sim::description::CollisionShape::Hull { parts_m, .. } => Some(parts_m.len()),
+            _ => None,
+        });
+    assert_eq!(parts, Some(2));
+    std::fs::write(&file, format!("{ARM}convex_decomposition: [flang]\n")).unwrap();
+    assert!(error_of_file(&file)
+        .contains("`convex_decomposition`: the URDF has no link `flang`; did you mean `flange`?"));
 }
 
 #[test]

@@ -44,10 +44,15 @@ pub enum CollisionShape {
         /// Length of the cylinder between the ends' centres (m).
         length_m: f64,
     },
-    /// A mesh: the contact points of its convex hull (scaled, m).
+    /// A mesh: the contact points of its convex hull (scaled, m), and, when the robot asks
+    /// for it, its convex decomposition (each part's hull vertices): what a link meets other
+    /// links with. The ground meets only the lowest points of a body, which are its hull's,
+    /// so it needs no parts.
     Hull {
         /// The points.
         points_m: Vec<Point3<f64>>,
+        /// The convex parts (empty: the whole hull is one).
+        parts_m: Vec<Vec<Point3<f64>>>,
     },
 }
 
@@ -85,7 +90,7 @@ impl LinkShape {
             CollisionShape::Capsule { radius_m, length_m } => {
                 centre_z - reach(2, length_m / 2.0) - radius_m
             }
-            CollisionShape::Hull { points_m } => points_m
+            CollisionShape::Hull { points_m, .. } => points_m
                 .iter()
                 .map(|p| (frame * p).z)
                 .fold(f64::INFINITY, f64::min),
@@ -136,6 +141,16 @@ impl Description {
         &self,
         missing: MissingMeshes,
     ) -> Result<CollisionGeometry, DescriptionError> {
+        self.collision_geometry_decomposed(missing, &[])
+    }
+
+    /// As [`Description::collision_geometry`], the meshes of the links named in `decompose`
+    /// also split into convex parts (parry3d's V-HACD; seconds for a large mesh).
+    pub fn collision_geometry_decomposed(
+        &self,
+        missing: MissingMeshes,
+        decompose: &[String],
+    ) -> Result<CollisionGeometry, DescriptionError> {
         let mut cache = MeshCache::default();
         let mut geometry = CollisionGeometry::default();
         for (link, l) in self.robot().links.iter().enumerate() {
@@ -158,8 +173,9 @@ impl Description {
                     }
                     urdf_rs::Geometry::Mesh { filename, scale } => {
                         let scale = scale.as_ref().map_or([1.0; 3], |s| s.0);
-                        match self.mesh_hull(&mut cache, filename, scale) {
-                            Ok(points_m) => CollisionShape::Hull { points_m },
+                        let parts = decompose.contains(&l.name);
+                        match self.mesh_hull(&mut cache, filename, scale, parts) {
+                            Ok((points_m, parts_m)) => CollisionShape::Hull { points_m, parts_m },
                             Err(problem) if missing == MissingMeshes::Skip => {
                                 geometry.skipped.push(format!(
                                     "link `{}`: collision mesh left out: {}",
@@ -189,21 +205,39 @@ impl Description {
         Ok(geometry)
     }
 
-    /// The hull contact points of the mesh `uri`, scaled.
+    /// The hull contact points of the mesh `uri`, scaled, and its convex parts if `parts`.
     fn mesh_hull(
         &self,
         cache: &mut MeshCache,
         uri: &str,
         scale: [f64; 3],
-    ) -> Result<Vec<Point3<f64>>, DescriptionError> {
+        parts: bool,
+    ) -> Result<(Vec<Point3<f64>>, Vec<Vec<Point3<f64>>>), DescriptionError> {
         let line = self.line_mentioning(uri);
         let fail = |message: String| DescriptionError::at(line, message);
         let path = self.paths().resolve(uri).map_err(|e| fail(e.to_string()))?;
         let points = cache.points(&path).map_err(|e| fail(e.to_string()))?;
-        let scaled: Vec<Point3<f64>> = points
+        let scaled = |p: &Point3<f64>| Point3::new(p.x * scale[0], p.y * scale[1], p.z * scale[2]);
+        let hull: Vec<Point3<f64>> = points.iter().map(scaled).collect();
+        let contact = contact_points(&hull).map_err(|e| fail(format!("`{uri}`: {e}")))?;
+        if !parts {
+            return Ok((contact, Vec::new()));
+        }
+        let mesh = super::visual::read_mesh_triangles(&path).map_err(|e| fail(e.to_string()))?;
+        let vertices: Vec<Point3<f64>> = mesh
+            .vertices
             .iter()
-            .map(|p| Point3::new(p.x * scale[0], p.y * scale[1], p.z * scale[2]))
+            .map(|v| {
+                scaled(&Point3::new(
+                    f64::from(v[0]),
+                    f64::from(v[1]),
+                    f64::from(v[2]),
+                ))
+            })
             .collect();
-        contact_points(&scaled).map_err(|e| fail(format!("`{uri}`: {e}")))
+        Ok((
+            contact,
+            super::hull::convex_parts(&vertices, &mesh.triangles),
+        ))
     }
 }

@@ -109,6 +109,37 @@ pub fn contact_points(points: &[Point3<f64>]) -> Result<Vec<Point3<f64>>, HullEr
     ))
 }
 
+/// The convex parts of a triangle mesh (parry3d's V-HACD at its default resolution), each as
+/// its hull's vertices; a mesh V-HACD cannot split (or that makes it panic) is one part, its
+/// whole hull.
+pub fn convex_parts(vertices: &[Point3<f64>], triangles: &[[u32; 3]]) -> Vec<Vec<Point3<f64>>> {
+    use parry3d::math::Vector;
+    use parry3d::transformation::vhacd::{VHACDParameters, VHACD};
+    let input: Vec<Vector> = vertices
+        .iter()
+        .map(|p| Vector::new(p.x as f32, p.y as f32, p.z as f32))
+        .collect();
+    let parts = std::panic::catch_unwind(|| {
+        VHACD::decompose(&VHACDParameters::default(), &input, triangles, false)
+            .compute_convex_hulls(1)
+    })
+    .unwrap_or_default();
+    let parts: Vec<Vec<Point3<f64>>> = parts
+        .into_iter()
+        .map(|(part, _)| part)
+        .filter(|part| part.len() >= 4)
+        .map(|part| {
+            part.iter()
+                .map(|v| Point3::new(f64::from(v.x), f64::from(v.y), f64::from(v.z)))
+                .collect()
+        })
+        .collect();
+    if parts.is_empty() {
+        return convex_hull_vertices(vertices).map_or_else(|_| Vec::new(), |hull| vec![hull]);
+    }
+    parts
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -126,6 +157,45 @@ mod tests {
         points.push(Point3::new(0.1, 0.2, 0.3));
         points.push(Point3::new(0.0, 0.0, -1.0));
         points
+    }
+
+    #[test]
+    fn an_l_shaped_block_splits_into_parts_that_leave_its_corner_empty() {
+        // An L of two 1×1×1 cubes on a 2×1 footprint plus one on top at x 0..1: its hull
+        // fills the empty corner (x 1..2, z 1..2); its parts do not.
+        // The L's surface as triangles: its outline extruded along y.
+        let outline = [
+            (0.0, 0.0),
+            (2.0, 0.0),
+            (2.0, 1.0),
+            (1.0, 1.0),
+            (1.0, 2.0),
+            (0.0, 2.0),
+        ];
+        let mut vertices = Vec::new();
+        for (x, z) in outline {
+            vertices.push(Point3::new(x, 0.0, z));
+            vertices.push(Point3::new(x, 1.0, z));
+        }
+        let n = outline.len() as u32;
+        let mut triangles = Vec::new();
+        for k in 0..n {
+            let (a, b) = (2 * k, 2 * ((k + 1) % n));
+            triangles.push([a, b, a + 1]);
+            triangles.push([b, b + 1, a + 1]);
+        }
+        // Caps (y = 0 and y = 1): the L as four triangles each.
+        for (p, q, r) in [(0, 1, 2), (0, 2, 3), (0, 3, 4), (0, 4, 5)] {
+            triangles.push([2 * p, 2 * r, 2 * q]);
+            triangles.push([2 * p + 1, 2 * q + 1, 2 * r + 1]);
+        }
+        let parts = convex_parts(&vertices, &triangles);
+        assert!(parts.len() >= 2, "{} parts", parts.len());
+        // No part reaches far into the empty corner's middle (1.5, ·, 1.5).
+        for part in &parts {
+            let inside = part.iter().all(|p| p.x <= 1.0 + 0.2 || p.z <= 1.0 + 0.2);
+            assert!(inside, "a part fills the corner: {part:?}");
+        }
     }
 
     #[test]

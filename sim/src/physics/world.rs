@@ -125,7 +125,7 @@ fn add_mesh_hulls(
         .shapes
         .iter()
         .filter_map(|s| match &s.shape {
-            CollisionShape::Hull { points_m } => Some((s, points_m)),
+            CollisionShape::Hull { points_m, .. } => Some((s, points_m)),
             _ => None,
         })
         .collect();

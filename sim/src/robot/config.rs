@@ -103,6 +103,8 @@ pub struct RobotConfig {
     /// Links touching links (off when `None`): the pairs of link names left out besides
     /// those a joint joins and those that overlap as the robot starts.
     pub self_collision: Option<Vec<(String, String)>>,
+    /// Links whose collision meshes are split into convex parts for `self_collision`.
+    pub convex_decomposition: Vec<String>,
     /// The collision geometry when already read (a robot file reads it while checking);
     /// `None`: read from the URDF when the world is built.
     pub collision: Option<Arc<CollisionGeometry>>,

@@ -67,7 +67,10 @@ impl RobotWorld {
         let description = Description::parse(config.urdf.clone(), config.urdf_paths.clone())?;
         let geometry = match &config.collision {
             Some(geometry) => std::sync::Arc::clone(geometry),
-            None => std::sync::Arc::new(description.collision_geometry(config.missing_meshes)?),
+            None => std::sync::Arc::new(description.collision_geometry_decomposed(
+                config.missing_meshes,
+                &config.convex_decomposition,
+            )?),
         };
         let mut world = ArticulatedWorld::from_description(&description, &geometry, world_config)?;
         if let Some(excluded) = &config.self_collision {

@@ -33,6 +33,7 @@ fn arm_config(start: &[(&str, f64)]) -> RobotConfig {
         missing_meshes: Default::default(),
         collision: None,
         self_collision: None,
+        convex_decomposition: Vec::new(),
         base: Base::Fixed,
         gantry: Default::default(),
         buses: ["can0", "can1"]

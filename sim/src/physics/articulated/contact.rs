@@ -90,7 +90,7 @@ fn features_of(shape: &CollisionShape, origin: &Isometry3<f64>) -> Vec<Feature> 
         CollisionShape::Sphere { radius_m } => {
             vec![Feature::Sphere(at(0.0, 0.0, 0.0), *radius_m)]
         }
-        CollisionShape::Hull { points_m } => points_m
+        CollisionShape::Hull { points_m, .. } => points_m
             .iter()
             .map(|p| Feature::Point(origin * p))
             .collect(),

@@ -75,19 +75,33 @@ fn solid(shape: &CollisionShape) -> Option<(SharedShape, Point3<f64>, f64)> {
             Point3::origin(),
             radius_m + length_m / 2.0,
         ),
-        CollisionShape::Hull { points_m } => {
-            let points: Vec<Vector> = points_m
-                .iter()
-                .map(|p| Vector::new(f(p.x), f(p.y), f(p.z)))
-                .collect();
-            let hull = ConvexPolyhedron::from_convex_hull(&points)?;
-            let n = points_m.len().max(1) as f64;
-            let centre = Point3::from(points_m.iter().map(|p| p.coords).sum::<Vector3<f64>>() / n);
-            let radius = points_m
-                .iter()
-                .map(|p| (p - centre).norm())
-                .fold(0.0, f64::max);
-            (SharedShape::new(hull), centre, radius)
+        CollisionShape::Hull { points_m, parts_m } => {
+            let convex = |points: &[Point3<f64>]| {
+                let points: Vec<Vector> = points
+                    .iter()
+                    .map(|p| Vector::new(f(p.x), f(p.y), f(p.z)))
+                    .collect();
+                ConvexPolyhedron::from_convex_hull(&points)
+            };
+            let shape = if parts_m.is_empty() {
+                // Its hull through the contact points (at most 16): coarse for a rounded
+                // mesh; `convex_decomposition` gives the parts' full hulls.
+                SharedShape::new(convex(points_m)?)
+            } else {
+                let parts: Vec<(Pose, SharedShape)> = parts_m
+                    .iter()
+                    .filter_map(|part| Some((Pose::IDENTITY, SharedShape::new(convex(part)?))))
+                    .collect();
+                if parts.is_empty() {
+                    return None;
+                }
+                SharedShape::compound(parts)
+            };
+            let all: Vec<&Point3<f64>> = points_m.iter().chain(parts_m.iter().flatten()).collect();
+            let n = all.len().max(1) as f64;
+            let centre = Point3::from(all.iter().map(|p| p.coords).sum::<Vector3<f64>>() / n);
+            let radius = all.iter().map(|p| (*p - centre).norm()).fold(0.0, f64::max);
+            (shape, centre, radius)
         }
     })
 }

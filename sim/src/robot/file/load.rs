@@ -109,8 +109,9 @@ impl Checker<'_> {
             )
         })?;
         let missing_meshes = self.missing_meshes(&raw)?;
+        let convex_decomposition = self.decomposed_links(&raw, &model)?;
         let collision = description
-            .collision_geometry(missing_meshes)
+            .collision_geometry_decomposed(missing_meshes, &convex_decomposition)
             .map_err(in_urdf)?;
         // What the physics refuses (a joint that moves nothing with mass), said now.
         ArticulatedWorld::from_description(&description, &collision, WorldConfig::default())
@@ -257,6 +258,7 @@ impl Checker<'_> {
                 urdf_paths: paths,
                 missing_meshes,
                 self_collision,
+                convex_decomposition,
                 collision: Some(std::sync::Arc::new(collision)),
                 base,
                 gantry,
@@ -403,6 +405,28 @@ impl Checker<'_> {
                 Ok(Some(out))
             }
         }
+    }
+
+    /// `convex_decomposition:`: links of the URDF, each named once.
+    fn decomposed_links(&self, raw: &RawRobot, model: &ArmModel) -> Res<Vec<String>> {
+        let links: Vec<&str> = model.link_names().iter().map(String::as_str).collect();
+        let mut out: Vec<String> = Vec::new();
+        for name in raw.convex_decomposition.iter().flat_map(|l| &l.value) {
+            if !links.contains(&name.value.as_str()) {
+                return Err(self.err(
+                    pos(name),
+                    format!(
+                        "`convex_decomposition`: the URDF has no link `{}`{}",
+                        name.value,
+                        suggestion(&name.value, &links)
+                    ),
+                ));
+            }
+            if !out.contains(&name.value) {
+                out.push(name.value.clone());
+            }
+        }
+        Ok(out)
     }
 
     fn missing_meshes(&self, raw: &RawRobot) -> Res<MissingMeshes> {

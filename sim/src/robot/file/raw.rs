@@ -19,6 +19,8 @@ pub(super) struct RawRobot {
     /// Links touching links: `true`, or the pairs of links to leave out (`[[a, b], …]`);
     /// off when left out or `false`.
     pub self_collision: Option<S<RawSelfCollision>>,
+    /// Links whose collision meshes are split into convex parts (for `self_collision`).
+    pub convex_decomposition: Option<S<Vec<S<String>>>>,
     /// `refuse` (default) or `skip`: what a collision mesh that cannot be found does.
     pub missing_meshes: Option<S<String>>,
     /// `fixed` (default) or `floating`.
