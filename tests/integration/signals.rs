@@ -412,3 +412,41 @@ fn a_state_file_the_commands_would_refuse_is_refused_at_start_naming_file_and_fi
         "{stderr}"
     );
 }
+
+#[test]
+fn ctrl_c_while_a_large_robot_loads_ends_the_process_at_once() {
+    // A 30,000-link chain (11 MB, about 2.5 s to load in the test profile): Ctrl-C 0.5 s in
+    // ends the process while it is still loading (exit 130), not once it has loaded.
+    let dir = tempfile::tempdir().unwrap();
+    let mut urdf = String::from("<robot name=\"chain\">\n");
+    let inertial = r#"<inertial><mass value="0.1"/><inertia ixx="1e-4" ixy="0" ixz="0" iyy="1e-4" iyz="0" izz="1e-4"/></inertial>"#;
+    for i in 0..30_000 {
+        urdf.push_str(&format!("<link name=\"l{i}\">{inertial}</link>\n"));
+        if i > 0 {
+            urdf.push_str(&format!(
+                "<joint name=\"j{i}\" type=\"revolute\"><parent link=\"l{}\"/><child link=\"l{i}\"/><origin xyz=\"0 0 0.01\"/><axis xyz=\"0 1 0\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/></joint>\n",
+                i - 1
+            ));
+        }
+    }
+    urdf.push_str("</robot>\n");
+    std::fs::write(dir.path().join("chain.urdf"), urdf).unwrap();
+    let robot = dir.path().join("chain.yaml");
+    std::fs::write(
+        &robot,
+        "robot: chain\nurdf: chain.urdf\nbuses: [{name: can0}]\nactuators:\n  - {joint: j1, model: RS03, id: 1, bus: can0}\n",
+    )
+    .unwrap();
+    let child = Command::new(ARMHIL)
+        .args([OsStr::new("sim"), OsStr::new("robot"), robot.as_os_str()])
+        .args(["--socketcand", "127.0.0.1:0"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("armhil runs");
+    let started = std::time::Instant::now();
+    let status = stop(child, "INT", Duration::from_millis(500));
+    let took = started.elapsed();
+    assert_eq!(status.code(), Some(130), "exit {status:?}");
+    assert!(took < Duration::from_millis(1500), "stopped after {took:?}");
+}
