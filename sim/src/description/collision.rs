@@ -125,6 +125,9 @@ impl CollisionGeometry {
     }
 }
 
+/// A mesh's hull contact points and its convex parts (each part's hull vertices).
+type HullAndParts = (Vec<Point3<f64>>, Vec<Vec<Point3<f64>>>);
+
 /// The frame of a URDF `<origin>`.
 pub fn isometry(pose: &urdf_rs::Pose) -> Isometry3<f64> {
     let [x, y, z] = pose.xyz.0;
@@ -212,7 +215,7 @@ impl Description {
         uri: &str,
         scale: [f64; 3],
         parts: bool,
-    ) -> Result<(Vec<Point3<f64>>, Vec<Vec<Point3<f64>>>), DescriptionError> {
+    ) -> Result<HullAndParts, DescriptionError> {
         let line = self.line_mentioning(uri);
         let fail = |message: String| DescriptionError::at(line, message);
         let path = self.paths().resolve(uri).map_err(|e| fail(e.to_string()))?;
