@@ -438,11 +438,16 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if let Some(bar) = progress {
         bar.finish_and_clear();
     }
-    let mut write_errors = ran.iter().filter(|r| r.write_error.is_some()).count();
-    if let Err(e) = write_index(&args.out, &files, &ran) {
-        println!("error {e}");
-        write_errors += 1;
-    }
+    // Scenarios whose outputs failed, and the suite's index apart: one scenario and its index
+    // under an `--out` that is a file is one scenario that could not write, not two.
+    let write_errors = ran.iter().filter(|r| r.write_error.is_some()).count();
+    let index_failed = match write_index(&args.out, &files, &ran) {
+        Ok(()) => false,
+        Err(e) => {
+            println!("error {e}");
+            true
+        }
+    };
     let results: Vec<ScenarioResult> = ran.into_iter().map(|r| r.result).collect();
     let count = |f: fn(&Verdict) -> bool| results.iter().filter(|r| f(&r.verdict)).count();
     let passed = count(|v| matches!(v, Verdict::Passed));
@@ -466,6 +471,9 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     if write_errors > 0 {
         println!("{write_errors} scenario(s) could not write their outputs");
     }
+    if index_failed {
+        println!("the suite's index could not be written");
+    }
     if let Some(path) = &args.junit {
         let xml = junit_xml("armhil", &results)?;
         write_atomic(path, xml.as_bytes()).map_err(|e| {
@@ -482,11 +490,13 @@ pub fn run(args: Args) -> anyhow::Result<ExitCode> {
         // 128 + SIGINT, the shell's convention for a run stopped by the user.
         return Ok(ExitCode::from(130));
     }
-    Ok(if failed == 0 && errors == 0 && write_errors == 0 {
-        ExitCode::SUCCESS
-    } else {
-        ExitCode::FAILURE
-    })
+    Ok(
+        if failed == 0 && errors == 0 && write_errors == 0 && !index_failed {
+            ExitCode::SUCCESS
+        } else {
+            ExitCode::FAILURE
+        },
+    )
 }
 
 #[cfg(test)]

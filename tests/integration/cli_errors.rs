@@ -159,3 +159,28 @@ fn a_bench_whose_device_cannot_start_stops_the_others_and_says_which() {
         stderr(&out)
     );
 }
+
+#[test]
+fn one_scenario_under_an_out_that_is_a_file_counts_one_failed_write() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("not_a_folder");
+    std::fs::write(&file, "").unwrap();
+    let scenario = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/piper/showcase.yaml");
+    let out = armhil(&[
+        "run",
+        scenario.to_str().unwrap(),
+        "--out",
+        file.to_str().unwrap(),
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(!out.status.success(), "{stdout}");
+    assert!(
+        stdout.contains("1 scenario(s) could not write their outputs"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("the suite's index could not be written"),
+        "{stdout}"
+    );
+    assert!(!stdout.contains("2 scenario(s)"), "{stdout}");
+}
