@@ -128,6 +128,10 @@ pub struct ArmModel {
     urdf_joint_index: Vec<usize>,
     /// For each link, the index in `tree` of the joint that moves it (`None` for the root).
     parent_joint: Vec<Option<usize>>,
+    /// For each link, the actuated joints between the root and it: built on the first
+    /// gravity-torque or mass-matrix call (the arms' firmware asks every 1 ms) and kept, not
+    /// at load (a 5,000-link chain's lists would take 100 MB, and robots never ask).
+    ancestors: std::sync::OnceLock<Vec<Vec<usize>>>,
 }
 
 fn pose_to_isometry(pose: &urdf_rs::Pose) -> Isometry3<f64> {
@@ -388,6 +392,7 @@ impl ArmModel {
             joints,
             urdf_joint_index,
             parent_joint,
+            ancestors: std::sync::OnceLock::new(),
         })
     }
 
@@ -400,17 +405,23 @@ impl ArmModel {
             .map(|k| self.tree[k].parent)
     }
 
-    /// The actuated joints between the root and link `link`, nearest the root first.
-    fn ancestors(&self, link: usize) -> Vec<usize> {
-        let mut chain = Vec::new();
-        let mut at = self.parent_joint[link];
-        while let Some(k) = at {
-            let joint = &self.tree[k];
-            chain.extend(joint.actuated);
-            at = self.parent_joint[joint.parent];
-        }
-        chain.reverse();
-        chain
+    /// Per link, the actuated joints between the root and it, nearest the root first.
+    fn ancestors(&self) -> &[Vec<usize>] {
+        self.ancestors.get_or_init(|| {
+            (0..self.link_names.len())
+                .map(|link| {
+                    let mut chain = Vec::new();
+                    let mut at = self.parent_joint[link];
+                    while let Some(k) = at {
+                        let joint = &self.tree[k];
+                        chain.extend(joint.actuated);
+                        at = self.parent_joint[joint.parent];
+                    }
+                    chain.reverse();
+                    chain
+                })
+                .collect()
+        })
     }
 
     /// The joints from the root to the leaves (a parent link's joint before its children's).
@@ -545,9 +556,7 @@ impl ArmModel {
         gravity_m_s2: [f64; 3],
     ) -> Result<Vec<f64>, PhysicsError> {
         let poses = self.link_poses(q)?;
-        let ancestors: Vec<Vec<usize>> = (0..self.link_names.len())
-            .map(|l| self.ancestors(l))
-            .collect();
+        let ancestors = self.ancestors();
         let g = Vector3::from(gravity_m_s2);
         let mut tau = vec![0.0; self.joints.len()];
         for j in &self.tree {
@@ -597,7 +606,7 @@ impl ArmModel {
             let inertia_w = rot.matrix() * inertial.inertia_kg_m2 * rot.matrix().transpose();
             let mut jv = DMatrix::zeros(3, n);
             let mut jw = DMatrix::zeros(3, n);
-            for a in self.ancestors(l) {
+            for &a in &self.ancestors()[l] {
                 let (kind, axis, pivot) = axes[a];
                 let (lin, ang) = match kind {
                     TreeJointKind::Revolute => (axis.cross(&(com_w - pivot)), axis),
