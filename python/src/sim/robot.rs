@@ -19,7 +19,7 @@ use sim::fault_desk::{FaultAction, FaultDesk, Faults};
 use sim::robot::faults::{BUS_LOST, EXTERNAL_TORQUE, GANTRY_RELEASE};
 use sim::robot::file::{load_robot_file, RobotFileError};
 use sim::robot::{
-    Base, Gantry, RobotEmulator as Emulator, RobotError, RobotHandle, RobotMonitor, RobotSnapshot,
+    Gantry, RobotEmulator as Emulator, RobotError, RobotHandle, RobotMonitor, RobotSnapshot,
 };
 
 use super::emulated::{apply, emulator_methods, Emulated, Running, Stop};
@@ -279,21 +279,14 @@ pub(super) fn robot(
         RobotFileError::Read { .. } => PyErr::new::<pyo3::exceptions::PyOSError, _>(e.to_string()),
         RobotFileError::Invalid(_) => value_err(e),
     })?;
+    // As `armhil sim robot`: the caller's, else the file's, else on the stand until enabled.
+    let requested = gantry
+        .map(|word| Gantry::parse(word).map_err(|e| PyValueError::new_err(format!("gantry {e}"))))
+        .transpose()?;
+    let gantry = loaded.serving_gantry(requested);
     let mut config = loaded.config;
     config.state_file = state_file;
-    // As `armhil sim robot`: a floating robot hangs on its gantry until every actuator is
-    // enabled unless the robot file or the caller says otherwise.
-    config.gantry = match (gantry, loaded.gantry_given, config.base) {
-        (Some(word), ..) => Gantry::named(word).ok_or_else(|| {
-            let words: Vec<&str> = Gantry::WORDS.iter().map(|(w, _)| *w).collect();
-            PyValueError::new_err(format!(
-                "gantry must be one of {}, got {word:?}",
-                words.join(", ")
-            ))
-        })?,
-        (None, true, _) | (None, false, Base::Fixed) => config.gantry,
-        (None, false, Base::Floating { .. }) => Gantry::UntilEnabled,
-    };
+    config.gantry = gantry;
     let names: Vec<String> = config.buses.iter().map(|b| b.name.clone()).collect();
     let joints = config
         .actuators

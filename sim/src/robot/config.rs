@@ -55,6 +55,20 @@ impl Gantry {
             .map(|(_, g)| *g)
     }
 
+    /// The gantry written `word`, or what is wrong with it (`must be one of …, got `x``,
+    /// with the nearest word): one message for robot files, scenarios, the CLI and Python,
+    /// each of which names its own key before it.
+    pub fn parse(word: &str) -> Result<Self, String> {
+        Self::named(word).ok_or_else(|| {
+            let words: Vec<&str> = Self::WORDS.iter().map(|(w, _)| *w).collect();
+            format!(
+                "must be one of {}, got `{word}`{}",
+                words.join(", "),
+                crate::yaml_words::suggestion(word, &words)
+            )
+        })
+    }
+
     /// How robot files write it.
     pub fn word(self) -> &'static str {
         Self::WORDS

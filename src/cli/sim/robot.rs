@@ -49,10 +49,7 @@ pub struct Args {
 
 /// `--gantry`'s word (`until_enabled` or `until-enabled`).
 fn parse_gantry(word: &str) -> Result<Gantry, String> {
-    Gantry::named(&word.replace('-', "_")).ok_or_else(|| {
-        let words: Vec<&str> = Gantry::WORDS.iter().map(|(w, _)| *w).collect();
-        format!("expected one of {}", words.join(", "))
-    })
+    Gantry::parse(&word.replace('-', "_"))
 }
 
 /// The prefix of the emulator's end of a vxcan pair.
@@ -196,14 +193,10 @@ pub(crate) async fn serve(args: Args, mut stop: super::StopSource) -> anyhow::Re
     for warning in &loaded.warnings {
         eprintln!("warning: {warning}");
     }
+    let gantry = loaded.serving_gantry(args.gantry);
     let mut config = loaded.config;
     config.host_id = args.host_id;
-    // A user bringing a robot up expects it on its stand until its actuators hold it.
-    config.gantry = match (args.gantry, loaded.gantry_given, config.base) {
-        (Some(gantry), ..) => gantry,
-        (None, true, _) | (None, false, Base::Fixed) => config.gantry,
-        (None, false, Base::Floating { .. }) => Gantry::UntilEnabled,
-    };
+    config.gantry = gantry;
     if config.gantry != Gantry::Off && matches!(config.base, Base::Floating { .. }) {
         eprintln!(
             "the robot hangs on its gantry ({}): {}",

@@ -105,17 +105,8 @@ fn robot_settings(
     })?;
     let mut config = loaded.config;
     if let Some(word) = gantry {
-        config.gantry = sim::robot::Gantry::named(&word.value).ok_or_else(|| {
-            let words: Vec<&str> = sim::robot::Gantry::WORDS.iter().map(|(w, _)| *w).collect();
-            ctx.err(
-                pos(word),
-                format!(
-                    "`gantry` must be one of {}, got `{}`",
-                    words.join(", "),
-                    word.value
-                ),
-            )
-        })?;
+        config.gantry = sim::robot::Gantry::parse(&word.value)
+            .map_err(|e| ctx.err(pos(word), format!("`gantry` {e}")))?;
         if config.base == sim::robot::Base::Fixed && config.gantry != sim::robot::Gantry::Off {
             return Err(ctx.err(
                 pos(word),

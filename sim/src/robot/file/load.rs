@@ -36,6 +36,20 @@ pub struct LoadedRobot {
     pub warnings: Vec<FileError>,
 }
 
+impl LoadedRobot {
+    /// The gantry a front end serving the robot to a user's stack (`armhil sim robot`,
+    /// Python) runs it with: `requested` (its own option), else the file's `gantry:`, else,
+    /// for a floating base, `until_enabled` — a user bringing a robot up expects it on its
+    /// stand until its actuators hold it. Scenarios keep the file's (`off` when unsaid).
+    pub fn serving_gantry(&self, requested: Option<Gantry>) -> Gantry {
+        match (requested, self.gantry_given, self.config.base) {
+            (Some(gantry), ..) => gantry,
+            (None, true, _) | (None, false, Base::Fixed) => self.config.gantry,
+            (None, false, Base::Floating { .. }) => Gantry::UntilEnabled,
+        }
+    }
+}
+
 /// Why a robot file could not be loaded.
 #[derive(Debug, thiserror::Error)]
 pub enum RobotFileError {
@@ -359,18 +373,7 @@ impl Checker<'_> {
                 "`gantry` holds a floating base; a fixed base is bolted down already",
             ));
         }
-        Gantry::named(&word.value).ok_or_else(|| {
-            let words: Vec<&str> = Gantry::WORDS.iter().map(|(w, _)| *w).collect();
-            self.err(
-                pos(word),
-                format!(
-                    "`gantry` must be one of {}, got `{}`{}",
-                    words.join(", "),
-                    word.value,
-                    suggestion(&word.value, &words)
-                ),
-            )
-        })
+        Gantry::parse(&word.value).map_err(|e| self.err(pos(word), format!("`gantry` {e}")))
     }
 
     /// `self_collision:`: off, on, or on without the pairs it lists (links of the URDF).
@@ -385,20 +388,10 @@ impl Checker<'_> {
             None | Some(RawSelfCollision::Switch(false)) => Ok(None),
             Some(RawSelfCollision::Switch(true)) => Ok(Some(Vec::new())),
             Some(RawSelfCollision::Except(pairs)) => {
-                let links: Vec<&str> = model.link_names().iter().map(String::as_str).collect();
                 let mut out = Vec::with_capacity(pairs.len());
                 for [a, b] in pairs {
                     for name in [a, b] {
-                        if !links.contains(&name.value.as_str()) {
-                            return Err(self.err(
-                                at,
-                                format!(
-                                    "`self_collision`: the URDF has no link `{}`{}",
-                                    name.value,
-                                    suggestion(&name.value, &links)
-                                ),
-                            ));
-                        }
+                        self.link(model, &name.value, at, "self_collision")?;
                     }
                     out.push((a.value.clone(), b.value.clone()));
                 }
@@ -409,24 +402,30 @@ impl Checker<'_> {
 
     /// `convex_decomposition:`: links of the URDF, each named once.
     fn decomposed_links(&self, raw: &RawRobot, model: &ArmModel) -> Res<Vec<String>> {
-        let links: Vec<&str> = model.link_names().iter().map(String::as_str).collect();
         let mut out: Vec<String> = Vec::new();
         for name in raw.convex_decomposition.iter().flat_map(|l| &l.value) {
-            if !links.contains(&name.value.as_str()) {
-                return Err(self.err(
-                    pos(name),
-                    format!(
-                        "`convex_decomposition`: the URDF has no link `{}`{}",
-                        name.value,
-                        suggestion(&name.value, &links)
-                    ),
-                ));
-            }
+            self.link(model, &name.value, pos(name), "convex_decomposition")?;
             if !out.contains(&name.value) {
                 out.push(name.value.clone());
             }
         }
         Ok(out)
+    }
+
+    /// `name` must be a link of the URDF; else an error at `at` for key `key`, with the
+    /// nearest link's name.
+    fn link(&self, model: &ArmModel, name: &str, at: Pos, key: &str) -> Res<()> {
+        if model.link_index(name).is_some() {
+            return Ok(());
+        }
+        let links: Vec<&str> = model.link_names().iter().map(String::as_str).collect();
+        Err(self.err(
+            at,
+            format!(
+                "`{key}`: the URDF has no link `{name}`{}",
+                suggestion(name, &links)
+            ),
+        ))
     }
 
     fn missing_meshes(&self, raw: &RawRobot) -> Res<MissingMeshes> {
