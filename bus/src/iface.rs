@@ -1,5 +1,7 @@
 //! The one async interface every bus implementation offers.
 
+use std::time::Duration;
+
 use async_trait::async_trait;
 
 use crate::{BusError, CanFrame, ReceivedFrame};
@@ -15,6 +17,16 @@ pub trait CanBus: Send + Sync {
     /// Queue a frame for transmission. Returns once the frame is accepted by the transmit queue;
     /// a full queue is [`BusError::TxQueueFull`], never a silent drop.
     async fn send(&self, frame: CanFrame) -> Result<(), BusError>;
+
+    /// Queue a frame that may start on the wire no earlier than `delay` from now: a
+    /// firmware's answer, which leaves its turnaround after the request arrived. The frame
+    /// holds its place in the transmit queue meanwhile. Buses that do not model the wire
+    /// (SocketCAN, socketcand) send at once, where the path to the real wire takes about as
+    /// long.
+    async fn send_after(&self, frame: CanFrame, delay: Duration) -> Result<(), BusError> {
+        let _ = delay;
+        self.send(frame).await
+    }
 
     /// Wait for the next frame from the bus, with its timestamp.
     async fn recv(&self) -> Result<ReceivedFrame, BusError>;

@@ -9,9 +9,11 @@
 //! - [`socketcand`]: CAN over TCP (the socketcand protocol), server and client.
 //! - [`candump`], [`pcap`] and [`recorder`]: logs for can-utils and Wireshark, and a reader.
 //! - [`timing`]: how many bit times a frame occupies.
+//! - [`fine_timer`]: sleeping to sub-millisecond deadlines, in real and virtual time.
 
 pub mod candump;
 mod error;
+pub mod fine_timer;
 mod frame;
 mod iface;
 pub mod pcap;

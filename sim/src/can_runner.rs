@@ -3,7 +3,7 @@
 //! bus's frames into one bounded queue, and the transmit backlog that keeps a saturated bus
 //! from stopping the clock.
 
-use std::collections::VecDeque;
+use std::collections::BTreeMap;
 use std::sync::Arc;
 use std::time::Duration;
 
@@ -96,35 +96,56 @@ pub fn receive_frames(
     (rx, tasks)
 }
 
-/// Frames a bus's full transmit queue refused, sent before any newer frame at the next
-/// chance (the next frame to send, or the next step). The emulator's loop never waits for the
-/// bus: waiting (100 µs at a time, up to 5 ms a frame) let one saturated bus stop every
-/// actuator's clock — a robot whose buses were offered 129 % of their bit rate emulated 0.01 s
-/// in 4 s of wall time. A real motor's firmware does not wait for its CAN mailboxes either.
-/// Bounded: past [`TxBacklog::CAPACITY`] the oldest frame is dropped, as an overwritten
-/// mailbox loses it.
+/// The emulator's side of a bus's transmit path: frames a bus's full transmit queue refused
+/// wait here, lowest CAN identifier first — each actuator on a bus has a controller of its
+/// own, so of their waiting frames the one that wins arbitration leaves first, as on the
+/// robot — and go to the bus at the next chance (the next frame to send, or the next step).
+/// The emulator's loop never waits for the bus: waiting (100 µs at a time, up to 5 ms a
+/// frame) let one saturated bus stop every actuator's clock — a robot whose buses were
+/// offered 129 % of their bit rate emulated 0.01 s in 4 s of wall time. A real motor's
+/// firmware does not wait for its CAN mailboxes either.
+///
+/// Bounded by what the wire carries: [`TxBacklog::CAPACITY`] frames are well over 100 ms of a
+/// saturated 1 Mbit/s bus, so a burst the bus would carry is never dropped (a CANopen node
+/// answering 3,000 back-to-back uploads lost 53 answers to the former 64-frame bound); past
+/// it the highest identifier is dropped, the frame that would have waited longest.
 #[derive(Debug, Default)]
 pub struct TxBacklog {
-    frames: VecDeque<CanFrame>,
+    /// Waiting frames by (arbitration key, arrival number): the order they win the bus.
+    frames: BTreeMap<(u64, u64), Waiting>,
+    arrivals: u64,
     dropped: u64,
 }
 
-impl TxBacklog {
-    /// Frames kept waiting, at most (several steps of a busy bus's replies).
-    pub const CAPACITY: usize = 64;
+/// A frame in the backlog and the earliest instant it may start on the wire.
+#[derive(Debug, Clone, Copy)]
+struct Waiting {
+    frame: CanFrame,
+    not_before: Instant,
+}
 
-    /// Queue `frames` behind those still waiting and send as many as the bus takes now.
-    /// `label` and `bus_name` name the emulator and the bus in warnings.
-    pub async fn send(
+impl TxBacklog {
+    /// Frames kept waiting, at most.
+    pub const CAPACITY: usize = 1024;
+
+    /// Queue `frames` to leave `delay` from now (a firmware's turnaround; zero for periodic
+    /// frames) and hand the bus as many waiting frames as it takes now, lowest identifier
+    /// first. `label` and `bus_name` name the emulator and the bus in warnings.
+    pub async fn send_after(
         &mut self,
         bus: &dyn CanBus,
         frames: impl IntoIterator<Item = CanFrame>,
+        delay: Duration,
         label: &'static str,
         bus_name: &str,
     ) {
+        let not_before = Instant::now() + delay;
         for frame in frames {
-            if self.frames.len() == Self::CAPACITY {
-                self.frames.pop_front();
+            let key = (frame.id().arbitration_key(), self.arrivals);
+            self.arrivals += 1;
+            self.frames.insert(key, Waiting { frame, not_before });
+            if self.frames.len() > Self::CAPACITY {
+                self.frames.pop_last();
                 self.dropped += 1;
                 // Warn at 1, 2, 4, 8 … drops: a saturated bus would otherwise log per frame.
                 if self.dropped.is_power_of_two() {
@@ -136,18 +157,31 @@ impl TxBacklog {
                     );
                 }
             }
-            self.frames.push_back(frame);
         }
-        while let Some(frame) = self.frames.front().copied() {
-            match bus.send(frame).await {
+        while let Some(entry) = self.frames.first_entry() {
+            let waiting = *entry.get();
+            let delay = waiting.not_before.saturating_duration_since(Instant::now());
+            match bus.send_after(waiting.frame, delay).await {
                 Ok(()) => {}
                 Err(BusError::TxQueueFull { .. }) => return,
                 Err(error) => {
-                    tracing::debug!(emulator = label, bus = bus_name, %error, %frame, "frame not sent");
+                    tracing::debug!(emulator = label, bus = bus_name, %error, frame = %waiting.frame, "frame not sent");
                 }
             }
-            self.frames.pop_front();
+            entry.remove();
         }
+    }
+
+    /// [`TxBacklog::send_after`] with no delay.
+    pub async fn send(
+        &mut self,
+        bus: &dyn CanBus,
+        frames: impl IntoIterator<Item = CanFrame>,
+        label: &'static str,
+        bus_name: &str,
+    ) {
+        self.send_after(bus, frames, Duration::ZERO, label, bus_name)
+            .await;
     }
 
     /// Frames dropped so far because the backlog was full.
@@ -243,17 +277,51 @@ mod tests {
         backlog.send(&bus, [], "test", "mailbox").await;
         assert_eq!(*bus.sent.lock().unwrap(), [4, 5]);
         assert!(started.elapsed() < Duration::from_millis(50), "it waited");
-        // A bus that takes nothing: the backlog keeps its newest CAPACITY frames.
+        // A bus that takes nothing: past CAPACITY the frame that would wait longest (the
+        // newest of the highest identifier) is the one lost.
         let stuck = Mailbox {
             room: 0,
             sent: std::sync::Mutex::new(Vec::new()),
         };
         let mut backlog = TxBacklog::default();
-        let n = TxBacklog::CAPACITY as u8 + 10;
+        let flood = (0..TxBacklog::CAPACITY + 10).map(|n| frame((n % 256) as u8));
+        backlog.send(&stuck, flood, "test", "stuck").await;
         backlog
-            .send(&stuck, (0..n).map(frame), "test", "stuck")
+            .send(
+                &stuck,
+                [CanFrame::standard(0x001, &[0xAA]).unwrap()],
+                "test",
+                "stuck",
+            )
             .await;
-        assert_eq!(backlog.dropped(), 10);
-        assert_eq!(backlog.frames.front().map(|f| f.data()[0]), Some(10));
+        assert_eq!(backlog.dropped(), 11);
+        let first = backlog.frames.values().next().map(|w| w.frame);
+        assert_eq!(
+            first.map(|f| f.raw_id()),
+            Some(0x001),
+            "the urgent frame kept"
+        );
+    }
+
+    /// Waiting frames leave in arbitration order, the lowest identifier first, whatever
+    /// order the firmware produced them in; one identifier keeps its own order.
+    #[tokio::test]
+    async fn waiting_frames_leave_lowest_identifier_first() {
+        let bus = Mailbox {
+            room: 0,
+            sent: std::sync::Mutex::new(Vec::new()),
+        };
+        let mut backlog = TxBacklog::default();
+        let produced = [(0x300, 1), (0x100, 2), (0x200, 3), (0x100, 4)];
+        backlog
+            .send(
+                &bus,
+                produced.map(|(id, n)| CanFrame::standard(id, &[n]).unwrap()),
+                "test",
+                "mailbox",
+            )
+            .await;
+        let order: Vec<u8> = backlog.frames.values().map(|w| w.frame.data()[0]).collect();
+        assert_eq!(order, [2, 4, 3, 1]);
     }
 }

@@ -3,6 +3,7 @@
 
 use std::sync::Arc;
 
+use bus::fine_timer::{FineTimer, TimelineGuard, VirtualTimeline};
 use bus::virtual_bus::{VirtualBus, VirtualBusConfig};
 use tokio::time::Instant;
 
@@ -23,6 +24,9 @@ pub(crate) struct BuiltBench {
     pub recorder: Recorder,
     /// Scenario time zero.
     pub t0: Instant,
+    /// Moves virtual time to each frame's microsecond (virtual runs; see
+    /// [`bus::fine_timer`]); the buses stop using it when it is dropped.
+    pub timeline: Option<TimelineGuard>,
 }
 
 /// Build the bench: in-process emulators on virtual buses, or drivers on a real interface.
@@ -46,6 +50,15 @@ pub(crate) async fn build(
         &bus_names,
     )
     .map_err(|e| format!("cannot create a temporary file for the bus recording: {e}"))?;
+    // Virtual time moves to each frame's microsecond, not tokio's next millisecond: a
+    // request and its answer take a fraction of a millisecond, as on the wire.
+    let timeline = match clock {
+        Clock::Virtual => VirtualTimeline::start(),
+        Clock::Realtime | Clock::Iface(_) => None,
+    };
+    let timer = timeline.as_ref().map_or(FineTimer::Auto, |guard| {
+        FineTimer::Virtual(guard.timeline().clone())
+    });
     let (buses, recorder) = match clock {
         Clock::Virtual | Clock::Realtime => {
             let buses: Vec<VirtualBus> = scenario
@@ -55,6 +68,7 @@ pub(crate) async fn build(
                 .map(|spec| {
                     VirtualBus::new(VirtualBusConfig {
                         bitrate_bps: spec.bitrate_bps,
+                        timer: timer.clone(),
                         ..VirtualBusConfig::default()
                     })
                 })
@@ -111,5 +125,6 @@ pub(crate) async fn build(
         buses,
         recorder,
         t0,
+        timeline,
     })
 }

@@ -36,6 +36,7 @@ pub use faults::{Fault, FaultHandle, FaultId, FaultKind, FrameFilter};
 pub use stats::BusStats;
 use wire::{Shared, WireParams, WireState};
 
+use crate::fine_timer::FineTimer;
 use crate::{BusError, CanBus, CanFrame, ReceivedFrame};
 
 /// How a virtual bus behaves.
@@ -52,6 +53,10 @@ pub struct VirtualBusConfig {
     pub stuffing: StuffingPolicy,
     /// Frames a tap may fall behind before it misses some (default 16384).
     pub tap_capacity: usize,
+    /// What the wire sleeps on between frames (default [`FineTimer::Auto`]: a timerfd in real
+    /// time on a multi-thread runtime; give the [`VirtualTimeline`](crate::fine_timer::VirtualTimeline)
+    /// in virtual time so frames arrive at the microsecond, not on the next millisecond).
+    pub timer: FineTimer,
 }
 
 impl Default for VirtualBusConfig {
@@ -62,6 +67,7 @@ impl Default for VirtualBusConfig {
             epoch: Duration::ZERO,
             stuffing: StuffingPolicy::Exact,
             tap_capacity: 16_384,
+            timer: FineTimer::Auto,
         }
     }
 }
@@ -122,7 +128,7 @@ impl VirtualBus {
             epoch: config.epoch,
         };
         let shared = Arc::new(Shared::new(WireState::new(params, tap)));
-        tokio::spawn(wire::run_wire(Arc::clone(&shared)));
+        tokio::spawn(wire::run_wire(Arc::clone(&shared), config.timer.sleeper()));
         Self {
             owner: Arc::new(Owner { shared }),
             config: Arc::new(config),
@@ -270,12 +276,16 @@ impl VirtualNode {
 #[async_trait]
 impl CanBus for VirtualNode {
     async fn send(&self, frame: CanFrame) -> Result<(), BusError> {
+        self.send_after(frame, Duration::ZERO).await
+    }
+
+    async fn send_after(&self, frame: CanFrame, delay: Duration) -> Result<(), BusError> {
         let shared = self.shared();
         let now = shared.now();
         let wire_idle = {
             let mut state = shared.lock();
             state.advance(now, false);
-            state.enqueue(self.inner.index, frame, now)?;
+            state.enqueue(self.inner.index, frame, now, now + delay)?;
             // With a frame on the wire the wire task already sleeps until it ends; otherwise
             // this frame may start now and the wire task must arbitrate.
             !state.has_frame_on_wire()

@@ -17,6 +17,7 @@ use tokio::time::Instant;
 
 use super::faults::{ActiveFault, Fault, FaultId, Verdict};
 use super::stats::StatsCounter;
+use crate::fine_timer::Sleeper;
 use crate::timing::{bits_duration, frame_bits, StuffingPolicy};
 use crate::{BusError, CanFrame, CanId, ReceivedFrame};
 
@@ -166,12 +167,14 @@ impl WireState {
         (self.nodes.len() - 1, rx)
     }
 
-    /// Queue a frame from `node` at bus time `now`.
+    /// Queue a frame from `node` at bus time `now`, to compete for the wire from `ready_at`
+    /// on (a firmware's turnaround later than `now`).
     pub(super) fn enqueue(
         &mut self,
         node: usize,
         frame: CanFrame,
         now: Duration,
+        ready_at: Duration,
     ) -> Result<(), BusError> {
         let Some(slot) = self.nodes.get_mut(node) else {
             return Err(BusError::Closed);
@@ -190,7 +193,7 @@ impl WireState {
         }
         slot.queue.push_back(Queued {
             frame,
-            ready_at: now,
+            ready_at: ready_at.max(now),
             delayed: false,
         });
         Ok(())
@@ -379,7 +382,7 @@ impl WireState {
 
 /// The wire task: sleep until the next frame completes (or until woken), advance, repeat.
 /// Exits when the bus and all its nodes are gone; an idle bus waits without spinning.
-pub(super) async fn run_wire(shared: Arc<Shared>) {
+pub(super) async fn run_wire(shared: Arc<Shared>, mut sleeper: Sleeper) {
     loop {
         let next = {
             let mut state = shared.lock();
@@ -392,7 +395,7 @@ pub(super) async fn run_wire(shared: Arc<Shared>) {
         match next {
             Some(at) => {
                 tokio::select! {
-                    () = tokio::time::sleep_until(shared.start + at) => {}
+                    () = sleeper.sleep_until(shared.start + at) => {}
                     () = shared.wake.notified() => {}
                 }
             }

@@ -3,6 +3,7 @@
 
 use std::path::PathBuf;
 use std::sync::Arc;
+use std::time::Duration;
 
 use bus::{CanBus, CanFrame};
 use tokio::sync::{mpsc, oneshot};
@@ -17,7 +18,7 @@ use crate::physics::PhysicsError;
 use crate::robot::faults::RobotLayout;
 use crate::robstride::faults::{check_external_torque_nm, check_temperature_c, ValueError};
 use crate::robstride::state_file::{uid_key, StateFile, StateFileError};
-use crate::robstride::{Actuator, Fault, MotorSnapshot};
+use crate::robstride::{Actuator, Fault, MotorSnapshot, TURNAROUND};
 use crate::supervise::{DeathWatch, Supervisor};
 
 /// Harness requests waiting for the runner.
@@ -585,7 +586,8 @@ impl Runner {
             replies.extend(a.firmware.handle_frame(frame));
         }
         self.persist_if_requested()?;
-        self.send(port, replies).await;
+        // Answered with the state of the latest step, after the firmware's turnaround.
+        self.send_after(port, replies, TURNAROUND).await;
         Ok(())
     }
 
@@ -633,12 +635,22 @@ impl Runner {
     }
 
     async fn send(&mut self, port: usize, frames: impl IntoIterator<Item = CanFrame>) {
+        self.send_after(port, frames, Duration::ZERO).await;
+    }
+
+    /// Hands `frames` to bus `port` to leave `delay` from now (a firmware's turnaround).
+    async fn send_after(
+        &mut self,
+        port: usize,
+        frames: impl IntoIterator<Item = CanFrame>,
+        delay: Duration,
+    ) {
         let port = &mut self.ports[port];
         if port.lost {
             return;
         }
         port.backlog
-            .send(port.bus.as_ref(), frames, "robot", &port.name)
+            .send_after(port.bus.as_ref(), frames, delay, "robot", &port.name)
             .await;
     }
 }

@@ -13,7 +13,9 @@ use crate::pacer::Pacer;
 use crate::robstride::faults::{
     check_bus_voltage_v, check_external_torque_nm, check_temperature_c, Fault, ValueError,
 };
-use crate::robstride::firmware::{Actuator, MotorConfig, MotorSnapshot, DEFAULT_HOST_ID};
+use crate::robstride::firmware::{
+    Actuator, MotorConfig, MotorSnapshot, DEFAULT_HOST_ID, TURNAROUND,
+};
 use crate::robstride::state_file::{uid_key, StateFile, StateFileError};
 use crate::supervise::{DeathWatch, Supervisor};
 
@@ -412,7 +414,11 @@ impl Runner {
             replies.extend(motor.handle_frame(frame));
         }
         self.persist_if_requested()?;
-        self.send_all(replies).await;
+        // Answered with the state of the latest control step, after the firmware's
+        // turnaround — not at the next step.
+        self.backlog
+            .send_after(self.bus.as_ref(), replies, TURNAROUND, "robstride", "bus")
+            .await;
         Ok(())
     }
 

@@ -20,6 +20,10 @@ use super::model::{GroupAction, GroupActuator, GroupCheck, GroupFault, GroupMode
 use crate::devices::{Action, Check, Device, DeviceError, DeviceFault, Reply, TraceColumn};
 use crate::scenario::{ErrorClass, Signal};
 
+/// Requests a group action keeps waiting on one bus at once (a host's CAN transmit queue
+/// holds ten frames; a few stay free for the command streams).
+const IN_FLIGHT_PER_BUS: usize = 8;
+
 /// Quantum of traced angles (rad): a thousandth, so a wrong scale factor still shows.
 const RAD_Q: f64 = 0.001;
 
@@ -292,28 +296,36 @@ impl GroupDevice {
         }
     }
 
-    /// Runs `each` on every motor: the buses at the same time, as a host with a thread per
-    /// bus does, the motors of one bus one after the other (one request in flight per bus).
-    /// A robot of 32 actuators on four buses enables in a quarter of the time it took one
-    /// motor at a time, its legs no longer unpowered while its arms are enabled. The first
-    /// failure (in configuration order) names its joint.
+    /// Runs `each` on every motor at once, as a host driver does: one request outstanding
+    /// per motor, the buses in parallel, at most [`IN_FLIGHT_PER_BUS`] requests waiting on
+    /// one bus (a host's CAN transmit queue holds ten frames). A robot of 32 actuators on
+    /// four buses enables in about 2 ms of bus time instead of 128 ms one motor at a time,
+    /// its legs no longer unpowered while its arms are enabled. The first failure (in
+    /// configuration order) names its joint.
     async fn on_every_motor<'a, F, Fut>(&'a self, each: F) -> Result<(), DeviceError>
     where
         F: Fn(&'a Motor) -> Fut,
         Fut: std::future::Future<Output = Result<(), RobstrideError>>,
     {
+        use futures::StreamExt;
         let each = &each;
         let buses = self.settings.buses.len().max(1);
         let per_bus = (0..buses).map(|bus| async move {
-            let mut failed = None;
+            let mut pending = futures::stream::FuturesUnordered::new();
+            let mut failed = Vec::new();
             for (index, motor) in self.motors.iter().enumerate() {
                 if self.settings.actuators[index].bus != bus {
                     continue;
                 }
-                if let Err(e) = each(motor).await {
-                    failed = Some((index, e));
-                    break;
+                if pending.len() == IN_FLIGHT_PER_BUS {
+                    if let Some(done) = pending.next().await {
+                        failed.extend(done);
+                    }
                 }
+                pending.push(async move { each(motor).await.err().map(|e| (index, e)) });
+            }
+            while let Some(done) = pending.next().await {
+                failed.extend(done);
             }
             failed
         });

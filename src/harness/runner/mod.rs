@@ -108,6 +108,7 @@ async fn run_async(scenario: &Scenario, clock: &Clock, options: &RunOptions) -> 
         buses,
         recorder,
         t0,
+        timeline: _timeline,
     } = built;
     let faults = Arc::new(FaultControl::new(
         devices.clone(),

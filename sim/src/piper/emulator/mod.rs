@@ -129,7 +129,7 @@ impl PiperEmulator {
         let core = Arc::new(Mutex::new(firmware));
         let counters = Arc::new(Mutex::new(RealtimeCounters::new()));
         let (in_tx, in_rx) = mpsc::channel::<CanFrame>(RX_QUEUE_FRAMES);
-        let (out_tx, out_rx) = mpsc::unbounded_channel::<CanFrame>();
+        let (out_tx, out_rx) = mpsc::unbounded_channel::<(CanFrame, std::time::Duration)>();
         let (stop, stop_rx) = watch::channel(false);
         // A task that panics or gives up is reported, not left dead behind an open bus.
         let (supervisor, death) = Supervisor::new();

@@ -10,7 +10,7 @@ use tokio::time::{sleep, Instant};
 use super::{lock, plan_wake_within, OVERRUN_REPORT_PERIOD, TX_RETRIES, TX_RETRY_WAIT};
 use crate::cpu_budget::CpuBudget;
 use crate::pacer::Pacer;
-use crate::piper::firmware::{Firmware, STEP_S};
+use crate::piper::firmware::{Firmware, STEP_S, TURNAROUND};
 use crate::realtime::RealtimeCounters;
 
 /// Frames received and not yet handled by the core; a full queue holds the receiver back, and
@@ -58,7 +58,7 @@ pub(super) struct CoreTask {
 pub(super) async fn run_core(
     task: CoreTask,
     mut in_rx: mpsc::Receiver<CanFrame>,
-    out_tx: mpsc::UnboundedSender<CanFrame>,
+    out_tx: mpsc::UnboundedSender<(CanFrame, Duration)>,
     mut stop: watch::Receiver<bool>,
 ) -> Result<(), String> {
     let CoreTask {
@@ -81,11 +81,37 @@ pub(super) async fn run_core(
     let mut budget = CpuBudget::default();
     let mut last_wake = boot;
     let mut overruns = OverrunReport::default();
+    let mut receiving = true;
     loop {
-        tokio::select! {
+        let arrived = tokio::select! {
             biased;
-            _ = clock.tick() => {}
+            _ = clock.tick() => None,
+            frame = in_rx.recv(), if receiving => {
+                receiving = frame.is_some();
+                frame
+            }
             _ = stop.changed() => break,
+        };
+        if let Some(frame) = arrived {
+            // A frame is handled when it arrives and a query answered after the firmware's
+            // turnaround, with the state of the latest step — not at the next step.
+            {
+                let mut fw = lock(&core);
+                fw.handle_frame(&frame);
+                while let Ok(frame) = in_rx.try_recv() {
+                    fw.handle_frame(&frame);
+                }
+                fw.drain_output_into(&mut produced);
+                if let Some(e) = fw.take_save_error() {
+                    return Err(e.to_string());
+                }
+            }
+            for frame in produced.drain(..) {
+                if out_tx.send((frame, TURNAROUND)).is_err() {
+                    return Ok(());
+                }
+            }
+            continue;
         }
         let woke = Instant::now();
         // On a machine too slow for real time, catching up a backlog would take the CPU from
@@ -126,7 +152,7 @@ pub(super) async fn run_core(
             }
         }
         for frame in produced.drain(..) {
-            if out_tx.send(frame).is_err() {
+            if out_tx.send((frame, Duration::ZERO)).is_err() {
                 // The transmitter ended: on a stop, or because the bus was closed (the owner
                 // of the bus closing it first is a way to stop, not a failure).
                 return Ok(());
@@ -164,17 +190,18 @@ impl OverrunReport {
     }
 }
 
-/// The transmitter task: the core's frames onto the bus, each retried a few times when the
-/// bus's transmit queue is full, then dropped (counted, warned at powers of two).
+/// The transmitter task: the core's frames onto the bus (each with the delay before it may
+/// start, a query's turnaround), each retried a few times when the bus's transmit queue is
+/// full, then dropped (counted, warned at powers of two).
 pub(super) async fn transmit(
     bus: Arc<dyn CanBus>,
     counters: Arc<Mutex<RealtimeCounters>>,
-    mut out_rx: mpsc::UnboundedReceiver<CanFrame>,
+    mut out_rx: mpsc::UnboundedReceiver<(CanFrame, Duration)>,
     mut stop: watch::Receiver<bool>,
 ) -> Result<(), String> {
     let mut dropped: u64 = 0;
     loop {
-        let frame = tokio::select! {
+        let (frame, delay) = tokio::select! {
             biased;
             f = out_rx.recv() => match f {
                 Some(f) => f,
@@ -184,7 +211,7 @@ pub(super) async fn transmit(
         };
         let mut attempts = 0;
         loop {
-            match bus.send(frame).await {
+            match bus.send_after(frame, delay).await {
                 Ok(()) => {
                     lock(&counters).record_frame(frame.raw_id(), Instant::now());
                     break;

@@ -31,6 +31,11 @@ pub use protections::FaultState;
 
 /// Physics and control period, s (1 kHz).
 pub const STEP_S: f64 = 0.001;
+/// From the last bit of a host's query on the wire to the first bit of the answer. No
+/// published figure: an estimate for a controller that decodes the frame in its receive
+/// interrupt and answers from the state of its latest 1 ms step (documented in
+/// docs/timing.md as an estimate).
+pub const TURNAROUND: std::time::Duration = std::time::Duration::from_micros(200);
 /// Ticks between two 200 Hz feedback groups.
 const HIGH_RATE_DIVIDER: u64 = 5;
 /// Ticks between two 40 Hz feedback groups.

@@ -25,6 +25,11 @@ pub use state::{ModeState, MotorSnapshot, PersistedMotor};
 
 /// Host ID the manuals use and the motor assumes until a host speaks.
 pub const DEFAULT_HOST_ID: u8 = 0xFD;
+/// From the last bit of a request on the wire to the answer's first: the firmware's
+/// turnaround. Hosts see a motor's answer about 250 µs after their frame ended (the
+/// CyberGear maintainers' observation); 130 µs of that is the answer itself on a 1 Mbit/s
+/// wire, which leaves this.
+pub const TURNAROUND: std::time::Duration = std::time::Duration::from_micros(120);
 /// Destination byte of type-0 replies ("broadcast" marker).
 const TYPE0_DST: u8 = 0xFE;
 /// Inner control-loop substeps per 1 ms tick (10 kHz, as the firmware's loops run faster than

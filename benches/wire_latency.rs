@@ -1,0 +1,287 @@
+//! The wire's timing as a host sees it, in real time, against the `armhil` binary itself:
+//!
+//! - `sim robot robots/humanoid.yaml --socketcand`: a host on the four channels sends each of
+//!   the 20 actuators an operation-control command every 10 ms (2,000 commands/s) and times
+//!   each answer from its send (p50, p99, max, share answered); then one socketcand client
+//!   pings another through the bus (client-to-client echo);
+//! - CPU of the emulator process (% of one core, from /proc) at rest and under that load, and
+//!   at rest for `sim robstride` (five motors) and `sim realman`.
+//!
+//! Prints figures; judges nothing. Run: `cargo bench --bench wire_latency` (Linux).
+
+use std::net::TcpListener;
+use std::process::{Child, Command, Stdio};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use bus::socketcand::SocketcandBus;
+use bus::{BusError, CanBus, CanFrame};
+
+const HOST_ID: u32 = 0xFD;
+const LOAD_SECONDS: u64 = 10;
+const IDLE_SECONDS: u64 = 5;
+const PINGS: usize = 2_000;
+
+/// The humanoid's buses and actuator ids (robots/humanoid.yaml).
+const BUSES: [(&str, [u8; 5]); 4] = [
+    ("can0", [11, 12, 13, 14, 15]),
+    ("can1", [21, 22, 23, 24, 25]),
+    ("can2", [31, 32, 33, 34, 35]),
+    ("can3", [41, 42, 43, 44, 45]),
+];
+
+fn free_port() -> u16 {
+    TcpListener::bind("127.0.0.1:0")
+        .and_then(|l| l.local_addr())
+        .map(|a| a.port())
+        .expect("a free port")
+}
+
+/// The emulator process, killed when dropped.
+struct Emulator {
+    child: Child,
+}
+
+impl Drop for Emulator {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+fn start(args: &[&str]) -> Emulator {
+    let child = Command::new(env!("CARGO_BIN_EXE_armhil"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("armhil starts");
+    Emulator { child }
+}
+
+fn wait_for_port(port: u16) {
+    let deadline = Instant::now() + Duration::from_secs(60);
+    while Instant::now() < deadline {
+        if std::net::TcpStream::connect(("127.0.0.1", port)).is_ok() {
+            return;
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    panic!("nothing listens on port {port}");
+}
+
+/// CPU time (user + system) of a process so far.
+fn cpu_time(pid: u32) -> Duration {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap_or_default();
+    // Fields after the parenthesised command name; utime and stime are the 14th and 15th.
+    let after = stat.rsplit(')').next().unwrap_or("");
+    let fields: Vec<&str> = after.split_whitespace().collect();
+    let ticks: u64 = fields
+        .get(11..13)
+        .map(|f| f.iter().filter_map(|v| v.parse::<u64>().ok()).sum())
+        .unwrap_or(0);
+    // SAFETY: sysconf with a constant name.
+    #[allow(unsafe_code)]
+    let per_second = unsafe { libc::sysconf(libc::_SC_CLK_TCK) }.max(1) as u64;
+    Duration::from_nanos(ticks * 1_000_000_000 / per_second)
+}
+
+/// Percent of one core the process used over `during`.
+fn cpu_percent(pid: u32, during: impl FnOnce()) -> f64 {
+    let (cpu0, wall0) = (cpu_time(pid), Instant::now());
+    during();
+    let (cpu1, wall1) = (cpu_time(pid), Instant::now());
+    100.0 * (cpu1 - cpu0).as_secs_f64() / (wall1 - wall0).as_secs_f64()
+}
+
+fn op_command(motor: u8) -> CanFrame {
+    // Type 1 with zero torque, p = v = 0, kp = kd = 0: a pure status exchange.
+    let id = (1 << 24) | (0x7FFF << 8) | u32::from(motor);
+    CanFrame::extended(id, &[0x7F, 0xFF, 0x7F, 0xFF, 0, 0, 0, 0]).expect("valid frame")
+}
+
+fn percentile(sorted: &[Duration], p: f64) -> Duration {
+    if sorted.is_empty() {
+        return Duration::ZERO;
+    }
+    let index = ((sorted.len() - 1) as f64 * p).round() as usize;
+    sorted[index]
+}
+
+fn ms(d: Duration) -> String {
+    format!("{:.3} ms", d.as_secs_f64() * 1e3)
+}
+
+async fn send(bus: &dyn CanBus, frame: CanFrame) {
+    loop {
+        match bus.send(frame).await {
+            Ok(()) => return,
+            Err(BusError::TxQueueFull { .. }) => tokio::task::yield_now().await,
+            Err(error) => panic!("send failed: {error}"),
+        }
+    }
+}
+
+/// 2,000 commands/s over the four channels; the answers' latencies and how many came.
+async fn commands_under_load(addr: &str) -> (Vec<Duration>, u64, u64) {
+    let latencies = Arc::new(Mutex::new(Vec::new()));
+    let sent_total = Arc::new(AtomicU64::new(0));
+    let mut tasks = Vec::new();
+    for (name, ids) in BUSES {
+        let bus: Arc<dyn CanBus> = Arc::new(
+            SocketcandBus::connect(addr, name)
+                .await
+                .expect("channel opens"),
+        );
+        let sent_at: Arc<Mutex<[Option<Instant>; 128]>> = Arc::new(Mutex::new([None; 128]));
+        let end = Instant::now() + Duration::from_secs(LOAD_SECONDS);
+        let receiver = {
+            let (bus, sent_at, latencies) = (
+                Arc::clone(&bus),
+                Arc::clone(&sent_at),
+                Arc::clone(&latencies),
+            );
+            tokio::spawn(async move {
+                while let Ok(Ok(received)) =
+                    tokio::time::timeout(Duration::from_millis(200), bus.recv()).await
+                {
+                    let id = received.frame.raw_id();
+                    if (id >> 24) & 0x1F == 2 && id & 0xFF == HOST_ID {
+                        let motor = ((id >> 8) & 0x7F) as usize;
+                        if let Some(at) = sent_at.lock().unwrap()[motor].take() {
+                            latencies.lock().unwrap().push(at.elapsed());
+                        }
+                    }
+                }
+            })
+        };
+        let sender = {
+            let sent_total = Arc::clone(&sent_total);
+            tokio::spawn(async move {
+                let mut ticks = tokio::time::interval(Duration::from_millis(10));
+                while Instant::now() < end {
+                    ticks.tick().await;
+                    for motor in ids {
+                        sent_at.lock().unwrap()[usize::from(motor)] = Some(Instant::now());
+                        send(bus.as_ref(), op_command(motor)).await;
+                        sent_total.fetch_add(1, Ordering::Relaxed);
+                    }
+                }
+                bus
+            })
+        };
+        tasks.push((sender, receiver));
+    }
+    for (sender, receiver) in tasks {
+        let _bus = sender.await.expect("sender");
+        receiver.await.expect("receiver");
+    }
+    let mut latencies = std::mem::take(&mut *latencies.lock().unwrap());
+    latencies.sort();
+    let answered = latencies.len() as u64;
+    (latencies, answered, sent_total.load(Ordering::Relaxed))
+}
+
+/// One client pings another on the same channel through the bus.
+async fn client_to_client(addr: &str) -> Vec<Duration> {
+    let a = SocketcandBus::connect(addr, "can0").await.expect("a");
+    let b = SocketcandBus::connect(addr, "can0").await.expect("b");
+    tokio::time::sleep(Duration::from_millis(300)).await;
+    let mut times = Vec::with_capacity(PINGS);
+    for n in 0..PINGS {
+        let frame = CanFrame::standard(0x7F0, &(n as u32).to_le_bytes()).expect("frame");
+        let sent = Instant::now();
+        send(&a, frame).await;
+        loop {
+            let Ok(Ok(received)) = tokio::time::timeout(Duration::from_secs(1), b.recv()).await
+            else {
+                break;
+            };
+            if received.frame == frame {
+                times.push(sent.elapsed());
+                break;
+            }
+        }
+        tokio::time::sleep(Duration::from_micros(500)).await;
+    }
+    times.sort();
+    times
+}
+
+fn main() {
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+        .expect("runtime");
+
+    let port = free_port();
+    let addr = format!("127.0.0.1:{port}");
+    let robot = start(&[
+        "sim",
+        "robot",
+        "robots/humanoid.yaml",
+        "--socketcand",
+        &addr,
+    ]);
+    wait_for_port(port);
+    std::thread::sleep(Duration::from_secs(1));
+    let pid = robot.child.id();
+    let idle = cpu_percent(pid, || {
+        std::thread::sleep(Duration::from_secs(IDLE_SECONDS))
+    });
+    let mut outcome = None;
+    let loaded = cpu_percent(pid, || {
+        outcome = Some(runtime.block_on(commands_under_load(&addr)));
+    });
+    let (latencies, answered, sent) = outcome.expect("ran");
+    let echo = runtime.block_on(client_to_client(&addr));
+    drop(robot);
+
+    println!("humanoid (20 actuators, 4 channels) over socketcand, real time:");
+    println!(
+        "  reply latency at 2,000 commands/s: p50 {}, p99 {}, max {}; answered {answered} of {sent} ({:.2} %)",
+        ms(percentile(&latencies, 0.5)),
+        ms(percentile(&latencies, 0.99)),
+        ms(latencies.last().copied().unwrap_or_default()),
+        100.0 * answered as f64 / sent.max(1) as f64,
+    );
+    println!(
+        "  client-to-client echo: p50 {}, p99 {} ({} of {PINGS} pings)",
+        ms(percentile(&echo, 0.5)),
+        ms(percentile(&echo, 0.99)),
+        echo.len()
+    );
+    println!("  CPU: {idle:.1} % of a core at rest, {loaded:.1} % under 2,000 commands/s");
+
+    for (label, args) in [
+        (
+            "sim robstride (5 motors)",
+            vec![
+                "--motor", "1:RS03", "--motor", "2:RS03", "--motor", "3:RS02", "--motor", "4:RS02",
+                "--motor", "5:RS04",
+            ],
+        ),
+        ("sim realman", vec![]),
+    ] {
+        let port = free_port();
+        let mut command = vec!["sim"];
+        let addr = format!("127.0.0.1:{port}");
+        let port_text = port.to_string();
+        if label.starts_with("sim realman") {
+            command.extend(["realman", "--port", &port_text]);
+        } else {
+            command.extend(["robstride", "--socketcand", &addr]);
+        }
+        command.extend(args.iter().copied());
+        let emulator = start(&command);
+        wait_for_port(port);
+        std::thread::sleep(Duration::from_secs(1));
+        let idle = cpu_percent(emulator.child.id(), || {
+            std::thread::sleep(Duration::from_secs(IDLE_SECONDS))
+        });
+        println!("{label}: {idle:.1} % of a core at rest");
+    }
+}

@@ -1,0 +1,175 @@
+use std::time::Duration;
+
+use tokio::time::Instant;
+
+use super::{FineTimer, VirtualTimeline};
+use crate::timing::{bits_duration, frame_bits, StuffingPolicy};
+use crate::virtual_bus::{VirtualBus, VirtualBusConfig};
+use crate::{CanBus, CanFrame};
+
+fn wire_time(frame: &CanFrame) -> Duration {
+    bits_duration(frame_bits(frame, StuffingPolicy::Exact), 1_000_000)
+}
+
+fn bus_on(timer: FineTimer) -> VirtualBus {
+    VirtualBus::new(VirtualBusConfig {
+        timer,
+        ..VirtualBusConfig::default()
+    })
+}
+
+#[tokio::test(start_paused = true)]
+async fn on_a_timeline_a_frame_arrives_when_its_last_bit_is_on_the_wire() {
+    let guard = VirtualTimeline::start().expect("a paused current-thread runtime");
+    let bus = bus_on(FineTimer::Virtual(guard.timeline().clone()));
+    let (host, motor) = (bus.attach("host"), bus.attach("motor"));
+    let request = CanFrame::extended(0x0300_FD01, &[0; 8]).unwrap();
+    let sent = Instant::now();
+    host.send(request).await.unwrap();
+    let received = motor.recv().await.unwrap();
+    let took = Instant::now() - sent;
+    assert_eq!(took, wire_time(&request), "not on the next millisecond");
+    assert!(took < Duration::from_micros(200), "{took:?}");
+    assert_eq!(received.timestamp, took);
+}
+
+#[tokio::test(start_paused = true)]
+async fn without_a_timeline_the_paused_clock_delivers_on_the_millisecond() {
+    // The behaviour the timeline exists to replace, kept for tests that pause the clock alone.
+    let bus = bus_on(FineTimer::Auto);
+    let (host, motor) = (bus.attach("host"), bus.attach("motor"));
+    let sent = Instant::now();
+    host.send(CanFrame::extended(0x0300_FD01, &[0; 8]).unwrap())
+        .await
+        .unwrap();
+    motor.recv().await.unwrap();
+    assert_eq!(Instant::now() - sent, Duration::from_millis(1));
+}
+
+/// A request, a firmware that answers after its turnaround, and the host's view of the round
+/// trip: request on the wire, turnaround, answer on the wire — a fraction of a millisecond.
+async fn round_trip(turnaround: Duration) -> (Duration, Duration) {
+    let guard = VirtualTimeline::start().unwrap();
+    let bus = bus_on(FineTimer::Virtual(guard.timeline().clone()));
+    let (host, motor) = (bus.attach("host"), bus.attach("motor"));
+    let firmware = tokio::spawn(async move {
+        let request = motor.recv().await.unwrap();
+        let answer = CanFrame::extended(0x0200_01FD, &request.frame.data()[..8]).unwrap();
+        motor.send_after(answer, turnaround).await.unwrap();
+        motor
+    });
+    let request = CanFrame::extended(0x0300_FD01, &[7; 8]).unwrap();
+    let sent = Instant::now();
+    host.send(request).await.unwrap();
+    let answer = host.recv().await.unwrap();
+    let _motor = firmware.await.unwrap();
+    (Instant::now() - sent, answer.timestamp)
+}
+
+#[tokio::test(start_paused = true)]
+async fn an_answer_leaves_its_turnaround_after_the_request_arrived() {
+    let turnaround = Duration::from_micros(120);
+    let (host_saw, stamped) = round_trip(turnaround).await;
+    let frame = wire_time(&CanFrame::extended(0x0300_FD01, &[7; 8]).unwrap());
+    assert_eq!(host_saw, frame + turnaround + frame);
+    assert_eq!(stamped, host_saw);
+    assert!(host_saw < Duration::from_micros(500), "{host_saw:?}");
+    // A longer turnaround is a later answer, to the microsecond.
+    let (slower, _) = round_trip(Duration::from_micros(620)).await;
+    assert_eq!(slower - host_saw, Duration::from_micros(500));
+}
+
+#[tokio::test(start_paused = true)]
+async fn tokio_timers_keep_their_milliseconds_while_frames_fly() {
+    let guard = VirtualTimeline::start().unwrap();
+    let bus = bus_on(FineTimer::Virtual(guard.timeline().clone()));
+    let (host, motor) = (bus.attach("host"), bus.attach("motor"));
+    let start = Instant::now();
+    let chatter = tokio::spawn(async move {
+        for n in 0..50u8 {
+            host.send(CanFrame::standard(0x100, &[n]).unwrap())
+                .await
+                .unwrap();
+            tokio::time::sleep(Duration::from_micros(50)).await;
+        }
+        host
+    });
+    let listener = tokio::spawn(async move {
+        let mut arrivals = Vec::new();
+        for _ in 0..50 {
+            arrivals.push(motor.recv().await.unwrap().timestamp);
+        }
+        arrivals
+    });
+    let mut ticks = tokio::time::interval(Duration::from_millis(1));
+    let mut offsets = Vec::new();
+    for _ in 0..20 {
+        ticks.tick().await;
+        offsets.push(Instant::now() - start);
+    }
+    let expected: Vec<Duration> = (0..20).map(Duration::from_millis).collect();
+    assert_eq!(offsets, expected);
+    let _host = chatter.await.unwrap();
+    let arrivals = listener.await.unwrap();
+    // Sub-millisecond arrivals, not all bunched on boundaries.
+    let off_boundary = arrivals
+        .iter()
+        .filter(|t| t.as_nanos() % 1_000_000 != 0)
+        .count();
+    assert!(off_boundary > 40, "{arrivals:?}");
+}
+
+#[tokio::test(start_paused = true)]
+async fn the_same_run_twice_gives_the_same_arrivals() {
+    async fn run() -> Vec<(Duration, u8)> {
+        let guard = VirtualTimeline::start().unwrap();
+        let bus = bus_on(FineTimer::Virtual(guard.timeline().clone()));
+        let nodes: Vec<_> = (0..3).map(|n| bus.attach(&format!("n{n}"))).collect();
+        let tap = bus.attach("tap");
+        for (k, node) in nodes.into_iter().enumerate() {
+            tokio::spawn(async move {
+                for n in 0..10u8 {
+                    let delay = Duration::from_micros(37 * u64::from(n) + 11 * k as u64);
+                    node.send_after(CanFrame::standard(0x200 + k as u16, &[n]).unwrap(), delay)
+                        .await
+                        .unwrap();
+                    tokio::time::sleep(Duration::from_micros(300)).await;
+                }
+                node
+            });
+        }
+        let mut seen = Vec::new();
+        for _ in 0..30 {
+            let frame = tap.recv().await.unwrap();
+            seen.push((frame.timestamp, frame.frame.data()[0]));
+        }
+        seen
+    }
+    let first = run().await;
+    assert_eq!(first, run().await);
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn in_real_time_a_multi_thread_runtime_sleeps_on_a_fine_timer() {
+    assert!(
+        VirtualTimeline::start().is_none(),
+        "no timeline in real time"
+    );
+    let mut sleeper = FineTimer::Auto.sleeper();
+    #[cfg(target_os = "linux")]
+    assert!(sleeper.is_fine());
+    for micros in [0u64, 150, 400] {
+        let deadline = Instant::now() + Duration::from_micros(micros);
+        sleeper.sleep_until(deadline).await;
+        assert!(Instant::now() >= deadline);
+    }
+    // A cancelled sleep leaves nothing that ends the next one early.
+    let early = Instant::now() + Duration::from_micros(100);
+    tokio::select! {
+        () = sleeper.sleep_until(Instant::now() + Duration::from_secs(5)) => unreachable!(),
+        () = tokio::time::sleep_until(early) => {}
+    }
+    let deadline = Instant::now() + Duration::from_millis(3);
+    sleeper.sleep_until(deadline).await;
+    assert!(Instant::now() >= deadline);
+}
