@@ -15,6 +15,9 @@
 //!   microsecond the wire model says, and runs stay deterministic;
 //! - otherwise tokio's timer (a current-thread runtime nobody drives finer, tests that pause
 //!   the clock without a timeline).
+//!
+//! [`PeriodicTimer`] (Linux) is the same timerfd firing on a fixed period, for the real-time
+//! control loops of emulators.
 
 mod timeline;
 #[cfg(target_os = "linux")]
@@ -24,6 +27,8 @@ use tokio::runtime::RuntimeFlavor;
 use tokio::time::Instant;
 
 pub use timeline::{TimelineGuard, VirtualTimeline};
+#[cfg(target_os = "linux")]
+pub use timerfd::PeriodicTimer;
 
 /// Which clock a bus's wire sleeps on; see the module docs.
 #[derive(Debug, Clone, Default)]

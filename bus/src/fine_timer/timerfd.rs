@@ -59,31 +59,38 @@ impl TimerFd {
 
     /// Reads away a pending expiry count so the descriptor reads as not ready.
     fn drain(&self) {
+        let _ = self.read_count();
+    }
+
+    /// The expiries since the last read, or `None` when there was none (the non-blocking
+    /// read fails with EAGAIN).
+    fn read_count(&self) -> Option<u64> {
         let mut count = [0u8; 8];
         // SAFETY: reads at most 8 bytes into a buffer of 8; a non-blocking timerfd with no
         // expiry fails with EAGAIN, which is fine.
         #[allow(unsafe_code)]
-        let _ = unsafe {
+        let read = unsafe {
             libc::read(
                 self.fd.get_ref().as_raw_fd(),
                 count.as_mut_ptr().cast(),
                 count.len(),
             )
         };
+        (read == 8).then(|| u64::from_ne_bytes(count))
     }
 
     /// One expiry `after` from now (at least a nanosecond: zero would disarm it).
     fn arm(&self, after: std::time::Duration) -> io::Result<()> {
-        let nanos = after.as_nanos().max(1);
+        self.set(after, std::time::Duration::ZERO)
+    }
+
+    /// First expiry `after` from now (at least a nanosecond), then one every `period` (zero:
+    /// none). The kernel keeps the period's phase, so wake-ups do not drift with the time
+    /// their owner takes.
+    fn set(&self, after: std::time::Duration, period: std::time::Duration) -> io::Result<()> {
         let spec = libc::itimerspec {
-            it_interval: libc::timespec {
-                tv_sec: 0,
-                tv_nsec: 0,
-            },
-            it_value: libc::timespec {
-                tv_sec: libc::time_t::try_from(nanos / 1_000_000_000).unwrap_or(libc::time_t::MAX),
-                tv_nsec: (nanos % 1_000_000_000) as libc::c_long,
-            },
+            it_interval: timespec(period),
+            it_value: timespec(after.max(std::time::Duration::from_nanos(1))),
         };
         // SAFETY: valid descriptor and itimerspec; the old value pointer may be null.
         #[allow(unsafe_code)]
@@ -99,5 +106,45 @@ impl TimerFd {
             return Err(io::Error::last_os_error());
         }
         Ok(())
+    }
+}
+
+fn timespec(d: std::time::Duration) -> libc::timespec {
+    libc::timespec {
+        tv_sec: libc::time_t::try_from(d.as_secs()).unwrap_or(libc::time_t::MAX),
+        // Below 10^9: fits every c_long.
+        tv_nsec: d.subsec_nanos() as libc::c_long,
+    }
+}
+
+/// A timer that fires every period, for a task that must wake on a fixed cadence (an
+/// emulator's control loop): the task runs on the runtime worker whose I/O driver saw the
+/// expiry, with no thread between the kernel's timer and the work.
+#[derive(Debug)]
+pub struct PeriodicTimer {
+    timer: TimerFd,
+}
+
+impl PeriodicTimer {
+    /// A timer whose first expiry is now and then one every `period`. Needs a tokio runtime
+    /// with I/O enabled.
+    pub fn new(period: std::time::Duration) -> io::Result<Self> {
+        let timer = TimerFd::new()?;
+        timer.set(std::time::Duration::ZERO, period)?;
+        Ok(Self { timer })
+    }
+
+    /// Waits for the next expiry and returns how many periods ended since the last call (more
+    /// than one when the owner was late: the missed ones are reported, not replayed).
+    /// Cancel-safe: an expiry that happened while nobody waited is returned by the next call.
+    pub async fn tick(&mut self) -> io::Result<u64> {
+        loop {
+            let mut ready = self.timer.fd.readable().await?;
+            match self.timer.read_count() {
+                Some(count) => return Ok(count),
+                // Readiness without an expiry (already read): wait for the next one.
+                None => ready.clear_ready(),
+            }
+        }
     }
 }
