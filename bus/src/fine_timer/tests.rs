@@ -173,3 +173,23 @@ async fn in_real_time_a_multi_thread_runtime_sleeps_on_a_fine_timer() {
     sleeper.sleep_until(deadline).await;
     assert!(Instant::now() >= deadline);
 }
+
+#[cfg(target_os = "linux")]
+#[tokio::test(flavor = "multi_thread", worker_threads = 1)]
+async fn a_periodic_timer_counts_what_its_owner_missed() {
+    use super::PeriodicTimer;
+    let period = Duration::from_millis(2);
+    let t0 = std::time::Instant::now();
+    let mut timer = PeriodicTimer::new(period).expect("a timerfd");
+    // The first expiry at once (more than one if this machine is slow to get here).
+    assert!(timer.tick().await.expect("tick") >= 1);
+    // An owner busy for three and a half periods: three expiries wait, reported at once.
+    std::thread::sleep(Duration::from_micros(7_000));
+    assert!(timer.is_overdue());
+    let missed = timer.tick().await.expect("tick");
+    assert!(missed >= 3, "{missed} expiries");
+    // The next one is not early: the 2 ms grid's next point, 8 ms after creation.
+    assert!(timer.tick().await.expect("tick") >= 1);
+    let since = t0.elapsed();
+    assert!(since >= Duration::from_millis(8), "{since:?}");
+}

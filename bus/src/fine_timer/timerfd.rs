@@ -123,6 +123,11 @@ fn timespec(d: std::time::Duration) -> libc::timespec {
 #[derive(Debug)]
 pub struct PeriodicTimer {
     timer: TimerFd,
+    /// When the first expiry was due.
+    first: std::time::Instant,
+    period: std::time::Duration,
+    /// Expiries returned so far.
+    seen: u64,
 }
 
 impl PeriodicTimer {
@@ -130,8 +135,24 @@ impl PeriodicTimer {
     /// with I/O enabled.
     pub fn new(period: std::time::Duration) -> io::Result<Self> {
         let timer = TimerFd::new()?;
+        let first = std::time::Instant::now();
         timer.set(std::time::Duration::ZERO, period)?;
-        Ok(Self { timer })
+        Ok(Self {
+            timer,
+            first,
+            period,
+            seen: 0,
+        })
+    }
+
+    /// Whether the next expiry is already due, so that [`PeriodicTimer::tick`] will return
+    /// without waiting: its owner is late. Reads the clock, not the descriptor.
+    pub fn is_overdue(&self) -> bool {
+        let next = u32::try_from(self.seen)
+            .ok()
+            .and_then(|n| self.period.checked_mul(n))
+            .and_then(|since| self.first.checked_add(since));
+        next.is_none_or(|next| std::time::Instant::now() >= next)
     }
 
     /// Waits for the next expiry and returns how many periods ended since the last call (more
@@ -140,10 +161,14 @@ impl PeriodicTimer {
     pub async fn tick(&mut self) -> io::Result<u64> {
         loop {
             let mut ready = self.timer.fd.readable().await?;
-            match self.timer.read_count() {
-                Some(count) => return Ok(count),
-                // Readiness without an expiry (already read): wait for the next one.
-                None => ready.clear_ready(),
+            let count = self.timer.read_count();
+            // Cleared either way, so the next call waits in the driver rather than paying a
+            // read that finds nothing. Safe: tokio clears only the readiness this guard saw;
+            // an expiry after the read arrives as a new event.
+            ready.clear_ready();
+            if let Some(count) = count {
+                self.seen = self.seen.saturating_add(count);
+                return Ok(count);
             }
         }
     }
