@@ -6,15 +6,13 @@
 //! (`cargo bench --bench realtime_jitter`). In real time a [`Pacer`] instead follows the
 //! kernel's high-resolution clock:
 //!
-//! - **kernel timer** (default for a 1 ms clock on a multi-thread runtime, Linux): a periodic
-//!   timerfd that
+//! - **kernel timer** (default on a multi-thread runtime, Linux): a periodic timerfd that
 //!   tokio's I/O driver watches ([`bus::fine_timer::PeriodicTimer`]). The worker that sees the
 //!   expiry runs the step itself: no thread hop between the timer and the work, and one
 //!   thread fewer to wake a thousand times a second at rest. The runtime's workers ask the
 //!   fair scheduler for a short slice ([`prefer_punctual_thread`]), so a worker woken on
 //!   time preempts a busy thread instead of waiting out its slice.
-//! - **deadline thread** (default for a clock of several milliseconds per wake-up,
-//!   `ARMHIL_PACER=thread`, or where no timerfd exists): one small
+//! - **deadline thread** (`ARMHIL_PACER=thread`, or where no timerfd exists): one small
 //!   thread that sleeps until each absolute deadline (`clock_nanosleep(CLOCK_MONOTONIC,
 //!   TIMER_ABSTIME)`, 1 ns timer slack) and wakes the clock task through a [`Notify`]; the
 //!   step runs on whichever worker picks the task up.
@@ -25,6 +23,10 @@
 //! (FIFO) priority instead of the short slice (see [`prefer_punctual_thread`] for why not by
 //! default). Missed deadlines are skipped, not bunched: the clock task works out how many
 //! steps are due from elapsed time, so a wake-up is a prompt, not a count.
+//!
+//! A clock task takes its time origin *before* it makes its pacer: wake-ups then fall just
+//! after each step's instant, so the count of steps due does not flip with timer jitter (with
+//! the pacer made first, a step often ran a millisecond late).
 //!
 //! What that buys depends on the host's scheduler more than on this code; the figures
 //! measured by `cargo bench --bench realtime_jitter` are in `docs/timing.md`.
@@ -80,17 +82,15 @@ impl Pacer {
     /// current runtime's flavour (see the module docs). `name` names the deadline thread when
     /// there is one, for `top -H` and debuggers. Must be called inside a tokio runtime.
     ///
-    /// On a multi-thread runtime the kernel timer for a 1 ms `period` and the deadline thread
-    /// for a longer one (measured: see `docs/timing.md`), unless
-    /// `ARMHIL_PACER` ([`PACER_ENV`]) asks for `kernel`, `thread` (a deadline thread) or
-    /// `tokio` (tokio's timer).
+    /// On a multi-thread runtime a kernel timer (Linux), unless `ARMHIL_PACER` ([`PACER_ENV`])
+    /// asks for `thread` (a deadline thread) or `tokio` (tokio's timer).
     pub fn new(period: Duration, name: &str) -> Self {
         let multi_thread = tokio::runtime::Handle::try_current()
             .is_ok_and(|h| h.runtime_flavor() == RuntimeFlavor::MultiThread);
         if !multi_thread {
             return Self::tokio_timer(period);
         }
-        match asked_pacer().unwrap_or_else(|| default_pacer(period)) {
+        match asked_pacer().unwrap_or(PacerKind::KernelTimer) {
             PacerKind::TokioTimer => Self::tokio_timer(period),
             PacerKind::DeadlineThread => Self::on_deadline_thread(period, name),
             PacerKind::KernelTimer => {
@@ -233,24 +233,8 @@ fn realtime_priority_asked() -> bool {
 }
 
 /// The environment variable that chooses another pacer for real-time emulators: `tokio`
-/// (tokio's 1 ms timer), `thread` (a deadline thread) or `kernel` (a kernel timer); unset,
-/// the default for the clock's period.
+/// (tokio's 1 ms timer) or `thread` (a deadline thread); unset or `kernel`, a kernel timer.
 pub const PACER_ENV: &str = "ARMHIL_PACER";
-
-/// The real-time pacer for a clock of `period` when the environment asks for none: the
-/// kernel timer for a 1 ms clock, the deadline thread for a clock that runs several steps per
-/// wake-up (the Piper's default of five). Measured with `cargo bench --bench realtime_jitter`
-/// with every core busy (`docs/timing.md`): at 1 ms the kernel timer's p99 period error was
-/// +1.06 ms against the thread's +3.1 ms, and it costs less at rest; at 5 ms the kernel
-/// timer's worker woke late often enough to lose one feedback period in ten (181 Hz of 200),
-/// where the thread kept 198–200 Hz.
-fn default_pacer(period: Duration) -> PacerKind {
-    if period <= Duration::from_millis(1) {
-        PacerKind::KernelTimer
-    } else {
-        PacerKind::DeadlineThread
-    }
-}
 
 /// The pacer `ARMHIL_PACER` asks for, if it names one.
 fn asked_pacer() -> Option<PacerKind> {
@@ -589,19 +573,10 @@ mod tests {
                     t0.elapsed()
                 );
             }
-            // A clock of several milliseconds per wake-up keeps the deadline thread.
-            kinds.push(Pacer::new(Duration::from_millis(5), "test-pacer").kind());
             #[cfg(target_os = "linux")]
-            assert_eq!(
-                kinds,
-                [
-                    PacerKind::DeadlineThread,
-                    PacerKind::KernelTimer,
-                    PacerKind::DeadlineThread
-                ]
-            );
+            assert_eq!(kinds, [PacerKind::DeadlineThread, PacerKind::KernelTimer]);
             #[cfg(not(target_os = "linux"))]
-            assert_eq!(kinds, [PacerKind::DeadlineThread; 3]);
+            assert_eq!(kinds, [PacerKind::DeadlineThread; 2]);
         });
     }
 }

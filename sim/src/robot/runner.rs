@@ -413,8 +413,11 @@ impl Runner {
             .map(|port| (Arc::clone(&port.bus), port.name.clone()))
             .collect();
         let (mut frames, receivers) = receive_frames(buses, "robot");
-        let mut tick = Pacer::new(STEP, "robot-clock");
+        // The clock's origin first: the pacer's wake-ups then come just after each step's
+        // instant, never just before, so the count of steps due does not flip between two
+        // wake-ups by timer jitter.
         let mut clock = StepClock::start();
+        let mut tick = Pacer::new(STEP, "robot-clock");
         let outcome = loop {
             tokio::select! {
                 biased;

@@ -303,8 +303,11 @@ impl Runner {
         // 1 ms control steps; the pacer (absolute deadlines in real time) only prompts them.
         // Every step the clock owes runs, so a late wake-up catches up as the firmware's own
         // clock would, up to MAX_CATCH_UP_STEPS (a stalled machine drops the rest).
-        let mut tick = Pacer::new(STEP, "robstride-clock");
+        // The clock's origin first: the pacer's wake-ups then come just after each step's
+        // instant, never just before, so the count of steps due does not flip between two
+        // wake-ups by timer jitter.
         let mut clock = StepClock::start();
+        let mut tick = Pacer::new(STEP, "robstride-clock");
         let outcome = loop {
             tokio::select! {
                 biased;

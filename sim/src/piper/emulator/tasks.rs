@@ -71,11 +71,14 @@ pub(super) async fn run_core(
     // The pacer only prompts the wake-ups (on absolute deadlines in real time); how many steps
     // run comes from the clock (`plan_wake_within`), so a skipped wake-up loses no emulated
     // time.
+    // The clock's origin first: the pacer's wake-ups then come just after each step's
+    // instant, never just before, so the count of steps due does not flip between two
+    // wake-ups by timer jitter (which lost one 200 Hz period in ten).
+    let boot = Instant::now();
     let mut clock = Pacer::new(
         Duration::from_secs_f64(STEP_S * per_wake as f64),
         "piper-clock",
     );
-    let boot = Instant::now();
     let mut done: u64 = 0;
     let mut produced = Vec::with_capacity(32);
     let mut budget = CpuBudget::default();
