@@ -297,11 +297,13 @@ fn stands_while_held_and_falls_when_let_go(name: &str) {
     let (stand_lo, stand_hi) = run.during(run.stand);
     let (rest_lo, rest_hi) = run.at_rest();
     let line = format!(
-        "corpus_robots: {name}: {:.1} kg, {}; hung {HANG_MS} ms, start height {h:.4} m; held \
-         at kp {}/N·m, kd {}/N·m: base {stand_lo:.3}..{stand_hi:.3} m for {STAND_MS} ms; \
-         disabled: rests at {rest_lo:.3}..{rest_hi:.3} m; {:.1} s emulated in {:.2} s",
+        "corpus_robots: {name}: {:.1} kg, {}; hung {HANG_MS} ms, start height {h:.4} m; every \
+         actuator enabled in {:.1} ms; held at kp {}/N·m, kd {}/N·m: base \
+         {stand_lo:.3}..{stand_hi:.3} m for {STAND_MS} ms; disabled: rests at \
+         {rest_lo:.3}..{rest_hi:.3} m; {:.1} s emulated in {:.2} s",
         run.robot.mass_kg,
         run.layout(),
+        run.result.steps[run.enable].took.as_secs_f64() * 1e3,
         run.legged.kp_per_nm,
         run.legged.kd_per_nm,
         run.result.duration.as_secs_f64(),
