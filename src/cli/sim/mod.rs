@@ -72,8 +72,8 @@ served_kinds! {
 }
 
 /// The runtime every emulator of `armhil sim` runs on: two workers, made punctual (the clock's
-/// deadline thread wakes on time, and the step it prompts runs on a worker, which a busy core
-/// would otherwise keep waiting; `cargo bench --bench realtime_jitter` measures both).
+/// kernel timer wakes a worker on time, and a busy core would otherwise keep that worker
+/// waiting; `cargo bench --bench realtime_jitter` measures it).
 fn real_time_runtime() -> anyhow::Result<tokio::runtime::Runtime> {
     use anyhow::Context as _;
     tokio::runtime::Builder::new_multi_thread()
