@@ -6,10 +6,9 @@
 //! keeps up), late wake-ups, overruns, the clock task's wake-up period p50/p99/max (nominal
 //! 1 ms or 5 ms: the pacer's own precision), and the send period p50/p99/max of 0x2A1 (200 Hz
 //! arm status) and 0x2A5 (200 Hz joint feedback) — nominal 5 ms. "error" is p99 − nominal.
-//! By default the emulator is paced by a kernel timer (`sim::pacer`);
-//! `ARMHIL_REALTIME_PRIORITY=1` measures with the runtime's workers at real-time priority,
-//! `ARMHIL_PACER=thread` with a deadline thread and `ARMHIL_PACER=tokio` with tokio's 1 ms
-//! timer instead.
+//! By default the emulator is paced as `sim::pacer` chooses (a kernel timer at 1 step per
+//! wake-up, a deadline thread at 5); `ARMHIL_REALTIME_PRIORITY=1` measures with the runtime's
+//! workers at real-time priority, `ARMHIL_PACER=kernel|thread|tokio` with one pacer for both.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;

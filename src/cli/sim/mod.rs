@@ -72,7 +72,7 @@ served_kinds! {
 }
 
 /// The runtime every emulator of `armhil sim` runs on: two workers, made punctual (the clock's
-/// kernel timer wakes a worker on time, and a busy core would otherwise keep that worker
+/// timer wakes on time, and a busy core would otherwise keep the worker that runs the step
 /// waiting; `cargo bench --bench realtime_jitter` measures it).
 fn real_time_runtime() -> anyhow::Result<tokio::runtime::Runtime> {
     use anyhow::Context as _;
