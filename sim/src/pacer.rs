@@ -244,8 +244,9 @@ pub const PACER_ENV: &str = "ARMHIL_PACER";
 /// kernel timer for a 1 ms clock; the deadline thread for a clock that runs several steps per
 /// wake-up (the Piper's default of five). Both keep time on this project's 2-core machine
 /// (`docs/timing.md`), but in the emulated (TCG) test VM, where the Piper cannot keep up with
-/// real time, its clients waited longer with the kernel timer: the vendor SDK saw its arm
-/// disabled after more than 20 s instead of 12 s.
+/// real time, the vendor SDK saw its arm disabled after over 20 s in the one run with the
+/// kernel timer, 12 and 18 s in two with the thread: too few runs to tell, so the thread
+/// stays until that VM is measured more.
 fn default_pacer(period: Duration) -> PacerKind {
     if period <= Duration::from_millis(1) {
         PacerKind::KernelTimer
