@@ -12,6 +12,8 @@ use tokio::sync::mpsc;
 use tokio::task::JoinHandle;
 use tokio::time::{sleep, Instant};
 
+use crate::pacer::Pacer;
+
 /// The actuators' control step.
 pub const STEP: Duration = Duration::from_millis(1);
 /// Most steps one late wake-up catches up (100 ms of emulated time); a longer stall of the
@@ -23,11 +25,15 @@ pub const RX_QUEUE_FRAMES: usize = 4096;
 
 /// Counts the steps due since start: steps at 0, 1, 2 … ms, so by elapsed time t,
 /// floor(t / 1 ms) + 1 are due. A wake-up is only a prompt: how many steps run comes from the
-/// clock, so a late wake-up catches up as the firmware's own clock would.
+/// clock, so a late wake-up catches up as the firmware's own clock would. The clock owns the
+/// [`Pacer`] that prompts it, made after its origin: the wake-ups then come just after each
+/// step's instant, never just before, so the count of steps due does not flip between two
+/// wake-ups by timer jitter.
 #[derive(Debug)]
 pub struct StepClock {
     started: Instant,
     done: u64,
+    pacer: Pacer,
 }
 
 /// What a wake-up runs.
@@ -40,12 +46,21 @@ pub struct StepsDue {
 }
 
 impl StepClock {
-    /// A clock whose first step is due now.
-    pub fn start() -> Self {
+    /// A clock whose first step is due now; `name` names its pacer's thread, if it has one.
+    pub fn start(name: &str) -> Self {
+        let started = Instant::now();
         Self {
-            started: Instant::now(),
+            started,
             done: 0,
+            pacer: Pacer::new(STEP, name),
         }
+    }
+
+    /// Waits for the next wake-up and returns the steps then owed (see [`StepClock::due`]).
+    /// Cancel-safe: the wait is, and the count is taken only once it has ended.
+    pub async fn next(&mut self) -> StepsDue {
+        self.pacer.tick().await;
+        self.due()
     }
 
     /// The steps owed since the last call, counted as done.
@@ -196,7 +211,7 @@ mod tests {
 
     #[tokio::test(start_paused = true)]
     async fn a_late_wake_up_runs_every_step_owed_up_to_the_catch_up_limit() {
-        let mut clock = StepClock::start();
+        let mut clock = StepClock::start("test-clock");
         assert_eq!(
             clock.due(),
             StepsDue { run: 1, dropped: 0 },
@@ -230,6 +245,16 @@ mod tests {
         sent: std::sync::Mutex<Vec<u8>>,
     }
 
+    impl Mailbox {
+        /// A bus whose transmit queue takes `room` frames until its `sent` list is cleared.
+        fn with_room(room: usize) -> Self {
+            Self {
+                room,
+                sent: std::sync::Mutex::new(Vec::new()),
+            }
+        }
+    }
+
     #[async_trait::async_trait]
     impl CanBus for Mailbox {
         async fn send(&self, frame: CanFrame) -> Result<(), BusError> {
@@ -256,13 +281,10 @@ mod tests {
     }
 
     /// A full bus never holds the emulator up: what it refuses waits, in order, for the next
-    /// chance, and only the backlog's overflow is lost (the oldest first).
+    /// chance, and only the backlog's overflow is lost (the highest identifier, newest first).
     #[tokio::test]
     async fn a_full_bus_defers_frames_in_order_and_never_waits() {
-        let bus = Mailbox {
-            room: 2,
-            sent: std::sync::Mutex::new(Vec::new()),
-        };
+        let bus = Mailbox::with_room(2);
         let mut backlog = TxBacklog::default();
         let started = std::time::Instant::now();
         backlog
@@ -279,10 +301,7 @@ mod tests {
         assert!(started.elapsed() < Duration::from_millis(50), "it waited");
         // A bus that takes nothing: past CAPACITY the frame that would wait longest (the
         // newest of the highest identifier) is the one lost.
-        let stuck = Mailbox {
-            room: 0,
-            sent: std::sync::Mutex::new(Vec::new()),
-        };
+        let stuck = Mailbox::with_room(0);
         let mut backlog = TxBacklog::default();
         let flood = (0..TxBacklog::CAPACITY + 10).map(|n| frame((n % 256) as u8));
         backlog.send(&stuck, flood, "test", "stuck").await;
@@ -307,10 +326,7 @@ mod tests {
     /// order the firmware produced them in; one identifier keeps its own order.
     #[tokio::test]
     async fn waiting_frames_leave_lowest_identifier_first() {
-        let bus = Mailbox {
-            room: 0,
-            sent: std::sync::Mutex::new(Vec::new()),
-        };
+        let bus = Mailbox::with_room(0);
         let mut backlog = TxBacklog::default();
         let produced = [(0x300, 1), (0x100, 2), (0x200, 3), (0x100, 4)];
         backlog

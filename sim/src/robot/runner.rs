@@ -12,8 +12,7 @@ use tokio::task::JoinHandle;
 use super::base_pose::BasePose;
 use super::config::{Gantry, RobotConfig, RobotConfigError};
 use super::world::{RobotWorld, RobotWorldError};
-use crate::can_runner::{receive_frames, StepClock, TxBacklog, STEP};
-use crate::pacer::Pacer;
+use crate::can_runner::{receive_frames, StepClock, TxBacklog};
 use crate::physics::PhysicsError;
 use crate::robot::faults::RobotLayout;
 use crate::robstride::faults::{check_external_torque_nm, check_temperature_c, ValueError};
@@ -413,11 +412,7 @@ impl Runner {
             .map(|port| (Arc::clone(&port.bus), port.name.clone()))
             .collect();
         let (mut frames, receivers) = receive_frames(buses, "robot");
-        // The clock's origin first: the pacer's wake-ups then come just after each step's
-        // instant, never just before, so the count of steps due does not flip between two
-        // wake-ups by timer jitter.
-        let mut clock = StepClock::start();
-        let mut tick = Pacer::new(STEP, "robot-clock");
+        let mut clock = StepClock::start("robot-clock");
         let outcome = loop {
             tokio::select! {
                 biased;
@@ -431,8 +426,7 @@ impl Runner {
                 },
                 // Time before frames: a host flooding the buses must not stop the clock
                 // (frames arriving faster than they are handled would starve the tick).
-                _ = tick.tick() => {
-                    let steps = clock.due();
+                steps = clock.next() => {
                     if steps.dropped > 0 {
                         tracing::debug!(dropped = steps.dropped, "robot emulator: steps dropped behind the wall clock");
                     }

@@ -8,8 +8,7 @@ use bus::{CanBus, CanFrame};
 use tokio::sync::{mpsc, oneshot};
 use tokio::task::JoinHandle;
 
-use crate::can_runner::{receive_frames, StepClock, TxBacklog, STEP};
-use crate::pacer::Pacer;
+use crate::can_runner::{receive_frames, StepClock, TxBacklog};
 use crate::robstride::faults::{
     check_bus_voltage_v, check_external_torque_nm, check_temperature_c, Fault, ValueError,
 };
@@ -303,11 +302,7 @@ impl Runner {
         // 1 ms control steps; the pacer (absolute deadlines in real time) only prompts them.
         // Every step the clock owes runs, so a late wake-up catches up as the firmware's own
         // clock would, up to MAX_CATCH_UP_STEPS (a stalled machine drops the rest).
-        // The clock's origin first: the pacer's wake-ups then come just after each step's
-        // instant, never just before, so the count of steps due does not flip between two
-        // wake-ups by timer jitter.
-        let mut clock = StepClock::start();
-        let mut tick = Pacer::new(STEP, "robstride-clock");
+        let mut clock = StepClock::start("robstride-clock");
         let outcome = loop {
             tokio::select! {
                 biased;
@@ -329,8 +324,7 @@ impl Runner {
                     }
                     None => break Ok(()),
                 },
-                _ = tick.tick() => {
-                    let steps = clock.due();
+                steps = clock.next() => {
                     if steps.dropped > 0 {
                         tracing::debug!(dropped = steps.dropped, "robstride emulator: steps dropped behind the wall clock");
                     }
@@ -419,9 +413,7 @@ impl Runner {
         self.persist_if_requested()?;
         // Answered with the state of the latest control step, after the firmware's
         // turnaround — not at the next step.
-        self.backlog
-            .send_after(self.bus.as_ref(), replies, TURNAROUND, "robstride", "bus")
-            .await;
+        self.send_after(replies, TURNAROUND).await;
         Ok(())
     }
 
@@ -450,8 +442,17 @@ impl Runner {
     }
 
     async fn send_all(&mut self, frames: impl IntoIterator<Item = CanFrame>) {
+        self.send_after(frames, std::time::Duration::ZERO).await;
+    }
+
+    /// Hands `frames` to the bus to leave `delay` from now (a firmware's turnaround).
+    async fn send_after(
+        &mut self,
+        frames: impl IntoIterator<Item = CanFrame>,
+        delay: std::time::Duration,
+    ) {
         self.backlog
-            .send(self.bus.as_ref(), frames, "robstride", "bus")
+            .send_after(self.bus.as_ref(), frames, delay, "robstride", "bus")
             .await;
     }
 }
