@@ -167,8 +167,10 @@ fn interface_name(bytes: &[u8], mut offset: usize, end: usize) -> Result<String,
         if code == 0 {
             break;
         }
+        // An option ends inside its block: past `end` lie the next block's bytes.
         let value = bytes
             .get(offset + 4..offset + 4 + len)
+            .filter(|_| offset + 4 + len <= end)
             .ok_or(PcapError::Truncated { offset: offset + 4 })?;
         if code == IF_NAME {
             return Ok(String::from_utf8_lossy(value).into_owned());
@@ -209,8 +211,12 @@ pub fn parse_capture(bytes: &[u8]) -> Result<Capture, PcapError> {
                     | u64::from(u32_at(bytes, offset + 16)?);
                 let captured = u32_at(bytes, offset + 20)? as usize;
                 let start = offset + 28;
+                // The packet lies inside its block, before the block's trailing length: a
+                // captured length past that would read the next block's bytes as data.
+                let block_end = offset + len - 4;
                 let packet = bytes
-                    .get(start..start + captured)
+                    .get(start..start.saturating_add(captured))
+                    .filter(|_| start.saturating_add(captured) <= block_end)
                     .ok_or(PcapError::Truncated { offset: start })?;
                 let frame = decode_packet(packet).ok_or(PcapError::BadPacket { offset: start })?;
                 capture.frames.push((
@@ -277,5 +283,45 @@ mod tests {
             error.to_string().contains("interface 1 of a capture of 1"),
             "{error}"
         );
+    }
+
+    /// A packet whose captured length runs past its own block is refused: read as it claims,
+    /// it would take the next block's header for frame data.
+    #[test]
+    fn a_packet_claiming_more_than_its_block_holds_is_refused() {
+        let names = ["can0"];
+        let mut writer = PcapngWriter::new(Vec::new(), &names).unwrap();
+        writer.write(0, &received(0x123, 1)).unwrap();
+        writer.write(0, &received(0x124, 2)).unwrap();
+        let mut bytes = writer.finish().unwrap();
+        let first = header_len(&names);
+        let claimed = (PACKET_LEN + 16) as u32;
+        bytes[first + 20..first + 24].copy_from_slice(&claimed.to_le_bytes());
+        assert!(
+            matches!(
+                parse_capture(&bytes),
+                Err(PcapError::Truncated { offset }) if offset == first + 28
+            ),
+            "{:?}",
+            parse_capture(&bytes)
+        );
+    }
+
+    /// An interface's name option that claims to run past its block is refused likewise.
+    #[test]
+    fn an_interface_name_longer_than_its_block_is_refused() {
+        let names = ["can0"];
+        let mut writer = PcapngWriter::new(Vec::new(), &names).unwrap();
+        writer.write(0, &received(0x123, 1)).unwrap();
+        let mut bytes = writer.finish().unwrap();
+        // The name option follows the section header and the description's 16 fixed bytes;
+        // 12 bytes of name would take in the end-of-options and the block's trailing length.
+        let option = section_header().len() + 16;
+        assert_eq!(u16_at(&bytes, option).unwrap(), IF_NAME);
+        bytes[option + 2..option + 4].copy_from_slice(&12u16.to_le_bytes());
+        assert!(matches!(
+            parse_capture(&bytes),
+            Err(PcapError::Truncated { .. })
+        ));
     }
 }

@@ -49,11 +49,19 @@ pub struct Args {
 /// sixty-four times a recording at `armhil run`'s default limit.
 const MAX_CAPTURE_BYTES: u64 = 4 * 1024 * 1024 * 1024;
 
-/// One frame of the capture: when, on which bus (pcapng names its interfaces), and the frame.
+/// One frame of the capture: when, on which bus (pcapng and candump name their interfaces;
+/// a pcap does not), and the frame.
 struct Captured {
     at: Duration,
     bus: Option<String>,
     frame: CanFrame,
+}
+
+/// The frames of a capture, and whether its lines name their bus (a pcapng, or a candump log
+/// of several interfaces; a log of one reads as it always has).
+struct Capture {
+    frames: Vec<Captured>,
+    names_buses: bool,
 }
 
 /// The capture's bytes: a regular file (not a FIFO or `/dev/zero`) of at most
@@ -74,7 +82,7 @@ fn read_capture_bytes(path: &Path) -> anyhow::Result<Vec<u8>> {
     })
 }
 
-fn read_frames(path: &Path) -> anyhow::Result<Vec<Captured>> {
+fn read_frames(path: &Path) -> anyhow::Result<Capture> {
     let extension = path
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase());
@@ -82,34 +90,40 @@ fn read_frames(path: &Path) -> anyhow::Result<Vec<Captured>> {
         Some("pcap") => {
             let frames = bus::pcap::parse_capture(&read_capture_bytes(path)?)
                 .with_context(|| format!("{} is not a readable pcap", path.display()))?;
-            Ok(frames
-                .into_iter()
-                .map(|r| Captured {
-                    at: r.timestamp,
-                    bus: None,
-                    frame: r.frame,
-                })
-                .collect())
+            Ok(Capture {
+                frames: frames
+                    .into_iter()
+                    .map(|r| Captured {
+                        at: r.timestamp,
+                        bus: None,
+                        frame: r.frame,
+                    })
+                    .collect(),
+                names_buses: false,
+            })
         }
         Some("pcapng") => {
             let capture = bus::pcapng::parse_capture(&read_capture_bytes(path)?)
                 .with_context(|| format!("{} is not a readable pcapng", path.display()))?;
             let names = capture.interfaces;
-            Ok(capture
-                .frames
-                .into_iter()
-                .map(|(interface, r)| Captured {
-                    at: r.timestamp,
-                    bus: Some(
-                        names
-                            .get(interface as usize)
-                            .filter(|n| !n.is_empty())
-                            .cloned()
-                            .unwrap_or_else(|| format!("if{interface}")),
-                    ),
-                    frame: r.frame,
-                })
-                .collect())
+            Ok(Capture {
+                frames: capture
+                    .frames
+                    .into_iter()
+                    .map(|(interface, r)| Captured {
+                        at: r.timestamp,
+                        bus: Some(
+                            names
+                                .get(interface as usize)
+                                .filter(|n| !n.is_empty())
+                                .cloned()
+                                .unwrap_or_else(|| format!("if{interface}")),
+                        ),
+                        frame: r.frame,
+                    })
+                    .collect(),
+                names_buses: true,
+            })
         }
         _ => {
             let bytes = read_capture_bytes(path)?;
@@ -121,14 +135,17 @@ fn read_frames(path: &Path) -> anyhow::Result<Vec<Captured>> {
             // A log of several interfaces (a bench of several buses) names each line's bus,
             // as a pcapng does; a log of one reads as it always has.
             let several = entries.iter().any(|e| e.iface != entries[0].iface);
-            Ok(entries
-                .into_iter()
-                .map(|e| Captured {
-                    at: e.timestamp,
-                    bus: several.then_some(e.iface),
-                    frame: e.frame,
-                })
-                .collect())
+            Ok(Capture {
+                frames: entries
+                    .into_iter()
+                    .map(|e| Captured {
+                        at: e.timestamp,
+                        bus: Some(e.iface),
+                        frame: e.frame,
+                    })
+                    .collect(),
+                names_buses: several,
+            })
         }
     }
 }
@@ -166,8 +183,13 @@ impl Decoder {
         })
     }
 
-    /// The frame's name and fields, or why it does not decode.
-    fn decode(&self, frame: &CanFrame) -> (Option<DecodedFrame>, Option<String>) {
+    /// The frame's name and fields, or why it does not decode; `bus` is the bus the capture
+    /// says it was on.
+    fn decode(
+        &self,
+        bus: Option<&str>,
+        frame: &CanFrame,
+    ) -> (Option<DecodedFrame>, Option<String>) {
         match self {
             Self::Protocol {
                 device: Device::Piper,
@@ -190,7 +212,7 @@ impl Decoder {
                 host_id,
                 model,
             } => (decode_robstride_mit(frame, *host_id, *model), None),
-            Self::Bench(bench) => (bench.decode(frame), None),
+            Self::Bench(bench) => (bench.decode(bus, frame), None),
         }
     }
 }
@@ -210,7 +232,7 @@ fn line(
     };
     let mut out = format!("{t_s:.6}  ");
     if let Some(bus) = bus {
-        out.push_str(bus);
+        out.push_str(&printable(bus));
         out.push_str("  ");
     }
     out.push_str(&id);
@@ -243,18 +265,37 @@ fn line(
     out
 }
 
+/// `name` with its control characters escaped (`\u{1b}`): an interface name comes from the
+/// capture, and a terminal must not act on what a file says.
+fn printable(name: &str) -> std::borrow::Cow<'_, str> {
+    if !name.chars().any(char::is_control) {
+        return name.into();
+    }
+    name.chars()
+        .map(|c| {
+            if c.is_control() {
+                c.escape_unicode().to_string()
+            } else {
+                c.to_string()
+            }
+        })
+        .collect::<String>()
+        .into()
+}
+
 /// Runs `armhil decode`.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let decoder = Decoder::of(&args)?;
-    let frames = read_frames(&args.file)?;
-    let start = frames.first().map_or(Duration::ZERO, |c| c.at);
+    let capture = read_frames(&args.file)?;
+    let start = capture.frames.first().map_or(Duration::ZERO, |c| c.at);
     let mut out = std::io::BufWriter::new(std::io::stdout().lock());
-    for captured in frames {
+    for captured in capture.frames {
         let t_s = captured.at.saturating_sub(start).as_secs_f64();
-        let (decoded, error) = decoder.decode(&captured.frame);
+        let bus = captured.bus.as_deref();
+        let (decoded, error) = decoder.decode(bus, &captured.frame);
         let text = line(
             t_s,
-            captured.bus.as_deref(),
+            bus.filter(|_| capture.names_buses),
             &captured.frame,
             decoded,
             error,

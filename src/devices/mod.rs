@@ -104,9 +104,10 @@ macro_rules! device_kinds {
                 match self { $( Self::$variant(s) => <$module::Kind as KindSpec>::drawing(s), )* }
             }
 
-            /// A decoder of this device's CAN frames for reports, if it speaks CAN.
-            pub fn frame_decoder(&self) -> Option<Arc<dyn FrameDecoder>> {
-                match self { $( Self::$variant(s) => <$module::Kind as KindSpec>::frame_decoder(s), )* }
+            /// A decoder of this device's CAN frames for reports, if it speaks CAN; `buses`
+            /// names its buses on the bench, in the order [`Self::buses`] lists them.
+            pub fn frame_decoder(&self, buses: &[String]) -> Option<Arc<dyn FrameDecoder>> {
+                match self { $( Self::$variant(s) => <$module::Kind as KindSpec>::frame_decoder(s, buses), )* }
             }
 
             /// Start the device (emulator when in-process, and driver).

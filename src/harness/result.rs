@@ -174,14 +174,34 @@ pub struct BenchInfo {
     pub drawing: Option<crate::devices::Drawing>,
     /// Each CAN device's frame decoder, in bench order: a frame is named by the first that
     /// knows it.
-    pub frame_decoders: Vec<std::sync::Arc<dyn crate::devices::FrameDecoder>>,
+    pub frame_decoders: Vec<DeviceFrames>,
+}
+
+/// One CAN device's frame decoder and the names of the bench's buses it sits on.
+#[derive(Clone)]
+pub struct DeviceFrames {
+    /// The device's buses.
+    pub buses: Vec<String>,
+    /// Its decoder.
+    pub decoder: std::sync::Arc<dyn crate::devices::FrameDecoder>,
 }
 
 impl BenchInfo {
     /// The frame's name and fields by the first device that knows it (`None`: no device on
-    /// the bench does).
-    pub fn decode(&self, frame: &bus::CanFrame) -> Option<crate::interop::DecodedFrame> {
-        self.frame_decoders.iter().find_map(|d| d.decode(frame))
+    /// the bench does). `bus` is the bus the capture says the frame was on: when the bench
+    /// has a bus of that name only its devices are asked, by that bus; a name the bench does
+    /// not have (a capture of the robot's own interfaces, named otherwise) is no evidence.
+    pub fn decode(
+        &self,
+        bus: Option<&str>,
+        frame: &bus::CanFrame,
+    ) -> Option<crate::interop::DecodedFrame> {
+        let on = |d: &DeviceFrames, bus: &str| d.buses.iter().any(|b| b == bus);
+        let bus = bus.filter(|bus| self.frame_decoders.iter().any(|d| on(d, bus)));
+        self.frame_decoders
+            .iter()
+            .filter(|d| bus.is_none_or(|bus| on(d, bus)))
+            .find_map(|d| d.decoder.decode(bus, frame))
     }
 }
 

@@ -110,3 +110,96 @@ fn a_capture_that_is_not_a_file_is_refused_by_name() {
         assert_ne!(out.status.code(), Some(101), "a panic: {stderr}");
     }
 }
+
+/// CAN ids repeat across a robot's buses: here motors 1 to 3 are RS03/RS04 on can0 and RS02
+/// on can1. Each command and reply is scaled by the model of the motor on the frame's own bus:
+/// can1's motor 1 held at kp 100 reads kp 100 (by can0's RS03 ranges, as before decoding knew
+/// buses, it read kp 1000).
+#[test]
+fn frames_of_motors_sharing_an_id_on_two_buses_decode_by_their_own_bus() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dir = tempfile::tempdir().expect("a temporary folder");
+    let urdf = root.join("urdf/robstride_arm6.urdf");
+    let robot = dir.path().join("arm.yaml");
+    std::fs::write(
+        &robot,
+        format!(
+            "robot: arm\nurdf: {}\nbase: fixed\nbuses:\n  - {{name: can0, bitrate: 1000000}}\n  - {{name: can1, bitrate: 1000000}}\nactuators:\n  - {{joint: shoulder_yaw, model: RS03, id: 1, bus: can0}}\n  - {{joint: shoulder_pitch, model: RS04, id: 2, bus: can0}}\n  - {{joint: elbow_pitch, model: RS03, id: 3, bus: can0}}\n  - {{joint: wrist_roll, model: RS02, id: 1, bus: can1}}\n  - {{joint: wrist_pitch, model: RS02, id: 2, bus: can1}}\n  - {{joint: flange_roll, model: RS02, id: 3, bus: can1}}\n",
+            urdf.display()
+        ),
+    )
+    .expect("robot file written");
+    let scenario = dir.path().join("hold.yaml");
+    std::fs::write(
+        &scenario,
+        "name: hold\nbench:\n  devices:\n    arm: {kind: actuator_group, robot: arm.yaml}\nsteps:\n  - group: {do: enable}\n  - group: {do: hold, targets_rad: {shoulder_yaw: 0, shoulder_pitch: 0, elbow_pitch: 0, wrist_roll: 0, wrist_pitch: 0, flange_roll: 0}, kp: 100, kd: 4}\n  - wait_ms: 20\n",
+    )
+    .expect("scenario written");
+    let out = dir.path().join("out");
+    let run = Command::new(ARMHIL)
+        .arg("run")
+        .arg(&scenario)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .expect("armhil runs");
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let decode = Command::new(ARMHIL)
+        .arg("decode")
+        .arg(out.join("hold/bus.log"))
+        .arg("--scenario")
+        .arg(&scenario)
+        .output()
+        .expect("armhil runs");
+    assert!(
+        decode.status.success(),
+        "{}",
+        String::from_utf8_lossy(&decode.stderr)
+    );
+    let text = String::from_utf8_lossy(&decode.stdout);
+    let kp_of = |bus: &str| -> Vec<f64> {
+        text.lines()
+            .filter(|l| l.contains(&format!("  {bus}  ")) && l.contains("OpControl  motor=1"))
+            .filter_map(|l| l.split("kp=").nth(1)?.split(' ').next()?.parse().ok())
+            .collect()
+    };
+    let (can0, can1) = (kp_of("can0"), kp_of("can1"));
+    assert!(
+        !can0.is_empty() && !can1.is_empty(),
+        "no hold command to motor 1 on each bus:\n{}",
+        &text[..text.len().min(3000)]
+    );
+    for kp in can0.iter().chain(&can1) {
+        assert!((kp - 100.0).abs() < 0.1, "kp {kp}:\n{text}");
+    }
+}
+
+/// An interface name is the capture's to choose: one holding an escape sequence is printed
+/// escaped, never sent to the terminal as it is.
+#[test]
+fn control_characters_in_a_capture_s_interface_names_are_printed_escaped() {
+    let dir = tempfile::tempdir().expect("a temporary folder");
+    let log = dir.path().join("evil.log");
+    std::fs::write(
+        &log,
+        "(0.000000) can\u{1b}[2J0 2A1#0000000000000000\n(0.001000) vcan1 2A1#0000000000000000\n",
+    )
+    .expect("log written");
+    let out = Command::new(ARMHIL)
+        .arg("decode")
+        .arg(&log)
+        .output()
+        .expect("armhil runs");
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(!text.contains('\u{1b}'), "{text:?}");
+    assert!(text.contains("can\\u{1b}[2J0"), "{text}");
+}

@@ -61,7 +61,7 @@ pub enum Reply {
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum ParseError {
     /// The element does not have the `< … >` shape.
-    #[error("not a `< … >` element")]
+    #[error("not an element (text between angle brackets)")]
     NotAnElement,
     /// The element is empty (`< >`).
     #[error("empty element")]
@@ -416,9 +416,27 @@ pub fn format_reply(reply: &Reply) -> String {
         Reply::Ok => "< ok >".to_owned(),
         Reply::Echo => "< echo >".to_owned(),
         Reply::Frame { frame, timestamp } => format_frame(frame, *timestamp),
-        // `<` and `>` inside the text would end the element early.
-        Reply::Error(text) => format!("< error {} >", text.replace(['<', '>'], "")),
+        Reply::Error(text) => format!("< error {} >", wire_text(text)),
     }
+}
+
+/// `text` as an element may carry it: `<` and `>` would end the element early, and clients
+/// read the stream as ASCII (python-can's backend fails on any other byte), so brackets become
+/// `[` `]`, an ellipsis three dots, control characters spaces and anything else outside
+/// printable ASCII its `\u{…}` escape. What the text quotes stays quoted.
+fn wire_text(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '<' => out.push('['),
+            '>' => out.push(']'),
+            '\u{2026}' => out.push_str("..."),
+            ' '..='~' => out.push(c),
+            c if c.is_control() => out.push(' '),
+            c => out.extend(c.escape_unicode()),
+        }
+    }
+    out
 }
 
 #[cfg(test)]

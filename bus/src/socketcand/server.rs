@@ -623,7 +623,9 @@ impl Session<'_> {
                     Element::Complete(text) => text,
                     Element::Garbage(junk) => {
                         let shown: String = junk.chars().take(40).collect();
-                        self.reply(Reply::Error(format!("ignored text outside < > {shown:?}")));
+                        self.reply(Reply::Error(format!(
+                            "ignored text outside an element: {shown:?}"
+                        )));
                         continue;
                     }
                 };
@@ -682,7 +684,7 @@ impl Session<'_> {
             }
             (Command::Open(_), Some(_)) => self.reply(Reply::Error("a bus is already open".into())),
             (Command::Echo, _) => self.reply(Reply::Echo),
-            (_, None) => self.reply(Reply::Error("no bus open: send < open NAME > first".into())),
+            (_, None) => self.reply(Reply::Error("no bus open: send `open NAME` first".into())),
             (Command::RawMode, Some(_)) => {
                 let start = Instant::now() + self.shared.config.rawmode_grace;
                 self.raw.send_replace(Some(start));

@@ -174,11 +174,15 @@ impl KindSpec for Kind {
         })
     }
 
-    fn frame_decoder(settings: &Settings) -> Option<Arc<dyn FrameDecoder>> {
-        // Its actuators speak RobStride's private protocol, as a RobStride bus's motors do.
+    fn frame_decoder(settings: &Settings, buses: &[String]) -> Option<Arc<dyn FrameDecoder>> {
+        // Its actuators speak RobStride's private protocol, as a RobStride bus's motors do;
+        // each is known by its bus and ID (a robot's IDs repeat across its buses).
         Some(Arc::new(
             super::robstride::decode::RobstrideFrames::of_motors(
-                settings.actuators.iter().map(|a| (a.can_id, a.model)),
+                settings
+                    .actuators
+                    .iter()
+                    .map(|a| (buses.get(a.bus).cloned(), a.can_id, a.model)),
             ),
         ))
     }

@@ -208,24 +208,25 @@ fn a_command_refuses_the_arguments_of_another() {
 fn a_robot_group_decodes_its_actuators_frames_for_reports() {
     let text = "bench:\n  devices:\n    kbot:\n      kind: actuator_group\n      robot: ../../robots/humanoid.yaml\nsteps:\n  - wait_ms: 1\n";
     let s = parse_scenario(&robot_scenario(), text).expect("valid");
-    let decoder = s.bench.devices[0]
-        .kind
-        .frame_decoder()
-        .expect("a group speaks CAN");
-    // Type 2 status of motor 14 (left elbow, RS02) to the host 0xFD.
+    let bench = crate::harness::report::bench_info(&s);
+    // Type 2 status of motor 14 (left elbow, RS02, on can0) to the host 0xFD.
     let status = bus::CanFrame::extended(0x0200_0EFD, &[0x80, 0, 0x80, 0, 0x80, 0, 0x01, 0x2C])
         .expect("a frame");
-    let named = decoder.decode(&status).expect("the left elbow's status");
-    assert_eq!(named.name, "Status");
-    assert!(
-        named
-            .fields
-            .iter()
-            .any(|f| f.name == "motor" && f.value == "14"),
-        "{named:?}"
-    );
+    for bus in [Some("can0"), None, Some("a bus the bench does not have")] {
+        let named = bench.decode(bus, &status).expect("the left elbow's status");
+        assert_eq!(named.name, "Status");
+        assert!(
+            named
+                .fields
+                .iter()
+                .any(|f| f.name == "motor" && f.value == "14"),
+            "{named:?}"
+        );
+    }
+    // Motor 14 sits on can0: on can1 the frame is no actuator's.
+    assert!(bench.decode(Some("can1"), &status).is_none());
     // No actuator has ID 99.
     let stranger = bus::CanFrame::extended(0x0200_63FD, &[0x80, 0, 0x80, 0, 0x80, 0, 0x01, 0x2C])
         .expect("a frame");
-    assert!(decoder.decode(&stranger).is_none());
+    assert!(bench.decode(None, &stranger).is_none());
 }

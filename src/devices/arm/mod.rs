@@ -155,7 +155,7 @@ impl KindSpec for Kind {
         }))
     }
 
-    fn frame_decoder(settings: &Settings) -> Option<Arc<dyn FrameDecoder>> {
+    fn frame_decoder(settings: &Settings, _buses: &[String]) -> Option<Arc<dyn FrameDecoder>> {
         match settings.vendor {
             driver::arm::Vendor::Piper => Some(Arc::new(super::piper::decode::PiperFrames)),
             driver::arm::Vendor::Realman => None,

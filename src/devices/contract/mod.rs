@@ -88,8 +88,11 @@ pub(crate) trait RawKindStep: OneKey + Debug {
 /// a frame that is not this device's, so that on a bench of several devices each frame is
 /// decoded by the device it belongs to, never by guessing from the identifier's width.
 pub trait FrameDecoder: Send + Sync {
-    /// The frame's message name and fields, if it is one of this device's.
-    fn decode(&self, frame: &CanFrame) -> Option<DecodedFrame>;
+    /// The frame's message name and fields, if it is one of this device's. `bus` is the bus
+    /// the frame was captured on when the capture says and the bench has a bus of that name
+    /// (`None`: any of the device's buses): CAN ids repeat across buses, and a robot's motor 1
+    /// on `can0` may be another model than its motor 1 on `can1`.
+    fn decode(&self, bus: Option<&str>, frame: &CanFrame) -> Option<DecodedFrame>;
 }
 
 /// One device kind. Implemented by a unit struct `Kind` in each kind's `mod.rs`.
@@ -176,6 +179,7 @@ pub(crate) trait KindSpec: 'static {
     /// is a robot or arm.
     fn drawing(settings: &Self::Settings) -> Option<Drawing>;
 
-    /// A decoder of this device's CAN frames for reports, if it speaks CAN.
-    fn frame_decoder(settings: &Self::Settings) -> Option<Arc<dyn FrameDecoder>>;
+    /// A decoder of this device's CAN frames for reports, if it speaks CAN. `buses` names the
+    /// device's buses on its bench, in the order [`KindSpec::buses`] lists them.
+    fn frame_decoder(settings: &Self::Settings, buses: &[String]) -> Option<Arc<dyn FrameDecoder>>;
 }

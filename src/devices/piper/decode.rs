@@ -9,7 +9,7 @@ use crate::interop::{decode_piper, DecodedFrame};
 pub(crate) struct PiperFrames;
 
 impl FrameDecoder for PiperFrames {
-    fn decode(&self, frame: &CanFrame) -> Option<DecodedFrame> {
+    fn decode(&self, _bus: Option<&str>, frame: &CanFrame) -> Option<DecodedFrame> {
         if frame.is_extended() {
             return None;
         }

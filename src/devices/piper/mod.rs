@@ -206,7 +206,7 @@ impl KindSpec for Kind {
         Some(Drawing::arm(sim::piper::BUNDLED_URDF))
     }
 
-    fn frame_decoder(_settings: &Settings) -> Option<Arc<dyn FrameDecoder>> {
+    fn frame_decoder(_settings: &Settings, _buses: &[String]) -> Option<Arc<dyn FrameDecoder>> {
         Some(Arc::new(decode::PiperFrames))
     }
 }

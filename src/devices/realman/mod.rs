@@ -132,7 +132,7 @@ impl KindSpec for Kind {
         }))
     }
 
-    fn frame_decoder(_settings: &Settings) -> Option<Arc<dyn FrameDecoder>> {
+    fn frame_decoder(_settings: &Settings, _buses: &[String]) -> Option<Arc<dyn FrameDecoder>> {
         // JSON over TCP and UDP: no CAN frames.
         None
     }

@@ -10,46 +10,66 @@ use crate::interop::{decode_robstride, decode_robstride_command, DecodedFrame};
 /// The RobStride driver's host ID (the address motors reply to).
 const HOST_ID: u8 = 0xFD;
 
-/// Decodes the private protocol's extended (29-bit) frames of the motors on this bus, replies
-/// and the host's commands, each with its own motor's model's ranges; frames of other motors
-/// or other protocols are not this device's.
+/// Decodes the private protocol's extended (29-bit) frames of the motors on this device's
+/// buses, replies and the host's commands, each with its own motor's model's ranges; frames of
+/// other motors or other protocols are not this device's.
 pub(crate) struct RobstrideFrames {
-    /// The bus's motors: CAN ID and model.
-    motors: Vec<(u8, Model)>,
+    /// The motors: the bus they sit on (`None`: unknown), CAN ID and model.
+    motors: Vec<(Option<String>, u8, Model)>,
 }
 
 impl RobstrideFrames {
-    /// A decoder for the motors of `settings`.
-    pub(crate) fn new(settings: &Settings) -> Self {
-        Self::of_motors(settings.motors.iter().map(|m| (m.can_id, m.model)))
+    /// A decoder for the motors of `settings`, on the first of `buses`.
+    pub(crate) fn new(settings: &Settings, buses: &[String]) -> Self {
+        let bus = buses.first().cloned();
+        Self::of_motors(
+            settings
+                .motors
+                .iter()
+                .map(|m| (bus.clone(), m.can_id, m.model)),
+        )
     }
 
-    /// A decoder for these motors (CAN ID and the emulator's model), wherever they are
+    /// A decoder for these motors (bus, CAN ID and the emulator's model), wherever they are
     /// listed: a RobStride bus, an actuator group, a robot.
-    pub(crate) fn of_motors(motors: impl IntoIterator<Item = (u8, sim::robstride::Model)>) -> Self {
+    pub(crate) fn of_motors(
+        motors: impl IntoIterator<Item = (Option<String>, u8, sim::robstride::Model)>,
+    ) -> Self {
         Self {
             motors: motors
                 .into_iter()
-                .filter_map(|(id, model)| Some((id, Model::parse(model.name())?)))
+                .filter_map(|(bus, id, model)| Some((bus, id, Model::parse(model.name())?)))
                 .collect(),
         }
+    }
+
+    /// The model of motor `id` on `bus` (on any bus when `None`); `None` when no such motor
+    /// is listed, or when the bus is unknown and motors of that ID on different buses are of
+    /// different models: a guess would scale the frame by the wrong ranges.
+    fn model_of(&self, bus: Option<&str>, id: u8) -> Option<Model> {
+        let mut candidates = self
+            .motors
+            .iter()
+            .filter(|(on, m, _)| *m == id && (bus.is_none() || on.as_deref() == bus))
+            .map(|(_, _, model)| *model);
+        let first = candidates.next()?;
+        candidates.all(|m| m == first).then_some(first)
     }
 }
 
 impl FrameDecoder for RobstrideFrames {
-    fn decode(&self, frame: &CanFrame) -> Option<DecodedFrame> {
+    fn decode(&self, bus: Option<&str>, frame: &CanFrame) -> Option<DecodedFrame> {
         if !frame.is_extended() {
             return None;
         }
-        let model_of = |id: u8| self.motors.iter().find(|(m, _)| *m == id).map(|(_, m)| *m);
         // Motor replies carry the motor's CAN ID in bits 8..16, the host's commands in bits
         // 0..8.
         let replier = ((frame.raw_id() >> 8) & 0xFF) as u8;
         let addressee = (frame.raw_id() & 0xFF) as u8;
-        model_of(replier)
+        self.model_of(bus, replier)
             .and_then(|model| decode_robstride(frame, HOST_ID, model))
             .or_else(|| {
-                model_of(addressee)
+                self.model_of(bus, addressee)
                     .and_then(|model| decode_robstride_command(frame, HOST_ID, model))
             })
     }
@@ -72,7 +92,7 @@ mod tests {
         let DeviceKind::Robstride(settings) = &s.bench.devices[0].kind else {
             panic!("not a robstride bus");
         };
-        RobstrideFrames::new(settings)
+        RobstrideFrames::new(settings, &["vcan0".to_owned()])
     }
 
     #[test]
@@ -84,7 +104,7 @@ mod tests {
             &[0x80, 0x00, 0x80, 0x00, 0x80, 0x00, 0x01, 0x2C],
         )
         .unwrap();
-        let named = decoder.decode(&status).expect("motor 1's status");
+        let named = decoder.decode(None, &status).expect("motor 1's status");
         assert_eq!(named.name, "Status");
         // Motor 2 is not on this bus; an 11-bit frame is no private-protocol frame. Before each
         // device decoded its own frames, the report named every 11-bit frame as a Piper's,
@@ -94,9 +114,44 @@ mod tests {
             &[0x80, 0x00, 0x80, 0x00, 0x80, 0x00, 0x01, 0x2C],
         )
         .unwrap();
-        assert!(decoder.decode(&other_motor).is_none());
+        assert!(decoder.decode(None, &other_motor).is_none());
         let eleven_bit = CanFrame::standard(0x2A1, &[0; 8]).unwrap();
-        assert!(decoder.decode(&eleven_bit).is_none());
-        assert!(PiperFrames.decode(&status).is_none());
+        assert!(decoder.decode(None, &eleven_bit).is_none());
+        assert!(PiperFrames.decode(None, &status).is_none());
+    }
+
+    /// A robot's IDs repeat across its buses: motor 1 is an RS04 on can0 and an RS00 on can1.
+    /// A command to can1's motor at kp 100 reads kp 100 by can1's ranges (by the RS04's, as
+    /// before the decoder knew buses, it read kp 1000), and a frame whose bus is unknown is
+    /// left undecoded rather than scaled by a guess.
+    #[test]
+    fn a_frame_is_decoded_by_the_model_of_the_motor_on_its_own_bus() {
+        use driver::robstride::codec::{op_control_frame, OpControl};
+        use driver::robstride::{Model as DriverModel, RangeTable};
+        let decoder = RobstrideFrames::of_motors([
+            (Some("can0".to_owned()), 1, sim::robstride::Model::RS04),
+            (Some("can1".to_owned()), 1, sim::robstride::Model::RS00),
+        ]);
+        let command = op_control_frame(
+            1,
+            &OpControl {
+                angle_rad: 0.5,
+                speed_rad_s: 0.0,
+                kp: 100.0,
+                kd: 2.0,
+                torque_nm: 0.0,
+            },
+            &DriverModel::RS00.ranges(RangeTable::Manual),
+        )
+        .expect("a frame");
+        let kp = |bus: Option<&str>| {
+            decoder.decode(bus, &command).map(|d| {
+                let field = d.fields.iter().find(|f| f.name == "kp").expect("kp");
+                field.value.parse::<f64>().expect("a number").round()
+            })
+        };
+        assert_eq!(kp(Some("can1")), Some(100.0));
+        assert_eq!(kp(Some("can0")), Some(1000.0));
+        assert_eq!(kp(None), None);
     }
 }

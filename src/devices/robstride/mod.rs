@@ -127,8 +127,8 @@ impl KindSpec for Kind {
         None
     }
 
-    fn frame_decoder(settings: &Settings) -> Option<Arc<dyn FrameDecoder>> {
-        Some(Arc::new(decode::RobstrideFrames::new(settings)))
+    fn frame_decoder(settings: &Settings, buses: &[String]) -> Option<Arc<dyn FrameDecoder>> {
+        Some(Arc::new(decode::RobstrideFrames::new(settings, buses)))
     }
 }
 

@@ -16,16 +16,28 @@ pub use snapshot::snapshot_yaml;
 pub use svg::plot_svg;
 
 use super::model::Record;
-use super::result::{BenchInfo, ScenarioResult};
+use super::result::{BenchInfo, DeviceFrames, ScenarioResult};
 use super::Scenario;
 
 /// What the HTML report needs to know about `scenario`'s bench, asked of each device's kind.
 pub fn bench_info(scenario: &Scenario) -> BenchInfo {
-    let kinds = || scenario.bench.devices.iter().map(|d| &d.kind);
+    let devices = &scenario.bench.devices;
     BenchInfo {
         // The first device that is drawn: the arm or robot the scenario drives.
-        drawing: kinds().find_map(|k| k.drawing()),
-        frame_decoders: kinds().filter_map(|k| k.frame_decoder()).collect(),
+        drawing: devices.iter().find_map(|d| d.kind.drawing()),
+        frame_decoders: devices
+            .iter()
+            .filter_map(|d| {
+                let buses: Vec<String> = d
+                    .buses
+                    .iter()
+                    .filter_map(|&i| scenario.bench.buses.get(i))
+                    .map(|b| b.name.clone())
+                    .collect();
+                let decoder = d.kind.frame_decoder(&buses)?;
+                Some(DeviceFrames { buses, decoder })
+            })
+            .collect(),
     }
 }
 

@@ -249,3 +249,27 @@ proptest! {
         }
     }
 }
+
+/// An error's text reaches the client whole and in ASCII: its quotes kept, brackets that
+/// would end the element early and bytes an ASCII reader fails on replaced (before, `<` and
+/// `>` were dropped: `send  open NAME  first`).
+#[test]
+fn error_texts_keep_their_quoting_and_stay_ascii() {
+    let text = format_reply(&Reply::Error(
+        "no bus open: send `open NAME` first; junk \"<x\u{1b}é…>\"".into(),
+    ));
+    assert!(text.is_ascii(), "{text}");
+    assert_eq!(text.matches('<').count(), 1, "{text}");
+    assert_eq!(text.matches('>').count(), 1, "{text}");
+    assert_eq!(
+        parse_reply(&text),
+        Ok(Reply::Error(
+            "no bus open: send `open NAME` first; junk \"[x \\u{e9}...]\"".into()
+        ))
+    );
+    for element in ["send 1 0", "< fly\u{1b}é >", "< send 12345 1 00 >"] {
+        let error = parse_command(element).unwrap_err();
+        let text = format_reply(&Reply::Error(error.to_string()));
+        assert!(text.is_ascii() && text.matches('>').count() == 1, "{text}");
+    }
+}

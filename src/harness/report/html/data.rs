@@ -65,8 +65,8 @@ fn trace_json(result: &ScenarioResult) -> Value {
     })
 }
 
-fn decode(frame: &ReceivedFrame, info: &BenchInfo) -> Option<DecodedFrame> {
-    info.decode(&frame.frame)
+fn decode(bus: Option<&str>, frame: &ReceivedFrame, info: &BenchInfo) -> Option<DecodedFrame> {
+    info.decode(bus, &frame.frame)
 }
 
 /// Which frames the table lists, out of `n` with the first failure's frame at `centre` (`n`
@@ -80,8 +80,12 @@ fn listed(n: usize, centre: usize) -> impl Fn(usize) -> bool {
 }
 
 /// Every frame of the recording in order, read one at a time from the spooled candump log
-/// (so a long recording is never held in memory), else from the pcap.
-fn for_each_frame(result: &ScenarioResult, mut each: impl FnMut(usize, ReceivedFrame)) {
+/// (so a long recording is never held in memory), else from the pcap; with the bus the log
+/// names (a pcap names none).
+fn for_each_frame(
+    result: &ScenarioResult,
+    mut each: impl FnMut(usize, Option<&str>, ReceivedFrame),
+) {
     use std::io::BufRead as _;
     if let Some(path) = result.recording.candump.as_deref() {
         let Ok(file) = std::fs::File::open(path) else {
@@ -92,6 +96,7 @@ fn for_each_frame(result: &ScenarioResult, mut each: impl FnMut(usize, ReceivedF
         for (i, entry) in entries.enumerate() {
             each(
                 i,
+                Some(&entry.iface),
                 ReceivedFrame {
                     frame: entry.frame,
                     timestamp: entry.timestamp,
@@ -104,7 +109,7 @@ fn for_each_frame(result: &ScenarioResult, mut each: impl FnMut(usize, ReceivedF
             .and_then(|bytes| bus::pcap::parse_capture(&bytes).ok())
             .unwrap_or_default();
         for (i, frame) in frames.into_iter().enumerate() {
-            each(i, frame);
+            each(i, None, frame);
         }
     }
 }
@@ -113,7 +118,7 @@ fn frames_json(result: &ScenarioResult) -> Value {
     // First pass: how many frames, where the first failure falls, where time starts.
     let focus = result.first_failure().map(|s| s.started + s.took);
     let (mut n, mut t0, mut centre) = (0, Duration::ZERO, None);
-    for_each_frame(result, |i, f| {
+    for_each_frame(result, |i, _, f| {
         if i == 0 && f.timestamp > Duration::from_secs(1_000_000) {
             // Frames on a real interface carry Unix time: count from the first one instead.
             t0 = f.timestamp;
@@ -125,21 +130,23 @@ fn frames_json(result: &ScenarioResult) -> Value {
     });
     let keep = listed(n, centre.unwrap_or(n));
     // Feedback repeats itself (an arm at rest sends the same payloads): decode each distinct
-    // frame once.
-    let mut decoded: HashMap<(u32, bool, Vec<u8>), (String, String)> = HashMap::new();
+    // frame on each bus once.
+    type FrameKey = (Option<String>, u32, bool, Vec<u8>);
+    let mut decoded: HashMap<FrameKey, (String, String)> = HashMap::new();
     let mut rows: Vec<Value> = Vec::new();
-    for_each_frame(result, |i, f| {
+    for_each_frame(result, |i, bus, f| {
         if !keep(i) {
             return;
         }
         let key = (
+            bus.map(str::to_owned),
             f.frame.raw_id(),
             f.frame.is_extended(),
             f.frame.data().to_vec(),
         );
         let (name, fields) = decoded
             .entry(key)
-            .or_insert_with(|| match decode(&f, &result.bench_info) {
+            .or_insert_with(|| match decode(bus, &f, &result.bench_info) {
                 Some(d) => {
                     let fields = d
                         .fields

@@ -14,9 +14,10 @@ fn failed_run() -> ScenarioResult {
     r.bench_info = BenchInfo {
         drawing: Some(crate::devices::Drawing::arm(sim::piper::BUNDLED_URDF)),
         // A Piper's bench: its frames are named by the Piper's decoder.
-        frame_decoders: vec![std::sync::Arc::new(
-            crate::devices::piper::decode::PiperFrames,
-        )],
+        frame_decoders: vec![crate::harness::result::DeviceFrames {
+            buses: vec!["vcan0".to_owned()],
+            decoder: std::sync::Arc::new(crate::devices::piper::decode::PiperFrames),
+        }],
     };
     r.steps.push(StepResult {
         index: 0,
