@@ -1,4 +1,8 @@
 //! Errors a bus reports to its users.
+//!
+//! The interface errors ([`BusError::NoSuchInterface`], [`BusError::InterfaceDown`],
+//! [`BusError::Io`]) are the one set of messages every front end shows (the CLI, the harness,
+//! the Python bindings): each names the interface and says what to do about it.
 
 /// Why a bus operation failed.
 #[derive(Debug, thiserror::Error)]
@@ -16,19 +20,26 @@ pub enum BusError {
     #[error("bus-off")]
     BusOff,
     /// The network interface does not exist (ENODEV / ENXIO: never created, or removed).
-    #[error("no such interface {iface}")]
+    #[error(
+        "CAN interface {iface} does not exist (is its adapter plugged in?); for a virtual one: \
+         `sudo ip link add dev {iface} type vcan && sudo ip link set up {iface}`"
+    )]
     NoSuchInterface {
         /// Interface name, e.g. `vcan0`.
         iface: String,
     },
     /// The network interface exists but is down (ENETDOWN).
-    #[error("interface {iface} is down")]
+    #[error(
+        "CAN interface {iface} is down; bring it up with `sudo ip link set up {iface}` (a real \
+         adapter also needs a bitrate, e.g. `sudo ip link set {iface} up type can bitrate 1000000`)"
+    )]
     InterfaceDown {
         /// Interface name, e.g. `vcan0`.
         iface: String,
     },
-    /// An operating-system I/O error from a real interface.
-    #[error("I/O error on {iface}: {source}")]
+    /// Any other operating-system error from a real interface, or an interface that is not a
+    /// CAN device. No permission and a kernel without SocketCAN come with what to do.
+    #[error("CAN interface {iface}: {source}{}", io_hint(.source))]
     Io {
         /// Interface name, e.g. `vcan0`.
         iface: String,
@@ -37,6 +48,19 @@ pub enum BusError {
         source: std::io::Error,
     },
     /// SocketCAN is not available on this platform.
-    #[error("SocketCAN is only available on Linux")]
+    #[error("SocketCAN exists only on Linux; on this system reach the bus through socketcand")]
     Unsupported,
+}
+
+/// What to do about an interface's I/O error, when there is something to say.
+fn io_hint(source: &std::io::Error) -> &'static str {
+    #[cfg(target_os = "linux")]
+    if source.raw_os_error() == Some(libc::EAFNOSUPPORT) {
+        return "; this kernel has no SocketCAN loaded: `sudo modprobe can_raw`";
+    }
+    if source.kind() == std::io::ErrorKind::PermissionDenied {
+        return "; this process may not use CAN sockets: run it as root, or allow CAN sockets \
+                in the container or the security policy";
+    }
+    ""
 }

@@ -4,7 +4,9 @@
 //! - [`CanBus`]: one async interface (send, receive with a timestamp, close).
 //! - [`virtual_bus`]: an in-process bus that models bit timing, arbitration, queues, load and
 //!   faults, and runs under tokio's paused clock for deterministic virtual time.
-//! - `socketcan_bus` (Linux only): real SocketCAN interfaces such as `vcan0` or `can0`.
+//! - [`open_socketcan`]: a real SocketCAN interface such as `vcan0` or `can0`, the one opener
+//!   every front end uses (on every platform; SocketCAN itself is Linux only, in
+//!   `socketcan_bus`).
 //! - `vxcan` (Linux only): creating a vxcan pair for a vendor SDK and an emulator.
 //! - [`socketcand`]: CAN over TCP (the socketcand protocol), server and client.
 //! - [`candump`], [`pcap`] and [`recorder`]: logs for can-utils and Wireshark, and a reader.
@@ -21,6 +23,7 @@ pub mod pcapng;
 pub mod recorder;
 #[cfg(target_os = "linux")]
 pub mod socketcan_bus;
+mod socketcan_open;
 pub mod socketcand;
 pub mod timing;
 pub mod virtual_bus;
@@ -32,3 +35,4 @@ pub use frame::{
     CanFrame, CanId, FrameError, ReceivedFrame, MAX_DATA_LEN, MAX_EXTENDED_ID, MAX_STANDARD_ID,
 };
 pub use iface::CanBus;
+pub use socketcan_open::open_socketcan;

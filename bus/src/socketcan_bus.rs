@@ -39,16 +39,42 @@ impl std::fmt::Debug for SocketCanBus {
 
 impl SocketCanBus {
     /// Open `iface` without own-loopback. Must be called inside a tokio runtime with I/O
-    /// enabled.
+    /// enabled. [`crate::open_socketcan`] does the same on every platform.
+    ///
+    /// # Errors
+    ///
+    /// The interface errors of [`BusError`], each naming `iface` and saying what to do:
+    /// [`BusError::NoSuchInterface`], [`BusError::InterfaceDown`] (checked here, not left
+    /// for the first receive), and [`BusError::Io`] for anything else, such as no permission,
+    /// a kernel without SocketCAN, or an interface that is not a CAN device.
     pub fn open(iface: &str) -> Result<Self, BusError> {
         Self::open_with(iface, SocketCanOptions::default())
     }
 
-    /// Open `iface` with options.
+    /// Open `iface` with options; errors as [`SocketCanBus::open`].
     pub fn open_with(iface: &str, options: SocketCanOptions) -> Result<Self, BusError> {
-        let socket =
-            socketcan::tokio::CanSocket::open(iface).map_err(|error| io_error(iface, error))?;
+        let addr = socketcan::CanAddr::from_iface(iface).map_err(|error| io_error(iface, error))?;
+        let socket = socketcan::tokio::CanSocket::open_addr(&addr).map_err(|error| {
+            // The name resolved, so ENODEV from the bind means a device of another type.
+            if matches!(error.raw_os_error(), Some(libc::ENODEV)) {
+                return BusError::Io {
+                    iface: iface.to_owned(),
+                    source: io::Error::new(
+                        io::ErrorKind::InvalidInput,
+                        "not a CAN device (SocketCAN binds only CAN interfaces, such as vcan0 \
+                         or can0)",
+                    ),
+                };
+            }
+            io_error(iface, error)
+        })?;
         let configure = || -> io::Result<()> {
+            // Binding to a down interface succeeds and leaves ENETDOWN pending for the first
+            // read: report it now, as the opener's error.
+            match socket.get_socket_option_int(libc::SOL_SOCKET, libc::SO_ERROR)? {
+                0 => {}
+                pending => return Err(io::Error::from_raw_os_error(pending)),
+            }
             socket.set_recv_own_msgs(options.receive_own)?;
             socket.set_error_filter_accept_all()?;
             socket.set_recv_timestamp(true)
@@ -197,18 +223,61 @@ mod tests {
     #[test]
     fn interface_errors_are_classified() {
         let down = io_error("vcan0", io::Error::from_raw_os_error(libc::ENETDOWN));
-        assert!(matches!(down, BusError::InterfaceDown { iface } if iface == "vcan0"));
+        assert!(matches!(&down, BusError::InterfaceDown { iface } if iface == "vcan0"));
+        assert!(
+            down.to_string().starts_with(
+                "CAN interface vcan0 is down; bring it up with `sudo ip link set up vcan0`"
+            ),
+            "{down}"
+        );
         let missing = io_error("vcan0", io::Error::from_raw_os_error(libc::ENODEV));
-        assert_eq!(missing.to_string(), "no such interface vcan0");
-        let other = io_error("vcan0", io::Error::from_raw_os_error(libc::EPERM));
-        assert!(matches!(other, BusError::Io { .. }));
+        assert!(matches!(&missing, BusError::NoSuchInterface { iface } if iface == "vcan0"));
+        let denied = io_error("vcan0", io::Error::from_raw_os_error(libc::EPERM));
+        assert!(matches!(denied, BusError::Io { .. }));
+        let text = denied.to_string();
+        assert!(text.starts_with("CAN interface vcan0: "), "{text}");
+        assert!(text.contains("(os error 1)"), "{text}");
+        assert!(text.contains("run it as root"), "{text}");
+        let no_can = io_error("vcan0", io::Error::from_raw_os_error(libc::EAFNOSUPPORT));
+        assert!(
+            no_can.to_string().ends_with("`sudo modprobe can_raw`"),
+            "{no_can}"
+        );
+        let other = io_error("vcan0", io::Error::from_raw_os_error(libc::EIO));
+        assert_eq!(
+            other.to_string(),
+            format!(
+                "CAN interface vcan0: {}",
+                io::Error::from_raw_os_error(libc::EIO)
+            )
+        );
     }
 
     #[tokio::test]
-    async fn opening_a_missing_interface_is_an_error() {
-        let Err(error) = SocketCanBus::open("armhil-nosuch") else {
+    async fn opening_a_missing_interface_names_it_and_says_how_to_create_it() {
+        let Err(error) = SocketCanBus::open("armhil-nosuch0") else {
             panic!("a missing interface opened");
         };
-        assert_eq!(error.to_string(), "no such interface armhil-nosuch");
+        assert!(matches!(&error, BusError::NoSuchInterface { iface } if iface == "armhil-nosuch0"));
+        assert_eq!(
+            error.to_string(),
+            "CAN interface armhil-nosuch0 does not exist (is its adapter plugged in?); for a \
+             virtual one: `sudo ip link add dev armhil-nosuch0 type vcan && sudo ip link set up \
+             armhil-nosuch0`"
+        );
+    }
+
+    #[tokio::test]
+    async fn opening_an_interface_that_is_not_can_says_so() {
+        // `lo` exists everywhere; a kernel without SocketCAN refuses the socket first.
+        let Err(error) = SocketCanBus::open("lo") else {
+            panic!("the loopback interface opened as a CAN interface");
+        };
+        let text = error.to_string();
+        assert!(text.starts_with("CAN interface lo: "), "{text}");
+        assert!(
+            text.contains("not a CAN device") || text.contains("`sudo modprobe can_raw`"),
+            "{text}"
+        );
     }
 }

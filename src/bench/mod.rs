@@ -15,16 +15,8 @@ pub use options::{RunOptions, DEFAULT_RECORDING_LIMIT_BYTES, MAX_DEADLINE, MAX_T
 /// Node name of the drivers on the virtual bus (bus faults can target it as `host`).
 pub const HOST_NODE: &str = "host";
 
-/// Open a SocketCAN socket on `iface` for `what`.
-#[cfg(target_os = "linux")]
+/// Open the SocketCAN interface `iface` for `what` (the recorder, the driver): the bus
+/// crate's error, which names the interface and says what to do, after what it was for.
 pub(crate) fn open_iface(iface: &str, what: &str) -> Result<Arc<dyn bus::CanBus>, String> {
-    bus::socketcan_bus::SocketCanBus::open(iface)
-        .map(|b| Arc::new(b) as Arc<dyn bus::CanBus>)
-        .map_err(|e| format!("cannot open {iface} for the {what}: {e}"))
-}
-
-/// Open a SocketCAN socket on `iface` for `what`.
-#[cfg(not(target_os = "linux"))]
-pub(crate) fn open_iface(iface: &str, _what: &str) -> Result<Arc<dyn bus::CanBus>, String> {
-    Err(format!("SocketCAN interface `{iface}` needs Linux"))
+    bus::open_socketcan(iface).map_err(|e| format!("cannot open the {what}'s bus: {e}"))
 }

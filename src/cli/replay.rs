@@ -96,8 +96,8 @@ mod imp {
             .build()
             .context("cannot start the async runtime")?;
         runtime.block_on(async {
-            let bus = SocketCanBus::open(&args.iface)
-                .with_context(|| format!("cannot open CAN interface {}", args.iface))?;
+            // The bus crate's error names the interface and says what to do.
+            let bus = SocketCanBus::open(&args.iface)?;
             tokio::select! {
                 result = replay(&bus, &plan, &args) => result,
                 signal = tokio::signal::ctrl_c() => {

@@ -38,23 +38,18 @@ async fn socketcand_place(addr: &str, node_name: &str) -> Result<CanPlace, Strin
     })
 }
 
-#[cfg(target_os = "linux")]
+/// The SocketCAN interface `iface`; the error is the bus crate's, which names the interface
+/// and says what to do.
 fn iface_place(iface: &str) -> Result<CanPlace, String> {
-    let socket = bus::socketcan_bus::SocketCanBus::open(iface)
-        .map_err(|e| format!("cannot open SocketCAN interface {iface}: {e}"))?;
+    // The socket registers with the runtime the emulator runs on (this is no runtime thread).
+    let _runtime = sim_runtime().enter();
+    let node = bus::open_socketcan(iface).map_err(|e| e.to_string())?;
     Ok(CanPlace {
-        node: Arc::new(socket),
+        node,
         virtual_bus: None,
         server: None,
         iface: Some(iface.to_string()),
     })
-}
-
-#[cfg(not(target_os = "linux"))]
-fn iface_place(iface: &str) -> Result<CanPlace, String> {
-    Err(format!(
-        "SocketCAN interface {iface}: SocketCAN is Linux only"
-    ))
 }
 
 /// `iface` when given, else a socketcand server on `socketcand` (a bare port = loopback).

@@ -231,23 +231,15 @@ async fn serve_buses(
     socketcand: &str,
 ) -> Result<Served, String> {
     if interfaces {
-        #[cfg(target_os = "linux")]
-        {
-            let nodes = names
-                .iter()
-                .map(|iface| {
-                    bus::socketcan_bus::SocketCanBus::open(iface)
-                        .map(|socket| Arc::new(socket) as Arc<dyn CanBus>)
-                        .map_err(|e| format!("cannot open SocketCAN interface {iface}: {e}"))
-                })
-                .collect::<Result<Vec<_>, _>>()?;
-            return Ok(Served {
-                nodes,
-                server: None,
-            });
-        }
-        #[cfg(not(target_os = "linux"))]
-        return Err("SocketCAN interfaces are Linux only; use socketcand".into());
+        // The bus crate's errors name the interface and say what to do.
+        let nodes = names
+            .iter()
+            .map(|iface| bus::open_socketcan(iface).map_err(|e| e.to_string()))
+            .collect::<Result<Vec<_>, _>>()?;
+        return Ok(Served {
+            nodes,
+            server: None,
+        });
     }
     let (buses, server) = SocketcandServer::bind_realtime_channels(socketcand, names)
         .await

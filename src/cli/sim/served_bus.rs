@@ -182,18 +182,10 @@ impl ServedBus {
     }
 }
 
-#[cfg(target_os = "linux")]
+/// A node on the SocketCAN interface `iface`; the error is the bus crate's, which names the
+/// interface and says what to do.
 pub(crate) fn open_socketcan(iface: &str) -> anyhow::Result<Arc<dyn CanBus>> {
-    use anyhow::Context as _;
-    let socket = bus::socketcan_bus::SocketCanBus::open(iface).with_context(|| {
-        format!("cannot open SocketCAN interface {iface} (is it up? `ip link set up {iface}`)")
-    })?;
-    Ok(Arc::new(socket))
-}
-
-#[cfg(not(target_os = "linux"))]
-pub(crate) fn open_socketcan(iface: &str) -> anyhow::Result<Arc<dyn CanBus>> {
-    anyhow::bail!("SocketCAN interface {iface}: SocketCAN exists only on Linux (use --socketcand)")
+    Ok(bus::open_socketcan(iface)?)
 }
 
 #[cfg(test)]
