@@ -5,10 +5,10 @@ use std::hint::black_box;
 use std::time::Instant;
 
 use sim::physics::articulated::{ArticulatedWorld, SUBSTEPS};
-use sim::physics::{ArmWorld, ObstacleShape, WorldConfig};
+use sim::physics::{ObstacleShape, RapierWorld, WorldConfig};
 use sim::piper::kinematics::PIPER_URDF;
 
-fn measure(label: &str, world: &mut ArmWorld, steps: usize) {
+fn measure(label: &str, world: &mut RapierWorld, steps: usize) {
     let target = world.joint_positions();
     let start = Instant::now();
     for _ in 0..steps {
@@ -31,7 +31,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let steps = 20_000;
     let pose = [0.2, 1.2, -1.1, 0.1, 0.4, 0.0, 0.01, -0.01];
 
-    let mut world = ArmWorld::from_urdf_str(PIPER_URDF, WorldConfig::default())?;
+    let mut world = RapierWorld::from_urdf_str(PIPER_URDF, WorldConfig::default())?;
     world.set_joint_positions(&pose)?;
     measure(
         "piper, free space, PD + gravity feed-forward",
@@ -39,7 +39,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         steps,
     );
 
-    let mut world = ArmWorld::from_urdf_str(PIPER_URDF, WorldConfig::default())?;
+    let mut world = RapierWorld::from_urdf_str(PIPER_URDF, WorldConfig::default())?;
     world.set_joint_positions(&pose)?;
     world.add_obstacle(
         ObstacleShape::Box {
@@ -50,7 +50,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     world.add_obstacle(ObstacleShape::Sphere { radius_m: 0.05 }, [0.35, 0.0, 0.2]);
     measure("piper, two obstacles", &mut world, steps);
 
-    let mut world = ArmWorld::from_urdf_str(PIPER_URDF, WorldConfig::default())?;
+    let mut world = RapierWorld::from_urdf_str(PIPER_URDF, WorldConfig::default())?;
     world.set_joint_positions(&pose)?;
     let zero = vec![0.0; world.joints().len()];
     let start = Instant::now();
@@ -65,7 +65,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 }
 
 /// The unpowered humanoid (floating base, 20 joints, ground contact) falling and lying for
-/// 10 s, in each physics: rapier's multibody (what `ArmWorld` builds) and the articulated-body
+/// 10 s, in each physics: rapier's multibody (what `RapierWorld` builds) and the articulated-body
 /// solver (`ArticulatedWorld`).
 fn humanoid_on_the_ground() -> Result<(), Box<dyn std::error::Error>> {
     const URDF: &str = include_str!("../../urdf/humanoid.urdf");
@@ -74,7 +74,7 @@ fn humanoid_on_the_ground() -> Result<(), Box<dyn std::error::Error>> {
         floating_base_height_m: Some(0.81),
         ..WorldConfig::default()
     };
-    let mut world = ArmWorld::from_urdf_str(URDF, config)?;
+    let mut world = RapierWorld::from_urdf_str(URDF, config)?;
     world.add_obstacle(
         ObstacleShape::Box {
             half_extents_m: [50.0, 50.0, 0.5],

@@ -390,3 +390,41 @@ fn self_collision_is_off_on_or_on_without_the_pairs_named() {
         "13:17: `self_collision`: the URDF has no link `flang`; did you mean `flange`?"
     );
 }
+
+/// `physics:` chooses the solver; rapier's refuses what only the articulated solver does,
+/// at the `physics` line, and a misspelt word is named with the nearest one.
+#[test]
+fn physics_chooses_the_solver_and_rapier_refuses_what_it_cannot_do() {
+    let (_dir, file) = write(&ARM.replace("robot: arm", "robot: arm\nphysics: rapier"));
+    let robot = load_robot_file(&file).unwrap();
+    assert_eq!(robot.config.physics, sim::physics::Solver::Rapier);
+    let (_dir, file) = write(ARM);
+    assert_eq!(
+        load_robot_file(&file).unwrap().config.physics,
+        sim::physics::Solver::Articulated
+    );
+    let cases = [
+        (
+            ARM.replace("robot: arm", "robot: arm\nphysics: rapir"),
+            "2:10: `physics` must be `articulated` or `rapier`, got `rapir`; did you mean `rapier`?",
+        ),
+        (
+            ARM.replace("robot: arm", "robot: arm\nphysics: rapier\nself_collision: true"),
+            "2:10: `physics: rapier` has no self-collision",
+        ),
+        (
+            ARM.replace(
+                "robot: arm",
+                "robot: arm\nphysics: rapier\nbase: floating\nstart_height_m: 1.0\ngantry: until_enabled",
+            ),
+            "2:10: `physics: rapier` cannot hold a floating base on a gantry",
+        ),
+    ];
+    for (text, expected) in cases {
+        let error = error_of(&text);
+        assert!(
+            error.starts_with(expected),
+            "expected `{expected}`, got `{error}`"
+        );
+    }
+}

@@ -73,6 +73,12 @@ pub enum PhysicsError {
         /// The joint's name.
         joint: String,
     },
+    /// The solver cannot do what was asked of it.
+    #[error("this physics solver does not support {what}")]
+    Unsupported {
+        /// What was asked.
+        what: String,
+    },
     /// A joint axis of zero length.
     #[error("joint {joint}: axis has zero length")]
     ZeroAxis {

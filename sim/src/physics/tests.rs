@@ -50,7 +50,7 @@ const SLIDER: &str = r#"<?xml version="1.0"?>
 
 const PIPER: &str = include_str!("../../../urdf/piper.urdf");
 
-fn run(world: &mut ArmWorld, steps: usize, torques: &[f64]) {
+fn run(world: &mut RapierWorld, steps: usize, torques: &[f64]) {
     for _ in 0..steps {
         world.step(torques);
     }
@@ -75,7 +75,7 @@ fn pendulum_gravity_torque_matches_the_lever_arm() {
 
 #[test]
 fn applied_torque_balances_gravity_in_the_world() {
-    let mut world = ArmWorld::from_urdf_str(PENDULUM, WorldConfig::default()).unwrap();
+    let mut world = RapierWorld::from_urdf_str(PENDULUM, WorldConfig::default()).unwrap();
     for q0 in [-0.5, 0.0, 0.6] {
         world.set_joint_positions(&[q0]).unwrap();
         let hold = world.gravity_torques(&[q0]).unwrap();
@@ -98,7 +98,7 @@ fn applied_torque_balances_gravity_in_the_world() {
 
 #[test]
 fn slider_holding_force_and_mimic_free_prismatic() {
-    let mut world = ArmWorld::from_urdf_str(SLIDER, WorldConfig::default()).unwrap();
+    let mut world = RapierWorld::from_urdf_str(SLIDER, WorldConfig::default()).unwrap();
     let hold = world.gravity_torques(&[0.0]).unwrap();
     assert!((hold[0] - 1.5 * 9.81).abs() < 1e-9);
     world.set_joint_positions(&[0.1]).unwrap();
@@ -112,7 +112,7 @@ fn slider_holding_force_and_mimic_free_prismatic() {
 
 #[test]
 fn external_torques_persist_until_changed() {
-    let mut world = ArmWorld::from_urdf_str(PENDULUM, WorldConfig::default()).unwrap();
+    let mut world = RapierWorld::from_urdf_str(PENDULUM, WorldConfig::default()).unwrap();
     let hold = world.gravity_torques(&[0.0]).unwrap();
     world.set_external_joint_torques(&[-3.0]);
     run(&mut world, 100, &hold);
@@ -128,7 +128,7 @@ fn external_torques_persist_until_changed() {
 
 #[test]
 fn joint_limits_stop_the_joint() {
-    let mut world = ArmWorld::from_urdf_str(PENDULUM, WorldConfig::default()).unwrap();
+    let mut world = RapierWorld::from_urdf_str(PENDULUM, WorldConfig::default()).unwrap();
     run(&mut world, 3000, &[-15.0]);
     let q = world.joint_positions()[0];
     assert!(q >= -1.0 - 1e-6, "limit −1 rad, got {q}");
@@ -138,7 +138,7 @@ fn joint_limits_stop_the_joint() {
 #[test]
 fn input_errors_are_typed() {
     assert!(matches!(
-        ArmWorld::from_urdf_str("<robot", WorldConfig::default()),
+        RapierWorld::from_urdf_str("<robot", WorldConfig::default()),
         Err(PhysicsError::Parse { .. })
     ));
     let bad_step = WorldConfig {
@@ -146,17 +146,17 @@ fn input_errors_are_typed() {
         ..WorldConfig::default()
     };
     assert!(matches!(
-        ArmWorld::from_urdf_str(PENDULUM, bad_step),
+        RapierWorld::from_urdf_str(PENDULUM, bad_step),
         Err(PhysicsError::InvalidConfig { .. })
     ));
     assert!(matches!(
-        ArmWorld::from_urdf_file(
+        RapierWorld::from_urdf_file(
             std::path::Path::new("/nonexistent.urdf"),
             WorldConfig::default()
         ),
         Err(PhysicsError::Io { .. })
     ));
-    let mut world = ArmWorld::from_urdf_str(PENDULUM, WorldConfig::default()).unwrap();
+    let mut world = RapierWorld::from_urdf_str(PENDULUM, WorldConfig::default()).unwrap();
     assert!(matches!(
         world.set_joint_positions(&[0.0, 0.0]),
         Err(PhysicsError::LengthMismatch {
@@ -181,7 +181,7 @@ fn input_errors_are_typed() {
 
 #[test]
 fn piper_joint_table_is_read_from_the_urdf() {
-    let world = ArmWorld::from_urdf_str(PIPER, WorldConfig::default()).unwrap();
+    let world = RapierWorld::from_urdf_str(PIPER, WorldConfig::default()).unwrap();
     let names: Vec<&str> = world.joints().iter().map(|j| j.name.as_str()).collect();
     assert_eq!(
         names,
@@ -201,7 +201,7 @@ fn piper_joint_table_is_read_from_the_urdf() {
 
 #[test]
 fn rapier_link_poses_match_our_forward_kinematics() {
-    let mut world = ArmWorld::from_urdf_str(PIPER, WorldConfig::default()).unwrap();
+    let mut world = RapierWorld::from_urdf_str(PIPER, WorldConfig::default()).unwrap();
     let q = [0.4, 1.2, -1.0, 0.5, -0.6, 0.8, 0.02, -0.02];
     world.set_joint_positions(&q).unwrap();
     let got = world.joint_positions();
@@ -219,7 +219,7 @@ fn rapier_link_poses_match_our_forward_kinematics() {
 
 #[test]
 fn mimic_follower_tracks_its_leader() {
-    let mut world = ArmWorld::from_urdf_str(PIPER, WorldConfig::default()).unwrap();
+    let mut world = RapierWorld::from_urdf_str(PIPER, WorldConfig::default()).unwrap();
     let mut q = [0.0, 1.0, -1.0, 0.0, 0.0, 0.0, 0.01, 0.0];
     world.set_joint_positions(&q).unwrap();
     assert!((world.joint_positions()[7] + 0.01).abs() < 1e-6);
@@ -236,7 +236,7 @@ fn mimic_follower_tracks_its_leader() {
 
 #[test]
 fn obstacles_report_contacts_until_removed() {
-    let mut world = ArmWorld::from_urdf_str(PENDULUM, WorldConfig::default()).unwrap();
+    let mut world = RapierWorld::from_urdf_str(PENDULUM, WorldConfig::default()).unwrap();
     // The bob (r = 5 cm) swings down on a 0.5 m radius from (0, 0, 1); a table whose top is
     // at z = 0.8 under x = 0.3…0.7 catches it at q = asin(0.3) ≈ 0.305 rad.
     let wall = world.add_obstacle(
@@ -271,7 +271,7 @@ fn obstacles_report_contacts_until_removed() {
 #[test]
 fn same_inputs_give_the_same_trajectory() {
     let trajectory = || {
-        let mut world = ArmWorld::from_urdf_str(PIPER, WorldConfig::default()).unwrap();
+        let mut world = RapierWorld::from_urdf_str(PIPER, WorldConfig::default()).unwrap();
         world
             .set_joint_positions(&[0.2, 1.0, -1.2, 0.1, 0.3, 0.0, 0.0, 0.0])
             .unwrap();
@@ -292,7 +292,7 @@ fn time_advances_by_whole_steps() {
         step_s: 0.002,
         ..WorldConfig::default()
     };
-    let mut world = ArmWorld::from_urdf_str(PENDULUM, config).unwrap();
+    let mut world = RapierWorld::from_urdf_str(PENDULUM, config).unwrap();
     run(&mut world, 250, &[0.0]);
     assert_eq!(world.steps(), 250);
     assert!((world.time_s() - 0.5).abs() < 1e-12);
@@ -341,7 +341,7 @@ fn mass_matrix_diagonal_is_m_l_squared_plus_own_inertia() {
 
 #[test]
 fn a_torque_beyond_f32_counts_as_zero_instead_of_poisoning_the_world() {
-    let mut world = ArmWorld::from_urdf_str(PENDULUM, WorldConfig::default()).unwrap();
+    let mut world = RapierWorld::from_urdf_str(PENDULUM, WorldConfig::default()).unwrap();
     // Finite in f64, infinite in rapier's f32.
     world.set_external_joint_torques(&[1e308]);
     assert_eq!(world.external_joint_torques(), &[0.0]);
@@ -355,7 +355,7 @@ fn a_torque_beyond_f32_counts_as_zero_instead_of_poisoning_the_world() {
 
 #[test]
 fn a_diverged_world_says_so_from_then_on() {
-    let mut world = ArmWorld::from_urdf_str(PENDULUM, WorldConfig::default()).unwrap();
+    let mut world = RapierWorld::from_urdf_str(PENDULUM, WorldConfig::default()).unwrap();
     assert!(world.check_finite().is_ok());
     // Finite in f32, but its acceleration over a step is not.
     world.set_external_joint_torques(&[3e38]);
@@ -376,7 +376,7 @@ fn a_diverged_world_says_so_from_then_on() {
 #[cfg(unix)]
 #[test]
 fn a_urdf_path_to_a_device_is_refused_not_read() {
-    let err = ArmWorld::from_urdf_file(std::path::Path::new("/dev/zero"), WorldConfig::default())
+    let err = RapierWorld::from_urdf_file(std::path::Path::new("/dev/zero"), WorldConfig::default())
         .unwrap_err();
     assert_eq!(
         err.to_string(),
@@ -425,7 +425,7 @@ const TURNTABLE: &str = r#"<?xml version="1.0"?>
 </robot>"#;
 
 /// rapier keeps the friction in `f32`: compare to that precision.
-fn assert_friction(world: &ArmWorld, joint: usize, expected: f64) {
+fn assert_friction(world: &RapierWorld, joint: usize, expected: f64) {
     let got = world.friction_in_effect(joint).expect("a known joint");
     assert!(
         (got - expected).abs() < 1e-6,
@@ -433,8 +433,8 @@ fn assert_friction(world: &ArmWorld, joint: usize, expected: f64) {
     );
 }
 
-fn turntable(kinetic: Option<f64>) -> ArmWorld {
-    let mut world = ArmWorld::from_urdf_str(TURNTABLE, WorldConfig::default()).expect("loads");
+fn turntable(kinetic: Option<f64>) -> RapierWorld {
+    let mut world = RapierWorld::from_urdf_str(TURNTABLE, WorldConfig::default()).expect("loads");
     world.set_kinetic_friction(
         0,
         kinetic.map(|k| KineticFriction {
@@ -514,7 +514,7 @@ fn a_collision_mesh_meets_obstacles_as_its_hull_where_its_primitive_would() {
             cube.display()
         ),
     );
-    let mut world = ArmWorld::from_urdf_str(&urdf, WorldConfig::default()).unwrap();
+    let mut world = RapierWorld::from_urdf_str(&urdf, WorldConfig::default()).unwrap();
     let table = world.add_obstacle(
         ObstacleShape::Box {
             half_extents_m: [0.2, 0.5, 0.4],

@@ -18,7 +18,7 @@ use nalgebra::{
 use crate::kinematics::{jacobian_column, joint_frames_m, pose_error, zyx_euler_rad, MdhRow};
 
 /// The Piper URDF (authored by the project, see `urdf/README.md`), for
-/// [`crate::physics::ArmWorld::from_urdf_str`].
+/// [`crate::physics::RapierWorld::from_urdf_str`].
 pub const PIPER_URDF: &str = include_str!("../../../urdf/piper.urdf");
 
 /// Number of arm joints.

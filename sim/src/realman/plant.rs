@@ -21,7 +21,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::physics::{ArmWorld, PhysicsError, WorldConfig};
+use crate::physics::{RapierWorld, PhysicsError, WorldConfig};
 
 use super::model::ArmModel;
 
@@ -76,7 +76,7 @@ pub enum PlantError {
 
 /// The simulated arm: rapier world, joint controllers, brakes, electrical and thermal state.
 pub struct ArmPlant {
-    world: ArmWorld,
+    world: RapierWorld,
     dof: usize,
     q: Vec<f64>,
     v: Vec<f64>,
@@ -125,7 +125,7 @@ impl ArmPlant {
             model: model.name.clone(),
             dof: model.dof,
         })?;
-        let mut world = ArmWorld::from_urdf_str(urdf, WorldConfig::default())?;
+        let mut world = RapierWorld::from_urdf_str(urdf, WorldConfig::default())?;
         world.set_joint_positions(initial_rad)?;
         let joints = world.joints();
         let dof = joints.len();
@@ -325,12 +325,12 @@ impl ArmPlant {
     }
 
     /// The physics world (link poses, contacts, the URDF model).
-    pub fn world(&self) -> &ArmWorld {
+    pub fn world(&self) -> &RapierWorld {
         &self.world
     }
 
     /// The physics world, to add obstacles or disturbance torques (collision faults).
-    pub fn world_mut(&mut self) -> &mut ArmWorld {
+    pub fn world_mut(&mut self) -> &mut RapierWorld {
         &mut self.world
     }
 }

@@ -7,6 +7,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use crate::description::{CollisionGeometry, MissingMeshes, PackagePaths};
+use crate::physics::Solver;
 use crate::robstride::MotorConfig;
 
 /// How the robot's root link meets the world.
@@ -126,6 +127,8 @@ pub struct RobotConfig {
     pub base: Base,
     /// A floating base's stand at start (ignored for a fixed base).
     pub gantry: Gantry,
+    /// The solver stepping its world (the articulated-body solver unless the file says).
+    pub physics: Solver,
     /// The buses.
     pub buses: Vec<BusConfig>,
     /// The actuated joints; joints not listed are passive.

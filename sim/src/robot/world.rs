@@ -2,7 +2,7 @@
 
 use crate::description::{Description, DescriptionError};
 use crate::physics::articulated::ArticulatedWorld;
-use crate::physics::{PhysicsError, WorldConfig};
+use crate::physics::{PhysicsError, Solver, World, WorldConfig};
 
 use super::config::{Base, Gantry, RobotConfig};
 use super::joint_plant::{joint_pair, JointLink, JointPlant};
@@ -13,7 +13,7 @@ const INERTIA_REFRESH_STEPS: u64 = 10;
 
 /// The robot's world and, per actuator, the link to its joint.
 pub struct RobotWorld {
-    world: ArticulatedWorld,
+    world: Box<dyn World>,
     /// Per actuator (configuration order): the world's joint index and the link.
     joints: Vec<(usize, JointLink)>,
     /// Per world joint, the torque applied in the last step (N·m).
@@ -54,9 +54,9 @@ impl RobotWorld {
     /// rotor inertia, and returns the world with one [`JointPlant`] per actuator (in
     /// configuration order) for the actuators' firmware.
     pub fn new(config: &RobotConfig) -> Result<(Self, Vec<JointPlant>), RobotWorldError> {
-        // Our articulated-body solver rather than rapier's multibody: a humanoid's 26 degrees
-        // of freedom cost rapier a dense mass matrix per substep (290-460 µs per 1 ms step),
-        // the solver walks the tree (~33 µs; see `physics::articulated`).
+        // The articulated-body solver by default rather than rapier's multibody: a humanoid's
+        // 26 degrees of freedom cost rapier a dense mass matrix per substep (290-460 µs per
+        // 1 ms step), the solver walks the tree (~33 µs; see `physics::articulated`).
         let world_config = WorldConfig {
             floating_base_height_m: match config.base {
                 Base::Fixed => None,
@@ -72,10 +72,23 @@ impl RobotWorld {
                 &config.convex_decomposition,
             )?),
         };
-        let mut world = ArticulatedWorld::from_description(&description, &geometry, world_config)?;
-        if let Some(excluded) = &config.self_collision {
-            world.enable_self_collision(&geometry, excluded)?;
-        }
+        let mut world: Box<dyn World> = match (config.physics, &config.self_collision) {
+            (Solver::Articulated, excluded) => {
+                let mut world =
+                    ArticulatedWorld::from_description(&description, &geometry, world_config)?;
+                if let Some(excluded) = excluded {
+                    world.enable_self_collision(&geometry, excluded)?;
+                }
+                Box::new(world)
+            }
+            (Solver::Rapier, None) => Solver::Rapier.load(&description, &geometry, world_config)?,
+            (Solver::Rapier, Some(_)) => {
+                return Err(PhysicsError::Unsupported {
+                    what: "self-collision (the articulated solver's: physics: articulated)".into(),
+                }
+                .into())
+            }
+        };
         let index_of = |name: &str| {
             world
                 .joint_index(name)
@@ -103,7 +116,7 @@ impl RobotWorld {
         }
         world.set_joint_positions(&q)?;
         let floating = matches!(config.base, Base::Floating { .. });
-        world.set_root_held(floating && config.gantry != Gantry::Off);
+        world.set_root_held(floating && config.gantry != Gantry::Off)?;
         let inertia = world.mass_matrix_diagonal();
         let mut joints = Vec::with_capacity(indices.len());
         let mut plants = Vec::with_capacity(indices.len());
@@ -155,13 +168,14 @@ impl RobotWorld {
     /// Lets the stand go of the base (see [`Gantry`]); `false` when it held nothing.
     pub fn release_base(&mut self) -> bool {
         let held = self.world.root_held();
-        self.world.set_root_held(false);
+        // Letting go is within every solver's reach (one that cannot hold never held).
+        let _ = self.world.set_root_held(false);
         held
     }
 
     /// The physics world (positions, link poses for views and checks).
-    pub fn world(&self) -> &ArticulatedWorld {
-        &self.world
+    pub fn world(&self) -> &dyn World {
+        self.world.as_ref()
     }
 
     /// The world's joint index of actuator `actuator` (configuration order).

@@ -6,7 +6,7 @@
 //!   [`Ranges`] per motor) and electrical/thermal facts; [`params`]: the 0x70xx table;
 //!   [`host_params`]: the per-model host-tool tables 0x20xx/0x30xx that type 17 also serves.
 //! - [`rig`]: the load the motor drives ([`Load`]), its URDF, and two integrators
-//!   ([`RigPlant`], or [`WorldPlant`] on `sim::physics::ArmWorld`, chosen by [`PlantKind`]).
+//!   ([`RigPlant`], or [`WorldPlant`] on `sim::physics::RapierWorld`, chosen by [`PlantKind`]).
 //! - [`RobstrideBus::spawn`]: many actuators on one [`bus::CanBus`], with a
 //!   [`RobstrideHandle`] for the harness: `inject` / `clear` typed [`Fault`]s,
 //!   `set_bus_voltage`, `set_temperature`, `set_external_torque`, `snapshot`, `shutdown`.

@@ -228,10 +228,10 @@ fn inertial_block(mass_kg: f64, com: [f64; 3], diag: [f64; 3], extra: &str) -> S
     )
 }
 
-/// The rig in the shared physics world (`sim::physics::ArmWorld`, rapier3d), loaded from
+/// The rig in the shared physics world (`sim::physics::RapierWorld`, rapier3d), loaded from
 /// [`rig_urdf_with_rotor`]. The world's step must equal the controller's substep (100 µs).
 pub struct WorldPlant {
-    world: crate::physics::ArmWorld,
+    world: crate::physics::RapierWorld,
     inertia_kg_m2: f64,
     friction_nm_s_per_rad: f64,
     external_nm: f64,
@@ -252,7 +252,7 @@ impl WorldPlant {
             step_s,
             ..crate::physics::WorldConfig::default()
         };
-        let mut world = crate::physics::ArmWorld::from_urdf_str(&urdf, config)?;
+        let mut world = crate::physics::RapierWorld::from_urdf_str(&urdf, config)?;
         world.set_joint_positions(&[start_rad])?;
         Ok(Self {
             world,

@@ -7,7 +7,7 @@
 //! - Masses: link6 no longer counts the gripper twice; J3 holds the audit pose with < 5 N·m.
 
 use bus::CanFrame;
-use sim::physics::{ArmWorld, WorldConfig};
+use sim::physics::{RapierWorld, WorldConfig};
 use sim::piper::codec::mit::{pack, MitCommand, MitRaw};
 use sim::piper::kinematics::PIPER_URDF;
 use sim::piper::motor::ARMATURE_KG_M2;
@@ -167,7 +167,7 @@ fn frictionless_urdf() -> String {
 
 #[test]
 fn armature_enters_rapier_as_the_model_mass_matrix_says() {
-    let mut world = ArmWorld::from_urdf_str(&frictionless_urdf(), WorldConfig::default())
+    let mut world = RapierWorld::from_urdf_str(&frictionless_urdf(), WorldConfig::default())
         .expect("the Piper URDF loads");
     let q = [0.3, 1.0, -1.2, 0.4, -0.5, 0.2, 0.0, 0.0];
     for (j, a) in ARMATURE_KG_M2.iter().enumerate() {
@@ -214,7 +214,7 @@ fn armature_enters_rapier_as_the_model_mass_matrix_says() {
 
 #[test]
 fn masses_match_agilex_and_j3_holds_the_audit_pose_under_5_nm() {
-    let world = ArmWorld::from_urdf_str(PIPER_URDF, WorldConfig::default()).expect("loads");
+    let world = RapierWorld::from_urdf_str(PIPER_URDF, WorldConfig::default()).expect("loads");
     let model = world.model();
     let base = model.inertials()[model.link_index("base_link").expect("base")].mass_kg;
     let moving = model.moving_mass_kg();
@@ -237,7 +237,7 @@ fn masses_match_agilex_and_j3_holds_the_audit_pose_under_5_nm() {
     let link6 = "<mass value=\"0.007\"/>";
     assert!(PIPER_URDF.contains(link6));
     let doubled = PIPER_URDF.replace(link6, "<mass value=\"0.46\"/>");
-    let old = ArmWorld::from_urdf_str(&doubled, WorldConfig::default()).expect("loads");
+    let old = RapierWorld::from_urdf_str(&doubled, WorldConfig::default()).expect("loads");
     let old_tau = old.gravity_torques(&q).expect("valid pose");
     eprintln!(
         "J3 at the audit pose: {:.3} N·m now, {:.3} N·m with link6 = 0.46 kg",

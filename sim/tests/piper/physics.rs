@@ -8,7 +8,7 @@
 //! - Joint limits: a torque-limited PD controller driving a joint toward a target past its
 //!   limit never takes it past the URDF limit.
 
-use sim::physics::{ArmWorld, JointInfo, WorldConfig};
+use sim::physics::{RapierWorld, JointInfo, WorldConfig};
 use sim::piper::kinematics::PIPER_URDF;
 
 /// Per-joint PD + integral gains (kp N·m/rad, kd N·m·s/rad, ki N·m/(rad·s)), scaled to each
@@ -57,12 +57,12 @@ impl Controller {
     }
 }
 
-fn piper_world() -> ArmWorld {
-    ArmWorld::from_urdf_str(PIPER_URDF, WorldConfig::default()).expect("the Piper URDF loads")
+fn piper_world() -> RapierWorld {
+    RapierWorld::from_urdf_str(PIPER_URDF, WorldConfig::default()).expect("the Piper URDF loads")
 }
 
 /// The Piper world with every `<dynamics friction>` set to 0.
-fn frictionless_piper_world() -> ArmWorld {
+fn frictionless_piper_world() -> RapierWorld {
     let mut urdf = String::with_capacity(PIPER_URDF.len());
     let mut rest = PIPER_URDF;
     while let Some(i) = rest.find("friction=\"") {
@@ -75,14 +75,14 @@ fn frictionless_piper_world() -> ArmWorld {
         rest = &rest[value_start + end..];
     }
     urdf.push_str(rest);
-    let world = ArmWorld::from_urdf_str(&urdf, WorldConfig::default()).expect("loads");
+    let world = RapierWorld::from_urdf_str(&urdf, WorldConfig::default()).expect("loads");
     assert!(world.joints().iter().all(|j| j.friction == 0.0));
     world
 }
 
 /// Holds `pose` for 3 s and returns the mean controller torque over the last 0.5 s and the
 /// largest position error over that window.
-fn settle_holding_torques(world: &mut ArmWorld, pose: &[f64]) -> (Vec<f64>, f64) {
+fn settle_holding_torques(world: &mut RapierWorld, pose: &[f64]) -> (Vec<f64>, f64) {
     world.set_joint_positions(pose).expect("pose within limits");
     let joints = world.joints().to_vec();
     let mut controller = Controller::new(pose, world.config().step_s);

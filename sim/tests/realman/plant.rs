@@ -3,7 +3,7 @@
 
 use rand::rngs::SmallRng;
 use rand::{Rng, SeedableRng};
-use sim::physics::{ArmModel as UrdfModel, ArmWorld, WorldConfig};
+use sim::physics::{ArmModel as UrdfModel, RapierWorld, WorldConfig};
 use sim::realman::kinematics::forward_isometry;
 use sim::realman::model::ArmModel;
 use sim::realman::planner::plan_joint;
@@ -20,7 +20,7 @@ fn urdf_flange_link_is_the_mdh_flange() {
     for model in [ArmModel::rm65b(), ArmModel::rm75b()] {
         let text = urdf_for(&model).expect("urdf");
         let urdf = UrdfModel::from_urdf_str(text).expect("urdf");
-        let mut world = ArmWorld::from_urdf_str(text, WorldConfig::default()).expect("world");
+        let mut world = RapierWorld::from_urdf_str(text, WorldConfig::default()).expect("world");
         let tip = format!("Link{}", model.dof);
         let mut rng = SmallRng::seed_from_u64(65);
         let (mut worst_urdf, mut worst_rapier) = (0.0_f64, 0.0_f64);

@@ -36,6 +36,7 @@ fn arm_config(start: &[(&str, f64)]) -> RobotConfig {
         convex_decomposition: Vec::new(),
         base: Base::Fixed,
         gantry: Default::default(),
+        physics: Default::default(),
         buses: ["can0", "can1"]
             .iter()
             .map(|name| BusConfig {
@@ -123,12 +124,26 @@ async fn send(host: &VirtualNode, frame: CanFrame) {
 
 #[tokio::test(start_paused = true)]
 async fn the_arm_holds_a_pose_against_gravity_with_the_torque_its_urdf_needs() {
+    holds_a_pose_against_gravity(sim::physics::Solver::Articulated).await;
+}
+
+/// The same robot on rapier's multibody (`physics: rapier`): the firmware cannot tell.
+#[tokio::test(start_paused = true)]
+async fn on_rapier_the_arm_holds_the_same_pose_with_the_same_torques() {
+    holds_a_pose_against_gravity(sim::physics::Solver::Rapier).await;
+}
+
+async fn holds_a_pose_against_gravity(physics: sim::physics::Solver) {
     let start = [
         ("shoulder_pitch", 1.0),
         ("elbow_pitch", 0.6),
         ("wrist_pitch", 0.3),
     ];
-    let rig = spawn(arm_config(&start));
+    let config = RobotConfig {
+        physics,
+        ..arm_config(&start)
+    };
+    let rig = spawn(config);
     let targets = [0.0, 1.0, 0.6, 0.0, 0.3, 0.0];
     for (k, target) in targets.iter().enumerate() {
         let bus = usize::from(k >= 3);

@@ -5,6 +5,7 @@
 use nalgebra::{DVector, Point3, Vector3};
 
 use super::ArticulatedWorld;
+use crate::physics::conformance::conservative;
 use crate::physics::WorldConfig;
 
 const HUMANOID: &str = include_str!("../../../../urdf/humanoid.urdf");
@@ -21,28 +22,6 @@ fn floating(urdf: &str, height_m: f64, gravity: [f64; 3]) -> ArticulatedWorld {
         ..WorldConfig::default()
     };
     ArticulatedWorld::from_urdf_str(urdf, config).unwrap()
-}
-
-/// `urdf` with no damping, no friction and limits so far out that no joint reaches a stop
-/// (stops are inelastic): a conservative system.
-fn conservative(urdf: &str) -> String {
-    let mut out = urdf
-        .replace("damping=", "data-damping=")
-        .replace("friction=", "data-friction=");
-    for (attribute, value) in [("lower=\"", "-100"), ("upper=\"", "100")] {
-        let mut rest = out.as_str();
-        let mut done = String::with_capacity(out.len());
-        while let Some(at) = rest.find(attribute) {
-            let start = at + attribute.len();
-            let end = start + rest[start..].find('"').unwrap();
-            done.push_str(&rest[..start]);
-            done.push_str(value);
-            rest = &rest[end..];
-        }
-        done.push_str(rest);
-        out = done;
-    }
-    out
 }
 
 /// A pose inside every joint's limits, different per joint.

@@ -58,7 +58,7 @@ impl Default for JointPass {
 /// One URDF tree, fixed or free at its root, stepped in `O(links)` per substep with
 /// Featherstone's articulated-body algorithm and ground contact from its collision primitives.
 ///
-/// What it simulates, and how it differs from the rapier world ([`crate::physics::ArmWorld`]):
+/// What it simulates, and how it differs from the rapier world ([`crate::physics::RapierWorld`]):
 /// - joints: motor and external torques, each joint's armature (on the articulated
 ///   inertia), URDF damping and dry friction (both implicit), stops at the URDF limits
 ///   (a stiff implicit spring; observed positions are clamped to the limits); `<mimic>`

@@ -1,4 +1,4 @@
-//! [`ArmWorld`]: a fixed-base articulated rapier3d world loaded from a URDF.
+//! [`RapierWorld`]: a fixed-base articulated rapier3d world loaded from a URDF.
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -11,36 +11,12 @@ use rapier3d::prelude::{
 };
 use rapier3d_urdf::{UrdfLoaderOptions, UrdfMultibodyOptions, UrdfRobot};
 
-use super::error::{Divergence, PhysicsError};
-use super::friction::KineticFriction;
-use super::model::{ArmModel, JointInfo, JointKind, DEFAULT_GRAVITY_M_S2};
-use super::obstacle::{Contact, ObstacleId, ObstacleShape};
 use crate::description::{CollisionGeometry, CollisionShape, Description, PackagePaths};
-
-/// Configuration of an [`ArmWorld`] (and of the articulated-body solver's world,
-/// [`super::articulated::ArticulatedWorld`]).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct WorldConfig {
-    /// Length of one [`ArmWorld::step`], s. Default 0.001 (1 kHz).
-    pub step_s: f64,
-    /// Gravity in the URDF base frame, m/s². Default `[0, 0, −9.81]` (URDF is Z-up).
-    pub gravity_m_s2: [f64; 3],
-    /// `None` (default): the URDF root link is fixed to the world at the origin. `Some(h)`:
-    /// the root link is a free body whose origin starts `h` m above the world origin (a
-    /// legged robot; give an `ArmWorld` ground to stand on with [`ArmWorld::add_obstacle`],
-    /// an `ArticulatedWorld` has the plane z = 0).
-    pub floating_base_height_m: Option<f64>,
-}
-
-impl Default for WorldConfig {
-    fn default() -> Self {
-        Self {
-            step_s: 0.001,
-            gravity_m_s2: DEFAULT_GRAVITY_M_S2,
-            floating_base_height_m: None,
-        }
-    }
-}
+use crate::physics::error::{Divergence, PhysicsError};
+use crate::physics::friction::KineticFriction;
+use crate::physics::model::{ArmModel, JointInfo, JointKind};
+use crate::physics::obstacle::{Contact, ObstacleId, ObstacleShape};
+use crate::physics::WorldConfig;
 
 /// Solver iterations (substeps) per step for a floating base.
 const FLOATING_SOLVER_ITERATIONS: usize = 2;
@@ -61,10 +37,10 @@ struct JointBinding {
 /// An articulated world: one URDF tree as a rapier3d multibody, gravity, static
 /// obstacles, and motor torques applied at the joints.
 ///
-/// - Time advances only through [`ArmWorld::step`], by exactly `config.step_s`; rapier is
+/// - Time advances only through [`RapierWorld::step`], by exactly `config.step_s`; rapier is
 ///   built with `enhanced-determinism`, so the same inputs give the same trajectory.
 /// - Joint vectors (positions, velocities, torques) have one entry per actuated joint in the
-///   order of [`ArmWorld::joints`] (URDF document order); units are rad, rad/s, N·m for
+///   order of [`RapierWorld::joints`] (URDF document order); units are rad, rad/s, N·m for
 ///   revolute joints and m, m/s, N for prismatic joints.
 /// - The URDF root link is fixed to the world, or free above it
 ///   ([`WorldConfig::floating_base_height_m`]). Self-collisions are disabled (the primitive
@@ -75,10 +51,10 @@ struct JointBinding {
 ///   *not* enforced here: the caller's motor model clamps its torque to
 ///   [`JointInfo::effort_limit`]. `<dynamics>` damping and friction and `<mimic>` couplings
 ///   from the URDF are applied, and so is each joint's armature (reflected rotor inertia, set
-///   with [`ArmWorld::set_armature`]: URDF has no element for it). A joint's friction can be
-///   split into its breakaway and kinetic values ([`ArmWorld::set_kinetic_friction`]);
+///   with [`RapierWorld::set_armature`]: URDF has no element for it). A joint's friction can be
+///   split into its breakaway and kinetic values ([`RapierWorld::set_kinetic_friction`]);
 ///   joints never given a split keep the URDF value at every speed.
-pub struct ArmWorld {
+pub struct RapierWorld {
     model: ArmModel,
     config: WorldConfig,
     physics: PhysicsWorld,
@@ -87,7 +63,7 @@ pub struct ArmWorld {
     link_bodies: Vec<(RigidBodyHandle, String)>,
     external_torques: Vec<f64>,
     /// Per joint: the sliding friction and stick band, for joints that have one (see
-    /// [`ArmWorld::set_kinetic_friction`]); `None` keeps the URDF friction at every speed.
+    /// [`RapierWorld::set_kinetic_friction`]); `None` keeps the URDF friction at every speed.
     kinetic_friction: Vec<Option<KineticFriction>>,
     /// Per joint: consecutive steps its speed has stayed inside its stick band (saturating;
     /// a joint placed or built at rest starts stuck).
@@ -97,13 +73,13 @@ pub struct ArmWorld {
     steps: u64,
     warned_torque_len: bool,
     /// The first joint whose position or velocity stopped being finite, and the time it
-    /// happened: kept once set (see [`ArmWorld::check_finite`]).
+    /// happened: kept once set (see [`RapierWorld::check_finite`]).
     diverged: Divergence,
 }
 
-impl std::fmt::Debug for ArmWorld {
+impl std::fmt::Debug for RapierWorld {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("ArmWorld")
+        f.debug_struct("RapierWorld")
             .field("robot", &self.model.name())
             .field("joints", &self.model.joints().len())
             .field("obstacles", &self.obstacles.len())
@@ -177,18 +153,18 @@ fn finite_in_physics(value: f64) -> Option<f64> {
     (value as Real).is_finite().then_some(value)
 }
 
-impl ArmWorld {
-    /// Loads a URDF file (at most [`super::MAX_URDF_BYTES`]); its collision meshes are found
+impl RapierWorld {
+    /// Loads a URDF file (at most [`crate::physics::MAX_URDF_BYTES`]); its collision meshes are found
     /// from its folder and `ROS_PACKAGE_PATH` / `AMENT_PREFIX_PATH`, and collide with
     /// obstacles as their convex hulls.
     pub fn from_urdf_file(path: &Path, config: WorldConfig) -> Result<Self, PhysicsError> {
-        let text = super::model::read_urdf(path)?;
+        let text = crate::physics::model::read_urdf(path)?;
         let paths = PackagePaths::for_urdf(path, Vec::new());
         Self::from_text(text, paths, config)
     }
 
     /// Loads URDF text (collision meshes only by absolute paths: text has no folder). See
-    /// [`ArmWorld`] for what is simulated.
+    /// [`RapierWorld`] for what is simulated.
     pub fn from_urdf_str(xml: &str, config: WorldConfig) -> Result<Self, PhysicsError> {
         Self::from_text(xml.to_owned(), PackagePaths::default(), config)
     }
@@ -569,7 +545,7 @@ impl ArmWorld {
 
     /// Advances the world by one fixed step of `config.step_s` with the motor torques
     /// (N·m, revolute) / forces (N, prismatic) `joint_torques` applied at the joints, plus the
-    /// persistent external torques of [`ArmWorld::set_external_joint_torques`].
+    /// persistent external torques of [`RapierWorld::set_external_joint_torques`].
     ///
     /// Each joint torque is applied as an equal and opposite pair on the joint's two links (a
     /// pure torque about the joint axis; for a prismatic joint, opposite forces on one line
@@ -579,7 +555,7 @@ impl ArmWorld {
     /// `f32` precision) count as 0.
     ///
     /// After the step every joint position and velocity is checked: the first one that is not
-    /// finite is remembered and reported by [`ArmWorld::check_finite`] from then on (a
+    /// finite is remembered and reported by [`RapierWorld::check_finite`] from then on (a
     /// diverged world does not recover; its owner must treat it as an error, not read zeros).
     pub fn step(&mut self, joint_torques: &[f64]) {
         if joint_torques.len() != self.bindings.len() && !self.warned_torque_len {
@@ -715,7 +691,7 @@ impl ArmWorld {
         }
     }
 
-    /// Joint positions, rad or m, in [`ArmWorld::joints`] order.
+    /// Joint positions, rad or m, in [`RapierWorld::joints`] order.
     pub fn joint_positions(&self) -> Vec<f64> {
         self.bindings
             .iter()
@@ -729,7 +705,7 @@ impl ArmWorld {
             .collect()
     }
 
-    /// Joint velocities, rad/s or m/s, in [`ArmWorld::joints`] order.
+    /// Joint velocities, rad/s or m/s, in [`RapierWorld::joints`] order.
     pub fn joint_velocities(&self) -> Vec<f64> {
         self.bindings
             .iter()

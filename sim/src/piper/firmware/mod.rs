@@ -24,7 +24,7 @@ use super::motor::{DriveLaw, JointMotor};
 use super::profile::FirmwareProfile;
 use super::state::{ArmStatusSnapshot, PiperSimState};
 use super::trajectory::{JointMove, PathMove};
-use crate::physics::{ArmWorld, KineticFriction, ObstacleId, ObstacleShape, WorldConfig};
+use crate::physics::{RapierWorld, KineticFriction, ObstacleId, ObstacleShape, WorldConfig};
 use crate::state_file::InvalidField;
 
 pub use protections::FaultState;
@@ -111,7 +111,7 @@ pub(crate) enum LeaderHoming {
 /// The emulated master controller plus the physics it drives.
 pub struct Firmware {
     pub(crate) profile: FirmwareProfile,
-    pub(crate) world: ArmWorld,
+    pub(crate) world: RapierWorld,
     arm_idx: [usize; 6],
     finger_idx: [usize; 2],
     finger_sign: [f64; 2],
@@ -187,11 +187,11 @@ pub struct Firmware {
     pub(crate) delayed: Vec<(u64, CanFrame)>,
 }
 
-fn load_world(config: &PiperConfig) -> Result<ArmWorld, PiperError> {
+fn load_world(config: &PiperConfig) -> Result<RapierWorld, PiperError> {
     let world_config = WorldConfig::default();
     let mut world = match &config.urdf_path {
-        Some(path) => ArmWorld::from_urdf_file(path, world_config)?,
-        None => ArmWorld::from_urdf_str(super::config::BUNDLED_URDF, world_config)?,
+        Some(path) => RapierWorld::from_urdf_file(path, world_config)?,
+        None => RapierWorld::from_urdf_str(super::config::BUNDLED_URDF, world_config)?,
     };
     // URDF cannot carry the motors' rotor inertia: add it to joint1..joint6 here.
     for (j, armature) in super::motor::ARMATURE_KG_M2.iter().enumerate() {
@@ -219,7 +219,7 @@ fn load_world(config: &PiperConfig) -> Result<ArmWorld, PiperError> {
 /// joints hold still). Computed, not probed: a small test torque would not overcome the
 /// joints' dry friction.
 fn estimate_inertias(
-    world: &ArmWorld,
+    world: &RapierWorld,
     q0: &[f64],
     arm_idx: &[usize; 6],
 ) -> Result<[f64; 6], PiperError> {
@@ -237,7 +237,7 @@ fn estimate_inertias(
 }
 
 /// The six arm joints' and the two fingers' indices in the URDF world.
-fn find_joints(world: &ArmWorld) -> Result<([usize; 6], [usize; 2]), PiperError> {
+fn find_joints(world: &RapierWorld) -> Result<([usize; 6], [usize; 2]), PiperError> {
     let find = |name: &str| {
         world
             .joint_index(name)
@@ -264,7 +264,7 @@ fn find_joints(world: &ArmWorld) -> Result<([usize; 6], [usize; 2]), PiperError>
 /// its zero offsets against the URDF.
 fn boot_flash(
     config: &PiperConfig,
-    world: &ArmWorld,
+    world: &RapierWorld,
     arm_idx: [usize; 6],
     finger_idx: [usize; 2],
     finger_sign: [f64; 2],
@@ -319,7 +319,7 @@ fn boot_flash(
 /// zero offsets, refused outside the URDF's range) and each finger at half the opening.
 fn initial_positions(
     config: &PiperConfig,
-    world: &ArmWorld,
+    world: &RapierWorld,
     flash: &Flash,
     arm_idx: [usize; 6],
     finger_idx: [usize; 2],

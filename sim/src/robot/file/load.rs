@@ -7,8 +7,7 @@ use super::error::{FileError, Position as Pos};
 use super::raw::{RawRobot, RawSelfCollision, S};
 use crate::bounded_read::read_text_file;
 use crate::description::{Description, DescriptionError, MissingMeshes, PackagePaths};
-use crate::physics::articulated::ArticulatedWorld;
-use crate::physics::{read_urdf, ArmModel, JointKind, WorldConfig};
+use crate::physics::{read_urdf, ArmModel, JointKind, Solver, WorldConfig};
 use crate::robot::{Base, BusConfig, Gantry, JointActuator, RobotConfig};
 use crate::robstride::{baud_code_bps, Model, MotorConfig, DEFAULT_HOST_ID};
 use crate::yaml_words::suggestion;
@@ -127,8 +126,10 @@ impl Checker<'_> {
         let collision = description
             .collision_geometry_decomposed(missing_meshes, &convex_decomposition)
             .map_err(in_urdf)?;
+        let physics = self.physics(&raw)?;
         // What the physics refuses (a joint that moves nothing with mass), said now.
-        ArticulatedWorld::from_description(&description, &collision, WorldConfig::default())
+        physics
+            .load(&description, &collision, WorldConfig::default())
             .map_err(|e| {
                 self.err(
                     pos(&raw.urdf),
@@ -276,6 +277,7 @@ impl Checker<'_> {
                 collision: Some(std::sync::Arc::new(collision)),
                 base,
                 gantry,
+                physics,
                 buses,
                 actuators,
                 start_positions_rad,
@@ -437,6 +439,53 @@ impl Checker<'_> {
                 format!("`missing_meshes` must be `refuse` or `skip`, got `{other}`"),
             )),
         }
+    }
+
+    /// `physics:`: the solver, and what only the articulated solver does (a gantry holding
+    /// a floating base, self-collision) refused with rapier's.
+    fn physics(&self, raw: &RawRobot) -> Res<Solver> {
+        let Some(word) = &raw.physics else {
+            return Ok(Solver::default());
+        };
+        let words: Vec<&str> = Solver::ALL.iter().map(|s| s.word()).collect();
+        let solver = Solver::parse(&word.value).ok_or_else(|| {
+            self.err(
+                pos(word),
+                format!(
+                    "`physics` must be {}, got `{}`{}",
+                    words
+                        .iter()
+                        .map(|w| format!("`{w}`"))
+                        .collect::<Vec<_>>()
+                        .join(" or "),
+                    word.value,
+                    suggestion(&word.value, &words)
+                ),
+            )
+        })?;
+        if solver == Solver::Rapier {
+            let gantry_holds = raw
+                .gantry
+                .as_ref()
+                .is_some_and(|g| Gantry::parse(&g.value).is_ok_and(|g| g != Gantry::Off));
+            if gantry_holds {
+                return Err(self.err(
+                    pos(word),
+                    "`physics: rapier` cannot hold a floating base on a gantry (rapier's root is fixed or free for good): use `physics: articulated` or `gantry: off`",
+                ));
+            }
+            if raw
+                .self_collision
+                .as_ref()
+                .is_some_and(|c| !matches!(c.value, RawSelfCollision::Switch(false)))
+            {
+                return Err(self.err(
+                    pos(word),
+                    "`physics: rapier` has no self-collision (the articulated solver's): use `physics: articulated` or leave `self_collision` out",
+                ));
+            }
+        }
+        Ok(solver)
     }
 
     fn base(&self, raw: &RawRobot) -> Res<Base> {

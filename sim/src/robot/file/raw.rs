@@ -27,6 +27,8 @@ pub(super) struct RawRobot {
     pub base: Option<S<String>>,
     /// Floating base: `off` (default), `until_enabled` or `until_released`.
     pub gantry: Option<S<String>>,
+    /// The solver: `articulated` (default) or `rapier`.
+    pub physics: Option<S<String>>,
     /// Floating base: the root link's height above the ground at start (m).
     pub start_height_m: Option<S<f64>>,
     /// The buses.

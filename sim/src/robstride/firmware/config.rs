@@ -56,7 +56,7 @@ pub enum PlantKind {
     /// The one-joint rig integrated directly (fast; default).
     #[default]
     Analytic,
-    /// The rig's URDF in the rapier3d physics world ([`crate::physics::ArmWorld`]).
+    /// The rig's URDF in the rapier3d physics world ([`crate::physics::RapierWorld`]).
     World,
 }
 
