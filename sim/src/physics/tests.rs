@@ -376,8 +376,9 @@ fn a_diverged_world_says_so_from_then_on() {
 #[cfg(unix)]
 #[test]
 fn a_urdf_path_to_a_device_is_refused_not_read() {
-    let err = RapierWorld::from_urdf_file(std::path::Path::new("/dev/zero"), WorldConfig::default())
-        .unwrap_err();
+    let err =
+        RapierWorld::from_urdf_file(std::path::Path::new("/dev/zero"), WorldConfig::default())
+            .unwrap_err();
     assert_eq!(
         err.to_string(),
         "cannot read URDF file /dev/zero: not a regular file"

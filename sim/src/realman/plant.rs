@@ -21,7 +21,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::physics::{RapierWorld, PhysicsError, WorldConfig};
+use crate::physics::{PhysicsError, RapierWorld, WorldConfig};
 
 use super::model::ArmModel;
 

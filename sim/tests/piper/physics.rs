@@ -8,7 +8,7 @@
 //! - Joint limits: a torque-limited PD controller driving a joint toward a target past its
 //!   limit never takes it past the URDF limit.
 
-use sim::physics::{RapierWorld, JointInfo, WorldConfig};
+use sim::physics::{JointInfo, RapierWorld, WorldConfig};
 use sim::piper::kinematics::PIPER_URDF;
 
 /// Per-joint PD + integral gains (kp N·m/rad, kd N·m·s/rad, ki N·m/(rad·s)), scaled to each

@@ -24,7 +24,7 @@ use super::motor::{DriveLaw, JointMotor};
 use super::profile::FirmwareProfile;
 use super::state::{ArmStatusSnapshot, PiperSimState};
 use super::trajectory::{JointMove, PathMove};
-use crate::physics::{RapierWorld, KineticFriction, ObstacleId, ObstacleShape, WorldConfig};
+use crate::physics::{KineticFriction, ObstacleId, ObstacleShape, RapierWorld, WorldConfig};
 use crate::state_file::InvalidField;
 
 pub use protections::FaultState;
