@@ -25,6 +25,10 @@ pub struct SimKind {
     pub name: &'static str,
     /// The keys written as positional arguments rather than options (`file:` of a robot).
     pub positional_keys: &'static [&'static str],
+    /// The keys whose value is a file the device writes (`record`, `state_file`), with `_`
+    /// between words: no two devices of a bench may write one file, nor one device two of
+    /// its outputs to one file.
+    pub output_keys: &'static [&'static str],
 }
 
 impl SimKind {
@@ -178,12 +182,14 @@ pub fn load_bench_file(path: &Path, kinds: &[SimKind]) -> Result<BenchFile, Benc
         .into());
     }
     let mut devices = Vec::with_capacity(raw.devices.value.len());
+    let mut outputs = Vec::new();
     for (name, entry) in &raw.devices.value {
         let at = pos(entry);
         check_name(name).map_err(|message| err(at, message))?;
         let device_err = |at: Pos, message: String| err(at, format!("device `{name}`: {message}"));
         let kind = kind_of(kinds, &entry.value, at).map_err(|(at, m)| device_err(at, m))?;
         let args = command_line(kind, &entry.value).map_err(|(at, m)| device_err(at, m))?;
+        outputs.extend(outputs_of(name, kind, &entry.value, path));
         devices.push(BenchDevice {
             name: name.clone(),
             kind,
@@ -191,12 +197,131 @@ pub fn load_bench_file(path: &Path, kinds: &[SimKind]) -> Result<BenchFile, Benc
             entry: ScenarioError::new(path, at, "").with_source(&text),
         });
     }
+    if let Some((at, message)) = shared_output(outputs) {
+        return Err(err(at, message).into());
+    }
     Ok(BenchFile {
         file: path.to_owned(),
         devices,
     })
 }
 
+/// A file a device writes, as its entry names it.
+#[derive(Debug)]
+struct Output<'a> {
+    /// Where the value is.
+    at: Pos,
+    /// The device.
+    device: &'a str,
+    /// The key, with `_` between words (`state_file`).
+    key: String,
+    /// The value as written.
+    written: String,
+    /// The path resolved against the bench file's folder and normalised (shown in messages).
+    shown: PathBuf,
+    /// What two names of one file have in common (see [`same_file_key`]).
+    same: PathBuf,
+}
+
+/// The files an entry names for its kind's outputs, resolved against the folder of the bench
+/// file `bench` (as the CLI resolves them). A list of one item is that item; a longer one is
+/// left to the kind's parser, which takes such an option once only; `true`/`false` name no
+/// file.
+fn outputs_of<'a>(device: &'a str, kind: SimKind, entry: &Entry, bench: &Path) -> Vec<Output<'a>> {
+    let dir = bench.parent().unwrap_or(Path::new(""));
+    entry
+        .iter()
+        .filter_map(|(key, value)| {
+            let key = key.replace('-', "_");
+            if !kind.output_keys.contains(&key.as_str()) {
+                return None;
+            }
+            let written = match &value.value {
+                RawValue::Text(t) => t.clone(),
+                RawValue::Integer(i) => i.to_string(),
+                RawValue::Number(x) => x.to_string(),
+                RawValue::List(items) if items.len() == 1 => items[0].text(),
+                RawValue::Flag(_) | RawValue::List(_) => return None,
+            };
+            let shown = lexically_normal(&dir.join(&written));
+            Some(Output {
+                at: pos(value),
+                device,
+                key,
+                same: same_file_key(&shown),
+                written,
+                shown,
+            })
+        })
+        .collect()
+}
+
+/// The first output (in file order) that names a file an earlier one names too: its place and
+/// the message naming both devices, both keys and the file.
+fn shared_output(mut outputs: Vec<Output<'_>>) -> Option<(Pos, String)> {
+    outputs.sort_by_key(|o| (o.at.line, o.at.column));
+    outputs.iter().enumerate().find_map(|(k, later)| {
+        let earlier = outputs[..k].iter().find(|o| o.same == later.same)?;
+        let whose = if earlier.device == later.device {
+            "its own".to_owned()
+        } else {
+            format!("device `{}`'s", earlier.device)
+        };
+        Some((
+            later.at,
+            format!(
+                "device `{}`: `{}: {}` and {whose} `{}:` (line {}) are one file, {}: one would \
+                 overwrite the other; give each its own file",
+                later.device,
+                later.key,
+                later.written,
+                earlier.key,
+                earlier.at.line,
+                later.shown.display()
+            ),
+        ))
+    })
+}
+
+/// `path` with `.` left out and each `..` taking out the name before it, without asking the
+/// file system (the file need not exist yet): `rigs/./a/../x.json` → `rigs/x.json`. A `..`
+/// with no name before it stays (`../x.json`), as does one after the root (`/..` is `/`).
+fn lexically_normal(path: &Path) -> PathBuf {
+    use std::path::Component;
+    let mut out: Vec<Component<'_>> = Vec::new();
+    for component in path.components() {
+        match component {
+            Component::CurDir => {}
+            Component::ParentDir => match out.last() {
+                Some(Component::Normal(_)) => {
+                    out.pop();
+                }
+                Some(Component::RootDir | Component::Prefix(_)) => {}
+                _ => out.push(component),
+            },
+            other => out.push(other),
+        }
+    }
+    if out.is_empty() {
+        return PathBuf::from(".");
+    }
+    out.iter().collect()
+}
+
+/// What two names of one file share: the lexically normal path made absolute (from the
+/// working folder) and, when its folder exists, that folder as the file system names it
+/// (through symbolic links: `/tmp/x` and `/private/tmp/x` on macOS). The file itself need not
+/// exist.
+fn same_file_key(normal: &Path) -> PathBuf {
+    let absolute = std::path::absolute(normal)
+        .map(|p| lexically_normal(&p))
+        .unwrap_or_else(|_| normal.to_owned());
+    let real = absolute
+        .parent()
+        .zip(absolute.file_name())
+        .and_then(|(dir, name)| std::fs::canonicalize(dir).ok().map(|dir| dir.join(name)));
+    real.unwrap_or(absolute)
+}
 fn check_name(name: &str) -> Result<(), String> {
     let fine = |c: char| c.is_ascii_alphanumeric() || c == '_' || c == '-';
     if name.is_empty() || name.chars().count() > MAX_NAME_CHARS || !name.chars().all(fine) {

@@ -8,18 +8,22 @@ use super::*;
 const PIPER: SimKind = SimKind {
     name: "piper",
     positional_keys: &[],
+    output_keys: &["state_file", "record"],
 };
 const REALMAN: SimKind = SimKind {
     name: "realman",
     positional_keys: &[],
+    output_keys: &["state_file"],
 };
 const ROBSTRIDE: SimKind = SimKind {
     name: "robstride",
     positional_keys: &[],
+    output_keys: &["state_file"],
 };
 const ROBOT: SimKind = SimKind {
     name: "robot",
     positional_keys: &["file"],
+    output_keys: &["state_file"],
 };
 const KINDS: [SimKind; 4] = [PIPER, REALMAN, ROBSTRIDE, ROBOT];
 
@@ -133,4 +137,108 @@ fn a_device_error_names_the_device_at_its_entry() {
 fn a_file_that_is_not_one_is_refused_without_reading_it_all() {
     let error = load_bench_file(std::path::Path::new("/dev/zero"), &KINDS).unwrap_err();
     assert!(error.to_string().contains("not a regular file"), "{error}");
+}
+
+/// The headline of a bench file's error (file:line:column: message).
+fn headline(file: &std::path::Path) -> String {
+    match load_bench_file(file, &KINDS) {
+        Ok(_) => panic!("{} loaded", file.display()),
+        Err(BenchFileError::Invalid(e)) => e.headline(),
+        Err(other) => panic!("{other}"),
+    }
+}
+
+#[test]
+fn two_devices_writing_one_file_are_refused_at_the_later_one() {
+    // `a` sorts first but is written second: the message is at its value.
+    let (dir, file) = write(
+        "devices:
+  b: {kind: piper, record: ./out/x.log}
+  a:
+    kind: robot
+    file: r.yaml
+    state_file: out/y/../x.log
+",
+    );
+    assert_eq!(
+        headline(&file),
+        format!(
+            "{}:6:17: device `a`: `state_file: out/y/../x.log` and device `b`'s `record:` \
+             (line 2) are one file, {}: one would overwrite the other; give each its own file",
+            file.display(),
+            dir.path().join("out/x.log").display()
+        )
+    );
+}
+
+#[test]
+fn one_device_writing_two_outputs_to_one_file_is_refused() {
+    let (dir, file) = write("devices:\n  a: {kind: piper, state_file: a.json, record: a.json}\n");
+    assert_eq!(
+        headline(&file),
+        format!(
+            "{}:2:48: device `a`: `record: a.json` and its own `state_file:` (line 2) are one \
+             file, {}: one would overwrite the other; give each its own file",
+            file.display(),
+            dir.path().join("a.json").display()
+        )
+    );
+}
+
+#[test]
+fn an_output_given_as_a_list_of_one_is_that_file() {
+    let got =
+        load("devices:\n  a: {kind: piper, record: [x.log]}\n  b: {kind: piper, record: x.log}\n")
+            .unwrap_err();
+    assert!(
+        got.starts_with("3:28: device `b`: `record: x.log` and device `a`'s `record:` (line 2)"),
+        "{got}"
+    );
+}
+
+#[test]
+fn an_absolute_and_a_relative_name_of_one_file_are_one_file() {
+    let (dir, file) = write("");
+    let absolute = dir.path().join("s.json");
+    std::fs::write(
+        &file,
+        format!(
+            "devices:\n  a: {{kind: realman, state_file: {}}}\n  b: {{kind: robstride, state-file: s.json}}\n",
+            absolute.display()
+        ),
+    )
+    .unwrap();
+    let got = headline(&file);
+    assert!(
+        got.contains(":3:")
+            && got.contains("device `b`: `state_file: s.json` and device `a`'s `state_file:`"),
+        "{got}"
+    );
+}
+
+#[cfg(unix)]
+#[test]
+fn a_folder_reached_through_a_symbolic_link_is_the_same_folder() {
+    let (dir, file) = write("devices:\n  a: {kind: piper, record: real/x.log}\n  b: {kind: piper, record: link/x.log}\n");
+    std::fs::create_dir(dir.path().join("real")).unwrap();
+    std::os::unix::fs::symlink(dir.path().join("real"), dir.path().join("link")).unwrap();
+    let got = headline(&file);
+    assert!(
+        got.contains("device `b`: `record: link/x.log` and device `a`'s"),
+        "{got}"
+    );
+}
+
+#[test]
+fn different_files_and_inputs_are_not_outputs() {
+    // Same name in two folders; a URDF two devices read; an output left out (`false`).
+    load(
+        "devices:
+  a: {kind: piper, record: l/x.log, state_file: a.json, urdf: arm.urdf}
+  b: {kind: piper, record: r/x.log, state_file: b.json, urdf: ./arm.urdf}
+  c: {kind: realman, state_file: false}
+  d: {kind: realman, state_file: false}
+",
+    )
+    .unwrap();
 }

@@ -23,6 +23,7 @@ pub use base_pose::BasePose;
 pub use config::{Base, BusConfig, Gantry, JointActuator, RobotConfig, RobotConfigError};
 pub use faults::{RobotFault, RobotLayout};
 pub use runner::{
-    JointSnapshot, RobotEmulator, RobotError, RobotHandle, RobotMonitor, RobotSnapshot,
+    check_kept_ids, JointSnapshot, RobotEmulator, RobotError, RobotHandle, RobotMonitor,
+    RobotSnapshot,
 };
 pub use world::{RobotWorld, RobotWorldError};

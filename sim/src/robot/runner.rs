@@ -63,6 +63,15 @@ pub enum RobotError {
     /// The state file could not be read or written.
     #[error(transparent)]
     StateFile(#[from] StateFileError),
+    /// The state file would put two actuators of one bus on one CAN ID (a host moved one
+    /// there in an earlier run).
+    #[error("bus `{bus}`: {clash}")]
+    IdClash {
+        /// The bus.
+        bus: String,
+        /// Both actuators, the ID and the file.
+        clash: Box<crate::robstride::state_file::IdClash>,
+    },
     /// The emulator task has stopped.
     #[error("the robot emulator has stopped")]
     Stopped,
@@ -160,6 +169,7 @@ impl RobotEmulator {
             Some(path) => StateFile::load(path)?,
             None => StateFile::default(),
         };
+        check_kept_ids(&config, &state)?;
         let (world, plants) = RobotWorld::new(&config)?;
         let mut actuators = Vec::with_capacity(plants.len());
         for (spec, plant) in config.actuators.iter().zip(plants) {
@@ -382,6 +392,34 @@ struct Runner {
     base: Arc<std::sync::Mutex<BasePose>>,
     /// When the stand lets go of the base.
     gantry: Gantry,
+}
+
+/// Refuses a state file that would put two actuators of one bus on one CAN ID (a host moved
+/// one onto another's in an earlier run), naming both joints, the bus, the ID and the file:
+/// the robot's actuators keep their IDs in the same state file as a RobStride bus's motors,
+/// and are refused for the same reason (see `RobstrideBus::spawn`).
+pub fn check_kept_ids(config: &RobotConfig, kept: &StateFile) -> Result<(), RobotError> {
+    let Some(path) = &config.state_file else {
+        return Ok(());
+    };
+    for (k, bus) in config.buses.iter().enumerate() {
+        let on_bus = config.actuators.iter().filter(|a| a.bus == k).map(|a| {
+            let name = format!(
+                "joint `{}` (motor {}:{})",
+                a.joint,
+                a.motor.can_id,
+                a.motor.model.name()
+            );
+            (name, &a.motor)
+        });
+        if let Some(clash) = kept.id_clash(path, on_bus) {
+            return Err(RobotError::IdClash {
+                bus: bus.name.clone(),
+                clash: Box::new(clash),
+            });
+        }
+    }
+    Ok(())
 }
 
 /// Pose of the URDF root link (the tree's root, wherever the file lists it) in the world.

@@ -15,7 +15,7 @@ use crate::robstride::faults::{
 use crate::robstride::firmware::{
     Actuator, MotorConfig, MotorSnapshot, DEFAULT_HOST_ID, TURNAROUND,
 };
-use crate::robstride::state_file::{uid_key, StateFile, StateFileError};
+use crate::robstride::state_file::{uid_key, IdClash, StateFile, StateFileError};
 use crate::supervise::{DeathWatch, Supervisor};
 
 /// Configuration of an emulated RobStride bus.
@@ -47,12 +47,15 @@ impl RobstrideConfig {
 /// Why the emulator could not start or a harness request failed.
 #[derive(Debug, thiserror::Error)]
 pub enum RobstrideError {
-    /// Two motors would answer on the same CAN ID.
+    /// Two motors are configured with the same CAN ID.
     #[error("two motors use CAN ID {can_id}")]
     DuplicateCanId {
         /// The ID.
         can_id: u8,
     },
+    /// The state file would put two motors on one CAN ID at power-on (a host moved one).
+    #[error(transparent)]
+    IdClash(Box<IdClash>),
     /// A CAN ID outside 1..=127.
     #[error("CAN ID {can_id} is outside 1..=127")]
     InvalidCanId {
@@ -116,28 +119,47 @@ impl RobstrideBus {
             Some(path) => StateFile::load(path)?,
             None => StateFile::default(),
         };
-        let mut motors = Vec::with_capacity(config.motors.len());
-        for motor in &config.motors {
+        for (k, motor) in config.motors.iter().enumerate() {
             if !(1..=0x7F).contains(&motor.can_id) {
                 return Err(RobstrideError::InvalidCanId {
                     can_id: motor.can_id,
                 });
             }
-            let saved = state.motors.get(&uid_key(motor.effective_uid()));
-            let mut actuator = Actuator::new(motor.clone(), saved, config.bus_bitrate_bps);
-            if saved.is_none() {
-                actuator.set_master_id(config.host_id);
-            }
-            if motors
-                .iter()
-                .any(|other: &Actuator| other.can_id() == actuator.can_id())
-            {
+            if config.motors[..k].iter().any(|m| m.can_id == motor.can_id) {
                 return Err(RobstrideError::DuplicateCanId {
-                    can_id: actuator.can_id(),
+                    can_id: motor.can_id,
                 });
             }
-            motors.push(actuator);
         }
+        // Motors the state file puts on one ID (a host moved one onto another's) are refused,
+        // not served with a warning: both would answer every frame for that ID, so the host
+        // could not even move one of them away again (a "set CAN ID" to it moves both), and
+        // the harness could reach only the first. Refusing loses nothing: the file is not
+        // written before the motors run, and the message says which entry to edit or delete
+        // (or the emulator can be started without one of the two and the host move the other).
+        // Whatever protocol each speaks and whether it still hears the bus: the harness and
+        // the web view address motors by ID alone, and a switch back would make it a clash.
+        if let Some(path) = &config.state_file {
+            let named = config
+                .motors
+                .iter()
+                .map(|m| (format!("motor {}:{}", m.can_id, m.model.name()), m));
+            if let Some(clash) = state.id_clash(path, named) {
+                return Err(RobstrideError::IdClash(Box::new(clash)));
+            }
+        }
+        let motors: Vec<Actuator> = config
+            .motors
+            .iter()
+            .map(|motor| {
+                let saved = state.saved(motor);
+                let mut actuator = Actuator::new(motor.clone(), saved, config.bus_bitrate_bps);
+                if saved.is_none() {
+                    actuator.set_master_id(config.host_id);
+                }
+                actuator
+            })
+            .collect();
         let (requests, inbox) = mpsc::unbounded_channel();
         let configured_ids = motors.iter().map(Actuator::can_id).collect();
         let runner = Runner {
@@ -211,6 +233,12 @@ impl RobstrideHandle {
         self.view.snapshot().await
     }
 
+    /// The CAN ID each motor answered on at power-on, in configuration order: the one the
+    /// state file kept for it (a host moved it in an earlier run), else its configured one.
+    pub fn power_on_ids(&self) -> &[u8] {
+        self.view.configured_ids()
+    }
+
     /// A cloneable view of this emulator for monitors (the web view of `armhil sim --ui`):
     /// snapshot and fault calls, shareable between tasks; they fail with
     /// [`RobstrideError::Stopped`] once the emulator is shut down.
@@ -237,8 +265,9 @@ impl RobstrideHandle {
 #[derive(Debug, Clone)]
 pub struct RobstrideMonitor {
     requests: mpsc::UnboundedSender<Request>,
-    /// The CAN IDs the motors were configured with (a host may change them at run time):
-    /// what a front end suggests as a fault's `motor`.
+    /// The CAN IDs the motors answered on at power-on (the state file's, else the configured
+    /// ones; a host may change them at run time): what a front end suggests as a fault's
+    /// `motor`.
     configured_ids: Arc<[u8]>,
 }
 
@@ -271,7 +300,9 @@ impl RobstrideMonitor {
         self.ask(Request::Snapshot).await
     }
 
-    /// The CAN IDs the motors were configured with, in configuration order.
+    /// The CAN IDs the motors answered on at power-on, in configuration order: a state
+    /// file's where it kept one (a host moved the motor in an earlier run), else the
+    /// configured ones.
     pub fn configured_ids(&self) -> &[u8] {
         &self.configured_ids
     }
@@ -492,5 +523,79 @@ mod tests {
             "{m:?}"
         );
         emulator.shutdown().await;
+    }
+
+    /// Motor 1 moved to motor 2's ID by a host (comm type 7) and the emulator restarted from
+    /// its state file: two motors on one ID is refused, naming both, the ID and the file.
+    #[tokio::test(start_paused = true)]
+    async fn a_state_file_that_puts_two_motors_on_one_id_is_refused_naming_both() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("rs.json");
+        let mut config = RobstrideConfig::new(vec![
+            MotorConfig::new(1, Model::RS03),
+            MotorConfig::new(2, Model::RS02),
+        ]);
+        config.state_file = Some(path.clone());
+        let bus = VirtualBus::new(VirtualBusConfig::default());
+        let emulator =
+            RobstrideBus::spawn(Arc::new(bus.attach("emulator")), config.clone()).unwrap();
+        let host = bus.attach("host");
+        // Type 7, new ID 2 (bits 23..16), host 0xFD, to motor 1.
+        let set_id = CanFrame::extended(0x0702_FD01, &[0; 8]).unwrap();
+        host.send(set_id).await.unwrap();
+        tokio::time::sleep(std::time::Duration::from_millis(20)).await;
+        let ids: Vec<u8> = emulator
+            .snapshot()
+            .await
+            .unwrap()
+            .iter()
+            .map(|m| m.can_id)
+            .collect();
+        assert_eq!(ids, [2, 2]);
+        emulator.shutdown().await;
+
+        let error = RobstrideBus::spawn(Arc::new(bus.attach("again")), config)
+            .unwrap_err()
+            .to_string();
+        for part in [
+            "motor 1:RS03",
+            "motor 2:RS02",
+            "CAN ID 2",
+            &path.display().to_string(),
+        ] {
+            assert!(error.contains(part), "{part:?} missing from: {error}");
+        }
+        let moved = format!(
+            "motors.{}",
+            uid_key(MotorConfig::new(1, Model::RS03).effective_uid())
+        );
+        assert!(
+            error.contains(&format!("set `{moved}.can_id` to a free ID")),
+            "{error}"
+        );
+    }
+
+    /// A motor a host moved to a free ID comes back there, and the handle says so.
+    #[tokio::test(start_paused = true)]
+    async fn a_motor_moved_to_a_free_id_powers_on_there() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut config = RobstrideConfig::new(vec![
+            MotorConfig::new(1, Model::RS03),
+            MotorConfig::new(2, Model::RS02),
+        ]);
+        config.state_file = Some(dir.path().join("rs.json"));
+        let bus = VirtualBus::new(VirtualBusConfig::default());
+        let emulator =
+            RobstrideBus::spawn(Arc::new(bus.attach("emulator")), config.clone()).unwrap();
+        assert_eq!(emulator.power_on_ids(), [1, 2]);
+        let host = bus.attach("host");
+        // Type 7: motor 1 → ID 3.
+        let set_id = CanFrame::extended(0x0703_FD01, &[0; 8]).unwrap();
+        host.send(set_id).await.unwrap();
+        tokio::time::sleep(std::time::Duration::from_millis(20)).await;
+        emulator.shutdown().await;
+        let again = RobstrideBus::spawn(Arc::new(bus.attach("again")), config).unwrap();
+        assert_eq!(again.power_on_ids(), [3, 2]);
+        again.shutdown().await;
     }
 }

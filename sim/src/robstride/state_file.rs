@@ -7,11 +7,11 @@
 //! the target, synced, then renamed.
 
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use crate::robstride::firmware::PersistedMotor;
+use crate::robstride::firmware::{MotorConfig, PersistedMotor};
 use crate::state_file::{self, InvalidField};
 
 /// Why the state file could not be read, checked or written (it names the file and field).
@@ -74,6 +74,50 @@ impl StateFile {
         Ok(())
     }
 
+    /// What this file keeps for `motor` (found by its UID), if anything.
+    pub fn saved(&self, motor: &MotorConfig) -> Option<&PersistedMotor> {
+        self.motors.get(&uid_key(motor.effective_uid()))
+    }
+
+    /// The CAN ID `motor` answers on at power-on: the one this file keeps for it (a host
+    /// gave it one with "set CAN ID", comm type 7 or the MIT variant's command 7), else the
+    /// configured one.
+    pub fn power_on_id(&self, motor: &MotorConfig) -> u8 {
+        self.saved(motor).map_or(motor.can_id, |saved| saved.can_id)
+    }
+
+    /// The first two of `motors` (each with how messages name it: `motor 1:RS03`, `joint
+    /// `hip``), all on one bus, that this file (read from `path`) would put on one CAN ID at
+    /// power-on. Two motors configured on one ID that the file leaves there are the
+    /// configuration's mistake, not the file's, and not reported here (the caller refuses
+    /// them): every clash found involves a motor the file moved.
+    pub fn id_clash<'a>(
+        &self,
+        path: &Path,
+        motors: impl IntoIterator<Item = (String, &'a MotorConfig)>,
+    ) -> Option<IdClash> {
+        let mut seen: Vec<ClashingMotor> = Vec::new();
+        for (name, motor) in motors {
+            let can_id = self.power_on_id(motor);
+            let this = ClashingMotor {
+                name,
+                can_id,
+                configured_id: motor.can_id,
+                entry: format!("motors.{}", uid_key(motor.effective_uid())),
+            };
+            let clashes = |m: &&ClashingMotor| m.can_id == can_id && (m.moved() || this.moved());
+            if let Some(first) = seen.iter().find(clashes) {
+                return Some(IdClash {
+                    can_id,
+                    motors: [first.clone(), this],
+                    state_file: path.to_owned(),
+                });
+            }
+            seen.push(this);
+        }
+        None
+    }
+
     /// Write so that the file is always complete (see [`state_file::save`]).
     pub fn save(&self, path: &Path) -> Result<(), StateFileError> {
         state_file::save(
@@ -86,6 +130,74 @@ impl StateFile {
         )
     }
 }
+
+/// Two motors on one bus that a state file would put on one CAN ID at power-on (a host moved
+/// one onto the other's ID, or both onto a third, and the file kept it): they would answer
+/// every frame for that ID together. The message names both, the ID, the file and how to
+/// get out of it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct IdClash {
+    /// The ID both would answer on.
+    pub can_id: u8,
+    /// The two motors, in configuration order.
+    pub motors: [ClashingMotor; 2],
+    /// The state file.
+    pub state_file: PathBuf,
+}
+
+/// One motor of an [`IdClash`].
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ClashingMotor {
+    /// How messages name it (`motor 1:RS03`, as the command line gives it).
+    pub name: String,
+    /// The ID the state file gives it (the clash's ID).
+    pub can_id: u8,
+    /// The ID it is configured with.
+    pub configured_id: u8,
+    /// Its entry in the state file (`motors.<uid>`; present for a motor the file moved).
+    pub entry: String,
+}
+
+impl ClashingMotor {
+    /// Whether the state file moved it off its configured ID.
+    pub fn moved(&self) -> bool {
+        self.can_id != self.configured_id
+    }
+}
+
+impl std::fmt::Display for IdClash {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let [first, second] = &self.motors;
+        let moved: Vec<&ClashingMotor> = self.motors.iter().filter(|m| m.moved()).collect();
+        let names: Vec<&str> = moved.iter().map(|m| m.name.as_str()).collect();
+        let path = self.state_file.display();
+        write!(
+            f,
+            "{} and {} would both answer on CAN ID {}: the state file {path} keeps {} there \
+             (a host's \"set CAN ID\"). Two motors on one ID answer together and no host \
+             could tell them apart again, so the emulator does not start. To fix it, edit \
+             {path}: ",
+            first.name,
+            second.name,
+            self.can_id,
+            names.join(" and "),
+        )?;
+        for (k, m) in moved.iter().enumerate() {
+            if k > 0 {
+                write!(f, "; or ")?;
+            }
+            write!(
+                f,
+                "set `{}.can_id` to a free ID, or delete `{}` to put {} back on ID {} \
+                 (its saved parameters and zero go with it)",
+                m.entry, m.entry, m.name, m.configured_id
+            )?;
+        }
+        Ok(())
+    }
+}
+
+impl std::error::Error for IdClash {}
 
 #[cfg(test)]
 mod tests {
@@ -112,6 +224,57 @@ mod tests {
             .insert(uid_key([1, 2, 3, 4, 5, 6, 7, 8]), motor());
         state.save(&path).unwrap();
         assert_eq!(StateFile::load(&path).unwrap(), state);
+    }
+
+    #[test]
+    fn two_motors_moved_onto_one_id_clash_naming_both_and_each_entry() {
+        let a = MotorConfig::new(1, crate::robstride::Model::RS03);
+        let b = MotorConfig::new(2, crate::robstride::Model::RS02);
+        let c = MotorConfig::new(3, crate::robstride::Model::RS00);
+        let mut state = StateFile::default();
+        for m in [&a, &c] {
+            let moved = PersistedMotor {
+                can_id: 7,
+                ..motor()
+            };
+            state.motors.insert(uid_key(m.effective_uid()), moved);
+        }
+        let path = Path::new("dir/rs.json");
+        let motors = [
+            ("motor 1:RS03", &a),
+            ("motor 2:RS02", &b),
+            ("motor 3:RS00", &c),
+        ];
+        let clash = state
+            .id_clash(path, motors.iter().map(|(n, m)| (n.to_string(), *m)))
+            .expect("a clash");
+        assert_eq!(clash.can_id, 7);
+        assert_eq!(
+            clash.motors.each_ref().map(|m| m.name.as_str()),
+            ["motor 1:RS03", "motor 3:RS00"]
+        );
+        let text = clash.to_string();
+        let entry = |m: &MotorConfig| format!("motors.{}", uid_key(m.effective_uid()));
+        assert!(
+            text.starts_with(
+                "motor 1:RS03 and motor 3:RS00 would both answer on CAN ID 7: the state file \
+                 dir/rs.json keeps motor 1:RS03 and motor 3:RS00 there"
+            ),
+            "{text}"
+        );
+        for m in [&a, &c] {
+            assert!(
+                text.contains(&format!("set `{}.can_id` to a free ID", entry(m))),
+                "{text}"
+            );
+        }
+        assert!(text.contains("put motor 3:RS00 back on ID 3"), "{text}");
+        // Without the moved motor 3 there is no clash; the kept ID is what it powers on at.
+        assert_eq!(
+            state.id_clash(path, [("a".into(), &a), ("b".into(), &b)]),
+            None
+        );
+        assert_eq!((state.power_on_id(&a), state.power_on_id(&b)), (7, 2));
     }
 
     #[test]

@@ -378,3 +378,45 @@ async fn a_humanoid_held_until_released_falls_when_let_go() {
         fallen.base_position_m
     );
 }
+
+/// A state file in which a host moved the shoulder yaw's actuator (can0, ID 1) onto the
+/// shoulder pitch's ID: the robot refuses to power on rather than answer twice on ID 2, and
+/// the error names the bus, both joints and the file (scenarios and Python start robots
+/// here, not through `armhil sim robot`).
+#[tokio::test(start_paused = true)]
+async fn a_state_file_putting_two_actuators_on_one_id_is_refused_at_spawn() {
+    let dir = tempfile::tempdir().expect("a temporary folder");
+    let path = dir.path().join("arm.json");
+    let mut config = arm_config(&[]);
+    config.state_file = Some(path.clone());
+    let mut kept = sim::robstride::state_file::StateFile::default();
+    let moved = &config.actuators[0].motor;
+    kept.motors.insert(
+        sim::robstride::state_file::uid_key(moved.effective_uid()),
+        sim::robstride::PersistedMotor {
+            can_id: 2,
+            master_id: sim::robstride::DEFAULT_HOST_ID,
+            zero_offset_rad: 0.0,
+            params: Default::default(),
+            baud_code: 1,
+            protocol: 0,
+        },
+    );
+    kept.save(&path).expect("state file written");
+    let bus = VirtualBus::new(VirtualBusConfig::default());
+    let buses: Vec<Arc<dyn CanBus>> = (0..2)
+        .map(|k| Arc::new(bus.attach(&format!("robot{k}"))) as Arc<dyn CanBus>)
+        .collect();
+    let error = RobotEmulator::spawn(config, buses)
+        .expect_err("two actuators on ID 2 of can0")
+        .to_string();
+    for part in [
+        "bus `can0`",
+        "shoulder_yaw",
+        "shoulder_pitch",
+        "ID 2",
+        "arm.json",
+    ] {
+        assert!(error.contains(part), "{part:?} missing from: {error}");
+    }
+}

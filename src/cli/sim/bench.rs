@@ -180,6 +180,99 @@ mod tests {
         assert!(files >= 4, "only {files} bench files in {}", rigs.display());
     }
 
+    /// Two devices of a bench writing one file (a recording, a state file) are refused when
+    /// the file loads, at the later one's line, naming both devices and the file, whatever
+    /// the spelling of the path.
+    #[test]
+    fn two_devices_writing_one_file_are_refused_at_load() {
+        let kinds: Vec<SimKind> = super::super::SERVED.iter().map(|(kind, _)| *kind).collect();
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("bench.yaml");
+        let shared = |name: &str| dir.path().join(name).display().to_string();
+        let cases = [
+            (
+                "devices:\n  a: {kind: piper, iface: can0, record: both.log}\n  b: {kind: piper, iface: can1, record: ./both.log}\n",
+                ":3:",
+                "both.log",
+            ),
+            (
+                "devices:\n  arm: {kind: realman, state_file: s.json}\n  motors: {kind: robstride, state-file: sub/../s.json}\n",
+                ":3:",
+                "s.json",
+            ),
+            (
+                "devices:\n  z: {kind: robstride, state_file: x.json}\n  a: {kind: piper, record: x.json}\n",
+                ":3:",
+                "x.json",
+            ),
+        ];
+        for (text, line, name) in cases {
+            let text = text.to_owned();
+            std::fs::write(&file, &text).unwrap();
+            let error = match load_bench_file(&file, &kinds) {
+                Ok(_) => panic!("accepted:\n{text}"),
+                Err(e) => e.to_string(),
+            };
+            let devices: Vec<&str> = text
+                .lines()
+                .skip(1)
+                .map(|l| l.trim().split(':').next().unwrap())
+                .collect();
+            let at = format!("{}{line}", file.display());
+            for part in [at.as_str(), devices[0], devices[1], &shared(name)] {
+                assert!(error.contains(part), "{part:?} missing from: {error}");
+            }
+        }
+        // The same name in two folders is two files.
+        std::fs::write(
+            &file,
+            "devices:\n  a: {kind: piper, iface: can0, record: l/x.log}\n  b: {kind: piper, iface: can1, record: r/x.log}\n",
+        )
+        .unwrap();
+        load_bench_file(&file, &kinds).unwrap();
+    }
+
+    /// Every file a device writes is resolved against the bench file's folder, as the load
+    /// compares them.
+    #[test]
+    fn every_output_is_resolved_against_the_bench_file() {
+        let kinds: Vec<SimKind> = super::super::SERVED.iter().map(|(kind, _)| *kind).collect();
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("bench.yaml");
+        let mut text = "devices:\n".to_owned();
+        for kind in &kinds {
+            let outputs: Vec<String> = kind
+                .output_keys
+                .iter()
+                .map(|key| format!(", {key}: out/{}-{key}", kind.name))
+                .collect();
+            let file_key = if kind.positional_keys.contains(&"file") {
+                ", file: robot.yaml"
+            } else {
+                ""
+            };
+            text.push_str(&format!(
+                "  {0}: {{kind: {0}{1}{file_key}}}\n",
+                kind.name,
+                outputs.concat()
+            ));
+        }
+        std::fs::write(&file, text).unwrap();
+        let bench = load_bench_file(&file, &kinds).unwrap();
+        for device in &bench.devices {
+            let mut args = parse(device, bench.dir()).unwrap_or_else(|e| panic!("{e:#}"));
+            let resolved: Vec<PathBuf> = args.paths_mut().into_iter().map(|p| p.clone()).collect();
+            for key in device.kind.output_keys {
+                let want = dir.path().join(format!("out/{}-{key}", device.kind.name));
+                assert!(
+                    resolved.contains(&want),
+                    "{}: {want:?} not in {resolved:?}",
+                    device.name
+                );
+            }
+        }
+    }
+
     #[test]
     fn clap_words_become_the_file_s_keys() {
         assert_eq!(

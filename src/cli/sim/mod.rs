@@ -277,6 +277,50 @@ fn raise_open_file_limit() -> Option<u64> {
 
 #[cfg(test)]
 mod tests {
+    /// Every path option of every kind is a file it reads (listed here) or a file it writes
+    /// (its `OUTPUT_KEYS`, which a bench checks for files two devices would write): a new
+    /// option naming a file fails here until it is one or the other.
+    #[test]
+    fn every_path_option_is_an_input_or_an_output_key() {
+        let read: &[(&str, &[&str])] = &[("piper", &["urdf"]), ("robot", &["file"])];
+        let command = <super::Args as clap::Args>::augment_args(clap::Command::new("sim"));
+        for (kind, _) in super::SERVED {
+            let sub = command
+                .find_subcommand(kind.name)
+                .expect("a subcommand per kind");
+            let paths: Vec<String> = sub
+                .get_arguments()
+                .filter(|a| {
+                    a.get_value_parser().type_id() == std::any::TypeId::of::<std::path::PathBuf>()
+                })
+                .map(|a| match a.get_long() {
+                    Some(long) => long.replace('-', "_"),
+                    None => a.get_id().as_str().to_owned(),
+                })
+                .collect();
+            let inputs = read
+                .iter()
+                .find(|(name, _)| *name == kind.name)
+                .map_or(&[][..], |(_, keys)| keys);
+            for input in inputs {
+                assert!(
+                    paths.iter().any(|p| p == input),
+                    "{}: no `{input}`",
+                    kind.name
+                );
+            }
+            let mut written: Vec<&str> = paths
+                .iter()
+                .map(String::as_str)
+                .filter(|p| !inputs.contains(p))
+                .collect();
+            let mut declared = kind.output_keys.to_vec();
+            written.sort_unstable();
+            declared.sort_unstable();
+            assert_eq!(written, declared, "{}: files it writes", kind.name);
+        }
+    }
+
     #[test]
     fn a_bare_port_means_loopback() {
         assert_eq!(super::socketcand_addr("29536"), "127.0.0.1:29536");

@@ -73,6 +73,7 @@ pub(crate) struct Kind;
 
 impl super::served::ServedKind for Kind {
     const NAME: &'static str = "piper";
+    const OUTPUT_KEYS: &'static [&'static str] = &["state_file", "record"];
     type Args = Args;
 
     fn paths_mut(args: &mut Args) -> Vec<&mut PathBuf> {

@@ -61,6 +61,7 @@ pub(crate) struct Kind;
 
 impl super::served::ServedKind for Kind {
     const NAME: &'static str = "realman";
+    const OUTPUT_KEYS: &'static [&'static str] = &["state_file"];
     type Args = Args;
 
     fn paths_mut(args: &mut Args) -> Vec<&mut PathBuf> {

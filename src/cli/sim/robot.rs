@@ -13,6 +13,7 @@ use armhil::ui::robot::RobotLive;
 use bus::socketcand::SocketcandServer;
 use bus::CanBus;
 use sim::robot::{Base, Gantry, RobotConfig, RobotEmulator};
+use sim::robstride::state_file::StateFile;
 
 /// Arguments of `armhil sim robot`.
 #[derive(Debug, clap::Args)]
@@ -63,6 +64,7 @@ pub(crate) struct Kind;
 impl super::served::ServedKind for Kind {
     const NAME: &'static str = "robot";
     const POSITIONAL_KEYS: &'static [&'static str] = &["file"];
+    const OUTPUT_KEYS: &'static [&'static str] = &["state_file"];
     type Args = Args;
 
     fn paths_mut(args: &mut Args) -> Vec<&mut PathBuf> {
@@ -208,7 +210,13 @@ pub(crate) async fn serve(args: Args, mut stop: super::StopSource) -> anyhow::Re
         );
     }
     config.state_file = args.state_file.clone();
-    let summary = summary(&config);
+    let kept = match &config.state_file {
+        Some(path) => StateFile::load(path)?,
+        None => StateFile::default(),
+    };
+    check_kept_ids(&config, &kept)
+        .with_context(|| format!("cannot start the robot of {}", args.file.display()))?;
+    let summary = summary(&config, &kept);
     let served = open_buses(&args, &config).await?;
     let mut nodes = served.nodes.clone();
     let ui_taps = match &args.ui {
@@ -258,8 +266,15 @@ pub(crate) async fn serve(args: Args, mut stop: super::StopSource) -> anyhow::Re
     super::outcome("robot", stopped, &death)
 }
 
-/// `robstride_arm6: can0 ids 1 2 3, can1 ids 4 5 6`.
-fn summary(config: &RobotConfig) -> String {
+/// Refuses a state file that would put two actuators of one bus on one CAN ID, before the
+/// banner (the robot's own check, which its spawn makes too).
+fn check_kept_ids(config: &RobotConfig, kept: &StateFile) -> anyhow::Result<()> {
+    sim::robot::check_kept_ids(config, kept).map_err(anyhow::Error::new)
+}
+
+/// `robstride_arm6: can0 ids 1 2 3, can1 ids 4 5 6`, each actuator at the ID it answers on:
+/// `3 (was 1 in the robot file)` for one a host moved in an earlier run (`kept` says).
+fn summary(config: &RobotConfig, kept: &StateFile) -> String {
     let buses: Vec<String> = config
         .buses
         .iter()
@@ -269,10 +284,82 @@ fn summary(config: &RobotConfig) -> String {
                 .actuators
                 .iter()
                 .filter(|a| a.bus == k)
-                .map(|a| a.motor.can_id.to_string())
+                .map(|a| match kept.power_on_id(&a.motor) {
+                    id if id == a.motor.can_id => id.to_string(),
+                    id => format!("{id} (was {} in the robot file)", a.motor.can_id),
+                })
                 .collect();
             format!("{} ids {}", b.name, ids.join(" "))
         })
         .collect();
     format!("{}: {}", config.name, buses.join(", "))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use sim::robstride::state_file::uid_key;
+    use sim::robstride::PersistedMotor;
+
+    fn arm6() -> RobotConfig {
+        let file =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("robots/robstride_arm6.yaml");
+        load_robot_file(&file)
+            .expect("robots/robstride_arm6.yaml loads")
+            .config
+    }
+
+    /// A state file in which a host moved the first actuator of the first bus to `to`.
+    fn moved_first(config: &RobotConfig, to: u8) -> StateFile {
+        let mut kept = StateFile::default();
+        let motor = &config.actuators[0].motor;
+        kept.motors.insert(
+            uid_key(motor.effective_uid()),
+            PersistedMotor {
+                can_id: to,
+                master_id: sim::robstride::DEFAULT_HOST_ID,
+                zero_offset_rad: 0.0,
+                params: Default::default(),
+                baud_code: 1,
+                protocol: 0,
+            },
+        );
+        kept
+    }
+
+    #[test]
+    fn a_state_file_putting_two_actuators_of_one_bus_on_one_id_is_refused() {
+        let mut config = arm6();
+        config.state_file = Some("arm.json".into());
+        let first = config.actuators[0].clone();
+        let second = config
+            .actuators
+            .iter()
+            .find(|a| a.bus == first.bus && a.joint != first.joint)
+            .unwrap()
+            .clone();
+        let kept = moved_first(&config, second.motor.can_id);
+        let error = format!("{:#}", check_kept_ids(&config, &kept).unwrap_err());
+        let bus = &config.buses[first.bus].name;
+        for part in [
+            format!("bus `{bus}`"),
+            format!("joint `{}`", first.joint),
+            format!("joint `{}`", second.joint),
+            format!("CAN ID {}", second.motor.can_id),
+            "arm.json".to_owned(),
+        ] {
+            assert!(error.contains(&part), "{part:?} missing from: {error}");
+        }
+        // Moved to a free ID: served there, and the summary says so.
+        let kept = moved_first(&config, 100);
+        check_kept_ids(&config, &kept).unwrap();
+        let text = summary(&config, &kept);
+        assert!(
+            text.contains(&format!(
+                "{bus} ids 100 (was {} in the robot file) ",
+                first.motor.can_id
+            )),
+            "{text}"
+        );
+    }
 }

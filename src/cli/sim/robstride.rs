@@ -1,7 +1,7 @@
 //! `armhil sim robstride`: RobStride actuators in real time on a SocketCAN interface or behind
 //! a socketcand server.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::str::FromStr;
 use std::sync::Arc;
@@ -117,6 +117,7 @@ pub(crate) struct Kind;
 
 impl super::served::ServedKind for Kind {
     const NAME: &'static str = "robstride";
+    const OUTPUT_KEYS: &'static [&'static str] = &["state_file"];
     type Args = Args;
 
     fn paths_mut(args: &mut Args) -> Vec<&mut PathBuf> {
@@ -169,15 +170,17 @@ pub(crate) async fn serve(args: Args, mut stop: super::StopSource) -> anyhow::Re
     let place = served.place();
     let bus = served.node("robstride")?;
     let ui_tap = args.ui.as_ref().map(|_| served.node("ui")).transpose()?;
-    let ids: Vec<u8> = config.motors.iter().map(|m| m.can_id).collect();
     let bitrate_bps = config.bus_bitrate_bps;
-    let motors: Vec<String> = config
-        .motors
-        .iter()
-        .map(|m| format!("{}:{}", m.can_id, m.model.name()))
-        .collect();
+    let configured = config.motors.clone();
     let emulator = RobstrideBus::spawn(Arc::clone(&bus), config)
         .with_context(|| format!("cannot start the RobStride emulator on {place}"))?;
+    // The IDs the motors answer on: a state file keeps the ones a host gave them.
+    let ids = emulator.power_on_ids().to_vec();
+    let motors: Vec<String> = configured
+        .iter()
+        .zip(&ids)
+        .map(|(m, id)| format!("{id}:{}", m.model.name()))
+        .collect();
     let ui = match &args.ui {
         Some(addr) => {
             let tap = ui_tap.map(|t| BusTap::spawn(t, bitrate_bps));
@@ -191,8 +194,8 @@ pub(crate) async fn serve(args: Args, mut stop: super::StopSource) -> anyhow::Re
     };
     tracing::info!(on = %place, motors = ?motors, "RobStride emulator running; Ctrl-C to stop");
     eprintln!(
-        "armhil sim robstride: {} on {place} (Ctrl-C to stop)",
-        motors.join(", "),
+        "{}",
+        banner(&configured, &ids, &place, args.state_file.as_deref())
     );
     let mut death = emulator.death_watch();
     let stopped = super::until_stopped(&mut stop, &mut death).await;
@@ -205,9 +208,59 @@ pub(crate) async fn serve(args: Args, mut stop: super::StopSource) -> anyhow::Re
     super::outcome("RobStride", stopped, &death)
 }
 
+/// What `armhil sim robstride` says once it serves: the motors at the CAN IDs they answer on
+/// (`ids`, in the order of `motors`, as configured). When a state file moved any (a host's
+/// "set CAN ID" in an earlier run), one line per motor says which ID it had on the command
+/// line, so that nobody addresses a motor where it no longer is.
+fn banner(motors: &[MotorConfig], ids: &[u8], place: &str, state_file: Option<&Path>) -> String {
+    let moved = motors.iter().zip(ids).any(|(m, id)| m.can_id != *id);
+    if !moved {
+        let motors: Vec<String> = motors
+            .iter()
+            .map(|m| format!("{}:{}", m.can_id, m.model.name()))
+            .collect();
+        return format!(
+            "armhil sim robstride: {} on {place} (Ctrl-C to stop)",
+            motors.join(", ")
+        );
+    }
+    let file = state_file.map_or(String::new(), |f| format!(" {}", f.display()));
+    let mut text = format!(
+        "armhil sim robstride: {} motors on {place} (Ctrl-C to stop), at the CAN IDs the \
+         state file{file} keeps:",
+        motors.len()
+    );
+    for (m, id) in motors.iter().zip(ids) {
+        let was = if m.can_id == *id {
+            String::new()
+        } else {
+            format!(" (was {} on the command line)", m.can_id)
+        };
+        text.push_str(&format!("\n  motor {id}{was}: {}", m.model.name()));
+    }
+    text
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_banner_lists_each_motor_at_the_id_it_answers_on() {
+        let motors = [
+            MotorConfig::new(1, Model::RS03),
+            MotorConfig::new(2, Model::RS02),
+        ];
+        assert_eq!(
+            banner(&motors, &[1, 2], "vcan0", Some(Path::new("rs.json"))),
+            "armhil sim robstride: 1:RS03, 2:RS02 on vcan0 (Ctrl-C to stop)"
+        );
+        assert_eq!(
+            banner(&motors, &[3, 2], "vcan0", Some(Path::new("rs.json"))),
+            "armhil sim robstride: 2 motors on vcan0 (Ctrl-C to stop), at the CAN IDs the \
+             state file rs.json keeps:\n  motor 3 (was 1 on the command line): RS03\n  motor 2: RS02"
+        );
+    }
 
     #[test]
     fn motor_and_load_arguments_parse() {

@@ -19,6 +19,10 @@ pub(crate) trait ServedKind: 'static {
     const NAME: &'static str;
     /// Option keys a bench entry gives as positional arguments (`file:` of a robot).
     const POSITIONAL_KEYS: &'static [&'static str] = &[];
+    /// The options (without dashes, `_` between words) whose value is a file the device
+    /// writes: a bench refuses two devices that would write one file. Every path option is
+    /// one of these or an input (a test in `mod.rs` holds each kind to it).
+    const OUTPUT_KEYS: &'static [&'static str];
     /// Its command-line options.
     type Args: clap::Args + Send + std::fmt::Debug + 'static;
 
@@ -37,6 +41,7 @@ pub(crate) const fn sim_kind<K: ServedKind>() -> SimKind {
     SimKind {
         name: K::NAME,
         positional_keys: K::POSITIONAL_KEYS,
+        output_keys: K::OUTPUT_KEYS,
     }
 }
 
