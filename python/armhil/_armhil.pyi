@@ -254,8 +254,17 @@ class RobstrideEmulator:
     @property
     def active_faults(self) -> List[str]:
         """Faults injected from Python and not cleared, as labels."""
-    def inject(self, name: str, can_id: int) -> None: ...
-    def clear(self, name: str, can_id: int) -> None: ...
+    def inject(
+        self, name: str, can_id: Optional[int] = None, **kwargs: Union[int, float, str]
+    ) -> None:
+        """Injects fault `name` of `faults()`, its arguments by keyword: `motor=` (CAN ID) and
+        the fault's own values, e.g. `inject("encoder_glitch", motor=3, counts=100)`.
+        `ValueError` when the fault builder refuses them. `can_id` is the old spelling of
+        `motor=` (deprecated: DeprecationWarning)."""
+    def clear(
+        self, name: str, can_id: Optional[int] = None, **kwargs: Union[int, float, str]
+    ) -> None:
+        """Removes fault `name`'s cause on `motor=` (a fault's values may be left out)."""
     def state(self) -> List[Dict[str, Any]]: ...
     def stop(self) -> None: ...
     def __enter__(self) -> "RobstrideEmulator": ...
@@ -280,8 +289,17 @@ class RobotEmulator:
     @property
     def active_faults(self) -> List[str]:
         """Faults injected from Python and not cleared, as labels."""
-    def inject(self, name: str, joint: str) -> None: ...
-    def clear(self, name: str, joint: str) -> None: ...
+    def inject(
+        self, name: str, joint: Optional[str] = None, **kwargs: Union[int, float, str]
+    ) -> None:
+        """Injects fault `name` of `faults()`, its arguments by keyword: RobStride's faults on
+        `joint=` with their values (`inject("encoder_glitch", joint="left_knee", counts=100)`),
+        `external_torque` (`joint=`, `torque_nm=`), `bus_lost` (`bus=`), `gantry_release`.
+        `ValueError` when the fault builder refuses them."""
+    def clear(
+        self, name: str, joint: Optional[str] = None, **kwargs: Union[int, float, str]
+    ) -> None:
+        """Removes fault `name`'s cause (`joint=` or `bus=`; a fault's values may be left out)."""
     def set_temperature(self, joint: str, celsius: float) -> None: ...
     def set_external_torque(self, joint: str, torque_nm: float) -> None: ...
     def bus_lost(self, bus: str, lost: bool = True) -> None: ...

@@ -4,8 +4,10 @@ them. Each is a context manager (the emulator stops at the end of the ``with`` b
     with armhil.sim.realman() as emu:
         arm = ArmFactory.create_arm("realman", "left_arm", emu.params)
 
-Faults use each emulator's own names: ``emu.inject("reply_delay", delay_ms=600)`` on the
-Realman, ``emu.inject("comm_loss", joint=3)`` on the Piper, then ``emu.clear(...)``.
+Faults use each emulator's own names and its fault table's arguments, by keyword, on every
+kind: ``emu.inject("reply_delay", delay_ms=600)`` on the Realman, ``emu.inject("comm_loss",
+joint=3)`` on the Piper, ``emu.inject("encoder_glitch", motor=3, counts=100)`` on RobStride
+actuators, then ``emu.clear(...)``; ``emu.faults()`` lists them.
 
 A whole robot from its robot file, every bus a channel of one socketcand server:
 

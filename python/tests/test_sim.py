@@ -57,10 +57,10 @@ def test_robstride_faults_show_in_the_fault_word():
         motors = emu.state()
         assert [m["can_id"] for m in motors] == [1, 2]
         assert all(m["fault_word"] == 0 for m in motors)
-        emu.inject("over_temperature", 1)
+        emu.inject("over_temperature", motor=1)
         motors = emu.state()
         assert motors[0]["fault_word"] & 1
         assert motors[1]["fault_word"] == 0
         assert "socketcand" in emu.params
         with pytest.raises(ValueError):
-            emu.inject("over_temperature", 99)
+            emu.inject("over_temperature", motor=99)

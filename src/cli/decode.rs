@@ -1,5 +1,6 @@
 //! `armhil decode`: print every frame of a candump log or pcap/pcapng capture decoded with
-//! units, through the driver's codecs: by one protocol (`--device`), or by the devices of a
+//! units, through the driver's codecs: by one protocol (`--device`, one of the protocols the
+//! registered device kinds own, [`armhil::devices::wire_decoders`]), or by the devices of a
 //! scenario's bench (`--scenario`), each frame named by the device that owns it, as the report
 //! names them.
 
@@ -8,20 +9,19 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use anyhow::Context;
-use armhil::interop::{
-    decode_piper, decode_robstride, decode_robstride_command, decode_robstride_mit, DecodedFrame,
-};
+use armhil::devices::{wire_decoders, WireDecode, WireOptions};
+use armhil::interop::DecodedFrame;
 use bus::{CanFrame, CanId};
 
-/// Which protocol the capture carries.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum Device {
-    /// AgileX Piper (11-bit ids).
-    Piper,
-    /// RobStride actuators (29-bit ids, private protocol).
-    Robstride,
-    /// RobStride actuators switched to the MIT variant (11-bit ids).
-    RobstrideMit,
+/// The protocol decoded with when neither `--device` nor `--scenario` says.
+const DEFAULT_DEVICE: &str = "piper";
+
+/// `--device`'s values: the protocols of the registered device kinds, each with its help line
+/// (listed by `armhil decode --help`, suggested from when mistyped).
+fn device_names() -> clap::builder::PossibleValuesParser {
+    clap::builder::PossibleValuesParser::new(
+        wire_decoders().map(|d| clap::builder::PossibleValue::new(d.name).help(d.help)),
+    )
 }
 
 /// Arguments of `armhil decode`.
@@ -31,8 +31,8 @@ pub struct Args {
     /// per bus, as `armhil run` records a bench of several buses).
     pub file: PathBuf,
     /// Protocol to decode with (default: piper).
-    #[arg(long, value_enum, conflicts_with = "scenario")]
-    pub device: Option<Device>,
+    #[arg(long, value_parser = device_names(), conflicts_with = "scenario")]
+    pub device: Option<String>,
     /// Decode with the devices of this scenario's bench: each frame by the device that owns
     /// it (a robot's actuators, a Piper and a RobStride bus side by side), as its report does.
     #[arg(long, value_name = "SCENARIO")]
@@ -152,12 +152,23 @@ fn read_frames(path: &Path) -> anyhow::Result<Capture> {
 
 /// How frames are named: one protocol, or the devices of a bench.
 enum Decoder {
-    Protocol {
-        device: Device,
-        host_id: u8,
-        model: driver::robstride::Model,
-    },
+    Protocol(WireDecode),
     Bench(Box<armhil::harness::result::BenchInfo>),
+}
+
+/// The decoder of the protocol named `name`, or an error naming the known ones.
+fn protocol(name: &str, options: WireOptions) -> anyhow::Result<WireDecode> {
+    match wire_decoders().find(|d| d.name == name) {
+        Some(wire) => Ok((wire.decoder)(options)),
+        None => {
+            let known: Vec<&str> = wire_decoders().map(|d| d.name).collect();
+            anyhow::bail!(
+                "unknown device `{name}`; known: {}{}",
+                known.join(", "),
+                sim::yaml_words::suggestion(name, &known)
+            )
+        }
+    }
 }
 
 impl Decoder {
@@ -176,11 +187,14 @@ impl Decoder {
         }
         let model = driver::robstride::Model::parse(&args.model)
             .with_context(|| format!("unknown RobStride model {:?}", args.model))?;
-        Ok(Self::Protocol {
-            device: args.device.unwrap_or(Device::Piper),
+        let options = WireOptions {
             host_id: args.host_id,
             model,
-        })
+        };
+        Ok(Self::Protocol(protocol(
+            args.device.as_deref().unwrap_or(DEFAULT_DEVICE),
+            options,
+        )?))
     }
 
     /// The frame's name and fields, or why it does not decode; `bus` is the bus the capture
@@ -191,27 +205,10 @@ impl Decoder {
         frame: &CanFrame,
     ) -> (Option<DecodedFrame>, Option<String>) {
         match self {
-            Self::Protocol {
-                device: Device::Piper,
-                ..
-            } => match decode_piper(frame) {
+            Self::Protocol(decode) => match decode(frame) {
                 Ok(d) => (d, None),
-                Err(e) => (None, Some(e.to_string())),
+                Err(e) => (None, Some(e)),
             },
-            Self::Protocol {
-                device: Device::Robstride,
-                host_id,
-                model,
-            } => (
-                decode_robstride(frame, *host_id, *model)
-                    .or_else(|| decode_robstride_command(frame, *host_id, *model)),
-                None,
-            ),
-            Self::Protocol {
-                device: Device::RobstrideMit,
-                host_id,
-                model,
-            } => (decode_robstride_mit(frame, *host_id, *model), None),
             Self::Bench(bench) => (bench.decode(bus, frame), None),
         }
     }

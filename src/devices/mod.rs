@@ -1,9 +1,10 @@
 //! Device kinds: one folder per kind, registered once, in `device_kinds!` below.
 //!
 //! What a kind provides is the `KindSpec` trait in [`contract`] (its scenario vocabulary,
-//! how it is built on a bench, its URDF and frame decoder for the views) and the [`Device`] it
-//! builds; the registry generates the enums the harness holds (`DeviceKind`, `Action`,
-//! `Check`, `DeviceFault`) and dispatches every call through the trait. The folder layout of a
+//! how it is built on a bench, its URDF and frame decoder for the views, the protocols
+//! `armhil decode --device` reads by) and the [`Device`] it builds; the registry generates the
+//! enums the harness holds (`DeviceKind`, `Action`, `Check`, `DeviceFault`), the list of
+//! protocols ([`wire_decoders`]) and dispatches every call through the trait. The folder layout of a
 //! kind is in `docs/architecture.md`.
 
 use std::sync::Arc;
@@ -18,7 +19,7 @@ pub mod contract;
 pub(crate) use contract::{named_bus, one_bus, KindSpec, RawKindStep, Wiring};
 pub use contract::{
     BaseColumns, BusUse, Device, DeviceError, Drawing, FrameDecoder, JointColumn, Posing, Reply,
-    TraceColumn,
+    TraceColumn, WireDecode, WireDecoder, WireOptions,
 };
 
 pub mod actuator_group;
@@ -53,6 +54,15 @@ macro_rules! device_kinds {
 
         /// The scenario names of every device kind.
         pub const KIND_NAMES: &[&str] = &[$($name),*];
+
+        /// Every kind's `KindSpec::WIRE_DECODERS`, in registration order.
+        const WIRE_DECODER_LISTS: &[&[WireDecoder]] = &[$( <$module::Kind as KindSpec>::WIRE_DECODERS ),*];
+
+        // Each protocol is registered once: by the kind that owns it.
+        const _: () = assert!(
+            distinct_wire_names(WIRE_DECODER_LISTS),
+            "two `decode --device` protocols of the same name (a kind that speaks another's protocol registers none)"
+        );
 
         /// A device's kind and validated settings.
         #[derive(Debug, Clone, PartialEq)]
@@ -339,6 +349,36 @@ pub const fn same_text(a: &str, b: &str) -> bool {
     true
 }
 
+/// Every protocol `armhil decode --device NAME` reads captures by: each registered kind's own
+/// (`KindSpec::WIRE_DECODERS`), in registration order, each name once.
+pub fn wire_decoders() -> impl Iterator<Item = &'static WireDecoder> {
+    WIRE_DECODER_LISTS.iter().flat_map(|list| list.iter())
+}
+
+/// Whether no two protocols of `lists` share a name (checked when the crate compiles).
+const fn distinct_wire_names(lists: &[&[WireDecoder]]) -> bool {
+    let mut a = 0;
+    while a < lists.len() {
+        let mut i = 0;
+        while i < lists[a].len() {
+            let mut b = a;
+            while b < lists.len() {
+                let mut j = if b == a { i + 1 } else { 0 };
+                while j < lists[b].len() {
+                    if same_text(lists[a][i].name, lists[b][j].name) {
+                        return false;
+                    }
+                    j += 1;
+                }
+                b += 1;
+            }
+            i += 1;
+        }
+        a += 1;
+    }
+    true
+}
+
 /// The kinds named `names` (the kinds on a bench), for reading its steps, faults and
 /// conditions: keys two kinds share (`under_voltage`, `enable`) then go to the one on the bench.
 pub(crate) fn kinds_named<'a>(names: impl IntoIterator<Item = &'a str>) -> KindSet {
@@ -398,5 +438,52 @@ impl<'de> Deserialize<'de> for RawDevice {
             }
         }
         deserializer.deserialize_map(Visit)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use bus::CanFrame;
+    use driver::robstride::Model;
+
+    use super::{wire_decoders, WireOptions};
+
+    const OPTIONS: WireOptions = WireOptions {
+        host_id: 0xFD,
+        model: Model::RS03,
+    };
+
+    /// Each protocol is registered once, by the kind that owns it: `arm` and `actuator_group`
+    /// speak the Piper's and RobStride's and add none, the Realman speaks no CAN.
+    #[test]
+    fn the_decode_protocols_are_those_of_the_kinds_that_own_them() {
+        let names: Vec<&str> = wire_decoders().map(|d| d.name).collect();
+        assert_eq!(names, ["piper", "robstride", "robstride-mit"]);
+        assert!(wire_decoders().all(|d| !d.help.is_empty() && !d.help.contains('\n')));
+    }
+
+    /// A protocol's decoder names its own frames and leaves the others' undecoded.
+    #[test]
+    fn each_protocol_decodes_its_own_frames() {
+        let decoder = |name: &str| {
+            let wire = wire_decoders()
+                .find(|d| d.name == name)
+                .expect("registered");
+            (wire.decoder)(OPTIONS)
+        };
+        // RobStride type 2 status from motor 1 to host 0xFD.
+        let status = CanFrame::extended(
+            0x0200_01FD,
+            &[0x80, 0x00, 0x80, 0x00, 0x80, 0x00, 0x01, 0x2C],
+        )
+        .unwrap();
+        let named = decoder("robstride")(&status).expect("no error");
+        assert_eq!(named.map(|d| d.name), Some("Status".to_owned()));
+        assert_eq!(decoder("robstride-mit")(&status), Ok(None));
+        // A Piper's status feedback (0x2A1), in standby.
+        let feedback = CanFrame::standard(0x2A1, &[0; 8]).unwrap();
+        let named = decoder("piper")(&feedback).expect("no error");
+        assert_eq!(named.map(|d| d.name), Some("ArmStatus".to_owned()));
+        assert_eq!(decoder("robstride")(&feedback), Ok(None));
     }
 }

@@ -12,6 +12,7 @@
 
 mod ctx;
 pub(crate) mod error;
+pub(crate) mod fault_args;
 pub(crate) mod onekey;
 pub(crate) mod read_in;
 pub mod vocab;

@@ -203,3 +203,64 @@ fn control_characters_in_a_capture_s_interface_names_are_printed_escaped() {
     assert!(!text.contains('\u{1b}'), "{text:?}");
     assert!(text.contains("can\\u{1b}[2J0"), "{text}");
 }
+
+/// `--device` takes the protocols the registered device kinds own (`armhil decode --help`
+/// lists each with its help line), decodes with `piper` when not given, and refuses another
+/// name with the known ones and the nearest of them.
+#[test]
+fn device_accepts_each_registered_protocol_and_suggests_one_for_an_unknown_name() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let log = root.join("fixtures/robstride/mit.log");
+    let decode = |device: Option<&str>| {
+        let mut command = Command::new(ARMHIL);
+        command.arg("decode").arg(&log);
+        if let Some(device) = device {
+            command.args(["--device", device]);
+        }
+        command.output().expect("armhil runs")
+    };
+    let help = Command::new(ARMHIL)
+        .args(["decode", "--help"])
+        .output()
+        .expect("armhil runs");
+    let help = String::from_utf8_lossy(&help.stdout);
+
+    let names: Vec<&str> = armhil::devices::wire_decoders().map(|d| d.name).collect();
+    assert!(
+        names.contains(&"piper") && names.contains(&"robstride-mit"),
+        "{names:?}"
+    );
+    for wire in armhil::devices::wire_decoders() {
+        let out = decode(Some(wire.name));
+        assert!(
+            out.status.success(),
+            "--device {}: {}",
+            wire.name,
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert!(!out.stdout.is_empty(), "--device {}: no output", wire.name);
+        assert!(
+            help.contains(&format!("- {}:", wire.name)) && help.contains(wire.help),
+            "--device {} not listed:\n{help}",
+            wire.name
+        );
+    }
+    // The name picks the protocol: the MIT capture's commands are named by the MIT decoder.
+    let mit = String::from_utf8_lossy(&decode(Some("robstride-mit")).stdout).into_owned();
+    assert!(mit.contains("  MitCommand  motor=127"), "{mit}");
+    // Without --device, the Piper's protocol.
+    assert_eq!(decode(None).stdout, decode(Some("piper")).stdout);
+
+    let unknown = decode(Some("robstrid"));
+    let stderr = String::from_utf8_lossy(&unknown.stderr);
+    assert_eq!(unknown.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("invalid value 'robstrid'"), "{stderr}");
+    assert!(
+        stderr.contains(&format!("[possible values: {}]", names.join(", "))),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains("a similar value exists: 'robstride'"),
+        "{stderr}"
+    );
+}

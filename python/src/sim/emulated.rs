@@ -124,22 +124,41 @@ pub(super) fn stopped<E: Emulated>() -> PyErr {
 }
 
 /// Python's keyword arguments as an emulator's fault builder reads them
-/// (`sim::fault_args`): `str` is a word, anything else a number (`int`, `float`), or shown by
-/// its `str()` if it is not one (the builder then refuses it by name).
+/// (`sim::fault_args`), every emulator's `inject(name, **kwargs)` and `clear(name, **kwargs)`:
+/// each keyword is a parameter name of the fault table (`faults()`), and the builder refuses
+/// any other by name.
 pub(super) fn builder_args(kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<FaultArgs> {
+    builder_args_after(None, kwargs)
+}
+
+/// [`builder_args`] after one argument given by position, under its table name (`("joint",
+/// value)`: the robot's `inject(name, joint)`; `("motor", value)`: RobStride's old `can_id`).
+/// The caller makes sure `kwargs` does not name it too.
+pub(super) fn builder_args_after(
+    positional: Option<(&str, &Bound<'_, PyAny>)>,
+    kwargs: Option<&Bound<'_, PyDict>>,
+) -> PyResult<FaultArgs> {
     let mut args = FaultArgs::new();
+    if let Some((name, value)) = positional {
+        args.push(name, builder_value(value)?);
+    }
     for (key, value) in kwargs.into_iter().flat_map(|k| k.iter()) {
         let key: String = key.extract()?;
-        let value = if value.is_instance_of::<pyo3::types::PyString>() {
-            FaultArgValue::Text(value.extract()?)
-        } else if let Ok(x) = value.extract::<f64>() {
-            FaultArgValue::Number(x)
-        } else {
-            FaultArgValue::Text(value.str()?.to_string())
-        };
-        args.push(key, value);
+        args.push(key, builder_value(&value)?);
     }
     Ok(args)
+}
+
+/// One Python value as the builder reads it: `str` is a word, anything else a number (`int`,
+/// `float`), or shown by its `str()` if it is not one (the builder then refuses it by name).
+fn builder_value(value: &Bound<'_, PyAny>) -> PyResult<FaultArgValue> {
+    Ok(if value.is_instance_of::<pyo3::types::PyString>() {
+        FaultArgValue::Text(value.extract()?)
+    } else if let Ok(x) = value.extract::<f64>() {
+        FaultArgValue::Number(x)
+    } else {
+        FaultArgValue::Text(value.str()?.to_string())
+    })
 }
 
 /// One argument as a Python value.

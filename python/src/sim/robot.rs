@@ -22,7 +22,7 @@ use sim::robot::{
     Gantry, RobotEmulator as Emulator, RobotError, RobotHandle, RobotMonitor, RobotSnapshot,
 };
 
-use super::emulated::{apply, emulator_methods, Emulated, Running, Stop};
+use super::emulated::{apply, builder_args_after, emulator_methods, Emulated, Running, Stop};
 use super::value_err;
 use crate::{block_on, sim_runtime};
 
@@ -156,17 +156,37 @@ impl RobotEmulator {
         self.addr.map(|a| a.port())
     }
 
-    /// Injects a RobStride fault on the actuator of `joint`: over_temperature,
-    /// under_voltage, over_voltage, phase_a/b/c_over_current, encoder_not_calibrated,
-    /// stall_overload, gate_driver.
-    /// (`external_torque` and `bus_lost` are `set_external_torque` and `bus_lost`.)
-    fn inject(&self, py: Python<'_>, name: &str, joint: String) -> PyResult<()> {
-        apply(self, py, FaultAction::Inject, name, &word("joint", joint))
+    /// Injects fault `name` of the robot's fault table (`faults()` lists it, with each
+    /// argument), its arguments by keyword: RobStride's faults on the actuator of `joint=` —
+    /// over_temperature, under_voltage, over_voltage, phase_a_over_current,
+    /// phase_b_over_current, phase_c_over_current, encoder_not_calibrated, stall_overload,
+    /// gate_driver; encoder_glitch(joint, counts) — and external_torque(joint, torque_nm),
+    /// bus_lost(bus), gantry_release. `joint` may come by position. The emulator's fault
+    /// builder checks them: `ValueError` when it refuses them.
+    #[pyo3(signature = (name, joint=None, **kwargs))]
+    fn inject(
+        &self,
+        py: Python<'_>,
+        name: &str,
+        joint: Option<&Bound<'_, PyAny>>,
+        kwargs: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<()> {
+        let args = builder_args_after(joint.map(|j| ("joint", j)), kwargs)?;
+        apply(self, py, FaultAction::Inject, name, &args)
     }
 
-    /// Removes a fault's cause on the actuator of `joint`.
-    fn clear(&self, py: Python<'_>, name: &str, joint: String) -> PyResult<()> {
-        apply(self, py, FaultAction::Clear, name, &word("joint", joint))
+    /// Removes a fault's cause: on the actuator of `joint=` (a fault's values may be left
+    /// out), or `bus_lost` with `bus=`.
+    #[pyo3(signature = (name, joint=None, **kwargs))]
+    fn clear(
+        &self,
+        py: Python<'_>,
+        name: &str,
+        joint: Option<&Bound<'_, PyAny>>,
+        kwargs: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<()> {
+        let args = builder_args_after(joint.map(|j| ("joint", j)), kwargs)?;
+        apply(self, py, FaultAction::Clear, name, &args)
     }
 
     /// Sets the winding temperature of `joint`'s actuator (°C); its thermal model goes on

@@ -6,17 +6,20 @@ use std::net::SocketAddr;
 use std::pin::Pin;
 use std::sync::Arc;
 
-use pyo3::exceptions::PyRuntimeError;
+use pyo3::exceptions::{PyDeprecationWarning, PyRuntimeError, PyTypeError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use sim::fault_args::{FaultArgValue, FaultArgs};
+use sim::fault_args::FaultArgs;
 use sim::fault_desk::{FaultAction, FaultDesk, Faults};
+use sim::robstride::faults::MOTOR;
 use sim::robstride::{
     Model, MotorConfig, RobstrideBus, RobstrideConfig, RobstrideHandle, RobstrideMonitor,
 };
 
 use super::can_place::{open_place, CanPlace};
-use super::emulated::{apply, emulator_methods, Emulated, Running, Stop};
+use super::emulated::{
+    apply, builder_args, builder_args_after, emulator_methods, Emulated, Running, Stop,
+};
 use super::value_err;
 use crate::{block_on, sim_runtime};
 
@@ -29,10 +32,31 @@ pub struct RobstrideEmulator {
     addr: Option<SocketAddr>,
 }
 
-/// The arguments of a fault on motor `can_id` (checked by the emulator's builder: every i64
-/// a CAN ID could be is exact in f64 up to 2^53; beyond, it is refused anyway).
-fn on_motor(can_id: i64) -> FaultArgs {
-    FaultArgs::new().with("motor", FaultArgValue::Number(can_id as f64))
+/// The builder's arguments of `inject` and `clear`: `kwargs`, after `can_id` if given (the
+/// old spelling of `motor=`, kept for one release with a `DeprecationWarning`; `TypeError`
+/// when `motor=` is given too).
+fn motor_args(
+    py: Python<'_>,
+    can_id: Option<&Bound<'_, PyAny>>,
+    kwargs: Option<&Bound<'_, PyDict>>,
+) -> PyResult<FaultArgs> {
+    let Some(can_id) = can_id else {
+        return builder_args(kwargs);
+    };
+    if let Some(kwargs) = kwargs {
+        if kwargs.contains(MOTOR.name)? {
+            return Err(PyTypeError::new_err(
+                "`can_id` is the old spelling of `motor=`: give the motor once, as `motor=`",
+            ));
+        }
+    }
+    PyErr::warn(
+        py,
+        &py.get_type::<PyDeprecationWarning>(),
+        c"RobStride inject/clear: `can_id` is the old spelling of `motor=` and goes in the next release; write inject(name, motor=ID)",
+        1,
+    )?;
+    builder_args_after(Some((MOTOR.name, can_id)), kwargs)
 }
 
 impl Stop for RobstrideHandle {
@@ -76,15 +100,37 @@ impl RobstrideEmulator {
         self.params.clone()
     }
 
-    /// Injects a fault on motor `can_id`: over_temperature, under_voltage, over_voltage,
-    /// phase_a/b/c_over_current, encoder_not_calibrated, stall_overload, gate_driver.
-    fn inject(&self, py: Python<'_>, name: &str, can_id: i64) -> PyResult<()> {
-        apply(self, py, FaultAction::Inject, name, &on_motor(can_id))
+    /// Injects fault `name` of the RobStride fault table (`faults()` lists it, with each
+    /// argument's range), its arguments by keyword: `motor=` (the CAN ID) and the fault's own
+    /// values — over_temperature, under_voltage, over_voltage, phase_a_over_current,
+    /// phase_b_over_current, phase_c_over_current, encoder_not_calibrated, stall_overload,
+    /// gate_driver (`motor=` alone); encoder_glitch(motor, counts). The emulator's fault
+    /// builder checks them (scenario files' ranges and messages): `ValueError` when it refuses
+    /// them. `can_id`, by position, is the old spelling of `motor=` (deprecated).
+    #[pyo3(signature = (name, can_id=None, **kwargs))]
+    fn inject(
+        &self,
+        py: Python<'_>,
+        name: &str,
+        can_id: Option<&Bound<'_, PyAny>>,
+        kwargs: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<()> {
+        let args = motor_args(py, can_id, kwargs)?;
+        apply(self, py, FaultAction::Inject, name, &args)
     }
 
-    /// Removes a fault's cause on motor `can_id`.
-    fn clear(&self, py: Python<'_>, name: &str, can_id: i64) -> PyResult<()> {
-        apply(self, py, FaultAction::Clear, name, &on_motor(can_id))
+    /// Removes a fault's cause on a motor: `motor=` (a fault's values may be left out).
+    /// `can_id`, by position, is the old spelling of `motor=` (deprecated).
+    #[pyo3(signature = (name, can_id=None, **kwargs))]
+    fn clear(
+        &self,
+        py: Python<'_>,
+        name: &str,
+        can_id: Option<&Bound<'_, PyAny>>,
+        kwargs: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<()> {
+        let args = motor_args(py, can_id, kwargs)?;
+        apply(self, py, FaultAction::Clear, name, &args)
     }
 
     /// One dictionary per motor: CAN ID, model, mode, angle, speed, torque, temperature,

@@ -78,7 +78,9 @@ impl RobotLayout {
             .map(|f| FaultInfo {
                 name: f.name(),
                 description: format!("{} (on the joint's actuator)", f.description()),
-                params: vec![joint("whose actuator faults")],
+                params: std::iter::once(joint("whose actuator faults"))
+                    .chain(f.value_infos())
+                    .collect(),
             })
             .collect();
         table.push(FaultInfo {
@@ -152,10 +154,19 @@ impl RobotLayout {
                 Ok(RobotFault::BusLost { bus })
             }
             _ => {
-                // Every other name of the table is RobStride's.
+                // Every other name of the table is RobStride's, with its values (which
+                // clearing may leave out).
                 let fault = Fault::named(name)?;
-                args.only(name, &["joint"])?;
+                let known: Vec<&str> = std::iter::once("joint")
+                    .chain(fault.values().iter().map(|p| p.name))
+                    .collect();
+                args.only(name, &known)?;
                 let (joint, _) = self.joint(name, args)?;
+                let fault = if clearing {
+                    fault
+                } else {
+                    fault.with_values(args)?
+                };
                 Ok(RobotFault::Actuator { joint, fault })
             }
         }
@@ -209,7 +220,7 @@ impl FaultTarget for RobotMonitor {
 
     fn label(&self, fault: &RobotFault) -> String {
         match fault {
-            RobotFault::Actuator { joint, fault } => format!("{} on {joint}", fault.name()),
+            RobotFault::Actuator { joint, fault } => format!("{} on {joint}", fault.label()),
             RobotFault::ExternalTorque { joint, .. } => format!("{EXTERNAL_TORQUE} on {joint}"),
             RobotFault::BusLost { bus } => format!("{BUS_LOST} {bus}"),
             RobotFault::GantryRelease => GANTRY_RELEASE.to_owned(),
@@ -221,7 +232,17 @@ impl FaultTarget for RobotMonitor {
     }
 
     fn same_site(&self, a: &RobotFault, b: &RobotFault) -> bool {
-        self.label(a) == self.label(b)
+        match (a, b) {
+            // One fault of a kind per actuator, whatever its values.
+            (
+                RobotFault::Actuator { joint, fault },
+                RobotFault::Actuator {
+                    joint: other_joint,
+                    fault: other,
+                },
+            ) => joint == other_joint && fault.same_kind(*other),
+            _ => self.label(a) == self.label(b),
+        }
     }
 
     async fn inject(&self, fault: RobotFault) -> Result<(), String> {

@@ -420,3 +420,58 @@ async fn a_state_file_putting_two_actuators_on_one_id_is_refused_at_spawn() {
         assert!(error.contains(part), "{part:?} missing from: {error}");
     }
 }
+
+/// An encoder glitch on the elbow's actuator: its loop holds the shifted reading at the
+/// target, so the joint itself settles the glitch's angle away (1024 counts of 16,384: π/8),
+/// while the actuator reports the target; cleared, the joint comes back.
+#[tokio::test(start_paused = true)]
+async fn an_encoder_glitch_moves_the_joint_by_its_angle_while_the_actuator_reads_the_target() {
+    let start = [
+        ("shoulder_pitch", 1.0),
+        ("elbow_pitch", 0.6),
+        ("wrist_pitch", 0.3),
+    ];
+    let rig = spawn(arm_config(&start));
+    let targets = [0.0, 1.0, 0.6, 0.0, 0.3, 0.0];
+    for (k, target) in targets.iter().enumerate() {
+        let bus = usize::from(k >= 3);
+        csp_hold(&rig.hosts[bus], k as u32 + 1, *target as f32).await;
+    }
+    tokio::time::sleep(Duration::from_secs(2)).await;
+    let elbow = |snap: &sim::robot::RobotSnapshot| {
+        let j = snap.joint("elbow_pitch").expect("the elbow");
+        (j.position_rad, j.motor.angle_rad)
+    };
+    let (held, _) = elbow(&rig.robot.snapshot().await.unwrap());
+    assert!((held - 0.6).abs() < 0.02, "held at {held}");
+    rig.robot
+        .inject(
+            "elbow_pitch",
+            sim::robstride::Fault::EncoderGlitch { counts: 1024 },
+        )
+        .await
+        .unwrap();
+    tokio::time::sleep(Duration::from_secs(3)).await;
+    let (truth, reading) = elbow(&rig.robot.snapshot().await.unwrap());
+    let glitch = std::f64::consts::PI / 8.0;
+    assert!(
+        (truth - (0.6 - glitch)).abs() < 0.02,
+        "the joint at {truth}, expected {}",
+        0.6 - glitch
+    );
+    assert!((reading - 0.6).abs() < 0.02, "the actuator reads {reading}");
+    rig.robot
+        .clear(
+            "elbow_pitch",
+            sim::robstride::Fault::EncoderGlitch { counts: 0 },
+        )
+        .await
+        .unwrap();
+    tokio::time::sleep(Duration::from_secs(3)).await;
+    let (back, _) = elbow(&rig.robot.snapshot().await.unwrap());
+    assert!((back - 0.6).abs() < 0.02, "back at {back}");
+    for host in &rig.hosts {
+        drain(host).await;
+    }
+    rig.robot.shutdown().await;
+}

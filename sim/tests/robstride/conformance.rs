@@ -405,3 +405,35 @@ fn every_vector_identifier_matches_its_annotation() {
         }
     }
 }
+
+/// An encoder glitch (a fault with a value) shifts what the firmware reads, on the wire too,
+/// by its counts of the 14-bit encoder's 16,384 per turn, sets no fault bit, and clearing it
+/// (its counts left out) puts the reading back.
+#[test]
+fn an_encoder_glitch_shifts_the_reading_by_its_counts_until_cleared() {
+    let all = vectors();
+    let mut rs03 = motor(0x7F, Model::RS03);
+    let before = rs03.snapshot().angle_rad;
+    let status_angle = |rs03: &mut Actuator| {
+        let status = single(rs03.handle_frame(&frame(&all, "stop")));
+        let raw = u16::from_be_bytes([status.data()[0], status.data()[1]]);
+        // Type 2 angles span ±4π over 16 bits (RS03, manual table).
+        f64::from(raw) / 65535.0 * 8.0 * std::f64::consts::PI - 4.0 * std::f64::consts::PI
+    };
+    let wire_before = status_angle(&mut rs03);
+    let glitch = sim::robstride::build_fault(
+        "encoder_glitch",
+        &sim::fault_args::FaultArgs::new()
+            .with("motor", sim::fault_args::FaultArgValue::Number(127.0))
+            .with("counts", sim::fault_args::FaultArgValue::Number(1024.0)),
+    )
+    .expect("a glitch of 1024 counts on motor 127");
+    assert_eq!(glitch.fault, Fault::EncoderGlitch { counts: 1024 });
+    assert_eq!(rs03.inject(glitch.fault), None, "no fault word to report");
+    let shift = std::f64::consts::TAU * 1024.0 / 16384.0;
+    assert!((rs03.snapshot().angle_rad - before - shift).abs() < 1e-12);
+    assert!((status_angle(&mut rs03) - wire_before - shift).abs() < 1e-3);
+    assert_eq!(rs03.snapshot().fault_word, 0);
+    rs03.remove_cause(Fault::EncoderGlitch { counts: 0 });
+    assert!((rs03.snapshot().angle_rad - before).abs() < 1e-12);
+}

@@ -83,7 +83,7 @@ impl KindSpec for Kind {
     }
 
     fn describe_fault(fault: &Fault) -> String {
-        format!("{} on joint {}", fault.fault.name(), fault.joint)
+        format!("{} on joint {}", fault.fault.label(), fault.joint)
     }
 
     fn action_needs_emulator(_action: &Action) -> Option<String> {
@@ -174,6 +174,9 @@ impl KindSpec for Kind {
         })
     }
 
+    /// Its actuators' frames are RobStride's: without a scenario `armhil decode --device
+    /// robstride` reads them, which the `robstride` kind registers (so this kind registers no
+    /// `WIRE_DECODERS`).
     fn frame_decoder(settings: &Settings, buses: &[String]) -> Option<Arc<dyn FrameDecoder>> {
         // Its actuators speak RobStride's private protocol, as a RobStride bus's motors do;
         // each is known by its bus and ID (a robot's IDs repeat across its buses).

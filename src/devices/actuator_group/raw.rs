@@ -94,13 +94,10 @@ pub(crate) const CONDITION_KEYS: [&str; 5] = [
     "tolerance_m",
 ];
 
-/// `actuator_fault: {joint, fault}`: one of the RobStride emulator's faults on one actuator.
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct RawActuatorFault {
-    pub joint: S<String>,
-    pub fault: S<String>,
-}
+/// `actuator_fault: {joint, fault, …}`: one of the RobStride emulator's faults on one
+/// actuator, with the fault's own values (`counts` of an `encoder_glitch`), read as every
+/// kind's fault arguments are.
+pub(crate) type RawActuatorFault = crate::scenario::fault_args::RawFaultArgs;
 
 one_key_enum! {
     /// Actuator-group faults.

@@ -97,6 +97,33 @@ fn an_unknown_fault_gets_the_emulators_message() {
     );
 }
 
+/// An actuator's fault takes its values beside `joint` and `fault`, refused at the value.
+#[test]
+fn an_actuator_fault_takes_its_values() {
+    let text = format!(
+        "{BENCH}steps:\n  - inject: {{fault: {{actuator_fault: {{joint: elbow, fault: encoder_glitch, counts: 100}}}}}}\n"
+    );
+    let s = parse_scenario(Path::new("ok.yaml"), &text).expect("valid");
+    let StepKind::Inject { fault, .. } = &s.steps[0].kind else {
+        panic!("an inject step");
+    };
+    assert_eq!(fault.describe(), "encoder_glitch 100 counts on joint elbow");
+    let e = error_of(&format!(
+        "{BENCH}steps:\n  - inject: {{fault: {{actuator_fault: {{joint: elbow, fault: encoder_glitch, counts: 1e9}}}}}}\n"
+    ));
+    assert!(
+        e.contains("`counts`: encoder counts 1000000000 out of range"),
+        "{e}"
+    );
+    let e = error_of(&format!(
+        "{BENCH}steps:\n  - inject: {{fault: {{actuator_fault: {{joint: elbow, fault: gate_driver, counts: 1}}}}}}\n"
+    ));
+    assert!(
+        e.contains("fault `gate_driver` takes no arguments, got `counts`"),
+        "{e}"
+    );
+}
+
 /// The repository's `scenarios/robot/` folder, where the robot files' relative paths start.
 fn robot_scenario() -> std::path::PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/robot/x.yaml")

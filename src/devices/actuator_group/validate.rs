@@ -349,7 +349,8 @@ pub(crate) fn checks(
     Ok(checks)
 }
 
-/// `actuator_fault: {joint, fault}`, built by the RobStride emulator's one fault builder.
+/// `actuator_fault: {joint, fault, …}`, built by the RobStride emulator's one fault builder:
+/// its names, its values (`counts`), its ranges and messages, each shown at its argument.
 pub(crate) fn fault(
     ctx: &Ctx<'_>,
     raw: &RawFault,
@@ -363,11 +364,25 @@ pub(crate) fn fault(
             "the bench has several devices: say which group with `device:`",
         )
     })?;
-    let actuator = ctx.part(device, &f.joint, "joint")?;
-    // The emulator's own fault names and message (its one fault builder's).
-    let fault = MotorFault::named(&f.fault.value).map_err(|e| ctx.err(pos(&f.fault), e.message))?;
+    let joint = f
+        .word("joint")
+        .ok_or_else(|| ctx.err(at, "`actuator_fault` needs `joint`"))?;
+    let actuator = ctx.part(device, &joint, "joint")?;
+    let name = f.word("fault").ok_or_else(|| {
+        ctx.err(
+            at,
+            "`actuator_fault` needs `fault`: one of the RobStride emulator's fault names",
+        )
+    })?;
+    let kind = MotorFault::named(&name.value).map_err(|e| ctx.err(pos(&name), e.message))?;
+    let values = f.args_except(&["joint", "fault"]);
+    let names: Vec<&str> = kind.values().iter().map(|p| p.name).collect();
+    let fault = values
+        .only(kind.name(), &names)
+        .and_then(|()| kind.with_values(&values))
+        .map_err(|e| f.refusal(ctx, at, e))?;
     Ok(GroupFault {
-        joint: f.joint.value.clone(),
+        joint: joint.value,
         actuator,
         fault,
     })

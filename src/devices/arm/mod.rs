@@ -155,6 +155,9 @@ impl KindSpec for Kind {
         }))
     }
 
+    /// Its frames are the Piper's (a Realman speaks no CAN): decoded by the Piper's decoder,
+    /// and without a scenario by `armhil decode --device piper`, which the `piper` kind
+    /// registers (so this kind registers no `WIRE_DECODERS`).
     fn frame_decoder(settings: &Settings, _buses: &[String]) -> Option<Arc<dyn FrameDecoder>> {
         match settings.vendor {
             driver::arm::Vendor::Piper => Some(Arc::new(super::piper::decode::PiperFrames)),

@@ -12,6 +12,8 @@
 //!   driver, on the transport the device speaks;
 //! - what the **views** need: the URDF to draw and the trace columns that pose it (`KindSpec::drawing`) and a decoder for its
 //!   frames in reports (`KindSpec::frame_decoder`);
+//! - the **protocols** it owns, by which `armhil decode --device NAME` reads a capture without
+//!   a scenario (`KindSpec::WIRE_DECODERS`);
 //! - its **trace columns**, observations and fault injection, through [`Device`].
 
 mod device;
@@ -93,6 +95,34 @@ pub trait FrameDecoder: Send + Sync {
     /// (`None`: any of the device's buses): CAN ids repeat across buses, and a robot's motor 1
     /// on `can0` may be another model than its motor 1 on `can1`.
     fn decode(&self, bus: Option<&str>, frame: &CanFrame) -> Option<DecodedFrame>;
+}
+
+/// The options of `armhil decode` a protocol's decoder reads: RobStride's protocols address
+/// replies to a host and scale values by the motor model's ranges.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct WireOptions {
+    /// The host id replies are addressed to (`--host-id`).
+    pub host_id: u8,
+    /// The model whose ranges scale the frames (`--model`).
+    pub model: driver::robstride::Model,
+}
+
+/// Decodes a capture's frames by one protocol: `Ok(Some(_))` names a frame and its fields,
+/// `Ok(None)` is a frame the protocol does not know, `Err` says why a frame of the protocol
+/// does not decode (`armhil decode` prints it beside the frame's bytes).
+pub type WireDecode = Box<dyn Fn(&CanFrame) -> Result<Option<DecodedFrame>, String>>;
+
+/// A protocol `armhil decode --device NAME` reads a capture by, when no scenario says which
+/// device owns which frame. Each is registered once, by the kind that owns the protocol
+/// (`KindSpec::WIRE_DECODERS`); `crate::devices::wire_decoders` lists them all.
+#[derive(Debug, Clone, Copy)]
+pub struct WireDecoder {
+    /// Its name, the value of `--device` (`robstride-mit`).
+    pub name: &'static str,
+    /// One line for `armhil decode --help`.
+    pub help: &'static str,
+    /// The decoder, given the command's options.
+    pub decoder: fn(WireOptions) -> WireDecode,
 }
 
 /// One device kind. Implemented by a unit struct `Kind` in each kind's `mod.rs`.
@@ -182,4 +212,10 @@ pub(crate) trait KindSpec: 'static {
     /// A decoder of this device's CAN frames for reports, if it speaks CAN. `buses` names the
     /// device's buses on its bench, in the order [`KindSpec::buses`] lists them.
     fn frame_decoder(settings: &Self::Settings, buses: &[String]) -> Option<Arc<dyn FrameDecoder>>;
+
+    /// The protocols `armhil decode --device` reads captures by (without a scenario) that this
+    /// kind owns. Each protocol is registered once, by its owner: a kind that speaks another
+    /// kind's protocol (`arm` the Piper's, `actuator_group` RobStride's) lists none, and so does
+    /// a kind that speaks no CAN (the default).
+    const WIRE_DECODERS: &'static [WireDecoder] = &[];
 }

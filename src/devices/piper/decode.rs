@@ -1,8 +1,8 @@
-//! The Piper's frames named for the report's frame table.
+//! The Piper's frames named for the report's frame table and `armhil decode --device piper`.
 
 use bus::CanFrame;
 
-use crate::devices::FrameDecoder;
+use crate::devices::{FrameDecoder, WireDecode, WireOptions};
 use crate::interop::{decode_piper, DecodedFrame};
 
 /// Decodes the Piper's standard (11-bit) frames; extended frames are never a Piper's.
@@ -15,4 +15,10 @@ impl FrameDecoder for PiperFrames {
         }
         decode_piper(frame).ok().flatten()
     }
+}
+
+/// `armhil decode --device piper`: every frame by the Piper's protocol (the driver's codec);
+/// a frame of it that does not decode says why. The options are RobStride's.
+pub(crate) fn wire(_options: WireOptions) -> WireDecode {
+    Box::new(|frame| decode_piper(frame).map_err(|e| e.to_string()))
 }

@@ -22,7 +22,9 @@ pub use validate::DEFAULT_FIRMWARE;
 /// A Piper condition.
 pub type Check = model::Check;
 
-use super::{one_bus, BusUse, Device, Drawing, FrameDecoder, KindSpec, RawKindStep, Wiring};
+use super::{
+    one_bus, BusUse, Device, Drawing, FrameDecoder, KindSpec, RawKindStep, WireDecoder, Wiring,
+};
 use crate::bench::{Clock, RunOptions, HOST_NODE};
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 use device::checks;
@@ -84,6 +86,11 @@ impl KindSpec for Kind {
     type RawConds = raw::RawConds;
     type RawFault = raw::RawFault;
     const CONDITION_KEYS: &'static [&'static str] = &raw::CONDITION_KEYS;
+    const WIRE_DECODERS: &'static [WireDecoder] = &[WireDecoder {
+        name: "piper",
+        help: "AgileX Piper (11-bit ids)",
+        decoder: decode::wire,
+    }];
 
     fn validate_settings(ctx: &Ctx<'_>, raw: &raw::RawSettings, at: Pos) -> Res<Settings> {
         validate::settings(ctx, raw, at)

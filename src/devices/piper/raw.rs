@@ -7,6 +7,7 @@ use serde::Deserialize;
 
 use sim::piper::FaultKind;
 
+use crate::scenario::fault_args::RawFaultArgs;
 use crate::scenario::onekey::{one_key_enum, OneKey};
 use crate::scenario::read_in::KindSet;
 use crate::scenario::S;
@@ -34,23 +35,12 @@ pub(crate) struct RawObstacle {
     pub at_m: S<Vec<f64>>,
 }
 
-/// Arguments of emulator faults; which ones apply depends on the fault (checked in layer 2).
-#[derive(Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct RawEmuArgs {
-    pub joint: Option<S<i64>>,
-    pub temp_c: Option<S<f64>>,
-    pub voltage_v: Option<S<f64>>,
-    pub torque_nm: Option<S<f64>>,
-    pub board: Option<S<String>>,
-}
-
 /// A Piper emulator fault as written: its kind (named by the emulator's own table,
 /// [`sim::piper::FaultKind`]) and arguments.
 #[derive(Debug)]
 pub(crate) struct RawFault {
     pub kind: FaultKind,
-    pub args: RawEmuArgs,
+    pub args: RawFaultArgs,
 }
 
 impl RawFault {
@@ -59,7 +49,7 @@ impl RawFault {
         if kind.bare_ok() {
             Ok(Self {
                 kind,
-                args: RawEmuArgs::default(),
+                args: RawFaultArgs::default(),
             })
         } else {
             let key = kind.name();
@@ -88,7 +78,7 @@ impl OneKey for RawFault {
     ) -> Option<Result<Self, A::Error>> {
         let kind = FaultKind::from_name(key)?;
         Some(
-            map.next_value::<Option<RawEmuArgs>>()
+            map.next_value::<Option<RawFaultArgs>>()
                 .and_then(|args| match args {
                     Some(args) => Ok(Self { kind, args }),
                     None => Self::bare_of(kind),

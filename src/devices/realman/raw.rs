@@ -111,21 +111,12 @@ impl RawStep {
     }
 }
 
-/// Arguments of a Realman emulator fault (which apply depends on the fault).
-#[derive(Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct RawFaultArgs {
-    pub delay_ms: Option<S<i64>>,
-    pub count: Option<S<i64>>,
-    pub permille: Option<S<i64>>,
-    pub joint: Option<S<i64>>,
-    pub code: Option<S<i64>>,
-    pub bits: Option<S<i64>>,
-}
-
-/// A Realman emulator fault as written: one of the emulator's fault names and its arguments.
-pub(crate) type RawFault =
-    crate::scenario::onekey::NamedEntry<sim::realman::RealmanFaultKind, RawFaultArgs>;
+/// A Realman emulator fault as written: one of the emulator's fault names and its arguments,
+/// read as every kind's are.
+pub(crate) type RawFault = crate::scenario::onekey::NamedEntry<
+    sim::realman::RealmanFaultKind,
+    crate::scenario::fault_args::RawFaultArgs,
+>;
 
 impl crate::scenario::onekey::NamedKind for sim::realman::RealmanFaultKind {
     fn all() -> &'static [Self] {

@@ -1,11 +1,14 @@
-//! A RobStride bus's frames named for the report's frame table.
+//! A RobStride bus's frames named for the report's frame table, and RobStride's protocols for
+//! `armhil decode --device robstride|robstride-mit`.
 
 use bus::CanFrame;
 use driver::robstride::Model;
 
 use super::Settings;
-use crate::devices::FrameDecoder;
-use crate::interop::{decode_robstride, decode_robstride_command, DecodedFrame};
+use crate::devices::{FrameDecoder, WireDecode, WireOptions};
+use crate::interop::{
+    decode_robstride, decode_robstride_command, decode_robstride_mit, DecodedFrame,
+};
 
 /// The RobStride driver's host ID (the address motors reply to).
 const HOST_ID: u8 = 0xFD;
@@ -73,6 +76,23 @@ impl FrameDecoder for RobstrideFrames {
                     .and_then(|model| decode_robstride_command(frame, HOST_ID, model))
             })
     }
+}
+
+/// `armhil decode --device robstride`: the private protocol both ways, the motors' replies to
+/// `--host-id` and the host's commands, scaled by `--model`'s ranges.
+pub(crate) fn wire_private(options: WireOptions) -> WireDecode {
+    let WireOptions { host_id, model } = options;
+    Box::new(move |frame| {
+        Ok(decode_robstride(frame, host_id, model)
+            .or_else(|| decode_robstride_command(frame, host_id, model)))
+    })
+}
+
+/// `armhil decode --device robstride-mit`: the MIT variant's 11-bit frames, scaled by
+/// `--model`'s ranges.
+pub(crate) fn wire_mit(options: WireOptions) -> WireDecode {
+    let WireOptions { host_id, model } = options;
+    Box::new(move |frame| Ok(decode_robstride_mit(frame, host_id, model)))
 }
 
 #[cfg(test)]

@@ -18,7 +18,9 @@ pub use model::{
 };
 pub use observe::{MotorObservation, Observation};
 
-use super::{one_bus, BusUse, Device, Drawing, FrameDecoder, KindSpec, RawKindStep, Wiring};
+use super::{
+    one_bus, BusUse, Device, Drawing, FrameDecoder, KindSpec, RawKindStep, WireDecoder, Wiring,
+};
 use crate::bench::{Clock, HOST_NODE};
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 use device::RobstrideDevice;
@@ -41,6 +43,18 @@ impl KindSpec for Kind {
     type RawConds = raw::RawConds;
     type RawFault = raw::RawFault;
     const CONDITION_KEYS: &'static [&'static str] = &raw::CONDITION_KEYS;
+    const WIRE_DECODERS: &'static [WireDecoder] = &[
+        WireDecoder {
+            name: "robstride",
+            help: "RobStride actuators (29-bit ids, private protocol)",
+            decoder: decode::wire_private,
+        },
+        WireDecoder {
+            name: "robstride-mit",
+            help: "RobStride actuators switched to the MIT variant (11-bit ids)",
+            decoder: decode::wire_mit,
+        },
+    ];
 
     fn validate_settings(ctx: &Ctx<'_>, raw: &raw::RawSettings, at: Pos) -> Res<Settings> {
         validate::settings(ctx, raw, at)

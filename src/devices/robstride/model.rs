@@ -356,7 +356,7 @@ pub struct RsFault {
 impl RsFault {
     /// Short description for logs and reports.
     pub fn describe(&self) -> String {
-        format!("{} motor {}", fault_name(self.fault), self.motor)
+        format!("{} motor {}", self.fault.label(), self.motor)
     }
 }
 

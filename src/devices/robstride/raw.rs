@@ -136,15 +136,12 @@ impl RawStep {
     }
 }
 
-/// Arguments of a RobStride emulator fault.
-#[derive(Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct RawFaultArgs {
-    pub motor: Option<S<i64>>,
-}
-
-/// A RobStride emulator fault as written: one of the emulator's fault names and its arguments.
-pub(crate) type RawFault = crate::scenario::onekey::NamedEntry<sim::robstride::Fault, RawFaultArgs>;
+/// A RobStride emulator fault as written: one of the emulator's fault names and its arguments
+/// (`motor`, and the fault's own values), read as every kind's are.
+pub(crate) type RawFault = crate::scenario::onekey::NamedEntry<
+    sim::robstride::Fault,
+    crate::scenario::fault_args::RawFaultArgs,
+>;
 
 impl crate::scenario::onekey::NamedKind for sim::robstride::Fault {
     fn all() -> &'static [Self] {

@@ -30,6 +30,13 @@ pub enum Fault {
     StallOverload,
     /// Gate-driver chip fault (one-shot event).
     GateDriver,
+    /// The encoder's reading shifted by `counts` of its 16,384 per turn until cleared: the
+    /// firmware's loops and reports see the shaft where it is not (no fault bit: the
+    /// firmware cannot tell).
+    EncoderGlitch {
+        /// The shift, in encoder counts (± half a turn at most).
+        counts: i16,
+    },
 }
 
 /// A motor phase.
@@ -44,8 +51,8 @@ pub enum Phase {
 }
 
 impl Fault {
-    /// Every fault the emulator can inject.
-    pub const ALL: [Fault; 9] = [
+    /// Every fault the emulator can inject (a fault with values as its template: values 0).
+    pub const ALL: [Fault; 10] = [
         Fault::OverTemperature,
         Fault::UnderVoltage,
         Fault::OverVoltage,
@@ -55,6 +62,7 @@ impl Fault {
         Fault::EncoderNotCalibrated,
         Fault::StallOverload,
         Fault::GateDriver,
+        Fault::EncoderGlitch { counts: 0 },
     ];
 
     /// The fault's name in scenario files, logs and reports.
@@ -69,10 +77,11 @@ impl Fault {
             Fault::EncoderNotCalibrated => "encoder_not_calibrated",
             Fault::StallOverload => "stall_overload",
             Fault::GateDriver => "gate_driver",
+            Fault::EncoderGlitch { .. } => "encoder_glitch",
         }
     }
 
-    /// The fault with this [`name`](Fault::name).
+    /// The fault with this [`name`](Fault::name) (a fault with values: its template).
     pub fn from_name(name: &str) -> Option<Fault> {
         Fault::ALL.into_iter().find(|f| f.name() == name)
     }
@@ -82,25 +91,90 @@ impl Fault {
         crate::fault_args::named("RobStride", name, &Fault::ALL, Fault::name)
     }
 
-    /// Its arguments ([`MOTOR`] alone: what a fault does, and on which phase, is in its name).
-    pub fn params(self) -> &'static [FaultParam] {
-        &[MOTOR]
+    /// Its own arguments, besides the motor or joint it is on: the values it takes (what a
+    /// fault does, and on which phase, is otherwise in its name).
+    pub fn values(self) -> &'static [FaultParam] {
+        match self {
+            Fault::EncoderGlitch { .. } => &[GLITCH_COUNTS],
+            _ => &[],
+        }
+    }
+
+    /// Its arguments on a RobStride bus: [`MOTOR`], then its [`values`](Fault::values).
+    pub fn params(self) -> Vec<FaultParam> {
+        std::iter::once(MOTOR)
+            .chain(self.values().iter().copied())
+            .collect()
     }
 
     /// This fault on the motor `args` name: an argument the fault does not take is refused,
-    /// and `motor` must be a CAN ID ([`MOTOR`]). The one builder behind the scenario files, the
-    /// web view and the Python emulator, so all three accept the same and say the same.
+    /// `motor` must be a CAN ID ([`MOTOR`]) and each value within its range. The one builder
+    /// behind the scenario files, the web view and the Python emulator, so all three accept
+    /// the same and say the same.
     pub fn build(self, args: &FaultArgs) -> Result<MotorFault, FaultArgError> {
         let names: Vec<&str> = self.params().iter().map(|p| p.name).collect();
         args.only(self.name(), &names)?;
+        let motor = MOTOR.read(self, args)?;
+        // A CAN ID is within 1..=127: the cast is exact.
         Ok(MotorFault {
-            motor: MOTOR.read(self, args)?,
+            motor: motor as u8,
+            fault: self.with_values(args)?,
+        })
+    }
+
+    /// The same fault to clear on the motor `args` name: its values may be left out (clearing
+    /// removes the cause whatever its size).
+    pub fn build_to_clear(self, args: &FaultArgs) -> Result<MotorFault, FaultArgError> {
+        let names: Vec<&str> = self.params().iter().map(|p| p.name).collect();
+        args.only(self.name(), &names)?;
+        Ok(MotorFault {
+            motor: MOTOR.read(self, args)? as u8,
             fault: self,
         })
     }
 
+    /// This fault with its values read from `args` (other arguments are the caller's to
+    /// check): a front end that addresses motors otherwise (a robot's joints) builds with it.
+    pub fn with_values(self, args: &FaultArgs) -> Result<Fault, FaultArgError> {
+        Ok(match self {
+            // Within ±8192 (GLITCH_COUNTS): the cast is exact.
+            Fault::EncoderGlitch { .. } => Fault::EncoderGlitch {
+                counts: GLITCH_COUNTS.read(self, args)? as i16,
+            },
+            other => other,
+        })
+    }
+
+    /// Its values as a front end offers them (form fields, keyword arguments).
+    pub fn value_infos(self) -> Vec<crate::fault_desk::ParamInfo> {
+        self.values()
+            .iter()
+            .map(|p| {
+                crate::fault_desk::ParamInfo::required(p.name, p.description)
+                    .within(p.min as f64, p.max as f64)
+                    .suggesting(Some(FaultArgValue::Number(p.suggested as f64)))
+            })
+            .collect()
+    }
+
+    /// Its name with its values, as a front end shows it applied (`encoder_glitch 100 counts`).
+    pub fn label(self) -> String {
+        match self {
+            Fault::EncoderGlitch { counts } => format!("{} {counts} counts", self.name()),
+            other => other.name().to_owned(),
+        }
+    }
+
+    /// Whether `other` is this fault, whatever its values: clearing one clears the other.
+    pub fn same_kind(self, other: Fault) -> bool {
+        self.name() == other.name()
+    }
+
     /// What it does to the fault word, and what clears it, in one line.
     pub fn description(self) -> String {
+        if let Fault::EncoderGlitch { .. } = self {
+            return "shifts the encoder reading by `counts` (16,384 per turn) until cleared; no fault bit".into();
+        }
         format!(
             "sets fault word bit 0x{:08X}; clear removes the cause, the latch stays until stop + clear",
             self.word_bit()
@@ -127,6 +201,8 @@ impl Fault {
             Fault::EncoderNotCalibrated => 1 << 7,
             Fault::StallOverload => 1 << 14,
             Fault::PhaseOverCurrent(Phase::A) => 1 << 16,
+            // The firmware does not know its encoder lies.
+            Fault::EncoderGlitch { .. } => 0,
         }
     }
 }
@@ -149,10 +225,14 @@ pub struct FaultParam {
     pub name: &'static str,
     /// What the number is, in the refusal message (`CAN ID`).
     pub what: &'static str,
+    /// What it sets, for a form's tooltip or a docstring.
+    pub description: &'static str,
     /// Smallest value accepted.
-    pub min: u8,
+    pub min: i64,
     /// Largest value accepted.
-    pub max: u8,
+    pub max: i64,
+    /// The value a form starts with.
+    pub suggested: i64,
 }
 
 /// `motor`: the CAN ID of the motor the fault is on, 1..=127 (the IDs a type-7 command may
@@ -160,13 +240,28 @@ pub struct FaultParam {
 pub const MOTOR: FaultParam = FaultParam {
     name: "motor",
     what: "CAN ID",
+    description: "CAN ID of the motor",
     min: 1,
-    max: MAX_CAN_ID,
+    max: MAX_CAN_ID as i64,
+    suggested: 1,
+};
+
+/// Encoder counts per turn: the RobStride family's 14-bit absolute encoder.
+pub const ENCODER_COUNTS_PER_TURN: i64 = 16_384;
+
+/// `counts`: an encoder glitch's shift, at most half a turn either way.
+pub const GLITCH_COUNTS: FaultParam = FaultParam {
+    name: "counts",
+    what: "encoder counts",
+    description: "shift of the encoder reading, counts of 16,384 per turn",
+    min: -ENCODER_COUNTS_PER_TURN / 2,
+    max: ENCODER_COUNTS_PER_TURN / 2,
+    suggested: 100,
 };
 
 impl FaultParam {
     /// The value of this argument in `args` for `fault`: given, a whole number, within range.
-    fn read(&self, fault: Fault, args: &FaultArgs) -> Result<u8, FaultArgError> {
+    fn read(&self, fault: Fault, args: &FaultArgs) -> Result<i64, FaultArgError> {
         let name = self.name;
         let Some(given) = args.get(name) else {
             return Err(FaultArgError::missing(fault.name(), name));
@@ -180,9 +275,9 @@ impl FaultParam {
                 ))
             }
         };
-        if (f64::from(self.min)..=f64::from(self.max)).contains(&value) {
-            // Whole and within a u8 range: the cast is exact.
-            Ok(value as u8)
+        if (self.min as f64..=self.max as f64).contains(&value) {
+            // Whole and within an i64 range: the cast is exact.
+            Ok(value as i64)
         } else {
             Err(FaultArgError::at(
                 name,
@@ -336,11 +431,54 @@ mod tests {
     #[test]
     fn every_fault_builds_on_a_motor_by_name() {
         for fault in Fault::ALL {
+            let mut args = motor(FaultArgValue::Number(127.0));
+            for value in fault.values() {
+                args.push(value.name, FaultArgValue::Number(0.0));
+            }
             assert_eq!(
-                build_fault(fault.name(), &motor(FaultArgValue::Number(127.0))),
+                build_fault(fault.name(), &args),
                 Ok(MotorFault { motor: 127, fault })
             );
         }
+    }
+
+    /// A fault with a value: required, whole, within its range, and refused at its name.
+    #[test]
+    fn an_encoder_glitch_takes_its_counts() {
+        let glitch = |counts: FaultArgValue| {
+            build_fault(
+                "encoder_glitch",
+                &motor(FaultArgValue::Number(3.0)).with("counts", counts),
+            )
+        };
+        assert_eq!(
+            glitch(FaultArgValue::Number(-300.0)),
+            Ok(MotorFault {
+                motor: 3,
+                fault: Fault::EncoderGlitch { counts: -300 }
+            })
+        );
+        let far = glitch(FaultArgValue::Number(9000.0)).unwrap_err();
+        assert_eq!(
+            (far.arg.as_deref(), far.message.as_str()),
+            (
+                Some("counts"),
+                "`counts`: encoder counts 9000 out of range, expected -8192..=8192"
+            )
+        );
+        let missing = build_fault("encoder_glitch", &motor(FaultArgValue::Number(3.0)));
+        assert_eq!(
+            missing.unwrap_err().message,
+            "`encoder_glitch` needs `counts`"
+        );
+        // Clearing names the motor; the size of the glitch does not matter.
+        assert_eq!(
+            Fault::EncoderGlitch { counts: 0 }.build_to_clear(&motor(FaultArgValue::Number(3.0))),
+            Ok(MotorFault {
+                motor: 3,
+                fault: Fault::EncoderGlitch { counts: 0 }
+            })
+        );
     }
 
     #[test]

@@ -17,9 +17,13 @@ impl FaultTarget for RobstrideMonitor {
             .map(|&fault| FaultInfo {
                 name: fault.name(),
                 description: fault.description(),
-                params: vec![ParamInfo::required(MOTOR.name, "CAN ID of the motor")
-                    .within(f64::from(MOTOR.min), f64::from(MOTOR.max))
-                    .suggesting(first.map(|id| FaultArgValue::Number(f64::from(id))))],
+                params: std::iter::once(
+                    ParamInfo::required(MOTOR.name, MOTOR.description)
+                        .within(MOTOR.min as f64, MOTOR.max as f64)
+                        .suggesting(first.map(|id| FaultArgValue::Number(f64::from(id)))),
+                )
+                .chain(fault.value_infos())
+                .collect(),
             })
             .collect()
     }
@@ -28,12 +32,16 @@ impl FaultTarget for RobstrideMonitor {
         Fault::named(name)?.build(args)
     }
 
+    fn build_to_clear(&self, name: &str, args: &FaultArgs) -> Result<MotorFault, FaultArgError> {
+        Fault::named(name)?.build_to_clear(args)
+    }
+
     fn label(&self, fault: &MotorFault) -> String {
-        format!("{} on motor {}", fault.fault.name(), fault.motor)
+        format!("{} on motor {}", fault.fault.label(), fault.motor)
     }
 
     fn same_site(&self, a: &MotorFault, b: &MotorFault) -> bool {
-        a == b
+        a.motor == b.motor && a.fault.same_kind(b.fault)
     }
 
     async fn inject(&self, fault: MotorFault) -> Result<(), String> {

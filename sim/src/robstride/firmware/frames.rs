@@ -214,7 +214,8 @@ impl Actuator {
         if self.run_mode() == 1 {
             return;
         }
-        self.zero_offset_rad = self.plant.position_rad();
+        // Zero is where the encoder reads, glitch and all.
+        self.zero_offset_rad = self.plant.position_rad() + self.encoder_glitch_rad;
         // The internal targets move with the zero so the joint does not jump.
         self.params.set(index::LOC_REF, 0.0);
         self.op.angle_rad = 0.0;
@@ -322,7 +323,7 @@ impl Actuator {
     }
 
     pub(super) fn angle_rad(&self) -> f64 {
-        self.plant.position_rad() - self.zero_offset_rad
+        self.plant.position_rad() + self.encoder_glitch_rad - self.zero_offset_rad
     }
 }
 

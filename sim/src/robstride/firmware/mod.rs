@@ -106,6 +106,8 @@ pub struct Actuator {
     fault_word: u32,
     warning_word: u32,
     encoder_uncalibrated: bool,
+    /// What an injected encoder glitch adds to the encoder's reading (rad; 0 without one).
+    encoder_glitch_rad: f64,
     calibration_left_ms: u32,
     op: OpCommand,
     profile: Profile,
@@ -195,6 +197,7 @@ impl Actuator {
             fault_word: 0,
             warning_word: 0,
             encoder_uncalibrated: false,
+            encoder_glitch_rad: 0.0,
             calibration_left_ms: 0,
             op: OpCommand::default(),
             profile: Profile::default(),

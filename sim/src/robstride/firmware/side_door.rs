@@ -3,7 +3,7 @@
 use bus::CanFrame;
 
 use super::{Actuator, ModeState, MotorSnapshot};
-use crate::robstride::faults::{Fault, Phase, WARNING_OVER_TEMP};
+use crate::robstride::faults::{Fault, Phase, ENCODER_COUNTS_PER_TURN, WARNING_OVER_TEMP};
 
 impl Actuator {
     /// Inject a fault: set its physical cause (heat, supply) or latch a one-shot event.
@@ -22,6 +22,10 @@ impl Actuator {
                 self.mode = ModeState::Calibration;
             }
             Fault::PhaseOverCurrent(_) | Fault::StallOverload | Fault::GateDriver => {}
+            Fault::EncoderGlitch { counts } => {
+                self.encoder_glitch_rad =
+                    f64::from(counts) * std::f64::consts::TAU / ENCODER_COUNTS_PER_TURN as f64;
+            }
         }
         self.fault_word |= fault.word_bit();
         self.after_fault_change(before)
@@ -41,6 +45,7 @@ impl Actuator {
                     self.mode = ModeState::Reset;
                 }
             }
+            Fault::EncoderGlitch { .. } => self.encoder_glitch_rad = 0.0,
             Fault::PhaseOverCurrent(Phase::A | Phase::B | Phase::C)
             | Fault::StallOverload
             | Fault::GateDriver => {}

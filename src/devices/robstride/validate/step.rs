@@ -409,7 +409,23 @@ fn side_door_command(args: &CommandArgs<'_, '_>) -> Res<RsCommand> {
     let a = args.a;
     let fault_names: Vec<(Fault, &str)> = Fault::ALL.iter().map(|f| (*f, f.name())).collect();
     Ok(match args.name {
-        "inject" => RsCommand::Inject(args.word(&a.fault, "fault", &fault_names)?),
+        "inject" => {
+            let fault = args.word(&a.fault, "fault", &fault_names)?;
+            if let (Some(value), Some(written)) = (fault.values().first(), &a.fault) {
+                // A step has no place for a fault's values; the `faults:` list has.
+                return Err(args.ctx.err(
+                    crate::scenario::pos(written),
+                    format!(
+                        "`{}` takes `{}`: schedule it in `faults:` as `{}: {{motor: …, {}: …}}`",
+                        fault.name(),
+                        value.name,
+                        fault.name(),
+                        value.name
+                    ),
+                ));
+            }
+            RsCommand::Inject(fault)
+        }
         "remove_cause" => RsCommand::RemoveCause(args.word(&a.fault, "fault", &fault_names)?),
         "set_temperature" => RsCommand::SetTemperature {
             temp_c: args.emulator(&a.temp_c, "temp_c", check_temperature_c)?,

@@ -290,3 +290,36 @@ fn scenario_web_view_and_builder_refuse_a_fault_with_one_message() {
         );
     }
 }
+
+/// A fault with a value is read like every other argument: the builder takes it, reports name
+/// it with its value, and its refusal (out of range, unknown argument) is shown at the value's
+/// line and column.
+#[test]
+fn a_fault_with_a_value_is_read_and_refused_at_its_value() {
+    let text = format!("{BENCH}faults:\n  - {{at_ms: 100, fault: {{encoder_glitch: {{motor: 1, counts: -300}}}}}}\nsteps:\n  - wait_ms: 1\n");
+    let s = parse_scenario(Path::new("ok.yaml"), &text).expect("valid");
+    assert_eq!(
+        s.faults[0].fault.describe(),
+        "encoder_glitch -300 counts motor 1"
+    );
+    let far = error_of(&format!("{BENCH}faults:\n  - {{at_ms: 100, fault: {{encoder_glitch: {{motor: 1, counts: 9000}}}}}}\nsteps:\n  - wait_ms: 1\n"));
+    assert_eq!(
+        far,
+        "broken.yaml:5:61: `counts`: encoder counts 9000 out of range, expected -8192..=8192"
+    );
+    let unknown = error_of(&format!("{BENCH}faults:\n  - {{at_ms: 100, fault: {{gate_driver: {{motor: 1, volts: 3}}}}}}\nsteps:\n  - wait_ms: 1\n"));
+    assert_eq!(
+        unknown,
+        "broken.yaml:5:57: fault `gate_driver` has no argument `volts`; it takes: motor"
+    );
+    // A step has no room for a value: the message says where it goes.
+    let step = error_of(&format!(
+        "{BENCH}steps:\n  - robstride: {{motor: 1, do: inject, fault: encoder_glitch}}\n"
+    ));
+    assert!(
+        step.starts_with(
+            "broken.yaml:5:46: `encoder_glitch` takes `counts`: schedule it in `faults:`"
+        ),
+        "{step}"
+    );
+}
