@@ -2,13 +2,13 @@
 //!
 //! Layers, each depending only on those above it: [`scenario`] (the grammar core: spans,
 //! errors, one-key mappings, the validation context), [`devices`] (the device kinds and their
-//! contract, built on [`bench`](mod@bench): clock, links, run options), [`harness`] (loading whole scenarios, the runner, reports).
+//! contract, built on [`wiring`]: clock, links, run options), [`harness`] (loading whole
+//! scenarios, the runner, reports).
 //!
 //! The CLI (`armhil run`, `armhil check`) is a thin layer over this library; [`ui`] is the live
 //! web view of `armhil sim ... --ui`; [`robots`] reads robot files for `armhil sim robot`,
-//! [`rigs`] bench files for `armhil sim bench`.
+//! [`rigs`] rig files for `armhil sim rig`.
 
-pub mod bench;
 pub mod devices;
 pub mod harness;
 pub mod interop;
@@ -16,3 +16,4 @@ pub mod rigs;
 pub mod robots;
 pub mod scenario;
 pub mod ui;
+pub mod wiring;

@@ -1,6 +1,6 @@
 //! The YAML reader's errors in the words of someone writing the file: "unknown key `x`; did
 //! you mean `y`?" rather than "unknown field", "expected a number" rather than "invalid f64".
-//! Every YAML file the project reads (scenarios, robot files, bench files) says it this way,
+//! Every YAML file the project reads (scenarios, robot files, rig files) says it this way,
 //! and shows the line and long values of an error the same way.
 
 /// Longest source line shown under an error, in bytes.

@@ -12,7 +12,7 @@ use super::runner::{Clock, Recorder, RunOptions, Spool};
 use crate::devices::Device;
 use crate::devices::Wiring;
 
-pub use crate::bench::HOST_NODE;
+pub use crate::wiring::HOST_NODE;
 
 /// A built bench.
 pub(crate) struct BuiltBench {

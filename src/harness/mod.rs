@@ -21,8 +21,8 @@ pub mod report;
 pub mod result;
 mod runner;
 
-pub use crate::bench::{Interrupt, InterruptTrigger};
 pub use crate::devices::contract::{Device, DeviceError, Reply, TraceColumn};
+pub use crate::wiring::{Interrupt, InterruptTrigger};
 pub use bench::HOST_NODE;
 pub use result::{Outcome, ScenarioResult, StepResult, Verdict};
 pub use runner::{

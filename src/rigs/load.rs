@@ -1,4 +1,4 @@
-//! Reading a bench file into one `armhil sim KIND` option list per device.
+//! Reading a rig file into one `armhil sim KIND` option list per device.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -9,15 +9,15 @@ use sim::bounded_read::read_text_file;
 use crate::scenario::error::{from_yaml_error, suggestion};
 use crate::scenario::{pos, Pos, ScenarioError, S};
 
-/// Largest bench file read (bytes); a bench of dozens of devices is a few KB.
-const MAX_BENCH_FILE_BYTES: u64 = 1024 * 1024;
-/// Most devices one bench serves: each is an emulator with its own tasks, sockets and
+/// Largest rig file read (bytes); a rig of dozens of devices is a few KB.
+const MAX_RIG_FILE_BYTES: u64 = 1024 * 1024;
+/// Most devices one rig serves: each is an emulator with its own tasks, sockets and
 /// physics, and one process on a developer's machine should not be asked for more.
 pub const MAX_DEVICES: usize = 64;
 /// Longest device name (it appears in every message about the device).
 const MAX_NAME_CHARS: usize = 64;
 
-/// An `armhil sim` subcommand a bench can hold: the CLI's registry of served kinds lists them
+/// An `armhil sim` subcommand a rig can hold: the CLI's registry of served kinds lists them
 /// (this reader knows none by name).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct SimKind {
@@ -26,7 +26,7 @@ pub struct SimKind {
     /// The keys written as positional arguments rather than options (`file:` of a robot).
     pub positional_keys: &'static [&'static str],
     /// The keys whose value is a file the device writes (`record`, `state_file`), with `_`
-    /// between words: no two devices of a bench may write one file, nor one device two of
+    /// between words: no two devices of a rig may write one file, nor one device two of
     /// its outputs to one file.
     pub output_keys: &'static [&'static str],
 }
@@ -38,25 +38,25 @@ impl SimKind {
     }
 }
 
-/// A bench file that loaded.
+/// A rig file that loaded.
 #[derive(Debug, Clone)]
-pub struct BenchFile {
+pub struct RigFile {
     /// The file.
     pub file: PathBuf,
     /// Every device, by name (the order they start and stop in).
-    pub devices: Vec<BenchDevice>,
+    pub devices: Vec<RigDevice>,
 }
 
-impl BenchFile {
+impl RigFile {
     /// The folder relative paths in the file are resolved against.
     pub fn dir(&self) -> &Path {
         self.file.parent().unwrap_or(Path::new("."))
     }
 }
 
-/// One device of a bench: its `armhil sim KIND` command line.
+/// One device of a rig: its `armhil sim KIND` command line.
 #[derive(Debug, Clone)]
-pub struct BenchDevice {
+pub struct RigDevice {
     /// Its name in the file.
     pub name: String,
     /// Which emulator.
@@ -68,8 +68,8 @@ pub struct BenchDevice {
     entry: ScenarioError,
 }
 
-impl BenchDevice {
-    /// A problem with this device, at its entry in the bench file.
+impl RigDevice {
+    /// A problem with this device, at its entry in the rig file.
     pub fn error(&self, message: impl std::fmt::Display) -> ScenarioError {
         let mut error = ScenarioError::new(
             &self.entry.file,
@@ -81,9 +81,9 @@ impl BenchDevice {
     }
 }
 
-/// Why a bench file could not be loaded.
+/// Why a rig file could not be loaded.
 #[derive(Debug, thiserror::Error)]
-pub enum BenchFileError {
+pub enum RigFileError {
     /// The file could not be read (missing, not a regular file, too large).
     #[error("{}: {message}", path.display())]
     Read {
@@ -92,7 +92,7 @@ pub enum BenchFileError {
         /// Why.
         message: String,
     },
-    /// The file was read but is not a valid bench file.
+    /// The file was read but is not a valid rig file.
     #[error("{0}")]
     Invalid(#[from] Box<ScenarioError>),
 }
@@ -103,7 +103,7 @@ type Entry = BTreeMap<String, S<RawValue>>;
 /// The whole file as written.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct RawBench {
+struct RawRig {
     /// Device name → its entry.
     devices: S<BTreeMap<String, S<Entry>>>,
 }
@@ -138,19 +138,19 @@ impl RawItem {
     }
 }
 
-/// Loads the bench file `path`: every device's kind and option list, every problem named at
+/// Loads the rig file `path`: every device's kind and option list, every problem named at
 /// its line. Whether the options themselves are right is the command's to say (the CLI
-/// parses them and reports through [`BenchDevice::error`]).
+/// parses them and reports through [`RigDevice::error`]).
 ///
 /// `kinds` are the subcommands a device may be, in the order messages list them.
-pub fn load_bench_file(path: &Path, kinds: &[SimKind]) -> Result<BenchFile, BenchFileError> {
-    let text = read_text_file(path, MAX_BENCH_FILE_BYTES, "bench file").map_err(|message| {
-        BenchFileError::Read {
+pub fn load_rig_file(path: &Path, kinds: &[SimKind]) -> Result<RigFile, RigFileError> {
+    let text = read_text_file(path, MAX_RIG_FILE_BYTES, "rig file").map_err(|message| {
+        RigFileError::Read {
             path: path.to_owned(),
             message,
         }
     })?;
-    let raw: RawBench = serde_saphyr::from_str(&text).map_err(|e| {
+    let raw: RawRig = serde_saphyr::from_str(&text).map_err(|e| {
         let mut error = from_yaml_error(path, &text, &e);
         if error.message.contains("untagged enum") {
             // serde's words for "none of the value shapes fit".
@@ -165,17 +165,13 @@ pub fn load_bench_file(path: &Path, kinds: &[SimKind]) -> Result<BenchFile, Benc
         Box::new(ScenarioError::new(path, at, message).with_source(&text))
     };
     if raw.devices.value.is_empty() {
-        return Err(err(
-            pos(&raw.devices),
-            "a bench needs at least one device".into(),
-        )
-        .into());
+        return Err(err(pos(&raw.devices), "a rig needs at least one device".into()).into());
     }
     if raw.devices.value.len() > MAX_DEVICES {
         return Err(err(
             pos(&raw.devices),
             format!(
-                "{} devices; one bench serves at most {MAX_DEVICES}",
+                "{} devices; one rig serves at most {MAX_DEVICES}",
                 raw.devices.value.len()
             ),
         )
@@ -190,7 +186,7 @@ pub fn load_bench_file(path: &Path, kinds: &[SimKind]) -> Result<BenchFile, Benc
         let kind = kind_of(kinds, &entry.value, at).map_err(|(at, m)| device_err(at, m))?;
         let args = command_line(kind, &entry.value).map_err(|(at, m)| device_err(at, m))?;
         outputs.extend(outputs_of(name, kind, &entry.value, path));
-        devices.push(BenchDevice {
+        devices.push(RigDevice {
             name: name.clone(),
             kind,
             args,
@@ -200,7 +196,7 @@ pub fn load_bench_file(path: &Path, kinds: &[SimKind]) -> Result<BenchFile, Benc
     if let Some((at, message)) = shared_output(outputs) {
         return Err(err(at, message).into());
     }
-    Ok(BenchFile {
+    Ok(RigFile {
         file: path.to_owned(),
         devices,
     })
@@ -217,18 +213,18 @@ struct Output<'a> {
     key: String,
     /// The value as written.
     written: String,
-    /// The path resolved against the bench file's folder and normalised (shown in messages).
+    /// The path resolved against the rig file's folder and normalised (shown in messages).
     shown: PathBuf,
     /// What two names of one file have in common (see [`same_file_key`]).
     same: PathBuf,
 }
 
-/// The files an entry names for its kind's outputs, resolved against the folder of the bench
-/// file `bench` (as the CLI resolves them). A list of one item is that item; a longer one is
+/// The files an entry names for its kind's outputs, resolved against the folder of the rig
+/// file `rig` (as the CLI resolves them). A list of one item is that item; a longer one is
 /// left to the kind's parser, which takes such an option once only; `true`/`false` name no
 /// file.
-fn outputs_of<'a>(device: &'a str, kind: SimKind, entry: &Entry, bench: &Path) -> Vec<Output<'a>> {
-    let dir = bench.parent().unwrap_or(Path::new(""));
+fn outputs_of<'a>(device: &'a str, kind: SimKind, entry: &Entry, rig: &Path) -> Vec<Output<'a>> {
+    let dir = rig.parent().unwrap_or(Path::new(""));
     entry
         .iter()
         .filter_map(|(key, value)| {
@@ -349,7 +345,7 @@ fn kind_of(kinds: &[SimKind], entry: &Entry, at: Pos) -> Result<SimKind, (Pos, S
             (
                 pos(value),
                 format!(
-                    "unknown kind `{word}`{}; a bench holds {}",
+                    "unknown kind `{word}`{}; a rig holds {}",
                     suggestion(word, &names),
                     names.join(", ")
                 ),

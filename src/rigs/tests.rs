@@ -1,4 +1,4 @@
-//! Bench files: entries become command lines, and each mistake is named at its place.
+//! Rig files: entries become command lines, and each mistake is named at its place.
 
 use std::path::PathBuf;
 
@@ -29,22 +29,22 @@ const KINDS: [SimKind; 4] = [PIPER, REALMAN, ROBSTRIDE, ROBOT];
 
 fn write(text: &str) -> (tempfile::TempDir, PathBuf) {
     let dir = tempfile::tempdir().unwrap();
-    let file = dir.path().join("bench.yaml");
+    let file = dir.path().join("rig.yaml");
     std::fs::write(&file, text).unwrap();
     (dir, file)
 }
 
-fn load(text: &str) -> Result<BenchFile, String> {
+fn load(text: &str) -> Result<RigFile, String> {
     let (_dir, file) = write(text);
-    load_bench_file(&file, &KINDS).map_err(|e| match e {
-        BenchFileError::Invalid(e) => e.headline().rsplit_once(".yaml:").unwrap().1.to_owned(),
+    load_rig_file(&file, &KINDS).map_err(|e| match e {
+        RigFileError::Invalid(e) => e.headline().rsplit_once(".yaml:").unwrap().1.to_owned(),
         other => other.to_string(),
     })
 }
 
 #[test]
 fn each_entry_becomes_its_command_line() {
-    let bench = load(
+    let rig = load(
         "devices:
   right: {kind: piper, iface: can_right, initial_joints_deg: [0, -10.5, 20], ui: 8001}
   left:
@@ -56,7 +56,7 @@ fn each_entry_becomes_its_command_line() {
 ",
     )
     .unwrap();
-    let lines: Vec<(&str, SimKind, Vec<&str>)> = bench
+    let lines: Vec<(&str, SimKind, Vec<&str>)> = rig
         .devices
         .iter()
         .map(|d| {
@@ -100,13 +100,13 @@ fn each_entry_becomes_its_command_line() {
 fn mistakes_are_named_at_their_line() {
     let cases = [
         ("devices:\n  a: {iface: can0}\n", "2:6: device `a`: no `kind:` (one of piper, realman, robstride, robot)"),
-        ("devices:\n  a: {kind: pipr}\n", "2:13: device `a`: unknown kind `pipr`; did you mean `piper`?; a bench holds piper, realman, robstride, robot"),
+        ("devices:\n  a: {kind: pipr}\n", "2:13: device `a`: unknown kind `pipr`; did you mean `piper`?; a rig holds piper, realman, robstride, robot"),
         ("devices:\n  a: {kind: robot, file: [x1, x2]}\n", "2:26: device `a`: `file:` takes one value, not a list"),
         ("devices:\n  a: {kind: robstride, motor: [1:RS03, y]}\n", "2:31: an option's value is a word, a number, true/false or a list of words and numbers (quote a word YAML reads as something else, such as `y` or `no`)"),
         ("devices:\n  a: {kind: piper, ui: {port: 1}}\n", "2:24: an option's value is a word, a number, true/false or a list of words and numbers (quote a word YAML reads as something else, such as `y` or `no`)"),
         ("devices:\n  a: {kind: robot, file: true}\n", "2:26: device `a`: `file:` takes a value, not true"),
         ("devices:\n  a b: {kind: piper}\n", "2:8: device name `a b`: use 1 to 64 letters, digits, `_` or `-`"),
-        ("devices: {}\n", "1:10: a bench needs at least one device"),
+        ("devices: {}\n", "1:10: a rig needs at least one device"),
         ("device:\n  a: {kind: piper}\n", "1:1: unknown key `device`, expected one of devices; did you mean `devices`?"),
     ];
     for (text, want) in cases {
@@ -118,8 +118,8 @@ fn mistakes_are_named_at_their_line() {
 #[test]
 fn a_device_error_names_the_device_at_its_entry() {
     let (_dir, file) = write("devices:\n  left: {kind: piper, ifac: can0}\n");
-    let bench = load_bench_file(&file, &KINDS).unwrap();
-    let error = bench.devices[0].error("unexpected argument '--ifac'");
+    let rig = load_rig_file(&file, &KINDS).unwrap();
+    let error = rig.devices[0].error("unexpected argument '--ifac'");
     assert!(
         error
             .headline()
@@ -135,15 +135,15 @@ fn a_device_error_names_the_device_at_its_entry() {
 
 #[test]
 fn a_file_that_is_not_one_is_refused_without_reading_it_all() {
-    let error = load_bench_file(std::path::Path::new("/dev/zero"), &KINDS).unwrap_err();
+    let error = load_rig_file(std::path::Path::new("/dev/zero"), &KINDS).unwrap_err();
     assert!(error.to_string().contains("not a regular file"), "{error}");
 }
 
-/// The headline of a bench file's error (file:line:column: message).
+/// The headline of a rig file's error (file:line:column: message).
 fn headline(file: &std::path::Path) -> String {
-    match load_bench_file(file, &KINDS) {
+    match load_rig_file(file, &KINDS) {
         Ok(_) => panic!("{} loaded", file.display()),
-        Err(BenchFileError::Invalid(e)) => e.headline(),
+        Err(RigFileError::Invalid(e)) => e.headline(),
         Err(other) => panic!("{other}"),
     }
 }

@@ -111,20 +111,26 @@ fn outputs_that_cannot_be_written_fail_the_run_naming_the_path() {
     assert!(stdout.contains(blocker.to_str().unwrap()), "{stdout}");
 }
 
-#[test]
-fn a_bench_file_s_mistakes_are_named_at_the_device_s_line() {
+/// A rig file with `ifac:` for `iface:` on its third line, and where it is.
+fn rig_with_a_misspelt_option() -> (tempfile::TempDir, std::path::PathBuf) {
     let dir = tempfile::tempdir().unwrap();
-    let file = dir.path().join("bench.yaml");
+    let file = dir.path().join("rig.yaml");
     std::fs::write(
         &file,
         "devices:\n  left: {kind: realman, port: 1}\n  right: {kind: piper, ifac: can0}\n",
     )
     .unwrap();
-    let out = armhil(&["sim", "bench", file.to_str().unwrap()]);
+    (dir, file)
+}
+
+#[test]
+fn a_rig_file_s_mistakes_are_named_at_the_device_s_line() {
+    let (_dir, file) = rig_with_a_misspelt_option();
+    let out = armhil(&["sim", "rig", file.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
     assert!(
         stderr(&out).contains(
-            "bench.yaml:3:10: device `right` (piper): unexpected argument `ifac:` found; tip: a \
+            "rig.yaml:3:10: device `right` (piper): unexpected argument `ifac:` found; tip: a \
              similar argument exists: `iface:`"
         ),
         "{}",
@@ -132,12 +138,29 @@ fn a_bench_file_s_mistakes_are_named_at_the_device_s_line() {
     );
 }
 
+/// `armhil sim bench FILE`, the command's name before rig files were called so, still runs
+/// one (a hidden alias: `armhil sim --help` does not list it).
 #[test]
-fn a_bench_whose_device_cannot_start_stops_the_others_and_says_which() {
+fn sim_bench_is_still_sim_rig() {
+    let (_dir, file) = rig_with_a_misspelt_option();
+    let out = armhil(&["sim", "bench", file.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("rig.yaml:3:10: device `right` (piper): unexpected argument"),
+        "{}",
+        stderr(&out)
+    );
+    let help = armhil(&["sim", "--help"]);
+    let help = String::from_utf8_lossy(&help.stdout);
+    assert!(help.contains("rig") && !help.contains("bench"), "{help}");
+}
+
+#[test]
+fn a_rig_whose_device_cannot_start_stops_the_others_and_says_which() {
     let taken = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
     let port = taken.local_addr().unwrap().port();
     let dir = tempfile::tempdir().unwrap();
-    let file = dir.path().join("bench.yaml");
+    let file = dir.path().join("rig.yaml");
     let free = std::net::TcpListener::bind("127.0.0.1:0")
         .unwrap()
         .local_addr()
@@ -148,7 +171,7 @@ fn a_bench_whose_device_cannot_start_stops_the_others_and_says_which() {
         format!("devices:\n  a: {{kind: realman, port: {free}}}\n  b: {{kind: realman, port: {port}}}\n"),
     )
     .unwrap();
-    let out = armhil(&["sim", "bench", file.to_str().unwrap()]);
+    let out = armhil(&["sim", "rig", file.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
     assert!(
         stderr(&out).contains(&format!(

@@ -98,12 +98,12 @@ async fn a_robot_answers_on_each_of_its_buses_over_socketcand_channels() {
     }
 }
 
-/// `armhil sim bench`: a leader Piper and its follower that name the same socketcand address
+/// `armhil sim rig`: a leader Piper and its follower that name the same socketcand address
 /// are on one bus behind one server, as on a shared SocketCAN interface: one client sees the
 /// leader's control frames (0x155) and the follower's feedback (0x2A5) on the same connection,
-/// and a second bench address is a bus of its own.
+/// and a second address of the rig is a bus of its own.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn bench_devices_naming_one_socketcand_address_share_its_bus() {
+async fn rig_devices_naming_one_socketcand_address_share_its_bus() {
     let dir = tempfile::tempdir().expect("temp dir");
     let (shared, alone) = (free_port(), free_port());
     let file = dir.path().join("bimanual.yaml");
@@ -118,17 +118,17 @@ async fn bench_devices_naming_one_socketcand_address_share_its_bus() {
     )
     .unwrap();
     let mut child = Sim(Command::new(ARMHIL)
-        .args(["sim", "bench"])
+        .args(["sim", "rig"])
         .arg(&file)
         .stdout(std::process::Stdio::null())
         .stderr(std::process::Stdio::null())
         .spawn()
-        .expect("armhil sim bench starts"));
+        .expect("armhil sim rig starts"));
     let deadline = Instant::now() + Duration::from_secs(20);
     for port in [shared, alone] {
         while !listens(("127.0.0.1", port)) {
             assert!(Instant::now() < deadline, "nothing listens on {port}");
-            assert!(child.0.try_wait().unwrap().is_none(), "the bench exited");
+            assert!(child.0.try_wait().unwrap().is_none(), "the rig exited");
             tokio::time::sleep(Duration::from_millis(50)).await;
         }
     }

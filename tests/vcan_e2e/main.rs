@@ -9,5 +9,5 @@ mod piper_driver;
 mod piper_sdk;
 mod robstride;
 mod scenarios;
-mod sim_bench;
+mod sim_rig;
 mod vxcan;

@@ -57,6 +57,11 @@ const MAX_FEED_FORWARD_ACC_RAD_S2: f64 = 20.0;
 const BRAKE_BANDWIDTH_RAD_S: f64 = 150.0;
 /// Brake holding torque = this × the joint's effort limit (assumed).
 const BRAKE_HOLD_PER_EFFORT: f64 = 1.5;
+/// Speed under which a joint counts as still, rad/s.
+const REST_SPEED_RAD_S: f64 = 1e-5;
+/// Distance from where its loop or its brake holds it under which a still joint counts as
+/// settled, rad: a fiftieth of the 0.001° the controller reports.
+const REST_ERROR_RAD: f64 = 3e-7;
 
 /// Why a plant cannot be built.
 #[derive(Debug, thiserror::Error)]
@@ -94,6 +99,12 @@ pub struct ArmPlant {
     damping: Vec<f64>,
     lower: Vec<f64>,
     upper: Vec<f64>,
+    /// Steps taken since the plant was built (stepped or at rest).
+    steps: u64,
+    /// Every joint settled where its loop or brake holds it, nothing commanded to move: the
+    /// world stands still and is not stepped (as a physics engine lets a body at rest sleep)
+    /// until a command, a brake or a disturbance changes something.
+    resting: bool,
 }
 
 impl std::fmt::Debug for ArmPlant {
@@ -150,6 +161,8 @@ impl ArmPlant {
             damping,
             lower,
             upper,
+            steps: 0,
+            resting: false,
         })
     }
 
@@ -168,6 +181,7 @@ impl ArmPlant {
             return;
         }
         let dt = self.world.config().step_s;
+        let before = (self.q_ref.clone(), self.v_ref.clone());
         for j in 0..self.dof {
             self.q_ref[j] = positions_rad[j].clamp(self.lower[j], self.upper[j]);
             // Streamed once per step: the change of speed is the reference acceleration (an
@@ -175,6 +189,10 @@ impl ArmPlant {
             self.a_ref[j] = ((speeds_rad_s[j] - self.v_ref[j]) / dt)
                 .clamp(-MAX_FEED_FORWARD_ACC_RAD_S2, MAX_FEED_FORWARD_ACC_RAD_S2);
             self.v_ref[j] = speeds_rad_s[j];
+        }
+        // A host streaming the pose the arm already holds leaves it at rest.
+        if (&self.q_ref, &self.v_ref) != (&before.0, &before.1) {
+            self.resting = false;
         }
     }
 
@@ -189,6 +207,9 @@ impl ArmPlant {
             self.v_ref[joint] = 0.0;
             self.a_ref[joint] = 0.0;
         }
+        if *slot != enabled {
+            self.resting = false;
+        }
         *slot = enabled;
     }
 
@@ -200,6 +221,9 @@ impl ArmPlant {
             self.v_ref.fill(0.0);
             self.a_ref.fill(0.0);
         }
+        if self.brakes_engaged != engaged {
+            self.resting = false;
+        }
         self.brakes_engaged = engaged;
     }
 
@@ -210,6 +234,12 @@ impl ArmPlant {
 
     /// Advances the plant by one 1 ms step.
     pub fn step(&mut self) {
+        self.steps += 1;
+        if self.resting {
+            // Held still: the same torques hold it, and only the windings' heat moves.
+            self.heat(self.world.config().step_s);
+            return;
+        }
         let model = self.world.model();
         let gravity = model
             .gravity_torques(&self.q, self.world.config().gravity_m_s2)
@@ -261,6 +291,23 @@ impl ArmPlant {
         self.q = self.world.joint_positions();
         self.v = self.world.joint_velocities();
         self.heat(self.world.config().step_s);
+        self.resting = self.settled();
+    }
+
+    /// Whether every joint is still where its loop (or its brake) holds it and nothing asks it
+    /// to move: the next step would leave the arm where it is (to well under what the
+    /// controller reports), so it need not be computed.
+    fn settled(&self) -> bool {
+        if self.v_ref.iter().chain(&self.a_ref).any(|x| *x != 0.0) {
+            return false;
+        }
+        (0..self.dof).all(|j| {
+            let held_at = match self.brake_hold[j] {
+                Some(hold) if self.is_braked(j) => hold,
+                _ => self.q_ref[j],
+            };
+            self.v[j].abs() < REST_SPEED_RAD_S && (held_at - self.q[j]).abs() < REST_ERROR_RAD
+        })
     }
 
     /// First-order thermal model: each joint tends to ambient + R_th · I²R.
@@ -321,7 +368,7 @@ impl ArmPlant {
 
     /// Simulated time since the plant was built, s.
     pub fn time_s(&self) -> f64 {
-        self.world.time_s()
+        self.steps as f64 * self.world.config().step_s
     }
 
     /// The physics world (link poses, contacts, the URDF model).
@@ -331,6 +378,8 @@ impl ArmPlant {
 
     /// The physics world, to add obstacles or disturbance torques (collision faults).
     pub fn world_mut(&mut self) -> &mut RapierWorld {
+        // An obstacle or a push may move a resting arm.
+        self.resting = false;
         &mut self.world
     }
 }

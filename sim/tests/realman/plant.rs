@@ -299,3 +299,45 @@ fn bad_inputs_are_refused_or_ignored() {
     assert!((plant.positions_rad()[0] - q[0]).abs() < 1e-3);
     assert!(plant.temperatures_c()[0].is_finite());
 }
+
+/// An arm settled where its loops hold it is not stepped (its world's step count stands while
+/// its time goes on), reports the same torques and pose, and a new target wakes it and moves
+/// it as before.
+#[test]
+fn a_settled_arm_rests_until_a_target_moves_it() {
+    let model = ArmModel::rm65b();
+    let start = deg(&[0.0, 20.0, 70.0, 0.0, 60.0, 0.0]);
+    let mut plant = ArmPlant::new(&model, &start).expect("plant");
+    for _ in 0..2000 {
+        plant.step();
+    }
+    let (pose, torques) = (plant.positions_rad(), plant.torques_nm());
+    assert!(
+        torques[1].abs() > 1.0,
+        "the shoulder carries the arm: {torques:?}"
+    );
+    let stepped = plant.world().steps();
+    for _ in 0..1000 {
+        plant.step();
+    }
+    assert_eq!(
+        plant.world().steps(),
+        stepped,
+        "a settled arm is not stepped"
+    );
+    assert!((plant.time_s() - 3.0).abs() < 1e-9, "{}", plant.time_s());
+    assert_eq!(plant.positions_rad(), pose);
+    assert_eq!(plant.torques_nm(), torques);
+    // The reference it holds streamed again leaves it at rest; another one wakes it.
+    plant.set_target(&start, &[0.0; 6]);
+    plant.step();
+    assert_eq!(plant.world().steps(), stepped);
+    let mut target = pose.clone();
+    target[0] += 0.2;
+    plant.set_target(&target, &[0.0; 6]);
+    for _ in 0..1000 {
+        plant.step();
+    }
+    assert!(plant.world().steps() > stepped);
+    assert!((plant.positions_rad()[0] - target[0]).abs() < 1e-3);
+}

@@ -8,9 +8,9 @@ use sim::supervise::{DeathWatch, EmulatorDied};
 
 use super::signals::StopSignals;
 
-pub mod bench;
 pub mod piper;
 pub mod realman;
+pub mod rig;
 pub mod robot;
 pub mod robstride;
 pub mod served;
@@ -26,8 +26,8 @@ pub struct Args {
 }
 
 /// Register the served kinds: `"name" => Variant(module)`, each module holding a `Kind`
-/// that implements [`ServedKind`]. The subcommands, the kinds a bench file may hold and the
-/// bench's dispatch are generated from this list; nothing else in the CLI lists them.
+/// that implements [`ServedKind`]. The subcommands, the kinds a rig file may hold and the
+/// rig's dispatch are generated from this list; nothing else in the CLI lists them.
 macro_rules! served_kinds {
     ($( $(#[$doc:meta])* $name:literal => $variant:ident($module:ident) ),* $(,)?) => {
         // Each registration line's name is its kind's `ServedKind::NAME`.
@@ -39,12 +39,15 @@ macro_rules! served_kinds {
         #[derive(Debug, Subcommand)]
         enum Device {
             $( $(#[$doc])* #[command(name = $name)] $variant(<$module::Kind as ServedKind>::Args), )*
-            /// Several devices in one process from a bench file (`rigs/`): two Piper arms on two
+            /// Several devices in one process from a rig file (`rigs/`): two Piper arms on two
             /// interfaces, Realman controllers on several ports, robots; stopped together.
-            Bench(bench::Args),
+            // `bench`: its name while rig files were called bench files; kept as a hidden
+            // alias so the commands people wrote then still run.
+            #[command(alias = "bench")]
+            Rig(rig::Args),
         }
 
-        /// Every kind a bench file may hold, with the parser of its options.
+        /// Every kind a rig file may hold, with the parser of its options.
         pub(crate) const SERVED: &[(armhil::rigs::SimKind, served::EntryParser)] = &[
             $( (served::sim_kind::<$module::Kind>(), served::parse_entry::<$module::Kind>), )*
         ];
@@ -54,7 +57,7 @@ macro_rules! served_kinds {
             raise_open_file_limit();
             match args.device {
                 $( Device::$variant(args) => served::run_alone::<$module::Kind>(args), )*
-                Device::Bench(args) => bench::run(args),
+                Device::Rig(args) => rig::run(args),
             }
         }
     };
@@ -170,26 +173,26 @@ fn create_vxcan(iface: &str, peer: &str) -> anyhow::Result<()> {
 /// How `armhil sim` came to stop.
 #[derive(Debug)]
 pub(crate) enum Stopped {
-    /// Ctrl-C or SIGTERM (or the bench's stop request).
+    /// Ctrl-C or SIGTERM (or the rig's stop request).
     Signal(&'static str),
     /// The emulator stopped serving on its own.
     Died(EmulatorDied),
 }
 
 /// What tells a served device to stop: the process's own signals when it runs alone, or the
-/// bench it is part of (`armhil sim bench`), which listens for the signals once and stops
+/// rig it is part of (`armhil sim rig`), which listens for the signals once and stops
 /// every device together.
 pub(crate) enum StopSource {
     /// SIGINT / SIGTERM. Listened for before the emulator starts: a signal that arrived
     /// earlier would kill the process with its recording or state file unfinished.
     Signals(StopSignals),
-    /// The bench's stop request: the name of the signal (or reason) once it is sent; and the
-    /// socketcand buses the bench's devices share.
-    Bench {
+    /// The rig's stop request: the name of the signal (or reason) once it is sent; and the
+    /// socketcand buses the rig's devices share.
+    Rig {
         /// The stop request.
         request: tokio::sync::watch::Receiver<Option<&'static str>>,
         /// The shared socketcand servers.
-        buses: std::sync::Arc<served_bus::BenchBuses>,
+        buses: std::sync::Arc<served_bus::RigBuses>,
     },
 }
 
@@ -199,11 +202,11 @@ impl StopSource {
         Ok(Self::Signals(StopSignals::listen()?))
     }
 
-    /// The socketcand buses shared with the other devices of the bench, if on one.
-    pub(crate) fn bench_buses(&self) -> Option<&std::sync::Arc<served_bus::BenchBuses>> {
+    /// The socketcand buses shared with the other devices of the rig, if on one.
+    pub(crate) fn rig_buses(&self) -> Option<&std::sync::Arc<served_bus::RigBuses>> {
         match self {
             Self::Signals(_) => None,
-            Self::Bench { buses, .. } => Some(buses),
+            Self::Rig { buses, .. } => Some(buses),
         }
     }
 
@@ -211,16 +214,16 @@ impl StopSource {
     pub(crate) async fn next(&mut self) -> &'static str {
         match self {
             Self::Signals(signals) => signals.next().await,
-            Self::Bench { request, .. } => match request.wait_for(Option::is_some).await {
+            Self::Rig { request, .. } => match request.wait_for(Option::is_some).await {
                 Ok(reason) => reason.unwrap_or("stop"),
-                // The bench is gone: nobody is left to serve.
+                // The rig is gone: nobody is left to serve.
                 Err(_) => "stop",
             },
         }
     }
 }
 
-/// Wait for a stop request (Ctrl-C / SIGTERM, or the bench's), or for the emulator to die on
+/// Wait for a stop request (Ctrl-C / SIGTERM, or the rig's), or for the emulator to die on
 /// its own (a task panicked, its state file could not be written), whichever comes first.
 /// Waiting for the signal alone kept the port open on a dead bus and exited 0 (D4).
 pub(crate) async fn until_stopped(stop: &mut StopSource, death: &mut DeathWatch) -> Stopped {
@@ -278,7 +281,7 @@ fn raise_open_file_limit() -> Option<u64> {
 #[cfg(test)]
 mod tests {
     /// Every path option of every kind is a file it reads (listed here) or a file it writes
-    /// (its `OUTPUT_KEYS`, which a bench checks for files two devices would write): a new
+    /// (its `OUTPUT_KEYS`, which a rig checks for files two devices would write): a new
     /// option naming a file fails here until it is one or the other.
     #[test]
     fn every_path_option_is_an_input_or_an_output_key() {

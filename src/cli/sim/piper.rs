@@ -102,7 +102,7 @@ fn initial_joints_rad(args: &Args) -> anyhow::Result<[f64; 6]> {
     Ok(arr.map(f64::to_radians))
 }
 
-/// Serve until `stop` asks (a signal, or the bench this device is part of stopping).
+/// Serve until `stop` asks (a signal, or the rig this device is part of stopping).
 pub(crate) async fn serve(args: Args, mut stop: super::StopSource) -> anyhow::Result<ExitCode> {
     let config = PiperConfig {
         firmware: args.firmware,
@@ -120,7 +120,7 @@ pub(crate) async fn serve(args: Args, mut stop: super::StopSource) -> anyhow::Re
         }),
         ..PiperConfig::default()
     };
-    let served = ServedBus::open(&args.bus, stop.bench_buses()).await?;
+    let served = ServedBus::open(&args.bus, stop.rig_buses()).await?;
     let place = served.place();
     let bus = served.node("piper")?;
     let tap = args

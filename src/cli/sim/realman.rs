@@ -76,7 +76,7 @@ impl super::served::ServedKind for Kind {
     }
 }
 
-/// Serve until `stop` asks (a signal, or the bench this device is part of stopping).
+/// Serve until `stop` asks (a signal, or the rig this device is part of stopping).
 pub(crate) async fn serve(args: Args, mut stop: super::StopSource) -> anyhow::Result<ExitCode> {
     let model = ArmModel::from_product(&args.model)
         .with_context(|| format!("unknown Realman model {:?} (try RM65-B)", args.model))?;

@@ -187,7 +187,7 @@ async fn load_until_stopped(
     }
 }
 
-/// Serve until `stop` asks (a signal, or the bench this device is part of stopping).
+/// Serve until `stop` asks (a signal, or the rig this device is part of stopping).
 pub(crate) async fn serve(args: Args, mut stop: super::StopSource) -> anyhow::Result<ExitCode> {
     let Some(loaded) = load_until_stopped(&args.file, &mut stop).await? else {
         return Ok(ExitCode::from(130));

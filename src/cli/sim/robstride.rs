@@ -163,10 +163,10 @@ fn config(args: &Args) -> anyhow::Result<RobstrideConfig> {
     Ok(config)
 }
 
-/// Serve until `stop` asks (a signal, or the bench this device is part of stopping).
+/// Serve until `stop` asks (a signal, or the rig this device is part of stopping).
 pub(crate) async fn serve(args: Args, mut stop: super::StopSource) -> anyhow::Result<ExitCode> {
     let config = config(&args)?;
-    let served = ServedBus::open(&args.bus, stop.bench_buses()).await?;
+    let served = ServedBus::open(&args.bus, stop.rig_buses()).await?;
     let place = served.place();
     let bus = served.node("robstride")?;
     let ui_tap = args.ui.as_ref().map(|_| served.node("ui")).transpose()?;

@@ -1,42 +1,42 @@
 //! What every `armhil sim` subcommand is: an emulator kind served alone (`armhil sim KIND`)
-//! or as one device of a bench (`armhil sim bench FILE`). A kind implements [`ServedKind`] in
+//! or as one device of a rig (`armhil sim rig FILE`). A kind implements [`ServedKind`] in
 //! its own file here and is registered by one line in [`served_kinds!`](super::served_kinds);
-//! the subcommand, its entry in bench files and the bench's dispatch come from that line.
+//! the subcommand, its entry in rig files and the rig's dispatch come from that line.
 
 use std::future::Future;
 use std::path::PathBuf;
 use std::pin::Pin;
 use std::process::ExitCode;
 
-use armhil::rigs::{BenchDevice, SimKind};
+use armhil::rigs::{RigDevice, SimKind};
 use clap::Parser;
 
 use super::StopSource;
 
 /// One emulator kind as `armhil sim` serves it.
 pub(crate) trait ServedKind: 'static {
-    /// The subcommand, and a bench entry's `kind:`.
+    /// The subcommand, and a rig entry's `kind:`.
     const NAME: &'static str;
-    /// Option keys a bench entry gives as positional arguments (`file:` of a robot).
+    /// Option keys a rig entry gives as positional arguments (`file:` of a robot).
     const POSITIONAL_KEYS: &'static [&'static str] = &[];
     /// The options (without dashes, `_` between words) whose value is a file the device
-    /// writes: a bench refuses two devices that would write one file. Every path option is
+    /// writes: a rig refuses two devices that would write one file. Every path option is
     /// one of these or an input (a test in `mod.rs` holds each kind to it).
     const OUTPUT_KEYS: &'static [&'static str];
     /// Its command-line options.
     type Args: clap::Args + Send + std::fmt::Debug + 'static;
 
-    /// The options that name files (a bench resolves them against its file's folder).
+    /// The options that name files (a rig resolves them against its file's folder).
     fn paths_mut(args: &mut Self::Args) -> Vec<&mut PathBuf>;
 
-    /// Serve until `stop` asks (a signal, or the bench this device is part of stopping).
+    /// Serve until `stop` asks (a signal, or the rig this device is part of stopping).
     fn serve(
         args: Self::Args,
         stop: StopSource,
     ) -> impl Future<Output = anyhow::Result<ExitCode>> + Send;
 }
 
-/// The kind as a bench file names it.
+/// The kind as a rig file names it.
 pub(crate) const fn sim_kind<K: ServedKind>() -> SimKind {
     SimKind {
         name: K::NAME,
@@ -50,11 +50,11 @@ pub(crate) fn run_alone<K: ServedKind>(args: K::Args) -> anyhow::Result<ExitCode
     super::real_time_runtime()?.block_on(async { K::serve(args, StopSource::signals()?).await })
 }
 
-/// One device of a bench, its options parsed by its kind's own parser.
-pub(crate) trait BenchEntry: Send {
+/// One device of a rig, its options parsed by its kind's own parser.
+pub(crate) trait RigEntry: Send {
     /// The options that name files.
     fn paths_mut(&mut self) -> Vec<&mut PathBuf>;
-    /// Serve until the bench stops.
+    /// Serve until the rig stops.
     fn serve(
         self: Box<Self>,
         stop: StopSource,
@@ -63,7 +63,7 @@ pub(crate) trait BenchEntry: Send {
 
 struct Parsed<K: ServedKind>(K::Args);
 
-impl<K: ServedKind> BenchEntry for Parsed<K> {
+impl<K: ServedKind> RigEntry for Parsed<K> {
     fn paths_mut(&mut self) -> Vec<&mut PathBuf> {
         K::paths_mut(&mut self.0)
     }
@@ -76,7 +76,7 @@ impl<K: ServedKind> BenchEntry for Parsed<K> {
     }
 }
 
-/// `armhil sim KIND` alone: what a bench entry's options are parsed with, so they take what
+/// `armhil sim KIND` alone: what a rig entry's options are parsed with, so they take what
 /// the command line takes and fail with its messages.
 #[derive(Debug, Parser)]
 #[command(no_binary_name = true, disable_help_flag = true)]
@@ -85,13 +85,13 @@ struct Entry<T: clap::Args> {
     args: T,
 }
 
-/// How a bench device's options are parsed: by its kind's own parser ([`parse_entry`]).
-pub(crate) type EntryParser = fn(&BenchDevice) -> Result<Box<dyn BenchEntry>, clap::Error>;
+/// How a rig device's options are parsed: by its kind's own parser ([`parse_entry`]).
+pub(crate) type EntryParser = fn(&RigDevice) -> Result<Box<dyn RigEntry>, clap::Error>;
 
-/// Parse a bench device's options with its kind's parser; clap's message, on failure.
+/// Parse a rig device's options with its kind's parser; clap's message, on failure.
 pub(crate) fn parse_entry<K: ServedKind>(
-    device: &BenchDevice,
-) -> Result<Box<dyn BenchEntry>, clap::Error> {
+    device: &RigDevice,
+) -> Result<Box<dyn RigEntry>, clap::Error> {
     let entry = Entry::<K::Args>::try_parse_from(&device.args)?;
     Ok(Box::new(Parsed::<K>(entry.args)))
 }

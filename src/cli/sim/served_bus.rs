@@ -1,8 +1,8 @@
 //! Where a CAN emulator answers: one set of options (`--iface`, `--socketcand`,
 //! `--create-vxcan`) for every CAN device of `armhil sim`, and the bus they open. A new CAN
 //! device flattens [`ServeArgs`] into its arguments and asks [`ServedBus`] for its nodes.
-//! The devices of one bench that name the same socketcand address share its server and its
-//! bus ([`BenchBuses`]), as devices that name the same SocketCAN interface share that.
+//! The devices of one rig that name the same socketcand address share its server and its
+//! bus ([`RigBuses`]), as devices that name the same SocketCAN interface share that.
 
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -41,18 +41,18 @@ impl ServeArgs {
     }
 }
 
-/// The socketcand servers the devices of one bench (`armhil sim bench`) share: devices that
+/// The socketcand servers the devices of one rig (`armhil sim rig`) share: devices that
 /// name the same address are on one bus behind one server (a leader arm and its follower),
 /// as devices that name the same SocketCAN interface are. An address with port 0 (any free
 /// port) is never shared. The server stops when the last device on it does.
 #[derive(Default)]
-pub(crate) struct BenchBuses {
+pub(crate) struct RigBuses {
     /// By address as given (a bare port is 127.0.0.1): the bus, its server, how many devices
     /// use it.
     servers: tokio::sync::Mutex<HashMap<String, (VirtualBus, SocketcandServer, usize)>>,
 }
 
-impl BenchBuses {
+impl RigBuses {
     /// The bus behind the server on `addr`, started by the first device that names it.
     async fn join(&self, addr: &str) -> anyhow::Result<(VirtualBus, std::net::SocketAddr)> {
         let mut servers = self.servers.lock().await;
@@ -95,12 +95,12 @@ enum Medium {
         bus: VirtualBus,
         server: SocketcandServer,
     },
-    /// The same, behind a server other devices of the bench use too.
+    /// The same, behind a server other devices of the rig use too.
     SharedSocketcand {
         bus: VirtualBus,
         addr: String,
         local: std::net::SocketAddr,
-        bench: Arc<BenchBuses>,
+        rig: Arc<RigBuses>,
     },
     /// A SocketCAN interface: every node is a socket of its own on it.
     SocketCan { iface: String },
@@ -108,21 +108,21 @@ enum Medium {
 
 impl ServedBus {
     /// Open the bus `args` names: start the socketcand server (warning if other machines can
-    /// reach it) or, on a bench, join the one the bench's devices share on that address; or
+    /// reach it) or, on a rig, join the one the rig's devices share on that address; or
     /// create the vxcan pair when asked and take the interface.
-    pub async fn open(args: &ServeArgs, bench: Option<&Arc<BenchBuses>>) -> anyhow::Result<Self> {
+    pub async fn open(args: &ServeArgs, rig: Option<&Arc<RigBuses>>) -> anyhow::Result<Self> {
         match args.link() {
             Link::Socketcand(addr) => {
                 let addr = super::socketcand_addr(&addr);
                 let any_port = addr.ends_with(":0");
-                if let (Some(bench), false) = (bench, any_port) {
-                    let (bus, local) = bench.join(&addr).await?;
+                if let (Some(rig), false) = (rig, any_port) {
+                    let (bus, local) = rig.join(&addr).await?;
                     return Ok(Self {
                         medium: Medium::SharedSocketcand {
                             bus,
                             addr,
                             local,
-                            bench: Arc::clone(bench),
+                            rig: Arc::clone(rig),
                         },
                     });
                 }
@@ -176,7 +176,7 @@ impl ServedBus {
     pub async fn shutdown(self) {
         match self.medium {
             Medium::Socketcand { server, .. } => server.shutdown().await,
-            Medium::SharedSocketcand { addr, bench, .. } => bench.leave(&addr).await,
+            Medium::SharedSocketcand { addr, rig, .. } => rig.leave(&addr).await,
             Medium::SocketCan { .. } => {}
         }
     }

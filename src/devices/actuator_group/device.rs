@@ -151,7 +151,7 @@ pub(crate) fn spawn_robot(
     let handle = RobotEmulator::spawn(robot.clone(), nodes).map_err(|e| e.to_string())?;
     let hosts = buses
         .iter()
-        .map(|b| Arc::new(b.attach(crate::bench::HOST_NODE)) as Arc<dyn CanBus>)
+        .map(|b| Arc::new(b.attach(crate::wiring::HOST_NODE)) as Arc<dyn CanBus>)
         .collect();
     Ok(SpawnedRobot {
         hosts,

@@ -24,8 +24,8 @@ use super::{
     one_bus, BaseColumns, BusUse, Device, Drawing, FrameDecoder, JointColumn, KindSpec, Posing,
     RawKindStep, Wiring,
 };
-use crate::bench::{Clock, HOST_NODE};
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
+use crate::wiring::{Clock, HOST_NODE};
 use device::GroupDevice;
 
 /// How long the driver waits for each reply (before time scaling): the RobStride driver's.

@@ -17,8 +17,8 @@ pub use model::{
 };
 
 use super::{one_bus, BusUse, Device, Drawing, FrameDecoder, KindSpec, RawKindStep, Wiring};
-use crate::bench::Clock;
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
+use crate::wiring::Clock;
 use device::{ArmDevice, Emulator};
 
 /// The vendor-neutral arm kind's contract (registered in `crate::devices`).

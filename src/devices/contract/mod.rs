@@ -28,13 +28,14 @@ use bus::CanFrame;
 pub use device::{Device, DeviceError, Reply, TraceColumn};
 pub use drawing::{BaseColumns, Drawing, JointColumn, Posing};
 
-use crate::bench::{Clock, RunOptions};
 use crate::interop::DecodedFrame;
 use crate::scenario::onekey::OneKey;
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
+use crate::wiring::{Clock, RunOptions};
 
 /// What a kind's `build` gets: the scenario's clock and options, and, for CAN devices, the
-/// in-process virtual buses or the SocketCAN interface to open.
+/// in-process virtual buses or the SocketCAN interface to open. One device's share of the
+/// run's wiring ([`crate::wiring`], which every device of the run shares).
 pub(crate) struct Wiring<'a> {
     /// Every in-process bus of the device, in the order of [`KindSpec::buses`] (a robot's).
     pub buses: Vec<&'a bus::virtual_bus::VirtualBus>,

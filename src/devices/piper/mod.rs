@@ -25,8 +25,8 @@ pub type Check = model::Check;
 use super::{
     one_bus, BusUse, Device, Drawing, FrameDecoder, KindSpec, RawKindStep, WireDecoder, Wiring,
 };
-use crate::bench::{Clock, RunOptions, HOST_NODE};
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
+use crate::wiring::{Clock, RunOptions, HOST_NODE};
 use device::checks;
 use device::emulator::PiperSim;
 use device::PiperDevice;

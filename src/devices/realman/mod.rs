@@ -16,8 +16,8 @@ pub use model::{
 pub use observe::Observation;
 
 use super::{BusUse, Device, Drawing, FrameDecoder, KindSpec, RawKindStep, Wiring};
-use crate::bench::Clock;
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
+use crate::wiring::Clock;
 use device::RealmanDevice;
 
 /// Whether a Realman emulator's physical state (joint angles and speeds) is finite.

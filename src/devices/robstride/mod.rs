@@ -21,8 +21,8 @@ pub use observe::{MotorObservation, Observation};
 use super::{
     one_bus, BusUse, Device, Drawing, FrameDecoder, KindSpec, RawKindStep, WireDecoder, Wiring,
 };
-use crate::bench::{Clock, HOST_NODE};
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
+use crate::wiring::{Clock, HOST_NODE};
 use device::RobstrideDevice;
 
 /// How long the RobStride driver waits for each reply (its default, before time scaling).

@@ -14,9 +14,9 @@ use async_trait::async_trait;
 use driver::piper::Piper;
 
 use super::{observe, trace};
-use crate::bench::RunOptions;
 use crate::devices::{Action, Check, Device, DeviceError, DeviceFault, Reply, TraceColumn};
 use crate::scenario::Signal;
+use crate::wiring::RunOptions;
 use sim::piper::PiperFault;
 use stream::Streams;
 

@@ -1,5 +1,5 @@
-//! `armhil sim bench` on real SocketCAN: a leader and a follower Piper of a bimanual rig, each
-//! on a vxcan pair the bench makes, heard on the peers as a teleoperation program hears them;
+//! `armhil sim rig` on real SocketCAN: a leader and a follower Piper of a bimanual rig, each
+//! on a vxcan pair the rig makes, heard on the peers as a teleoperation program hears them;
 //! SIGTERM stops both and the process exits 0.
 
 use std::collections::BTreeSet;
@@ -43,7 +43,7 @@ async fn ids_heard(bus: &SocketCanBus) -> BTreeSet<u32> {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 #[ignore = "needs vcan; run by scripts/vcan-e2e.sh"]
-async fn a_bench_serves_a_leader_and_a_follower_on_their_own_interfaces() {
+async fn a_rig_serves_a_leader_and_a_follower_on_their_own_interfaces() {
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("bimanual.yaml");
     std::fs::write(
@@ -55,17 +55,17 @@ async fn a_bench_serves_a_leader_and_a_follower_on_their_own_interfaces() {
     )
     .unwrap();
     let child = Command::new(armhil_bin())
-        .args(["sim", "bench", file.to_str().unwrap()])
+        .args(["sim", "rig", file.to_str().unwrap()])
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()
-        .expect("armhil sim bench starts");
+        .expect("armhil sim rig starts");
     let pid = child.id().to_string();
     let leader = open_when_there(LEADER.1).await;
     let follower = open_when_there(FOLLOWER.1).await;
     let (from_leader, from_follower) = tokio::join!(ids_heard(&leader), ids_heard(&follower));
     let _ = Command::new("kill").args(["-TERM", &pid]).status();
-    let output = child.wait_with_output().expect("armhil sim bench exits");
+    let output = child.wait_with_output().expect("armhil sim rig exits");
     let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
     for peer in [LEADER.1, FOLLOWER.1] {
         let _ = Command::new("ip").args(["link", "del", peer]).status();

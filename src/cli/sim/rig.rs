@@ -1,4 +1,4 @@
-//! `armhil sim bench FILE`: several devices in one process from a bench file — two Piper arms
+//! `armhil sim rig FILE`: several devices in one process from a rig file — two Piper arms
 //! on two interfaces, Realman controllers on several ports, robots — each served as its own
 //! `armhil sim KIND` would serve it, all stopped together.
 
@@ -6,18 +6,18 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::Context;
-use armhil::rigs::{load_bench_file, BenchDevice, BenchFile, SimKind};
+use armhil::rigs::{load_rig_file, RigDevice, RigFile, SimKind};
 use tokio::sync::watch;
 use tokio::task::JoinSet;
 
-use super::served::BenchEntry;
-use super::served_bus::BenchBuses;
+use super::served::RigEntry;
+use super::served_bus::RigBuses;
 use super::StopSource;
 
-/// Arguments of `armhil sim bench`.
+/// Arguments of `armhil sim rig`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The bench file (`rigs/bimanual_piper.yaml`, grammar in `rigs/README.md`).
+    /// The rig file (`rigs/bimanual_piper.yaml`, grammar in `rigs/README.md`).
     pub file: PathBuf,
 }
 
@@ -72,8 +72,8 @@ fn positional_as_key(text: &str) -> String {
 }
 
 /// Parse a device's options with its kind's own parser and resolve its paths against the
-/// bench file's folder.
-fn parse(device: &BenchDevice, dir: &Path) -> anyhow::Result<Box<dyn BenchEntry>> {
+/// rig file's folder.
+fn parse(device: &RigDevice, dir: &Path) -> anyhow::Result<Box<dyn RigEntry>> {
     let (_, parse_entry) = super::SERVED
         .iter()
         .find(|(kind, _)| *kind == device.kind)
@@ -88,38 +88,38 @@ fn parse(device: &BenchDevice, dir: &Path) -> anyhow::Result<Box<dyn BenchEntry>
     Ok(args)
 }
 
-/// Serve every device of the bench file until Ctrl-C, or until one of them stops on its own
+/// Serve every device of the rig file until Ctrl-C, or until one of them stops on its own
 /// (it could not start, or it died), which stops the others.
 pub fn run(args: Args) -> anyhow::Result<ExitCode> {
     let kinds: Vec<SimKind> = super::SERVED.iter().map(|(kind, _)| *kind).collect();
-    let bench = load_bench_file(&args.file, &kinds)?;
-    let devices = bench
+    let rig = load_rig_file(&args.file, &kinds)?;
+    let devices = rig
         .devices
         .iter()
-        .map(|d| Ok((d.name.clone(), d.kind, parse(d, bench.dir())?)))
+        .map(|d| Ok((d.name.clone(), d.kind, parse(d, rig.dir())?)))
         .collect::<anyhow::Result<Vec<_>>>()?;
-    super::real_time_runtime()?.block_on(serve(&bench, devices))
+    super::real_time_runtime()?.block_on(serve(&rig, devices))
 }
 
 async fn serve(
-    bench: &BenchFile,
-    devices: Vec<(String, SimKind, Box<dyn BenchEntry>)>,
+    rig: &RigFile,
+    devices: Vec<(String, SimKind, Box<dyn RigEntry>)>,
 ) -> anyhow::Result<ExitCode> {
     let mut signals = StopSource::signals()?;
     let (stop, stop_request) = watch::channel(None);
     let mut running = JoinSet::new();
     let count = devices.len();
-    let buses = std::sync::Arc::new(BenchBuses::default());
+    let buses = std::sync::Arc::new(RigBuses::default());
     for (name, kind, args) in devices {
-        let stop = StopSource::Bench {
+        let stop = StopSource::Rig {
             request: stop_request.clone(),
             buses: std::sync::Arc::clone(&buses),
         };
         running.spawn(async move { (name, kind, args.serve(stop).await) });
     }
     eprintln!(
-        "armhil sim bench: {count} devices from {} (Ctrl-C to stop them all)",
-        bench.file.display()
+        "armhil sim rig: {count} devices from {} (Ctrl-C to stop them all)",
+        rig.file.display()
     );
     let mut failures = Vec::new();
     let mut record = |joined: Result<(String, SimKind, anyhow::Result<ExitCode>), _>| match joined {
@@ -150,10 +150,10 @@ async fn serve(
     Err(anyhow::anyhow!(
         "{} of {count} devices of {} failed:\n  {}",
         failures.len(),
-        bench.file.display(),
+        rig.file.display(),
         failures.join("\n  ")
     ))
-    .context("the bench stopped")
+    .context("the rig stopped")
 }
 
 #[cfg(test)]
@@ -161,7 +161,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn every_shipped_bench_file_loads_and_each_device_takes_its_options() {
+    fn every_shipped_rig_file_loads_and_each_device_takes_its_options() {
         let kinds: Vec<SimKind> = super::super::SERVED.iter().map(|(kind, _)| *kind).collect();
         let rigs = Path::new(env!("CARGO_MANIFEST_DIR")).join("rigs");
         let mut files = 0;
@@ -170,24 +170,24 @@ mod tests {
             if path.extension().and_then(|e| e.to_str()) != Some("yaml") {
                 continue;
             }
-            let bench = load_bench_file(&path, &kinds)
-                .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-            for device in &bench.devices {
-                parse(device, bench.dir()).unwrap_or_else(|e| panic!("{e:#}"));
+            let rig =
+                load_rig_file(&path, &kinds).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            for device in &rig.devices {
+                parse(device, rig.dir()).unwrap_or_else(|e| panic!("{e:#}"));
             }
             files += 1;
         }
-        assert!(files >= 4, "only {files} bench files in {}", rigs.display());
+        assert!(files >= 4, "only {files} rig files in {}", rigs.display());
     }
 
-    /// Two devices of a bench writing one file (a recording, a state file) are refused when
+    /// Two devices of a rig writing one file (a recording, a state file) are refused when
     /// the file loads, at the later one's line, naming both devices and the file, whatever
     /// the spelling of the path.
     #[test]
     fn two_devices_writing_one_file_are_refused_at_load() {
         let kinds: Vec<SimKind> = super::super::SERVED.iter().map(|(kind, _)| *kind).collect();
         let dir = tempfile::tempdir().unwrap();
-        let file = dir.path().join("bench.yaml");
+        let file = dir.path().join("rig.yaml");
         let shared = |name: &str| dir.path().join(name).display().to_string();
         let cases = [
             (
@@ -209,7 +209,7 @@ mod tests {
         for (text, line, name) in cases {
             let text = text.to_owned();
             std::fs::write(&file, &text).unwrap();
-            let error = match load_bench_file(&file, &kinds) {
+            let error = match load_rig_file(&file, &kinds) {
                 Ok(_) => panic!("accepted:\n{text}"),
                 Err(e) => e.to_string(),
             };
@@ -229,16 +229,16 @@ mod tests {
             "devices:\n  a: {kind: piper, iface: can0, record: l/x.log}\n  b: {kind: piper, iface: can1, record: r/x.log}\n",
         )
         .unwrap();
-        load_bench_file(&file, &kinds).unwrap();
+        load_rig_file(&file, &kinds).unwrap();
     }
 
-    /// Every file a device writes is resolved against the bench file's folder, as the load
+    /// Every file a device writes is resolved against the rig file's folder, as the load
     /// compares them.
     #[test]
-    fn every_output_is_resolved_against_the_bench_file() {
+    fn every_output_is_resolved_against_the_rig_file() {
         let kinds: Vec<SimKind> = super::super::SERVED.iter().map(|(kind, _)| *kind).collect();
         let dir = tempfile::tempdir().unwrap();
-        let file = dir.path().join("bench.yaml");
+        let file = dir.path().join("rig.yaml");
         let mut text = "devices:\n".to_owned();
         for kind in &kinds {
             let outputs: Vec<String> = kind
@@ -258,9 +258,9 @@ mod tests {
             ));
         }
         std::fs::write(&file, text).unwrap();
-        let bench = load_bench_file(&file, &kinds).unwrap();
-        for device in &bench.devices {
-            let mut args = parse(device, bench.dir()).unwrap_or_else(|e| panic!("{e:#}"));
+        let rig = load_rig_file(&file, &kinds).unwrap();
+        for device in &rig.devices {
+            let mut args = parse(device, rig.dir()).unwrap_or_else(|e| panic!("{e:#}"));
             let resolved: Vec<PathBuf> = args.paths_mut().into_iter().map(|p| p.clone()).collect();
             for key in device.kind.output_keys {
                 let want = dir.path().join(format!("out/{}-{key}", device.kind.name));

@@ -1,4 +1,4 @@
-"""Several devices in one process: `armhil sim bench FILE` serving two Realman controllers
+"""Several devices in one process: `armhil sim rig FILE` serving two Realman controllers
 and a Piper leader/follower pair, reached by the vendors' clients unchanged — one Python
 program holding two Robotic_Arm handles (a dual-arm robot's program), and python-can on each
 Piper's socketcand server.
@@ -6,7 +6,7 @@ Piper's socketcand server.
 Run (after `cargo build -p armhil`):
 
     pip install Robotic_Arm==1.1.6 python-can==4.6.1 pytest
-    ARMHIL_BIN=target/debug/armhil python -m pytest -v tests/sdk/test_sim_bench.py
+    ARMHIL_BIN=target/debug/armhil python -m pytest -v tests/sdk/test_sim_rig.py
 """
 
 import os
@@ -34,10 +34,10 @@ def wait_listening(port, timeout_s=20):
 
 
 @pytest.fixture(scope="module")
-def bench(tmp_path_factory):
-    """One `armhil sim bench` process; yields the ports by device name."""
+def rig(tmp_path_factory):
+    """One `armhil sim rig` process; yields the ports by device name."""
     ports = {name: free_port() for name in ["left", "right", "leader", "follower"]}
-    file = tmp_path_factory.mktemp("bench") / "bench.yaml"
+    file = tmp_path_factory.mktemp("rig") / "rig.yaml"
     file.write_text(
         f"""devices:
   left: {{kind: realman, port: {ports['left']}}}
@@ -46,11 +46,11 @@ def bench(tmp_path_factory):
   follower: {{kind: piper, socketcand: {ports['follower']}}}
 """
     )
-    with listening(["sim", "bench", str(file)], ports["left"]) as proc:
+    with listening(["sim", "rig", str(file)], ports["left"]) as proc:
         for port in ports.values():
             wait_listening(port)
         yield ports
-    assert proc.returncode == 0, f"bench exit {proc.returncode}: {proc.stderr_tail}"
+    assert proc.returncode == 0, f"rig exit {proc.returncode}: {proc.stderr_tail}"
 
 
 def connect(port):
@@ -60,8 +60,8 @@ def connect(port):
     return robot
 
 
-def test_one_program_drives_two_realman_arms_independently(bench):
-    left, right = connect(bench["left"]), connect(bench["right"])
+def test_one_program_drives_two_realman_arms_independently(rig):
+    left, right = connect(rig["left"]), connect(rig["right"])
     try:
         assert left.rm_get_arm_software_info()[1]["product_version"] == "RM65-B"
         assert right.rm_get_arm_software_info()[1]["product_version"] == "RM75-B"
@@ -88,8 +88,8 @@ def ids_heard(port, seconds=0.5):
         return heard
 
 
-def test_each_piper_answers_on_its_own_server_in_its_role(bench):
-    leader, follower = ids_heard(bench["leader"]), ids_heard(bench["follower"])
+def test_each_piper_answers_on_its_own_server_in_its_role(rig):
+    leader, follower = ids_heard(rig["leader"]), ids_heard(rig["follower"])
     # A leader (teach-input arm) sends its joints as commands (0x155-0x157); a follower
     # reports them as feedback (0x2A5-0x2A7). Neither hears the other's bus.
     assert {0x155, 0x156, 0x157} <= leader, sorted(map(hex, leader))

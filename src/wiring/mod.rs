@@ -1,6 +1,11 @@
-//! How a bench is wired, shared by the device kinds (which build on it) and the harness (which
+//! What wires a run, shared by the device kinds (which build on it) and the harness (which
 //! runs on it): the run's [`Clock`] and CAN [`Link`], its [`RunOptions`] and [`Interrupt`], and
 //! the drivers' node name on the virtual bus. Nothing here knows a scenario or a device kind.
+//!
+//! Not to be confused with `devices::Wiring`, the per-device bundle a kind's `build` gets: the
+//! harness fills one for each device of a scenario's `bench:` from this module's [`Clock`] and
+//! [`RunOptions`] plus that device's in-process buses and bit rate. This module is the run's
+//! wiring, which every device shares; a `Wiring` is one device's share of it.
 
 mod clock;
 mod interrupt;
