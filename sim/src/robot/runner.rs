@@ -598,7 +598,7 @@ impl Runner {
             })
             .collect();
         RobotSnapshot {
-            time_s: world.time_s(),
+            time_s: self.world.time_s(),
             base_position_m,
             base_rotation: base_rotation(&self.world),
             joints,

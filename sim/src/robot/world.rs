@@ -11,6 +11,13 @@ use super::joint_plant::{joint_pair, JointLink, JointPlant};
 /// pose, slowly at the speeds a robot moves, and the mass matrix costs more than a step.
 const INERTIA_REFRESH_STEPS: u64 = 10;
 
+/// Joint speed under which a joint counts as still, rad/s (m/s).
+const REST_SPEED_RAD_S: f64 = 1e-5;
+
+/// Change of a joint's torque from one step to the next under which the torques count as the
+/// same, N·m: a firmware holding a still joint computes the same torque step after step.
+const REST_TORQUE_CHANGE_NM: f64 = 1e-9;
+
 /// The robot's world and, per actuator, the link to its joint.
 pub struct RobotWorld {
     world: Box<dyn World>,
@@ -18,6 +25,20 @@ pub struct RobotWorld {
     joints: Vec<(usize, JointLink)>,
     /// Per world joint, the torque applied in the last step (N·m).
     applied_nm: Vec<f64>,
+    /// Per world joint, the torque of the last step the world took (N·m).
+    stepped_nm: Vec<f64>,
+    /// 1 ms steps since power-on, the world's own and those it rested through.
+    steps: u64,
+    /// Every joint was still after the last two world steps, under the same torques, with the
+    /// base fixed or held: the world is at rest and is not stepped (as a physics engine lets
+    /// a body at rest sleep) until a torque changes or the stand lets go.
+    resting: bool,
+    /// Every joint was still after the last world step.
+    was_still: bool,
+    /// Whether the base is bolted down (a fixed base).
+    fixed_base: bool,
+    /// Length of one step (s).
+    step_s: f64,
 }
 
 impl std::fmt::Debug for RobotWorld {
@@ -135,7 +156,13 @@ impl RobotWorld {
             Self {
                 world,
                 joints,
+                stepped_nm: applied_nm.clone(),
                 applied_nm,
+                steps: 0,
+                resting: false,
+                was_still: false,
+                fixed_base: !floating,
+                step_s: world_config.step_s,
             },
             plants,
         ))
@@ -144,14 +171,32 @@ impl RobotWorld {
     /// One 1 ms world step with the torques the actuators applied since the last one; then
     /// every joint's state goes back to its actuator. An `Err` means the physics diverged.
     pub fn step(&mut self) -> Result<(), PhysicsError> {
+        self.steps += 1;
         self.applied_nm.fill(0.0);
         for (index, link) in &self.joints {
             self.applied_nm[*index] = link.take_joint_torque_nm();
         }
+        let same_torques = self
+            .applied_nm
+            .iter()
+            .zip(&self.stepped_nm)
+            .all(|(now, then)| (now - then).abs() <= REST_TORQUE_CHANGE_NM);
+        if self.resting && same_torques {
+            // At rest under the torques that keep it there: the joints' states stand.
+            return Ok(());
+        }
         self.world.step(&self.applied_nm);
         self.world.check_finite()?;
+        self.stepped_nm.clone_from(&self.applied_nm);
         let q = self.world.joint_positions();
         let qd = self.world.joint_velocities();
+        // Still twice in a row under the same torques: no joint is at the turn of a swing
+        // (where it is still for an instant but accelerating), so the world is in balance.
+        // A floating base left to its contacts is never taken as at rest.
+        let still = qd.iter().all(|v| v.abs() < REST_SPEED_RAD_S);
+        let anchored = self.fixed_base || self.world.root_held();
+        self.resting = still && self.was_still && same_torques && anchored;
+        self.was_still = still;
         let refresh = self.world.steps().is_multiple_of(INERTIA_REFRESH_STEPS);
         let inertia = if refresh {
             Some(self.world.mass_matrix_diagonal())
@@ -167,6 +212,8 @@ impl RobotWorld {
 
     /// Lets the stand go of the base (see [`Gantry`]); `false` when it held nothing.
     pub fn release_base(&mut self) -> bool {
+        self.resting = false;
+        self.was_still = false;
         let held = self.world.root_held();
         // Letting go is within every solver's reach (one that cannot hold never held).
         let _ = self.world.set_root_held(false);
@@ -176,6 +223,11 @@ impl RobotWorld {
     /// The physics world (positions, link poses for views and checks).
     pub fn world(&self) -> &dyn World {
         self.world.as_ref()
+    }
+
+    /// Emulated time since power-on (s): the steps taken and those rested through.
+    pub fn time_s(&self) -> f64 {
+        self.steps as f64 * self.step_s
     }
 
     /// The world's joint index of actuator `actuator` (configuration order).

@@ -475,3 +475,39 @@ async fn an_encoder_glitch_moves_the_joint_by_its_angle_while_the_actuator_reads
     }
     rig.robot.shutdown().await;
 }
+
+/// A humanoid hanging unpowered on its gantry settles and then rests: its world is no longer
+/// stepped (time goes on, the pose stands exactly), and a torque from an actuator wakes it
+/// and moves the joint as before.
+#[test]
+fn a_robot_at_rest_is_not_stepped_until_a_torque_changes() {
+    use sim::robstride::Plant as _;
+    let config = humanoid(sim::robot::Gantry::UntilEnabled);
+    let elbow = config
+        .actuators
+        .iter()
+        .position(|a| a.joint == "left_elbow")
+        .expect("a left elbow");
+    let (mut world, mut plants) = sim::robot::RobotWorld::new(&config).expect("the world");
+    for _ in 0..6000 {
+        world.step().expect("finite");
+    }
+    let stepped = world.world().steps();
+    assert!(stepped < 6000, "it came to rest: {stepped} steps of 6000");
+    let pose = world.world().joint_positions();
+    for _ in 0..1000 {
+        world.step().expect("finite");
+    }
+    assert_eq!(world.world().steps(), stepped, "at rest, not stepped");
+    assert_eq!(world.world().joint_positions(), pose);
+    assert!((world.time_s() - 7.0).abs() < 1e-9, "{}", world.time_s());
+    // The elbow's actuator pushes: the world wakes and the elbow moves.
+    let index = world.joint_index(elbow).expect("its world joint");
+    for _ in 0..200 {
+        plants[elbow].step(2.0, 0.001);
+        world.step().expect("finite");
+    }
+    assert!(world.world().steps() > stepped);
+    let moved = world.world().joint_positions()[index] - pose[index];
+    assert!(moved.abs() > 0.01, "the elbow moved {moved} rad");
+}
