@@ -6,38 +6,39 @@ use std::process::Command;
 
 const ARMHIL: &str = env!("CARGO_BIN_EXE_armhil");
 
+/// `armhil ARGS…`, which must succeed: its standard output.
+fn armhil_ok(args: &[&std::ffi::OsStr]) -> String {
+    let out = Command::new(ARMHIL)
+        .args(args)
+        .output()
+        .expect("armhil runs");
+    assert!(
+        out.status.success(),
+        "armhil {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
 #[test]
 fn a_robot_s_capture_is_decoded_by_its_scenario_s_devices_with_each_frame_s_bus() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let scenario = root.join("scenarios/robot/arm6_hold_gravity.yaml");
     let out = tempfile::tempdir().expect("a temporary folder");
-    let run = Command::new(ARMHIL)
-        .arg("run")
-        .arg(&scenario)
-        .arg("--out")
-        .arg(out.path())
-        .output()
-        .expect("armhil runs");
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    armhil_ok(&[
+        "run".as_ref(),
+        scenario.as_ref(),
+        "--out".as_ref(),
+        out.path().as_ref(),
+    ]);
     let capture = out.path().join("arm6_hold_gravity/bus.pcapng");
 
-    let decode = Command::new(ARMHIL)
-        .arg("decode")
-        .arg(&capture)
-        .arg("--scenario")
-        .arg(&scenario)
-        .output()
-        .expect("armhil runs");
-    assert!(
-        decode.status.success(),
-        "{}",
-        String::from_utf8_lossy(&decode.stderr)
-    );
-    let text = String::from_utf8_lossy(&decode.stdout);
+    let text = armhil_ok(&[
+        "decode".as_ref(),
+        capture.as_ref(),
+        "--scenario".as_ref(),
+        scenario.as_ref(),
+    ]);
     // Motor 6 (flange roll) sits on can1 and its status replies are named with its RS02 units;
     // motor 2 (shoulder pitch, RS04) on can0.
     let status_of = |bus: &str, motor: &str| {
@@ -136,31 +137,18 @@ fn frames_of_motors_sharing_an_id_on_two_buses_decode_by_their_own_bus() {
     )
     .expect("scenario written");
     let out = dir.path().join("out");
-    let run = Command::new(ARMHIL)
-        .arg("run")
-        .arg(&scenario)
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .expect("armhil runs");
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
-    let decode = Command::new(ARMHIL)
-        .arg("decode")
-        .arg(out.join("hold/bus.log"))
-        .arg("--scenario")
-        .arg(&scenario)
-        .output()
-        .expect("armhil runs");
-    assert!(
-        decode.status.success(),
-        "{}",
-        String::from_utf8_lossy(&decode.stderr)
-    );
-    let text = String::from_utf8_lossy(&decode.stdout);
+    armhil_ok(&[
+        "run".as_ref(),
+        scenario.as_ref(),
+        "--out".as_ref(),
+        out.as_ref(),
+    ]);
+    let text = armhil_ok(&[
+        "decode".as_ref(),
+        out.join("hold/bus.log").as_ref(),
+        "--scenario".as_ref(),
+        scenario.as_ref(),
+    ]);
     let kp_of = |bus: &str| -> Vec<f64> {
         text.lines()
             .filter(|l| l.contains(&format!("  {bus}  ")) && l.contains("OpControl  motor=1"))
