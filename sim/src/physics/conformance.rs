@@ -3,8 +3,9 @@
 //! the numerics of a run, never its physics. Each law prints its figure per solver and URDF
 //! (`cargo test -p armhil-sim conformance -- --nocapture`).
 //!
-//! Contacts are not among the laws: the articulated solver has the ground plane, rapier's
-//! world has obstacles instead, and neither shape of contact is part of [`World`].
+//! Contacts are held to one law (a dropped robot rests on the ground), though their shape is
+//! not part of [`World`]: the articulated solver has the ground plane, rapier's world an
+//! obstacle standing in for it.
 
 use nalgebra::{DVector, Point3};
 
@@ -370,5 +371,58 @@ fn both_solvers_see_the_same_joints() {
                 "{name}: {a:?} vs {b:?}"
             );
         }
+    }
+}
+
+/// Contacts: the humanoid dropped unpowered from 0.9 m comes down onto the ground, its
+/// lowest collision point on the plane z = 0 (the articulated solver's ground; rapier's, a
+/// slab obstacle whose top is that plane), neither through it nor above it.
+#[test]
+fn a_dropped_robot_comes_to_rest_on_the_ground() {
+    use crate::physics::{ObstacleShape, RapierWorld};
+    let (description, geometry) =
+        Description::load_for_physics(HUMANOID.to_owned(), Default::default()).expect("a URDF");
+    let config = WorldConfig {
+        floating_base_height_m: Some(0.9),
+        ..WorldConfig::default()
+    };
+    for solver in Solver::ALL {
+        let mut world: Box<dyn World> = match solver {
+            Solver::Rapier => {
+                let mut world = RapierWorld::from_description(&description, &geometry, config)
+                    .expect("the humanoid loads");
+                world.add_obstacle(
+                    ObstacleShape::Box {
+                        half_extents_m: [5.0, 5.0, 0.5],
+                    },
+                    [0.0, 0.0, -0.5],
+                );
+                Box::new(world)
+            }
+            Solver::Articulated => solver.load(&description, &geometry, config).expect("loads"),
+        };
+        for _ in 0..3000 {
+            world.step(&[]);
+        }
+        world.check_finite().expect("finite");
+        let poses: Vec<_> = world
+            .model()
+            .link_names()
+            .iter()
+            .map(|name| world.link_pose(name).expect("a link"))
+            .collect();
+        let (_, lowest) = geometry.lowest_point(&poses).expect("collision shapes");
+        let root = world.model().root_link_name().to_owned();
+        let base = world.link_pose(&root).expect("the root").translation.z;
+        println!(
+            "conformance: contacts      humanoid        {:<11} lowest point {lowest:+.4} m, pelvis at {base:.3} m after 3 s",
+            solver.word()
+        );
+        assert!(
+            lowest.abs() < 0.01,
+            "{}: lowest collision point at {lowest} m",
+            solver.word()
+        );
+        assert!(base < 0.85, "{}: it came down ({base} m)", solver.word());
     }
 }
