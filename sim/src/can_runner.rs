@@ -12,13 +12,15 @@ use tokio::sync::mpsc;
 use tokio::task::JoinHandle;
 use tokio::time::{sleep, Instant};
 
-use crate::pacer::Pacer;
+use crate::pacer::{Pacer, PacerKind};
 
 /// The actuators' control step.
 pub const STEP: Duration = Duration::from_millis(1);
 /// Most steps one late wake-up catches up (100 ms of emulated time); a longer stall of the
 /// machine is lost time, as for the other emulators.
 pub const MAX_CATCH_UP_STEPS: u64 = 100;
+/// Steps between two wake-ups of a resting clock ([`StepClock::rest`]): 20 ms.
+pub const RESTING_STRIDE_STEPS: u32 = 20;
 /// Frames received from all buses and not yet handled; a full queue holds the receivers
 /// back, and each bus's own receive queue then decides what is dropped.
 pub const RX_QUEUE_FRAMES: usize = 4096;
@@ -34,6 +36,10 @@ pub struct StepClock {
     started: Instant,
     done: u64,
     pacer: Pacer,
+    /// The pacer thread's name, for the pacers made when the clock rests or wakes.
+    name: String,
+    /// Whether the pacer wakes every [`RESTING_STRIDE_STEPS`] steps instead of every step.
+    resting: bool,
 }
 
 /// What a wake-up runs.
@@ -53,7 +59,33 @@ impl StepClock {
             started,
             done: 0,
             pacer: Pacer::new(STEP, name),
+            name: name.to_owned(),
+            resting: false,
         }
+    }
+
+    /// Wakes up every [`RESTING_STRIDE_STEPS`] steps (`true`) or every step again (`false`).
+    /// For an emulator whose steps, for now, send nothing of their own: its steps then run in
+    /// batches, and it catches them up ([`StepClock::due`]) before it answers a frame or a
+    /// request, so a host sees the same answers from the same state, and the machine is woken
+    /// fifty times a second instead of a thousand. Under tokio's timer (virtual time, a
+    /// current-thread runtime) the clock never rests: runs stay exactly as they were.
+    pub fn rest(&mut self, resting: bool) {
+        if resting == self.resting || (resting && self.pacer.kind() == PacerKind::TokioTimer) {
+            return;
+        }
+        let period = if resting {
+            STEP * RESTING_STRIDE_STEPS
+        } else {
+            STEP
+        };
+        self.pacer = Pacer::new(period, &self.name);
+        self.resting = resting;
+    }
+
+    /// Whether the clock rests ([`StepClock::rest`]).
+    pub fn is_resting(&self) -> bool {
+        self.resting
     }
 
     /// Waits for the next wake-up and returns the steps then owed (see [`StepClock::due`]).
@@ -208,6 +240,33 @@ impl TxBacklog {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A resting clock wakes every 20 ms with the steps owed since (a loaded machine can only
+    /// wake it later, never more often: the bounds hold either way); woken, it no longer rests.
+    #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+    async fn a_resting_clock_wakes_every_stride_with_the_steps_owed() {
+        let mut clock = StepClock::start("test-clock");
+        clock.rest(true);
+        assert!(clock.is_resting());
+        let started = Instant::now();
+        let (mut wakes, mut steps) = (0u32, 0u64);
+        while started.elapsed() < Duration::from_millis(200) {
+            steps += clock.next().await.run;
+            wakes += 1;
+        }
+        // At most about ten wake-ups (a first one may come at once) for every step owed.
+        assert!(wakes <= 13, "{wakes} wake-ups in 200 ms");
+        assert!(steps >= 195, "{steps} steps in 200 ms");
+        clock.rest(false);
+        assert!(!clock.is_resting());
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn under_tokio_s_timer_a_clock_never_rests() {
+        let mut clock = StepClock::start("test-clock");
+        clock.rest(true);
+        assert!(!clock.is_resting());
+    }
 
     #[tokio::test(start_paused = true)]
     async fn a_late_wake_up_runs_every_step_owed_up_to_the_catch_up_limit() {

@@ -168,6 +168,7 @@ impl RobstrideBus {
             motors,
             state,
             state_path: config.state_file,
+            quiet_steps: 0,
         };
         // A panic or a state file that cannot be written ends the runner; the watch says so.
         let (supervisor, death) = Supervisor::new();
@@ -323,7 +324,12 @@ struct Runner {
     motors: Vec<Actuator>,
     state: StateFile,
     state_path: Option<PathBuf>,
+    /// Steps in a row in which no motor sent or could send anything of its own.
+    quiet_steps: u32,
 }
+
+/// Quiet steps after which the clock rests ([`StepClock::rest`]): 0.1 s.
+const QUIET_STEPS_BEFORE_REST: u32 = 100;
 
 impl Runner {
     /// Serve until shut down; an `Err` (the state file could not be written) ends it early.
@@ -342,15 +348,27 @@ impl Runner {
                         let _ = done.send(());
                         break Ok(());
                     }
-                    Some(request) => self.serve(request).await,
+                    Some(request) => {
+                        self.catch_up(&mut clock).await;
+                        let side_door = !matches!(request, Request::Snapshot(_));
+                        self.serve(request).await;
+                        if side_door {
+                            // A fault, a supply or a temperature may make the next step send.
+                            self.wake(&mut clock);
+                        }
+                    }
                     None => break Ok(()),
                 },
                 frame = frames.recv() => match frame {
                     Some((_, frame)) => {
+                        self.catch_up(&mut clock).await;
                         // A motor told to keep something that cannot be kept: stop, rather
                         // than let the host believe it was saved.
                         if let Err(error) = self.on_frame(&frame).await {
                             break Err(error.to_string());
+                        }
+                        if !self.quiet() {
+                            self.wake(&mut clock);
                         }
                     }
                     None => break Ok(()),
@@ -359,9 +377,7 @@ impl Runner {
                     if steps.dropped > 0 {
                         tracing::debug!(dropped = steps.dropped, "robstride emulator: steps dropped behind the wall clock");
                     }
-                    for _ in 0..steps.run {
-                        self.on_tick().await;
-                    }
+                    self.run_steps(steps.run, &mut clock).await;
                 }
             }
         };
@@ -369,6 +385,41 @@ impl Runner {
             receiver.abort();
         }
         outcome
+    }
+
+    /// Runs `steps` steps; after enough quiet ones in a row, lets the clock rest.
+    async fn run_steps(&mut self, steps: u64, clock: &mut StepClock) {
+        for _ in 0..steps {
+            let sent = self.on_tick().await;
+            if sent || !self.quiet() {
+                self.wake(clock);
+            } else {
+                self.quiet_steps = self.quiet_steps.saturating_add(1);
+            }
+        }
+        if self.quiet_steps >= QUIET_STEPS_BEFORE_REST {
+            clock.rest(true);
+        }
+    }
+
+    /// A resting clock's steps owed until now, run before a frame or request is handled: the
+    /// answer comes from the state of the latest step, as it would without the rest.
+    async fn catch_up(&mut self, clock: &mut StepClock) {
+        if clock.is_resting() {
+            let steps = clock.due();
+            self.run_steps(steps.run, clock).await;
+        }
+    }
+
+    /// Every motor's steps send nothing of their own for now.
+    fn quiet(&self) -> bool {
+        self.motors.iter().all(Actuator::sends_nothing_on_its_own)
+    }
+
+    /// Back to a step every 1 ms.
+    fn wake(&mut self, clock: &mut StepClock) {
+        self.quiet_steps = 0;
+        clock.rest(false);
     }
 
     fn motor_mut(&mut self, can_id: u8) -> Result<&mut Actuator, RobstrideError> {
@@ -448,12 +499,15 @@ impl Runner {
         Ok(())
     }
 
-    async fn on_tick(&mut self) {
+    /// One step of every motor; whether any sent a frame.
+    async fn on_tick(&mut self) -> bool {
         let mut out = Vec::new();
         for motor in &mut self.motors {
             out.extend(motor.tick());
         }
+        let sent = !out.is_empty();
         self.send_all(out).await;
+        sent
     }
 
     fn persist_if_requested(&mut self) -> Result<(), StateFileError> {

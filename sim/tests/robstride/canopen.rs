@@ -240,8 +240,17 @@ fn nmt_commands_move_the_node_and_the_heartbeat_reports_them() {
     host.run_ms(100);
     assert_eq!(host.take_spontaneous(), [std_frame(0x705, &[0x7F])]);
     assert_eq!(host.statusword() & 0x4F, 0x40);
-    // Reset communication: boot-up again and the heartbeat time back to 0.
-    assert_eq!(host.nmt(0x82, NODE), [std_frame(0x705, &[0x00])]);
+    // Reset communication: silent while it restarts (no SDO served), boot-up 50 ms later,
+    // the heartbeat time back to 0.
+    assert!(host.nmt(0x82, NODE).is_empty(), "NMT is never answered");
+    assert_eq!(host.sdo([0x40, 0x41, 0x60, 0, 0, 0, 0, 0]), None);
+    host.run_ms(49);
+    assert!(
+        host.take_spontaneous().is_empty(),
+        "no boot-up before 50 ms"
+    );
+    host.run_ms(2);
+    assert_eq!(host.take_spontaneous(), [std_frame(0x705, &[0x00])]);
     host.run_ms(300);
     assert!(host.take_spontaneous().is_empty());
     assert_eq!(host.read_u32(0x1017, 0), 0);
@@ -250,8 +259,10 @@ fn nmt_commands_move_the_node_and_the_heartbeat_reports_them() {
     host.controlword(15);
     host.controlword(11);
     assert_eq!(host.motor.snapshot().mode, ModeState::Run);
-    assert_eq!(host.nmt(0x81, 0), [std_frame(0x705, &[0x00])]);
+    assert!(host.nmt(0x81, 0).is_empty(), "NMT is never answered");
     assert_eq!(host.motor.snapshot().mode, ModeState::Reset);
+    host.run_ms(51);
+    assert_eq!(host.take_spontaneous(), [std_frame(0x705, &[0x00])]);
     assert_eq!(host.statusword() & 0x4F, 0x40);
     assert_eq!(
         (host.read_i32(0x6061), host.motor.snapshot().run_mode),

@@ -39,6 +39,13 @@ const EMCY_BASE: u16 = 0x080;
 /// Error code of a watchdog expiry (CiA-301 "life guard error or heartbeat error").
 const WATCHDOG_ERROR_CODE: u16 = 0x8130;
 
+/// How long a node takes to restart after an NMT reset (node or communication) before its
+/// boot-up, ms: an estimate (neither CiA 301 nor RobStride gives a figure; CANopen devices
+/// take tens to hundreds of milliseconds to restart their application). Answering at once
+/// was faster than any device, and a real master (python-canopen's `wait_for_bootup`, which
+/// starts listening after it sent the reset) missed the boot-up.
+const RESET_BOOT_MS: u32 = 50;
+
 /// A mode of operation, in this drive's own numbering (spec: 1 PP, 3 velocity, 4 torque,
 /// 5 CSP, 6 homing; DS402 would call CSP 8).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -120,6 +127,9 @@ pub(super) struct CanopenNode {
     target_torque_permille: i16,
     heartbeat_ms: u16,
     heartbeat_elapsed_ms: u32,
+    /// Milliseconds until a node restarting after an NMT reset sends its boot-up (0 at
+    /// power-on: the first step sends it).
+    boot_in_ms: u32,
     /// Frames produced outside a reply (EMCY), sent with the next reply or tick.
     outbox: Vec<CanFrame>,
 }
@@ -140,6 +150,7 @@ impl CanopenNode {
             target_torque_permille: 0,
             heartbeat_ms: 0,
             heartbeat_elapsed_ms: 0,
+            boot_in_ms: 0,
             outbox: Vec::new(),
         }
     }
@@ -183,8 +194,15 @@ impl Actuator {
     pub(super) fn canopen_tick(&mut self) -> Vec<CanFrame> {
         let mut out = Vec::new();
         if self.canopen.nmt == NmtState::Initialising {
-            self.canopen.mode = Mode::from_run_mode(self.run_mode());
-            out.extend(self.boot_up());
+            if self.canopen.boot_in_ms > 0 {
+                self.canopen.boot_in_ms -= 1;
+            } else {
+                if self.canopen.mode == Mode::None {
+                    // At power-on the mode comes from the 0x70xx table; a reset node keeps its.
+                    self.canopen.mode = Mode::from_run_mode(self.run_mode());
+                }
+                out.extend(self.boot_up());
+            }
         }
         if self.canopen.drive != DriveState::Fault {
             if self.fault_word != 0 {
@@ -212,6 +230,13 @@ impl Actuator {
         out
     }
 
+    /// The node restarts: silent (Initialising: no SDO served) until its boot-up, `ms` from
+    /// now, sent by [`Actuator::canopen_tick`].
+    fn restart_after(&mut self, ms: u32) {
+        self.canopen.nmt = NmtState::Initialising;
+        self.canopen.boot_in_ms = ms;
+    }
+
     fn boot_up(&mut self) -> Option<CanFrame> {
         self.canopen.nmt = NmtState::PreOperational;
         standard(nmt::ERROR_CONTROL_BASE + u16::from(self.can_id), &[0x00])
@@ -237,12 +262,12 @@ impl Actuator {
                 self.clear_faults();
                 self.canopen = CanopenNode::new();
                 self.canopen.mode = mode;
-                return self.boot_up();
+                self.restart_after(RESET_BOOT_MS);
             }
             NmtCommand::ResetCommunication => {
                 self.canopen.heartbeat_ms = 0;
                 self.canopen.heartbeat_elapsed_ms = 0;
-                return self.boot_up();
+                self.restart_after(RESET_BOOT_MS);
             }
         }
         None

@@ -71,6 +71,17 @@ impl Actuator {
         self.plant.set_external_torque_nm(torque_nm);
     }
 
+    /// Whether the motor's 1 ms steps send nothing of their own for now: not running (no loop
+    /// can raise a fault from its current), no active report, not a CANopen node (its own
+    /// heartbeat and PDOs), no calibration ending. Its steps may then run in batches as long
+    /// as they are caught up before it answers ([`crate::can_runner::StepClock::rest`]).
+    pub fn sends_nothing_on_its_own(&self) -> bool {
+        self.mode != ModeState::Run
+            && !(self.active_report && self.listening)
+            && self.protocol != super::canopen::PROTOCOL_CANOPEN
+            && self.calibration_left_ms == 0
+    }
+
     /// Whether the motor is enabled (run mode): its loops drive the joint.
     pub fn is_running(&self) -> bool {
         self.mode == ModeState::Run
