@@ -212,10 +212,14 @@ def run_checks():
             raise Failure(f"end pose {name}: SDK FK {fk[i]:.3f}°, feedback {fb[i]:.3f}°")
     say(f"SDK FK agrees with end-pose feedback: {[round(x, 2) for x in fb]}")
 
-    # 5. Disable. In the emulated (TCG) test VM, where the Piper runs slower than real time,
-    # the SDK has seen every joint disabled 12 to 18 s after its first request: 60 s keeps
-    # the check (it fails if the arm never reads disabled) without failing on that VM's pace.
-    wait_for(lambda: not piper.DisablePiper(), 60, "all joints disabled", poll_s=0.05)
+    # 5. Disable. In the emulated (TCG) test VM, where the Piper runs at about a quarter of
+    # real time (its log: 1 ms steps cost 3.4-6.6 ms, three steps in four dropped), the SDK
+    # has seen every joint disabled 12 to 18 s after its first request in earlier runs, 49 s
+    # and over 60 s in two runs on 2026-12-07, although the firmware disables at once and
+    # sends the 0x261-0x266 status at 9 Hz there: the SDK's view lags (an open finding,
+    # docs/timing.md). 150 s keeps the check (it fails if the arm never reads disabled)
+    # without failing on that VM's pace.
+    wait_for(lambda: not piper.DisablePiper(), 150, "all joints disabled", poll_s=0.05)
     say("disabled")
     piper.DisconnectPort()
 
