@@ -64,10 +64,7 @@ impl RawFaultArgs {
         let value = self.0.get(name)?;
         let text = match &value.value {
             RawArgValue::Word(w) => w.clone(),
-            // Whole numbers as their digits (`joint: 2`), others as Rust prints them.
-            RawArgValue::Number(x) if x.fract() == 0.0 && x.abs() < 1e15 => {
-                format!("{}", *x as i64)
-            }
+            // As Rust prints it: a whole number as its digits (`joint: 2` reads `2`).
             RawArgValue::Number(x) => x.to_string(),
             RawArgValue::Switch(on) => on.to_string(),
         };

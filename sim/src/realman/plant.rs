@@ -181,9 +181,11 @@ impl ArmPlant {
             return;
         }
         let dt = self.world.config().step_s;
-        let before = (self.q_ref.clone(), self.v_ref.clone());
+        let mut changed = false;
         for j in 0..self.dof {
-            self.q_ref[j] = positions_rad[j].clamp(self.lower[j], self.upper[j]);
+            let q_ref = positions_rad[j].clamp(self.lower[j], self.upper[j]);
+            changed |= q_ref != self.q_ref[j] || speeds_rad_s[j] != self.v_ref[j];
+            self.q_ref[j] = q_ref;
             // Streamed once per step: the change of speed is the reference acceleration (an
             // inertial feed-forward); capped so that a jump in the stream cannot kick the arm.
             self.a_ref[j] = ((speeds_rad_s[j] - self.v_ref[j]) / dt)
@@ -191,7 +193,7 @@ impl ArmPlant {
             self.v_ref[j] = speeds_rad_s[j];
         }
         // A host streaming the pose the arm already holds leaves it at rest.
-        if (&self.q_ref, &self.v_ref) != (&before.0, &before.1) {
+        if changed {
             self.resting = false;
         }
     }

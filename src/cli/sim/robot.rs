@@ -214,7 +214,8 @@ pub(crate) async fn serve(args: Args, mut stop: super::StopSource) -> anyhow::Re
         Some(path) => StateFile::load(path)?,
         None => StateFile::default(),
     };
-    check_kept_ids(&config, &kept)
+    // Refused before the banner (the robot's spawn checks the same).
+    sim::robot::check_kept_ids(&config, &kept)
         .with_context(|| format!("cannot start the robot of {}", args.file.display()))?;
     let summary = summary(&config, &kept);
     let served = open_buses(&args, &config).await?;
@@ -264,12 +265,6 @@ pub(crate) async fn serve(args: Args, mut stop: super::StopSource) -> anyhow::Re
         server.shutdown().await;
     }
     super::outcome("robot", stopped, &death)
-}
-
-/// Refuses a state file that would put two actuators of one bus on one CAN ID, before the
-/// banner (the robot's own check, which its spawn makes too).
-fn check_kept_ids(config: &RobotConfig, kept: &StateFile) -> anyhow::Result<()> {
-    sim::robot::check_kept_ids(config, kept).map_err(anyhow::Error::new)
 }
 
 /// `robstride_arm6: can0 ids 1 2 3, can1 ids 4 5 6`, each actuator at the ID it answers on:
@@ -339,7 +334,10 @@ mod tests {
             .unwrap()
             .clone();
         let kept = moved_first(&config, second.motor.can_id);
-        let error = format!("{:#}", check_kept_ids(&config, &kept).unwrap_err());
+        let error = format!(
+            "{:#}",
+            sim::robot::check_kept_ids(&config, &kept).unwrap_err()
+        );
         let bus = &config.buses[first.bus].name;
         for part in [
             format!("bus `{bus}`"),
@@ -352,7 +350,7 @@ mod tests {
         }
         // Moved to a free ID: served there, and the summary says so.
         let kept = moved_first(&config, 100);
-        check_kept_ids(&config, &kept).unwrap();
+        sim::robot::check_kept_ids(&config, &kept).unwrap();
         let text = summary(&config, &kept);
         assert!(
             text.contains(&format!(
