@@ -55,7 +55,7 @@ fn shipped(name: &str) -> Subject {
         .actuators
         .iter()
         .map(|a| {
-            let leg = a.motor.model != sim::robstride::Model::RS02 || a.joint.contains("ankle");
+            let leg = a.actuator.model().name != "RS02" || a.joint.contains("ankle");
             if leg {
                 (300.0, 5.0)
             } else {
@@ -178,9 +178,11 @@ fn hold_frames(running: &Running, start: &sim::robot::RobotSnapshot) -> Vec<(usi
         .zip(&start.joints)
         .zip(&running.gains)
         .map(|((a, j), (kp, kd))| {
+            // The shipped robots carry RobStride actuators only.
+            let motor = a.actuator.robstride().expect("a RobStride actuator");
             (
                 a.bus,
-                hold_frame(a.motor.can_id, a.motor.model, j.motor.angle_rad, *kp, *kd),
+                hold_frame(motor.can_id, motor.model, j.actuator.angle_rad, *kp, *kd),
             )
         })
         .collect()
@@ -202,7 +204,11 @@ async fn hold_all(running: &Running) {
         send(&running.hosts[*bus], *frame).await;
     }
     for a in &running.config.actuators {
-        send(&running.hosts[a.bus], enable_frame(a.motor.can_id)).await;
+        send(
+            &running.hosts[a.bus],
+            enable_frame(a.actuator.can_id() as u8),
+        )
+        .await;
     }
     for (bus, frame) in frames {
         send(&running.hosts[bus], frame).await;

@@ -66,7 +66,9 @@ def test_a_fault_and_a_lost_bus_reach_the_wire(robot_emulator):
     robot = robot_emulator(ARM6)
     with open_bus(robot, "can1") as can1:
         robot.inject("over_temperature", joint="wrist_pitch")
-        assert robot.state()["joints"]["wrist_pitch"]["fault_word"] != 0
+        wrist = robot.state()["joints"]["wrist_pitch"]
+        assert wrist["faults"] == ["over_temperature"], wrist
+        assert wrist["fault_word"] != 0 and wrist["kind"] == "robstride", wrist
         enable(can1, 5)
         reply = feedback_from(can1, 5)
         assert reply is not None

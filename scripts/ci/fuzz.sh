@@ -27,8 +27,17 @@ if ((targets * secs / 2 + 30 > budget)); then
 fi
 
 echo "---- cargo check of the fuzz targets (fuzz/)"
+# A build that does not fit the budget is CI running short of time, not a finding: said and
+# skipped (a smoke run that overruns is a hang, and fails).
+rc=0
 CARGO_TARGET_DIR=${CARGO_TARGET_DIR:-$PWD/target} \
-    timeout $((budget / 2)) cargo check --manifest-path fuzz/Cargo.toml --bins
+    timeout $((budget / 2)) cargo check --manifest-path fuzz/Cargo.toml --bins || rc=$?
+if ((rc == 124)); then
+    echo "ci/fuzz: the fuzz targets' build did not fit the ${budget}s budget; smoke run skipped"
+    exit 0
+elif ((rc != 0)); then
+    exit "$rc"
+fi
 echo "---- smoke run: ${secs}s per target, seed $seed"
 timeout $((budget - ($(date +%s) - start))) \
     cargo run --quiet -p armhil-testkit --features fuzz --example fuzz_smoke -- \

@@ -1,5 +1,6 @@
 //! Firmware emulators of robot arms and actuators on a rapier3d physics world.
 //!
+//! - [`actuator`]: the actuator contract: any kind's firmware driving a robot joint.
 //! - [`fault_args`]: a named fault's arguments as a front end read them (scenario, web view,
 //!   Python), for each emulator's one fault builder.
 //! - [`fault_desk`]: the contract a front end (web view, Python) reaches a running emulator's
@@ -19,6 +20,7 @@
 //! - [`robot`]: whole robots (one world, an actuator per joint, several buses) and robot files.
 //! - [`yaml_words`]: the YAML reader's errors in a file author's words.
 
+pub mod actuator;
 pub mod bounded_read;
 pub mod can_runner;
 pub mod cpu_budget;

@@ -64,7 +64,7 @@ fn a_valid_file_becomes_the_emulators_configuration() {
         (shoulder.direction, shoulder.zero_offset_rad, shoulder.bus),
         (-1.0, 0.1, 0)
     );
-    assert_eq!(c.actuators[3].motor.can_id, 1);
+    assert_eq!(c.actuators[3].actuator.can_id(), 1);
     assert_eq!(c.actuators[3].bus, 1, "id 1 twice, on two buses");
     assert_eq!(c.start_positions_rad, [("shoulder_pitch".to_string(), 0.5)]);
     assert!(robot.warnings.is_empty(), "{:?}", robot.warnings);
@@ -94,7 +94,7 @@ fn each_mistake_is_named_at_its_line_and_column() {
         ),
         (
             ARM.replace("model: RS04", "model: RS09"),
-            "8:36: unknown RobStride model `RS09`",
+            "8:36: no actuator model `RS09` (known: RS00, RS01",
         ),
         (
             ARM.replace("direction: -1", "direction: 2"),

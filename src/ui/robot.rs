@@ -7,7 +7,6 @@ use sim::fault_desk::{FaultDesk, Faults};
 use sim::robot::{RobotMonitor, RobotSnapshot};
 
 use super::bus_tap::BusTap;
-use super::robstride::fault_names;
 use super::{round3, LiveSource};
 use crate::harness::report::html::arm_model;
 
@@ -96,21 +95,15 @@ impl RobotLive {
             ]));
         }
         for j in &s.joints {
-            let m = &j.motor;
+            let m = &j.actuator;
             panel.push(json!([
-                format!(
-                    "{} ({} id {} on {})",
-                    j.joint,
-                    m.model.name(),
-                    m.can_id,
-                    j.bus
-                ),
+                format!("{} ({} id {} on {})", j.joint, m.model, m.can_id, j.bus),
                 format!(
                     "{}, {:.1} °C, faults: {}",
-                    m.mode.name(),
+                    m.mode,
                     m.temperature_c,
-                    match fault_names(m.fault_word) {
-                        names if names.is_empty() => "none".to_owned(),
+                    match m.faults.as_slice() {
+                        [] => "none".to_owned(),
                         names => names.join(","),
                     }
                 )
@@ -163,8 +156,8 @@ impl LiveSource for RobotLive {
             "base_pose": base_pose(&s),
             "joints_deg": per(&|j| j.position_rad.to_degrees()),
             "velocity_deg_s": per(&|j| j.velocity_rad_s.to_degrees()),
-            "torque_nm": per(&|j| j.motor.torque_nm),
-            "temperature_c": per(&|j| j.motor.temperature_c),
+            "torque_nm": per(&|j| j.actuator.torque_nm),
+            "temperature_c": per(&|j| j.actuator.temperature_c),
             "panel": self.panel(&s),
             "bus": self.bus_json(),
         })

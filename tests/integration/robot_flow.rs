@@ -36,8 +36,8 @@ fn start(name: &str) -> (RobotHandle, Vec<RobstrideDriver>, Vec<VirtualBus>) {
     (robot, drivers, buses)
 }
 
-fn driver_model(model: sim::robstride::Model) -> DModel {
-    model.name().parse().expect("the driver knows every model")
+fn driver_model(model: &str) -> DModel {
+    model.parse().expect("the driver knows every model")
 }
 
 /// Every actuator of the snapshot enabled in operation control (the private protocol's MIT
@@ -57,13 +57,16 @@ async fn hold_all(snapshot: &RobotSnapshot, drivers: &[RobstrideDriver], bus_nam
     for joint in legs_first {
         let bus = bus_names.iter().position(|b| *b == joint.bus).unwrap();
         let motor = drivers[bus]
-            .motor(joint.motor.can_id, driver_model(joint.motor.model))
+            .motor(
+                joint.actuator.can_id as u8,
+                driver_model(joint.actuator.model),
+            )
             .unwrap();
         let leg = joint.bus == "can2" || joint.bus == "can3";
         motor.enable().await.unwrap();
         motor
             .op_control(OpControl {
-                angle_rad: joint.motor.angle_rad as f32,
+                angle_rad: joint.actuator.angle_rad as f32,
                 speed_rad_s: 0.0,
                 kp: if leg { 300.0 } else { 50.0 },
                 kd: if leg { 5.0 } else { 1.0 },
@@ -117,14 +120,9 @@ async fn the_humanoid_stands_while_its_20_actuators_hold_in_operation_control() 
     assert!((z - 0.805).abs() < 0.005, "the pelvis stays up: {z} m");
     assert!(x.abs() < 0.02 && y.abs() < 0.02, "and in place: {x} {y}");
     for (joint, start) in standing.joints.iter().zip(&first.joints) {
-        assert_eq!(
-            joint.motor.mode,
-            sim::robstride::ModeState::Run,
-            "{}",
-            joint.joint
-        );
+        assert!(joint.actuator.enabled, "{}", joint.joint);
         // kp 300 N·m/rad: the knees carrying the body sag by its torque / kp (~0.02 rad).
-        let sag = joint.motor.torque_nm.abs() / 300.0;
+        let sag = joint.actuator.torque_nm.abs() / 300.0;
         assert!(
             (joint.position_rad - start.position_rad).abs() < 0.005 + sag
                 && joint.velocity_rad_s.abs() < 0.05,
@@ -135,7 +133,7 @@ async fn the_humanoid_stands_while_its_20_actuators_hold_in_operation_control() 
     }
     let knee = standing.joint("left_knee").unwrap();
     assert!(
-        knee.motor.torque_nm.abs() > 2.0,
+        knee.actuator.torque_nm.abs() > 2.0,
         "the bent knee carries weight: {knee:?}"
     );
     robot.shutdown().await;

@@ -14,6 +14,7 @@ use bus::CanBus;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use sim::actuator::Detail;
 use sim::fault_args::{FaultArgValue, FaultArgs};
 use sim::fault_desk::{FaultAction, FaultDesk, Faults};
 use sim::robot::faults::{BUS_LOST, EXTERNAL_TORQUE, GANTRY_RELEASE};
@@ -51,7 +52,7 @@ pub struct RobotEmulator {
     name: String,
     buses: Vec<String>,
     /// Per actuated joint: its bus and CAN id.
-    joints: Vec<(String, String, u8)>,
+    joints: Vec<(String, String, u32)>,
     addr: Option<SocketAddr>,
 }
 
@@ -102,19 +103,29 @@ fn snapshot_dict<'py>(py: Python<'py>, s: &RobotSnapshot) -> PyResult<Bound<'py,
     d.set_item("gantry_holds", s.gantry_holds)?;
     let joints = PyDict::new(py);
     for j in &s.joints {
-        let m = &j.motor;
+        let m = &j.actuator;
         let jd = PyDict::new(py);
         jd.set_item("bus", &j.bus)?;
+        jd.set_item("kind", m.kind)?;
         jd.set_item("can_id", m.can_id)?;
-        jd.set_item("model", m.model.name())?;
+        jd.set_item("model", m.model)?;
         jd.set_item("position_rad", j.position_rad)?;
         jd.set_item("velocity_rad_s", j.velocity_rad_s)?;
-        jd.set_item("mode", m.mode.name())?;
-        jd.set_item("run_mode", m.run_mode)?;
+        jd.set_item("enabled", m.enabled)?;
+        jd.set_item("mode", &m.mode)?;
         jd.set_item("angle_rad", m.angle_rad)?;
+        jd.set_item("speed_rad_s", m.speed_rad_s)?;
         jd.set_item("torque_nm", m.torque_nm)?;
         jd.set_item("temperature_c", m.temperature_c)?;
-        jd.set_item("fault_word", m.fault_word)?;
+        jd.set_item("faults", m.faults.clone())?;
+        // What only this kind has (RobStride: run_mode, fault_word …), under its own names.
+        for (name, value) in &m.details {
+            match value {
+                Detail::Int(v) => jd.set_item(*name, v)?,
+                Detail::Real(v) => jd.set_item(*name, v)?,
+                Detail::Word(v) => jd.set_item(*name, v)?,
+            }
+        }
         joints.set_item(&j.joint, jd)?;
     }
     d.set_item("joints", joints)?;
@@ -137,7 +148,7 @@ impl RobotEmulator {
 
     /// Per actuated joint: `{"bus": ..., "can_id": ...}`.
     #[getter]
-    fn actuators(&self) -> BTreeMap<String, (String, u8)> {
+    fn actuators(&self) -> BTreeMap<String, (String, u32)> {
         self.joints
             .iter()
             .map(|(j, b, id)| (j.clone(), (b.clone(), *id)))
@@ -303,7 +314,7 @@ pub(super) fn robot(
     let joints = config
         .actuators
         .iter()
-        .map(|a| (a.joint.clone(), names[a.bus].clone(), a.motor.can_id))
+        .map(|a| (a.joint.clone(), names[a.bus].clone(), a.actuator.can_id()))
         .collect();
     let name = config.name.clone();
     let socketcand = socketcand.to_owned();

@@ -6,9 +6,9 @@ use std::path::PathBuf;
 
 use std::sync::Arc;
 
+use crate::actuator::ActuatorConfig;
 use crate::description::{CollisionGeometry, MissingMeshes, PackagePaths};
 use crate::physics::Solver;
-use crate::robstride::MotorConfig;
 
 /// How the robot's root link meets the world.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -95,9 +95,9 @@ pub struct JointActuator {
     pub joint: String,
     /// Index into [`RobotConfig::buses`].
     pub bus: usize,
-    /// The motor (its model, CAN id, thermal model …); its `load` and rig fields are unused:
-    /// the robot is the load.
-    pub motor: MotorConfig,
+    /// The actuator: its kind and model, CAN id and firmware settings (any kind the
+    /// actuator registry lists, [`crate::actuator::KINDS`]).
+    pub actuator: ActuatorConfig,
     /// +1 when the shaft turns the joint's positive way, −1 when mounted the other way round.
     pub direction: f64,
     /// Joint position (rad) at which the shaft reads 0.
@@ -161,7 +161,7 @@ pub enum RobotConfigError {
         /// The bus.
         bus: String,
         /// The id.
-        can_id: u8,
+        can_id: u32,
         /// The first joint with it.
         first: String,
         /// The second one.
@@ -173,13 +173,21 @@ pub enum RobotConfigError {
         /// The joint.
         joint: String,
     },
-    /// A CAN id outside 1..=127.
-    #[error("joint `{joint}`: CAN id {can_id} is outside 1..=127")]
+    /// A CAN id outside what its kind takes (RobStride: 1..=127).
+    #[error(
+        "joint `{joint}`: CAN id {can_id} is outside {low}..={high}, the ids of a {kind} actuator"
+    )]
     InvalidCanId {
         /// The joint.
         joint: String,
         /// The id.
-        can_id: u8,
+        can_id: u32,
+        /// The kind.
+        kind: &'static str,
+        /// The lowest id it takes.
+        low: u32,
+        /// The highest.
+        high: u32,
     },
     /// A non-finite or non-positive number where one is needed.
     #[error("{what} must be finite{positive}, got {value}", positive = if *.positive { " and positive" } else { "" })]
@@ -219,10 +227,15 @@ impl RobotConfig {
                     buses: self.buses.len(),
                 });
             }
-            if !(1..=0x7F).contains(&a.motor.can_id) {
+            let kind = a.actuator.kind();
+            let (low, high) = kind.ids;
+            if !(low..=high).contains(&a.actuator.can_id()) {
                 return Err(RobotConfigError::InvalidCanId {
                     joint: a.joint.clone(),
-                    can_id: a.motor.can_id,
+                    can_id: a.actuator.can_id(),
+                    kind: kind.name,
+                    low,
+                    high,
                 });
             }
             finite(
@@ -236,10 +249,10 @@ impl RobotConfig {
                         joint: a.joint.clone(),
                     });
                 }
-                if b.bus == a.bus && b.motor.can_id == a.motor.can_id {
+                if b.bus == a.bus && b.actuator.can_id() == a.actuator.can_id() {
                     return Err(RobotConfigError::DuplicateCanId {
                         bus: self.buses[a.bus].name.clone(),
-                        can_id: a.motor.can_id,
+                        can_id: a.actuator.can_id(),
                         first: b.joint.clone(),
                         second: a.joint.clone(),
                     });

@@ -1,14 +1,15 @@
 //! A robot's faults, the one builder behind the web view and the Python emulator
-//! ([`FaultTarget`] on [`RobotMonitor`]): RobStride's fault table on the actuator of a joint
-//! (addressed by URDF joint name), a push on a joint, and a bus cut off. A scenario's
-//! `actuator_fault: {joint, fault}` names the same RobStride table.
+//! ([`FaultTarget`] on [`RobotMonitor`]): each actuator kind's fault table on the actuator of
+//! a joint (addressed by URDF joint name), a push on a joint, and a bus cut off. A scenario's
+//! `actuator_fault: {joint, fault}` names the same tables.
 
+use crate::actuator::registry::kind_named;
+use crate::actuator::ActuatorModel;
 use crate::fault_args::{self, shown_word, FaultArgError, FaultArgValue, FaultArgs};
 use crate::fault_desk::{FaultInfo, FaultTarget, ParamInfo};
 use crate::piper::faults::Shown;
 use crate::robot::RobotMonitor;
-use crate::robstride::faults::check_external_torque_nm;
-use crate::robstride::{Fault, Model};
+use crate::robstride::faults::{within, EXTERNAL_TORQUE_PEAK_MULTIPLE};
 use crate::yaml_words::suggestion;
 
 /// The push's name.
@@ -21,12 +22,16 @@ pub const GANTRY_RELEASE: &str = "gantry_release";
 /// A fault on a running robot.
 #[derive(Debug, Clone, PartialEq)]
 pub enum RobotFault {
-    /// A RobStride fault on the actuator of `joint`.
+    /// A fault of the actuator kind's table on the actuator of `joint`.
     Actuator {
         /// The URDF joint.
         joint: String,
-        /// The fault.
-        fault: Fault,
+        /// The fault's name in its kind's table.
+        fault: &'static str,
+        /// Its values (no `joint`).
+        args: FaultArgs,
+        /// How it shows applied (`encoder_glitch 100 counts`).
+        label: String,
     },
     /// A torque from outside on `joint` (N·m, in the actuator's shaft frame); clearing it
     /// stops the push.
@@ -50,15 +55,37 @@ pub enum RobotFault {
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct RobotLayout {
     /// Each actuated joint and its actuator's model.
-    pub joints: Vec<(String, Model)>,
+    pub joints: Vec<(String, ActuatorModel)>,
     /// Each bus's name.
     pub buses: Vec<String>,
 }
 
 impl RobotLayout {
-    /// Every fault name: RobStride's table, then the push and the bus cut.
-    fn names() -> Vec<&'static str> {
-        let mut names: Vec<&str> = Fault::ALL.iter().map(|f| f.name()).collect();
+    /// The fault tables of the actuator kinds the robot carries, each once, in joint order.
+    fn actuator_faults(&self) -> Vec<FaultInfo> {
+        let mut kinds: Vec<&str> = Vec::new();
+        let mut table: Vec<FaultInfo> = Vec::new();
+        for (_, model) in &self.joints {
+            if kinds.contains(&model.kind) {
+                continue;
+            }
+            kinds.push(model.kind);
+            let Some(kind) = kind_named(model.kind) else {
+                continue;
+            };
+            // Two kinds may name one fault alike (under_voltage): listed once.
+            for fault in (kind.faults)() {
+                if !table.iter().any(|f| f.name == fault.name) {
+                    table.push(fault);
+                }
+            }
+        }
+        table
+    }
+
+    /// Every fault name: the actuators' tables, then the push and the bus cut.
+    fn names(&self) -> Vec<&'static str> {
+        let mut names: Vec<&str> = self.actuator_faults().iter().map(|f| f.name).collect();
         names.extend([EXTERNAL_TORQUE, BUS_LOST, GANTRY_RELEASE]);
         names
     }
@@ -73,13 +100,14 @@ impl RobotLayout {
             ParamInfo::required("joint", format!("URDF joint {what}"))
                 .suggesting(first_joint.clone())
         };
-        let mut table: Vec<FaultInfo> = Fault::ALL
-            .iter()
+        let mut table: Vec<FaultInfo> = self
+            .actuator_faults()
+            .into_iter()
             .map(|f| FaultInfo {
-                name: f.name(),
-                description: format!("{} (on the joint's actuator)", f.description()),
+                name: f.name,
+                description: format!("{} (on the joint's actuator)", f.description),
                 params: std::iter::once(joint("whose actuator faults"))
-                    .chain(f.value_infos())
+                    .chain(f.params)
                     .collect(),
             })
             .collect();
@@ -114,15 +142,18 @@ impl RobotLayout {
         args: &FaultArgs,
         clearing: bool,
     ) -> Result<RobotFault, FaultArgError> {
-        match fault_args::named("robot", name, &Self::names(), |n| n)? {
+        match fault_args::named("robot", name, &self.names(), |n| n)? {
             EXTERNAL_TORQUE => {
                 args.only(name, &["joint", "torque_nm"])?;
                 let (joint, model) = self.joint(name, args)?;
                 let torque_nm = match args.get("torque_nm") {
                     None if clearing => 0.0,
                     None => return Err(FaultArgError::missing(name, "torque_nm")),
-                    Some(FaultArgValue::Number(x)) => check_external_torque_nm(model, *x)
-                        .map_err(|e| FaultArgError::at("torque_nm", e.to_string()))?,
+                    Some(FaultArgValue::Number(x)) => {
+                        let max = EXTERNAL_TORQUE_PEAK_MULTIPLE * model.peak_torque_nm;
+                        within("torque_nm", *x, (-max, max))
+                            .map_err(|e| FaultArgError::at("torque_nm", e.to_string()))?
+                    }
                     Some(other) => {
                         return Err(FaultArgError::at(
                             "torque_nm",
@@ -153,27 +184,43 @@ impl RobotLayout {
                 }
                 Ok(RobotFault::BusLost { bus })
             }
-            _ => {
-                // Every other name of the table is RobStride's, with its values (which
-                // clearing may leave out).
-                let fault = Fault::named(name)?;
-                let known: Vec<&str> = std::iter::once("joint")
-                    .chain(fault.values().iter().map(|p| p.name))
-                    .collect();
-                args.only(name, &known)?;
-                let (joint, _) = self.joint(name, args)?;
-                let fault = if clearing {
-                    fault
-                } else {
-                    fault.with_values(args)?
+            fault => {
+                // Every other name is an actuator kind's, with its values (which clearing
+                // may leave out), checked by the kind of the joint's actuator.
+                let (joint, model) = self.joint(name, args)?;
+                let kind = kind_named(model.kind).filter(|k| k.has_fault(fault));
+                let Some(kind) = kind else {
+                    return Err(FaultArgError::at(
+                        "joint",
+                        format!(
+                            "joint {}'s actuator ({} {}) has no fault `{fault}`",
+                            shown_word(&joint),
+                            model.kind,
+                            model.name
+                        ),
+                    ));
                 };
-                Ok(RobotFault::Actuator { joint, fault })
+                let mut values = FaultArgs::new();
+                for (arg, value) in args.iter().filter(|(arg, _)| *arg != "joint") {
+                    values.push(arg, value.clone());
+                }
+                let label = (kind.fault_label)(fault, &values, clearing)?;
+                Ok(RobotFault::Actuator {
+                    joint,
+                    fault,
+                    args: values,
+                    label,
+                })
             }
         }
     }
 
     /// The `joint` argument: an actuated joint of the robot, and its actuator's model.
-    fn joint(&self, fault: &str, args: &FaultArgs) -> Result<(String, Model), FaultArgError> {
+    fn joint(
+        &self,
+        fault: &str,
+        args: &FaultArgs,
+    ) -> Result<(String, ActuatorModel), FaultArgError> {
         let joint = word(fault, args, "joint")?;
         match self.joints.iter().find(|(name, _)| *name == joint) {
             Some((_, model)) => Ok((joint, *model)),
@@ -220,7 +267,7 @@ impl FaultTarget for RobotMonitor {
 
     fn label(&self, fault: &RobotFault) -> String {
         match fault {
-            RobotFault::Actuator { joint, fault } => format!("{} on {joint}", fault.label()),
+            RobotFault::Actuator { joint, label, .. } => format!("{label} on {joint}"),
             RobotFault::ExternalTorque { joint, .. } => format!("{EXTERNAL_TORQUE} on {joint}"),
             RobotFault::BusLost { bus } => format!("{BUS_LOST} {bus}"),
             RobotFault::GantryRelease => GANTRY_RELEASE.to_owned(),
@@ -235,21 +282,22 @@ impl FaultTarget for RobotMonitor {
         match (a, b) {
             // One fault of a kind per actuator, whatever its values.
             (
-                RobotFault::Actuator { joint, fault },
+                RobotFault::Actuator { joint, fault, .. },
                 RobotFault::Actuator {
                     joint: other_joint,
                     fault: other,
+                    ..
                 },
-            ) => joint == other_joint && fault.same_kind(*other),
+            ) => joint == other_joint && fault == other,
             _ => self.label(a) == self.label(b),
         }
     }
 
     async fn inject(&self, fault: RobotFault) -> Result<(), String> {
         match fault {
-            RobotFault::Actuator { joint, fault } => {
-                RobotMonitor::inject(self, &joint, fault).await
-            }
+            RobotFault::Actuator {
+                joint, fault, args, ..
+            } => RobotMonitor::inject(self, &joint, fault, args).await,
             RobotFault::ExternalTorque { joint, torque_nm } => {
                 self.set_external_torque(&joint, torque_nm).await
             }
@@ -261,7 +309,9 @@ impl FaultTarget for RobotMonitor {
 
     async fn clear(&self, fault: RobotFault) -> Result<(), String> {
         match fault {
-            RobotFault::Actuator { joint, fault } => RobotMonitor::clear(self, &joint, fault).await,
+            RobotFault::Actuator {
+                joint, fault, args, ..
+            } => RobotMonitor::clear(self, &joint, fault, args).await,
             RobotFault::ExternalTorque { joint, .. } => self.set_external_torque(&joint, 0.0).await,
             RobotFault::BusLost { bus } => self.set_bus_lost(&bus, false).await,
             // An event: nothing is left to clear (the stand does not come back).
@@ -274,12 +324,17 @@ impl FaultTarget for RobotMonitor {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::robstride::{Fault, Model};
+
+    fn model(model: &str) -> ActuatorModel {
+        crate::actuator::configure(model, 1).unwrap().model()
+    }
 
     fn layout() -> RobotLayout {
         RobotLayout {
             joints: vec![
-                ("left_knee".into(), Model::RS04),
-                ("left_ankle".into(), Model::RS02),
+                ("left_knee".into(), model("RS04")),
+                ("left_ankle".into(), model("RS02")),
             ],
             buses: vec!["can0".into(), "can1".into()],
         }
@@ -304,7 +359,9 @@ mod tests {
             l.build("gate_driver", &args(&[("joint", text("left_knee"))]), false),
             Ok(RobotFault::Actuator {
                 joint: "left_knee".into(),
-                fault: Fault::GateDriver
+                fault: "gate_driver",
+                args: FaultArgs::new(),
+                label: "gate_driver".into(),
             })
         );
         assert_eq!(

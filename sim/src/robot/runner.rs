@@ -12,12 +12,13 @@ use tokio::task::JoinHandle;
 use super::base_pose::BasePose;
 use super::config::{Gantry, RobotConfig, RobotConfigError};
 use super::world::{RobotWorld, RobotWorldError};
+use crate::actuator::{ActuatorConfig, ActuatorFirmware, ActuatorSnapshot, PowerOn};
 use crate::can_runner::{receive_frames, StepClock, TxBacklog};
+use crate::fault_args::{FaultArgError, FaultArgs};
 use crate::physics::PhysicsError;
 use crate::robot::faults::RobotLayout;
-use crate::robstride::faults::{check_external_torque_nm, check_temperature_c, ValueError};
-use crate::robstride::state_file::{uid_key, StateFile, StateFileError};
-use crate::robstride::{Actuator, Fault, MotorSnapshot, TURNAROUND};
+use crate::robstride::faults::{check_temperature_c, within, ValueError};
+use crate::robstride::state_file::{StateFile, StateFileError};
 use crate::supervise::{DeathWatch, Supervisor};
 
 /// Harness requests waiting for the runner.
@@ -60,6 +61,14 @@ pub enum RobotError {
         /// What is wrong.
         source: ValueError,
     },
+    /// The actuator's kind has no such fault, or refused its arguments.
+    #[error("joint `{joint}`: {source}")]
+    Fault {
+        /// The joint.
+        joint: String,
+        /// What is wrong.
+        source: FaultArgError,
+    },
     /// The state file could not be read or written.
     #[error(transparent)]
     StateFile(#[from] StateFileError),
@@ -89,7 +98,7 @@ pub struct JointSnapshot {
     /// Joint speed in the world (rad/s).
     pub velocity_rad_s: f64,
     /// The actuator's own view (its shaft angle is after direction and zero offset).
-    pub motor: MotorSnapshot,
+    pub actuator: ActuatorSnapshot,
 }
 
 /// The whole robot's state.
@@ -118,14 +127,21 @@ impl RobotSnapshot {
 }
 
 enum Request {
-    Inject(String, Fault, oneshot::Sender<Result<(), RobotError>>),
-    RemoveCause(String, Fault, oneshot::Sender<Result<(), RobotError>>),
+    Inject(Addressed, oneshot::Sender<Result<(), RobotError>>),
+    RemoveCause(Addressed, oneshot::Sender<Result<(), RobotError>>),
     SetTemperature(String, f64, oneshot::Sender<Result<(), RobotError>>),
     SetExternalTorque(String, f64, oneshot::Sender<Result<(), RobotError>>),
     SetBusLost(String, bool, oneshot::Sender<Result<(), RobotError>>),
     Snapshot(oneshot::Sender<RobotSnapshot>),
     ReleaseGantry(oneshot::Sender<bool>),
     Shutdown(oneshot::Sender<()>),
+}
+
+/// A fault of the actuator of a joint: its name in the actuator kind's table, and arguments.
+struct Addressed {
+    joint: String,
+    fault: String,
+    args: FaultArgs,
 }
 
 /// Emulated robots.
@@ -173,19 +189,19 @@ impl RobotEmulator {
         let (world, plants) = RobotWorld::new(&config)?;
         let mut actuators = Vec::with_capacity(plants.len());
         for (spec, plant) in config.actuators.iter().zip(plants) {
-            let saved = state.motors.get(&uid_key(spec.motor.effective_uid()));
-            let bitrate = config.buses[spec.bus].bitrate_bps;
-            let mut actuator =
-                Actuator::with_plant(spec.motor.clone(), saved, bitrate, Box::new(plant));
-            if saved.is_none() {
-                actuator.set_master_id(config.host_id);
-            }
+            let how = PowerOn {
+                bitrate_bps: config.buses[spec.bus].bitrate_bps,
+                host_id: config.host_id,
+                kept: &state,
+            };
+            let mut firmware = spec.actuator.power_on(Box::new(plant), &how);
             // The world steps once per tick for every joint (see `joint_plant`).
-            actuator.set_control_substeps(1);
+            firmware.set_control_substeps(1);
             actuators.push(JointActuator {
                 joint: spec.joint.clone(),
                 bus: spec.bus,
-                firmware: actuator,
+                config: spec.actuator.clone(),
+                firmware,
             });
         }
         let ports = config
@@ -205,7 +221,7 @@ impl RobotEmulator {
             joints: config
                 .actuators
                 .iter()
-                .map(|a| (a.joint.clone(), a.motor.model))
+                .map(|a| (a.joint.clone(), a.actuator.model()))
                 .collect(),
             buses: config.buses.iter().map(|b| b.name.clone()).collect(),
         });
@@ -265,15 +281,22 @@ impl RobotMonitor {
         answer.await.map_err(|_| RobotError::Stopped)
     }
 
-    /// Inject a fault into the actuator of `joint` (see [`crate::robstride::Fault`]).
-    pub async fn inject(&self, joint: &str, fault: Fault) -> Result<(), RobotError> {
-        self.ask(|reply| Request::Inject(joint.to_owned(), fault, reply))
-            .await?
+    /// Inject the fault `fault` of the actuator kind's table (with `args`, its values) into
+    /// the actuator of `joint`.
+    pub async fn inject(
+        &self,
+        joint: &str,
+        fault: &str,
+        args: FaultArgs,
+    ) -> Result<(), RobotError> {
+        let addressed = Addressed::new(joint, fault, args);
+        self.ask(|reply| Request::Inject(addressed, reply)).await?
     }
 
-    /// Remove a fault's cause; the latched bit stays until the host clears it.
-    pub async fn clear(&self, joint: &str, fault: Fault) -> Result<(), RobotError> {
-        self.ask(|reply| Request::RemoveCause(joint.to_owned(), fault, reply))
+    /// Remove a fault's cause; the latched fault stays until the host clears it.
+    pub async fn clear(&self, joint: &str, fault: &str, args: FaultArgs) -> Result<(), RobotError> {
+        let addressed = Addressed::new(joint, fault, args);
+        self.ask(|reply| Request::RemoveCause(addressed, reply))
             .await?
     }
 
@@ -316,13 +339,18 @@ impl RobotHandle {
     }
 
     /// See [`RobotMonitor::inject`].
-    pub async fn inject(&self, joint: &str, fault: Fault) -> Result<(), RobotError> {
-        self.view.inject(joint, fault).await
+    pub async fn inject(
+        &self,
+        joint: &str,
+        fault: &str,
+        args: FaultArgs,
+    ) -> Result<(), RobotError> {
+        self.view.inject(joint, fault, args).await
     }
 
     /// See [`RobotMonitor::clear`].
-    pub async fn clear(&self, joint: &str, fault: Fault) -> Result<(), RobotError> {
-        self.view.clear(joint, fault).await
+    pub async fn clear(&self, joint: &str, fault: &str, args: FaultArgs) -> Result<(), RobotError> {
+        self.view.clear(joint, fault, args).await
     }
 
     /// See [`RobotMonitor::set_temperature`].
@@ -368,10 +396,22 @@ impl Drop for RobotHandle {
     }
 }
 
+impl Addressed {
+    fn new(joint: &str, fault: &str, args: FaultArgs) -> Self {
+        Self {
+            joint: joint.to_owned(),
+            fault: fault.to_owned(),
+            args,
+        }
+    }
+}
+
 struct JointActuator {
     joint: String,
     bus: usize,
-    firmware: Actuator,
+    /// What it was configured as (where its kept state goes).
+    config: ActuatorConfig,
+    firmware: Box<dyn ActuatorFirmware>,
 }
 
 struct Port {
@@ -403,15 +443,21 @@ pub fn check_kept_ids(config: &RobotConfig, kept: &StateFile) -> Result<(), Robo
         return Ok(());
     };
     for (k, bus) in config.buses.iter().enumerate() {
-        let on_bus = config.actuators.iter().filter(|a| a.bus == k).map(|a| {
-            let name = format!(
-                "joint `{}` (motor {}:{})",
-                a.joint,
-                a.motor.can_id,
-                a.motor.model.name()
-            );
-            (name, &a.motor)
-        });
+        // Only RobStride actuators keep their IDs in the state file.
+        let on_bus = config
+            .actuators
+            .iter()
+            .filter(|a| a.bus == k)
+            .filter_map(|a| {
+                let motor = a.actuator.robstride()?;
+                let name = format!(
+                    "joint `{}` (motor {}:{})",
+                    a.joint,
+                    motor.can_id,
+                    motor.model.name()
+                );
+                Some((name, motor))
+            });
         if let Some(clash) = kept.id_clash(path, on_bus) {
             return Err(RobotError::IdClash {
                 bus: bus.name.clone(),
@@ -506,23 +552,33 @@ impl Runner {
 
     async fn serve(&mut self, request: Request) {
         match request {
-            Request::Inject(joint, fault, reply) => {
-                let result = self
-                    .actuator_mut(&joint)
-                    .map(|a| (a.bus, a.firmware.inject(fault)));
+            Request::Inject(at, reply) => {
+                let result = self.actuator_mut(&at.joint).and_then(|a| {
+                    let frames = a.firmware.inject(&at.fault, &at.args);
+                    let frames = frames.map_err(|source| RobotError::Fault {
+                        joint: at.joint.clone(),
+                        source,
+                    })?;
+                    Ok((a.bus, frames))
+                });
                 let result = match result {
-                    Ok((bus, frame)) => {
-                        self.send(bus, frame).await;
+                    Ok((bus, frames)) => {
+                        self.send(bus, frames).await;
                         Ok(())
                     }
                     Err(error) => Err(error),
                 };
                 let _ = reply.send(result);
             }
-            Request::RemoveCause(joint, fault, reply) => {
-                let result = self
-                    .actuator_mut(&joint)
-                    .map(|a| a.firmware.remove_cause(fault));
+            Request::RemoveCause(at, reply) => {
+                let result = self.actuator_mut(&at.joint).and_then(|a| {
+                    a.firmware
+                        .clear(&at.fault, &at.args)
+                        .map_err(|source| RobotError::Fault {
+                            joint: at.joint.clone(),
+                            source,
+                        })
+                });
                 let _ = reply.send(result);
             }
             Request::SetTemperature(joint, celsius, reply) => {
@@ -539,8 +595,8 @@ impl Runner {
             }
             Request::SetExternalTorque(joint, torque, reply) => {
                 let result = self.actuator_mut(&joint).and_then(|a| {
-                    let model = a.firmware.config().model;
-                    let torque = check_external_torque_nm(model, torque).map_err(|source| {
+                    let max = a.firmware.max_external_torque_nm();
+                    let torque = within("torque_nm", torque, (-max, max)).map_err(|source| {
                         RobotError::BadValue {
                             joint: joint.clone(),
                             source,
@@ -593,7 +649,7 @@ impl Runner {
                     bus: self.ports[a.bus].name.clone(),
                     position_rad: q.get(i).copied().unwrap_or(0.0),
                     velocity_rad_s: qd.get(i).copied().unwrap_or(0.0),
-                    motor: a.firmware.snapshot(),
+                    actuator: a.firmware.snapshot(),
                 }
             })
             .collect();
@@ -617,12 +673,18 @@ impl Runner {
             return Ok(());
         }
         let mut replies = Vec::new();
+        let mut turnaround = Duration::ZERO;
         for a in self.actuators.iter_mut().filter(|a| a.bus == port) {
-            replies.extend(a.firmware.handle_frame(frame));
+            let answer = a.firmware.handle_frame(frame);
+            if !answer.is_empty() {
+                turnaround = turnaround.max(a.firmware.turnaround());
+            }
+            replies.extend(answer);
         }
         self.persist_if_requested()?;
-        // Answered with the state of the latest step, after the firmware's turnaround.
-        self.send_after(port, replies, TURNAROUND).await;
+        // Answered with the state of the latest step, after the slowest answering firmware's
+        // turnaround (one batch per frame: a bus carries one reply at a time anyway).
+        self.send_after(port, replies, turnaround).await;
         Ok(())
     }
 
@@ -657,9 +719,7 @@ impl Runner {
         let mut changed = false;
         for a in &mut self.actuators {
             if a.firmware.take_persist_request() {
-                self.state
-                    .motors
-                    .insert(uid_key(a.firmware.uid()), a.firmware.persisted());
+                a.config.keep(a.firmware.as_ref(), &mut self.state);
                 changed = true;
             }
         }

@@ -133,7 +133,7 @@ impl RobotWorld {
             indices.push(index);
         }
         for (actuator, &index) in config.actuators.iter().zip(&indices) {
-            world.set_armature(index, actuator.motor.model.spec().rotor_inertia_kg_m2);
+            world.set_armature(index, actuator.actuator.model().rotor_inertia_kg_m2);
         }
         world.set_joint_positions(&q)?;
         let floating = matches!(config.base, Base::Floating { .. });

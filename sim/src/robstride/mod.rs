@@ -41,7 +41,7 @@ pub mod state_file;
 pub use faults::{build_fault, Fault, FaultParam, MotorFault, Phase};
 pub use firmware::{
     baud_code_bps, Actuator, ModeState, MotorConfig, MotorSnapshot, PersistedMotor, PlantKind,
-    ReportType, DEFAULT_HOST_ID, TURNAROUND,
+    ReportType, ACTUATOR_KIND, DEFAULT_HOST_ID, TURNAROUND,
 };
 pub use model::{Model, ModelSpec, RangeTable, Ranges};
 pub use rig::{finite_or_zero, Load, Plant, RigPlant, WorldPlant};

@@ -73,19 +73,9 @@ pub fn finite_or_zero(torque_nm: f64) -> f64 {
     }
 }
 
-/// A single-axis plant the motor drives.
-pub trait Plant: Send + Sync {
-    /// Advance by `dt_s` with the motor applying `torque_nm`.
-    fn step(&mut self, torque_nm: f64, dt_s: f64);
-    /// Shaft angle (rad), not wrapped.
-    fn position_rad(&self) -> f64;
-    /// Shaft speed (rad/s).
-    fn velocity_rad_s(&self) -> f64;
-    /// Total inertia seen by the motor (kg·m²).
-    fn inertia_kg_m2(&self) -> f64;
-    /// An external torque on the shaft (N·m), e.g. a hand pushing the load.
-    fn set_external_torque_nm(&mut self, torque_nm: f64);
-}
+/// A single-axis plant the motor drives: the actuator contract's shaft, under the name this
+/// module has always used.
+pub use crate::actuator::ShaftPlant as Plant;
 
 /// The rig integrated directly (semi-implicit Euler).
 #[derive(Debug, Clone, PartialEq)]

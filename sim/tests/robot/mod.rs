@@ -6,6 +6,8 @@ use std::time::Duration;
 
 use bus::virtual_bus::{VirtualBus, VirtualBusConfig, VirtualNode};
 use bus::{CanBus, CanFrame};
+use sim::actuator::ActuatorConfig;
+use sim::fault_args::{FaultArgValue, FaultArgs};
 use sim::physics::ArmModel;
 use sim::robot::{
     Base, BusConfig, JointActuator, RobotConfig, RobotConfigError, RobotEmulator, RobotError,
@@ -50,7 +52,7 @@ fn arm_config(start: &[(&str, f64)]) -> RobotConfig {
             .map(|(k, (joint, model, bus))| JointActuator {
                 joint: (*joint).into(),
                 bus: *bus,
-                motor: MotorConfig::new(k as u8 + 1, *model),
+                actuator: ActuatorConfig::Robstride(MotorConfig::new(k as u8 + 1, *model)),
                 direction: 1.0,
                 zero_offset_rad: 0.0,
             })
@@ -159,7 +161,12 @@ async fn holds_a_pose_against_gravity(physics: sim::physics::Solver) {
     let q: Vec<f64> = snap.joints.iter().map(|j| j.position_rad).collect();
     let gravity = model.gravity_torques(&q, [0.0, 0.0, -9.81]).unwrap();
     for (k, joint) in snap.joints.iter().enumerate() {
-        assert_eq!(joint.motor.mode, ModeState::Run, "{}", joint.joint);
+        assert_eq!(
+            joint.actuator.mode,
+            ModeState::Run.name(),
+            "{}",
+            joint.joint
+        );
         assert!(
             (joint.position_rad - targets[k]).abs() < 0.02,
             "{} at {} rad, target {}",
@@ -171,10 +178,10 @@ async fn holds_a_pose_against_gravity(physics: sim::physics::Solver) {
         // or 0.1 N·m for the nearly unloaded wrist.
         let tolerance = (0.05 * gravity[k].abs()).max(0.1);
         assert!(
-            (joint.motor.torque_nm - gravity[k]).abs() <= tolerance,
+            (joint.actuator.torque_nm - gravity[k]).abs() <= tolerance,
             "{}: motor torque {} N·m, gravity needs {} N·m",
             joint.joint,
-            joint.motor.torque_nm,
+            joint.actuator.torque_nm,
             gravity[k]
         );
     }
@@ -199,7 +206,7 @@ async fn an_unpowered_arm_topples_from_upright_and_the_shorted_windings_brake_it
     }
     let snap = rig.robot.snapshot().await.unwrap();
     let shoulder = snap.joint("shoulder_pitch").unwrap();
-    assert_eq!(shoulder.motor.mode, ModeState::Reset);
+    assert_eq!(shoulder.actuator.mode, ModeState::Reset.name());
     assert!(
         (shoulder.position_rad - 2.0).abs() < 0.01,
         "on its stop: {}",
@@ -251,9 +258,11 @@ async fn a_lost_bus_stops_its_actuators_by_their_watchdog_and_the_others_hold() 
             ModeState::Run
         };
         assert_eq!(
-            joint.motor.mode, expected,
+            joint.actuator.mode,
+            expected.name(),
             "{} on {}",
-            joint.joint, joint.bus
+            joint.joint,
+            joint.bus
         );
     }
     let shoulder = snap.joint("shoulder_pitch").unwrap();
@@ -272,7 +281,7 @@ async fn a_lost_bus_stops_its_actuators_by_their_watchdog_and_the_others_hold() 
 #[tokio::test(start_paused = true)]
 async fn configuration_mistakes_are_named() {
     let mut twice = arm_config(&[]);
-    twice.actuators[1].motor.can_id = 1;
+    twice.actuators[1].actuator = ActuatorConfig::Robstride(MotorConfig::new(1, Model::RS03));
     let nodes = || -> Vec<Arc<dyn CanBus>> {
         let bus = VirtualBus::new(VirtualBusConfig::default());
         vec![Arc::new(bus.attach("a")), Arc::new(bus.attach("b"))]
@@ -313,6 +322,39 @@ async fn configuration_mistakes_are_named() {
     );
 }
 
+#[tokio::test(start_paused = true)]
+async fn a_fault_reaches_the_joints_actuator_through_its_kinds_table() {
+    let rig = spawn(arm_config(&[]));
+    let error = rig
+        .robot
+        .inject("wrist_pitch", "melt", FaultArgs::new())
+        .await
+        .unwrap_err();
+    assert!(
+        matches!(&error, RobotError::Fault { joint, .. } if joint == "wrist_pitch"),
+        "{error:?}"
+    );
+    assert!(error.to_string().contains("melt"), "{error}");
+    let glitch = FaultArgs::new().with("counts", FaultArgValue::Number(1e6));
+    let error = rig
+        .robot
+        .inject("wrist_pitch", "encoder_glitch", glitch)
+        .await
+        .unwrap_err();
+    assert!(error.to_string().contains("counts"), "{error}");
+    rig.robot
+        .inject("wrist_pitch", "over_temperature", FaultArgs::new())
+        .await
+        .unwrap();
+    let wrist = rig.robot.snapshot().await.unwrap();
+    let wrist = &wrist.joint("wrist_pitch").unwrap().actuator;
+    assert_eq!(
+        (wrist.kind, wrist.faults.as_slice()),
+        ("robstride", ["over_temperature".to_owned()].as_slice())
+    );
+    rig.robot.shutdown().await;
+}
+
 /// The shipped humanoid (20 actuators on four buses, floating base) with `gantry`.
 fn humanoid(gantry: sim::robot::Gantry) -> RobotConfig {
     let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../robots/humanoid.yaml");
@@ -334,7 +376,7 @@ async fn a_humanoid_on_its_gantry_hangs_until_every_actuator_is_enabled() {
     let ids: Vec<(usize, u32)> = config
         .actuators
         .iter()
-        .map(|a| (a.bus, u32::from(a.motor.can_id)))
+        .map(|a| (a.bus, a.actuator.can_id()))
         .collect();
     let rig = spawn(config);
     tokio::time::sleep(Duration::from_millis(1000)).await;
@@ -390,7 +432,10 @@ async fn a_state_file_putting_two_actuators_on_one_id_is_refused_at_spawn() {
     let mut config = arm_config(&[]);
     config.state_file = Some(path.clone());
     let mut kept = sim::robstride::state_file::StateFile::default();
-    let moved = &config.actuators[0].motor;
+    let moved = config.actuators[0]
+        .actuator
+        .robstride()
+        .expect("a RobStride actuator");
     kept.motors.insert(
         sim::robstride::state_file::uid_key(moved.effective_uid()),
         sim::robstride::PersistedMotor {
@@ -440,14 +485,15 @@ async fn an_encoder_glitch_moves_the_joint_by_its_angle_while_the_actuator_reads
     tokio::time::sleep(Duration::from_secs(2)).await;
     let elbow = |snap: &sim::robot::RobotSnapshot| {
         let j = snap.joint("elbow_pitch").expect("the elbow");
-        (j.position_rad, j.motor.angle_rad)
+        (j.position_rad, j.actuator.angle_rad)
     };
     let (held, _) = elbow(&rig.robot.snapshot().await.unwrap());
     assert!((held - 0.6).abs() < 0.02, "held at {held}");
     rig.robot
         .inject(
             "elbow_pitch",
-            sim::robstride::Fault::EncoderGlitch { counts: 1024 },
+            "encoder_glitch",
+            FaultArgs::new().with("counts", FaultArgValue::Number(1024.0)),
         )
         .await
         .unwrap();
@@ -461,10 +507,7 @@ async fn an_encoder_glitch_moves_the_joint_by_its_angle_while_the_actuator_reads
     );
     assert!((reading - 0.6).abs() < 0.02, "the actuator reads {reading}");
     rig.robot
-        .clear(
-            "elbow_pitch",
-            sim::robstride::Fault::EncoderGlitch { counts: 0 },
-        )
+        .clear("elbow_pitch", "encoder_glitch", FaultArgs::new())
         .await
         .unwrap();
     tokio::time::sleep(Duration::from_secs(3)).await;

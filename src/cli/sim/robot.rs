@@ -279,9 +279,9 @@ fn summary(config: &RobotConfig, kept: &StateFile) -> String {
                 .actuators
                 .iter()
                 .filter(|a| a.bus == k)
-                .map(|a| match kept.power_on_id(&a.motor) {
-                    id if id == a.motor.can_id => id.to_string(),
-                    id => format!("{id} (was {} in the robot file)", a.motor.can_id),
+                .map(|a| match a.actuator.power_on_id(kept) {
+                    id if id == a.actuator.can_id() => id.to_string(),
+                    id => format!("{id} (was {} in the robot file)", a.actuator.can_id()),
                 })
                 .collect();
             format!("{} ids {}", b.name, ids.join(" "))
@@ -307,7 +307,7 @@ mod tests {
     /// A state file in which a host moved the first actuator of the first bus to `to`.
     fn moved_first(config: &RobotConfig, to: u8) -> StateFile {
         let mut kept = StateFile::default();
-        let motor = &config.actuators[0].motor;
+        let motor = config.actuators[0].actuator.robstride().unwrap();
         kept.motors.insert(
             uid_key(motor.effective_uid()),
             PersistedMotor {
@@ -333,7 +333,7 @@ mod tests {
             .find(|a| a.bus == first.bus && a.joint != first.joint)
             .unwrap()
             .clone();
-        let kept = moved_first(&config, second.motor.can_id);
+        let kept = moved_first(&config, second.actuator.can_id() as u8);
         let error = format!(
             "{:#}",
             sim::robot::check_kept_ids(&config, &kept).unwrap_err()
@@ -343,7 +343,7 @@ mod tests {
             format!("bus `{bus}`"),
             format!("joint `{}`", first.joint),
             format!("joint `{}`", second.joint),
-            format!("CAN ID {}", second.motor.can_id),
+            format!("CAN ID {}", second.actuator.can_id()),
             "arm.json".to_owned(),
         ] {
             assert!(error.contains(&part), "{part:?} missing from: {error}");
@@ -355,7 +355,7 @@ mod tests {
         assert!(
             text.contains(&format!(
                 "{bus} ids 100 (was {} in the robot file) ",
-                first.motor.can_id
+                first.actuator.can_id()
             )),
             "{text}"
         );

@@ -95,7 +95,7 @@ impl GroupEmulator {
                 .await
                 .map_err(|e| e.to_string()),
             Self::Robot(r) => r
-                .inject(&actuator.joint, fault)
+                .inject(&actuator.joint, fault.name(), fault.value_args())
                 .await
                 .map_err(|e| e.to_string()),
         }
@@ -108,7 +108,7 @@ impl GroupEmulator {
                 .await
                 .map_err(|e| e.to_string()),
             Self::Robot(r) => r
-                .clear(&actuator.joint, fault)
+                .clear(&actuator.joint, fault.name(), fault.value_args())
                 .await
                 .map_err(|e| e.to_string()),
         }

@@ -117,17 +117,27 @@ fn robot_settings(
             ));
         }
     }
-    let actuators = config
-        .actuators
-        .iter()
-        .map(|a| GroupActuator {
+    // The group's driver speaks RobStride's protocols; an actuator of another kind is named.
+    let mut actuators = Vec::with_capacity(config.actuators.len());
+    for a in &config.actuators {
+        let Some(motor) = a.actuator.robstride() else {
+            let model = a.actuator.model();
+            return Err(ctx.err(
+                pos(file),
+                format!(
+                    "robot file `{}`: joint `{}` is driven by a {} {}; a scenario's group drives RobStride actuators only",
+                    file.value, a.joint, model.kind, model.name
+                ),
+            ));
+        };
+        actuators.push(GroupActuator {
             joint: a.joint.clone(),
-            can_id: a.motor.can_id,
-            model: a.motor.model,
+            can_id: motor.can_id,
+            model: motor.model,
             load: Load::None,
             bus: a.bus,
-        })
-        .collect();
+        });
+    }
     Ok(GroupSettings {
         actuators,
         buses: config.buses.iter().map(|b| b.name.clone()).collect(),

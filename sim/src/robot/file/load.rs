@@ -5,11 +5,12 @@ use std::path::{Path, PathBuf};
 
 use super::error::{FileError, Position as Pos};
 use super::raw::{RawRobot, RawSelfCollision, S};
+use crate::actuator::{self, ConfigureError};
 use crate::bounded_read::read_text_file;
 use crate::description::{Description, DescriptionError, MissingMeshes, PackagePaths};
 use crate::physics::{read_urdf, ArmModel, JointKind, Solver, WorldConfig};
 use crate::robot::{Base, BusConfig, Gantry, JointActuator, RobotConfig};
-use crate::robstride::{baud_code_bps, Model, MotorConfig, DEFAULT_HOST_ID};
+use crate::robstride::{baud_code_bps, DEFAULT_HOST_ID};
 use crate::yaml_words::suggestion;
 
 fn pos<T>(value: &S<T>) -> Pos {
@@ -158,7 +159,7 @@ impl Checker<'_> {
                 return Err(self.err(
                     pos(&a.joint),
                     format!(
-                        "joint `{}` is prismatic; a RobStride actuator turns",
+                        "joint `{}` is prismatic; the actuators a robot file names turn",
                         info.name
                     ),
                 ));
@@ -177,19 +178,30 @@ impl Checker<'_> {
                     pos(&a.joint),
                     format!(
                         "joint `{}` already has an actuator (id {})",
-                        other.joint, other.motor.can_id
+                        other.joint,
+                        other.actuator.can_id()
                     ),
                 ));
             }
-            let model_name =
-                Model::named(&a.model.value).map_err(|e| self.err(pos(&a.model), e))?;
-            if !(1..=0x7F).contains(&a.id.value) {
-                return Err(self.err(
-                    pos(&a.id),
-                    format!("`id` must be 1..=127, got {}", a.id.value),
-                ));
-            }
-            let can_id = a.id.value as u8;
+            // The model names the kind (RS03: RobStride); the id is checked by that kind.
+            let can_id = u32::try_from(a.id.value).unwrap_or(u32::MAX);
+            let config = match actuator::configure(&a.model.value, can_id) {
+                Ok(config) => config,
+                Err(e @ ConfigureError::UnknownModel { .. }) => {
+                    return Err(self.err(pos(&a.model), e.to_string()))
+                }
+                Err(ConfigureError::IdOutOfRange {
+                    kind, low, high, ..
+                }) => {
+                    return Err(self.err(
+                        pos(&a.id),
+                        format!(
+                            "`id` must be {low}..={high} for a {kind} actuator, got {}",
+                            a.id.value
+                        ),
+                    ));
+                }
+            };
             let names: Vec<&str> = buses.iter().map(|b| b.name.as_str()).collect();
             let bus = names
                 .iter()
@@ -207,7 +219,7 @@ impl Checker<'_> {
                 })?;
             if let Some(other) = actuators
                 .iter()
-                .find(|o| o.bus == bus && o.motor.can_id == can_id)
+                .find(|o| o.bus == bus && o.actuator.can_id() == can_id)
             {
                 return Err(self.err(
                     pos(&a.id),
@@ -237,22 +249,21 @@ impl Checker<'_> {
                     ))
                 }
             };
-            let peak = model_name.spec().peak_torque_nm;
+            let model = config.model();
+            let peak = model.peak_torque_nm;
             if info.effort_limit.is_finite() && peak + 1e-9 < info.effort_limit {
                 warnings.push(*self.err(
                     pos(&a.model),
                     format!(
                         "{} peaks at {peak} N·m, below joint `{}`'s URDF effort of {} N·m",
-                        model_name.name(),
-                        info.name,
-                        info.effort_limit
+                        model.name, info.name, info.effort_limit
                     ),
                 ));
             }
             actuators.push(JointActuator {
                 joint: info.name.clone(),
                 bus,
-                motor: MotorConfig::new(can_id, model_name),
+                actuator: config,
                 direction,
                 zero_offset_rad,
             });

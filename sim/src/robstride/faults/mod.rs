@@ -39,6 +39,19 @@ pub enum Fault {
     },
 }
 
+/// The faults of one actuator with their values (no `motor`: a robot addresses its actuators
+/// by joint), as the actuator contract lists them.
+pub fn actuator_fault_table() -> Vec<crate::fault_desk::FaultInfo> {
+    Fault::ALL
+        .iter()
+        .map(|f| crate::fault_desk::FaultInfo {
+            name: f.name(),
+            description: f.description(),
+            params: f.value_infos(),
+        })
+        .collect()
+}
+
 /// A motor phase.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 pub enum Phase {
@@ -143,6 +156,17 @@ impl Fault {
             },
             other => other,
         })
+    }
+
+    /// Its values as arguments (`counts` of a glitch): what [`Fault::with_values`] reads back,
+    /// for a caller holding a typed fault that reaches the motor through the actuator contract.
+    pub fn value_args(self) -> FaultArgs {
+        match self {
+            Fault::EncoderGlitch { counts } => {
+                FaultArgs::new().with(GLITCH_COUNTS.name, FaultArgValue::Number(f64::from(counts)))
+            }
+            _ => FaultArgs::new(),
+        }
     }
 
     /// Its values as a front end offers them (form fields, keyword arguments).
@@ -340,7 +364,11 @@ pub enum ValueError {
     },
 }
 
-fn within(param: &'static str, value: f64, (min, max): (f64, f64)) -> Result<f64, ValueError> {
+pub(crate) fn within(
+    param: &'static str,
+    value: f64,
+    (min, max): (f64, f64),
+) -> Result<f64, ValueError> {
     if !value.is_finite() {
         Err(ValueError::NotFinite { param, value })
     } else if !(min..=max).contains(&value) {

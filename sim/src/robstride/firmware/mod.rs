@@ -13,6 +13,7 @@ use crate::robstride::rig::{Plant, RigPlant, WorldPlant};
 
 mod canopen;
 mod config;
+mod contract;
 mod frames;
 mod host;
 mod mit;
@@ -21,6 +22,7 @@ mod state;
 mod tick;
 
 pub use config::{MotorConfig, PlantKind, ReportType};
+pub use contract::KIND as ACTUATOR_KIND;
 pub use state::{ModeState, MotorSnapshot, PersistedMotor};
 
 /// Host ID the manuals use and the motor assumes until a host speaks.

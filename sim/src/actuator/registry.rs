@@ -1,0 +1,283 @@
+//! The actuator kinds a robot joint can be driven by, the model names each answers to, and
+//! the settings of one actuator a robot carries. A robot file's `model:` is looked up here
+//! ([`configure`]); adding a kind is a variant of [`ActuatorConfig`] and a line in [`KINDS`].
+
+use super::{ActuatorFirmware, ShaftPlant};
+use crate::fault_args::{FaultArgError, FaultArgs};
+use crate::fault_desk::FaultInfo;
+use crate::robstride::state_file::{uid_key, StateFile};
+use crate::robstride::Fault as RobstrideFault;
+use crate::robstride::{Actuator, Model as RobstrideModel, MotorConfig as RobstrideConfig};
+use crate::yaml_words::suggestion;
+
+/// Facts about one actuator model a robot needs before its firmware runs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ActuatorModel {
+    /// The kind's name (`robstride`).
+    pub kind: &'static str,
+    /// Its name as robot files write it (`RS03`, `DM4310`).
+    pub name: &'static str,
+    /// Peak torque (N·m): a robot file warns when below its joint's URDF effort.
+    pub peak_torque_nm: f64,
+    /// Rotor inertia reflected to the output (kg·m²): the joint's armature.
+    pub rotor_inertia_kg_m2: f64,
+}
+
+/// An actuator kind: its name, its models, the CAN identifiers a robot file may give it.
+#[derive(Debug)]
+pub struct ActuatorKind {
+    /// The kind's name (`robstride`).
+    pub name: &'static str,
+    /// Every model it answers to, as robot files write them.
+    pub model_names: fn() -> Vec<&'static str>,
+    /// The identifiers a robot file may give (both ends included).
+    pub ids: (u32, u32),
+    /// The settings of a `model` (a name [`Self::model_names`] lists, any case) on `can_id`;
+    /// `None` when the kind has no such model.
+    pub configure: fn(model: &str, can_id: u32) -> Option<ActuatorConfig>,
+    /// Its fault table (what [`super::ActuatorFirmware::fault_table`] of any of its
+    /// actuators says), for a front end to offer before a robot runs.
+    pub faults: fn() -> Vec<FaultInfo>,
+    /// The fault `name` with `args` (its values only) checked as its firmware will take it,
+    /// and how a front end shows it applied (`encoder_glitch 100 counts`); `clearing`: its
+    /// values may be left out (clearing removes the cause whatever its size).
+    pub fault_label:
+        fn(name: &str, args: &FaultArgs, clearing: bool) -> Result<String, FaultArgError>,
+}
+
+impl ActuatorKind {
+    /// Whether its table has a fault `name`.
+    pub fn has_fault(&self, name: &str) -> bool {
+        (self.faults)().iter().any(|f| f.name == name)
+    }
+}
+
+/// The kind named `name`.
+pub fn kind_named(name: &str) -> Option<&'static ActuatorKind> {
+    KINDS.iter().copied().find(|k| k.name == name)
+}
+
+/// Every actuator kind, in the order a model name is looked up.
+pub static KINDS: &[&ActuatorKind] = &[&ROBSTRIDE];
+
+/// RobStride's quasi-direct-drive actuators (private protocol, MIT and CANopen variants).
+pub static ROBSTRIDE: ActuatorKind = ActuatorKind {
+    name: crate::robstride::ACTUATOR_KIND,
+    model_names: || RobstrideModel::ALL.iter().map(|m| m.name()).collect(),
+    ids: (1, 0x7F),
+    configure: |model, can_id| {
+        let model = RobstrideModel::from_name(model)?;
+        let can_id = u8::try_from(can_id).unwrap_or(u8::MAX);
+        Some(ActuatorConfig::Robstride(RobstrideConfig::new(
+            can_id, model,
+        )))
+    },
+    faults: crate::robstride::faults::actuator_fault_table,
+    fault_label: |name, args, clearing| {
+        let fault = RobstrideFault::named(name)?;
+        let names: Vec<&str> = fault.values().iter().map(|p| p.name).collect();
+        args.only(name, &names)?;
+        Ok(if clearing {
+            fault.name().to_owned()
+        } else {
+            fault.with_values(args)?.label()
+        })
+    },
+};
+
+/// Why a robot file's actuator has no settings.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ConfigureError {
+    /// No kind makes a model of this name.
+    #[error("no actuator model `{model}` (known: {}){suggestion}", known.join(", "))]
+    UnknownModel {
+        /// The name given.
+        model: String,
+        /// Every model of every kind.
+        known: Vec<&'static str>,
+        /// `; did you mean …?` with the nearest name, or nothing.
+        suggestion: String,
+    },
+    /// The model's kind takes no such identifier.
+    #[error("a {kind} actuator's id must be {low}..={high}, got {can_id}")]
+    IdOutOfRange {
+        /// The kind.
+        kind: &'static str,
+        /// The identifier given.
+        can_id: u32,
+        /// The lowest it takes.
+        low: u32,
+        /// The highest.
+        high: u32,
+    },
+}
+
+/// The settings of `model` on `can_id`, from whichever kind makes it.
+pub fn configure(model: &str, can_id: u32) -> Result<ActuatorConfig, ConfigureError> {
+    for kind in KINDS {
+        if let Some(config) = (kind.configure)(model, can_id) {
+            let (low, high) = kind.ids;
+            if !(low..=high).contains(&can_id) {
+                return Err(ConfigureError::IdOutOfRange {
+                    kind: kind.name,
+                    can_id,
+                    low,
+                    high,
+                });
+            }
+            return Ok(config);
+        }
+    }
+    let known: Vec<&str> = KINDS.iter().flat_map(|k| (k.model_names)()).collect();
+    Err(ConfigureError::UnknownModel {
+        model: model.to_owned(),
+        suggestion: suggestion(model, &known),
+        known,
+    })
+}
+
+/// How a robot powers an actuator on.
+pub struct PowerOn<'a> {
+    /// Bit rate of its bus (bit/s).
+    pub bitrate_bps: u32,
+    /// The host identifier replies go to at first power-on, where the kind has one.
+    pub host_id: u8,
+    /// What the robot's state file kept of earlier runs.
+    pub kept: &'a StateFile,
+}
+
+/// The firmware settings of one actuator a robot carries: one variant per kind of [`KINDS`].
+#[derive(Debug, Clone, PartialEq)]
+pub enum ActuatorConfig {
+    /// A RobStride actuator (its `load` and rig fields are unused: the robot is the load).
+    Robstride(RobstrideConfig),
+}
+
+impl ActuatorConfig {
+    /// Its kind.
+    pub fn kind(&self) -> &'static ActuatorKind {
+        match self {
+            Self::Robstride(_) => &ROBSTRIDE,
+        }
+    }
+
+    /// The CAN identifier at first power-on (a state file may hold a newer one).
+    pub fn can_id(&self) -> u32 {
+        match self {
+            Self::Robstride(m) => u32::from(m.can_id),
+        }
+    }
+
+    /// The model's facts.
+    pub fn model(&self) -> ActuatorModel {
+        match self {
+            Self::Robstride(m) => {
+                let spec = m.model.spec();
+                ActuatorModel {
+                    kind: ROBSTRIDE.name,
+                    name: m.model.name(),
+                    peak_torque_nm: spec.peak_torque_nm,
+                    rotor_inertia_kg_m2: spec.rotor_inertia_kg_m2,
+                }
+            }
+        }
+    }
+
+    /// The RobStride settings, when it is one.
+    pub fn robstride(&self) -> Option<&RobstrideConfig> {
+        match self {
+            Self::Robstride(m) => Some(m),
+        }
+    }
+
+    /// The CAN identifier it answers on at power-on, after what the state file kept.
+    pub fn power_on_id(&self, kept: &StateFile) -> u32 {
+        match self {
+            Self::Robstride(m) => u32::from(kept.power_on_id(m)),
+        }
+    }
+
+    /// Its firmware, powered on driving `plant`.
+    pub fn power_on(
+        &self,
+        plant: Box<dyn ShaftPlant>,
+        how: &PowerOn<'_>,
+    ) -> Box<dyn ActuatorFirmware> {
+        match self {
+            Self::Robstride(m) => {
+                let saved = how.kept.motors.get(&uid_key(m.effective_uid()));
+                let mut actuator = Actuator::with_plant(m.clone(), saved, how.bitrate_bps, plant);
+                if saved.is_none() {
+                    actuator.set_master_id(how.host_id);
+                }
+                Box::new(actuator)
+            }
+        }
+    }
+
+    /// Keeps what `firmware` (this actuator's) asked to save in `state`.
+    pub fn keep(&self, firmware: &dyn ActuatorFirmware, state: &mut StateFile) {
+        match self {
+            Self::Robstride(m) => {
+                if let Ok(saved) = serde_json::from_value(firmware.persisted()) {
+                    state.motors.insert(uid_key(m.effective_uid()), saved);
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_model_name_finds_its_kind_in_any_case() {
+        let config = configure("rs03", 5).expect("RS03 is RobStride's");
+        assert_eq!(config.kind().name, "robstride");
+        assert_eq!(config.can_id(), 5);
+        let model = config.model();
+        assert_eq!((model.kind, model.name), ("robstride", "RS03"));
+        assert!(model.peak_torque_nm > 10.0 && model.rotor_inertia_kg_m2 > 0.0);
+    }
+
+    #[test]
+    fn an_unknown_model_lists_every_kinds_models_with_the_nearest() {
+        let error = configure("RS3", 1).unwrap_err().to_string();
+        assert!(
+            error.starts_with("no actuator model `RS3` (known: RS00"),
+            "{error}"
+        );
+        assert!(error.contains("did you mean"), "{error}");
+    }
+
+    #[test]
+    fn an_id_is_checked_by_the_models_kind() {
+        assert_eq!(
+            configure("RS03", 128),
+            Err(ConfigureError::IdOutOfRange {
+                kind: "robstride",
+                can_id: 128,
+                low: 1,
+                high: 0x7F
+            })
+        );
+        assert!(configure("RS03", 0).is_err());
+    }
+
+    #[test]
+    fn a_kinds_fault_labels_check_values_as_its_firmware_does() {
+        let glitch =
+            FaultArgs::new().with("counts", crate::fault_args::FaultArgValue::Number(100.0));
+        assert_eq!(
+            (ROBSTRIDE.fault_label)("encoder_glitch", &glitch, false).as_deref(),
+            Ok("encoder_glitch 100 counts")
+        );
+        let huge = FaultArgs::new().with("counts", crate::fault_args::FaultArgValue::Number(1e6));
+        assert!((ROBSTRIDE.fault_label)("encoder_glitch", &huge, false).is_err());
+        // Clearing takes the fault whatever its size.
+        assert!((ROBSTRIDE.fault_label)("encoder_glitch", &FaultArgs::new(), true).is_ok());
+        assert!((ROBSTRIDE.fault_label)("melt", &FaultArgs::new(), false).is_err());
+        assert!(ROBSTRIDE.has_fault("gate_driver") && !ROBSTRIDE.has_fault("melt"));
+    }
+}
