@@ -5,6 +5,7 @@
 //!   Python), for each emulator's one fault builder.
 //! - [`fault_desk`]: the contract a front end (web view, Python) reaches a running emulator's
 //!   faults through, and the desk that builds, applies and remembers them.
+//! - [`damiao`]: Damiao (DM) joint motors, the OpenArm's actuators (CAN, 11-bit IDs).
 //! - [`cpu_budget`]: how much a late real-time wake-up may catch up, bounded by CPU.
 //! - [`kinematics`]: modified-DH kinematics (one row type, frames, Jacobian) for every arm.
 //! - [`pacer`]: an emulator clock task's wake-ups, on absolute deadlines in real time.
@@ -24,6 +25,7 @@ pub mod actuator;
 pub mod bounded_read;
 pub mod can_runner;
 pub mod cpu_budget;
+pub mod damiao;
 pub mod description;
 pub mod fault_args;
 pub mod fault_desk;

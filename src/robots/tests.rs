@@ -36,6 +36,41 @@ start_rad:
   - {joint: shoulder_pitch, rad: 0.5}
 ";
 
+#[test]
+fn a_robot_file_mixes_kinds_and_the_openarm_is_sixteen_damiao_motors() {
+    let mixed = ARM.replace(
+        "model: RS02, id: 1, bus: can1",
+        "model: dm4340, id: 1, bus: can1",
+    );
+    let (_dir, file) = write(&mixed);
+    let robot = load_robot_file(&file).unwrap();
+    let kinds: Vec<&str> = robot
+        .config
+        .actuators
+        .iter()
+        .map(|a| a.actuator.kind().name)
+        .collect();
+    assert_eq!(kinds, ["robstride", "robstride", "robstride", "damiao"]);
+    assert_eq!(robot.config.actuators[3].actuator.model().name, "DM4340");
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("robots/openarm.yaml");
+    let openarm = load_robot_file(&file).unwrap();
+    let models: Vec<&str> = openarm.config.actuators[..8]
+        .iter()
+        .map(|a| a.actuator.model().name)
+        .collect();
+    assert_eq!(
+        models,
+        ["DM8009", "DM8009", "DM4340", "DM4340", "DM4310", "DM4310", "DM4310", "DM4310"]
+    );
+    assert_eq!(openarm.config.actuators.len(), 16);
+    assert!(openarm
+        .config
+        .actuators
+        .iter()
+        .all(|a| a.actuator.kind().name == "damiao"));
+    assert!(openarm.warnings.is_empty(), "{:?}", openarm.warnings);
+}
+
 fn error_of(text: &str) -> String {
     let (_dir, file) = write(text);
     error_of_file(&file)
@@ -113,13 +148,25 @@ fn each_mistake_is_named_at_its_line_and_column() {
         ),
         (
             ARM.replace("bitrate: 500000", "bitrate: 400000"),
-            "5:27: `bitrate` 400000 is not one a RobStride actuator runs at",
+            "5:27: `bitrate` 400000 is not one an actuator runs at (1000000, 500000, 250000, 200000, 125000)",
         ),
         (
             ARM.replace("robot: arm", "robot: arm\nbase: floating"),
             "2:7: a floating base needs `start_height_m`",
         ),
         (ARM.replace("buses:", "busses:"), "did you mean `buses`?"),
+        // A Damiao motor beside RobStride actuators: its kind's ids and bus rates.
+        (
+            ARM.replace(
+                "model: RS02, id: 1, bus: can1",
+                "model: DM4310, id: 1279, bus: can1",
+            ),
+            "10:45: `id` must be 1..=1278 for a damiao actuator, got 1279",
+        ),
+        (
+            ARM.replace("bitrate: 500000", "bitrate: 200000"),
+            "10:51: bus `can1` runs at 200000 bit/s; a robstride actuator runs at",
+        ),
     ];
     for (text, expected) in cases {
         let error = error_of(&text);

@@ -18,6 +18,7 @@ mod decode_cli;
 mod deps;
 mod fuzz_regressions;
 mod long_run;
+mod openarm;
 mod piper_flow;
 mod realman_flow;
 mod robot_flow;

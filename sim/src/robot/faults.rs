@@ -63,18 +63,19 @@ pub struct RobotLayout {
 impl RobotLayout {
     /// The fault tables of the actuator kinds the robot carries, each once, in joint order.
     fn actuator_faults(&self) -> Vec<FaultInfo> {
-        let mut kinds: Vec<&str> = Vec::new();
+        let mut models: Vec<&str> = Vec::new();
         let mut table: Vec<FaultInfo> = Vec::new();
         for (_, model) in &self.joints {
-            if kinds.contains(&model.kind) {
+            if models.contains(&model.name) {
                 continue;
             }
-            kinds.push(model.kind);
+            models.push(model.name);
             let Some(kind) = kind_named(model.kind) else {
                 continue;
             };
-            // Two kinds may name one fault alike (under_voltage): listed once.
-            for fault in (kind.faults)() {
+            // Two kinds may name one fault alike (under_voltage): listed once, as the first
+            // joint's actuator takes it.
+            for fault in (kind.faults)(model.name) {
                 if !table.iter().any(|f| f.name == fault.name) {
                     table.push(fault);
                 }
@@ -188,7 +189,7 @@ impl RobotLayout {
                 // Every other name is an actuator kind's, with its values (which clearing
                 // may leave out), checked by the kind of the joint's actuator.
                 let (joint, model) = self.joint(name, args)?;
-                let kind = kind_named(model.kind).filter(|k| k.has_fault(fault));
+                let kind = kind_named(model.kind).filter(|k| k.has_fault(model.name, fault));
                 let Some(kind) = kind else {
                     return Err(FaultArgError::at(
                         "joint",
@@ -204,7 +205,7 @@ impl RobotLayout {
                 for (arg, value) in args.iter().filter(|(arg, _)| *arg != "joint") {
                     values.push(arg, value.clone());
                 }
-                let label = (kind.fault_label)(fault, &values, clearing)?;
+                let label = (kind.fault_label)(model.name, fault, &values, clearing)?;
                 Ok(RobotFault::Actuator {
                     joint,
                     fault,

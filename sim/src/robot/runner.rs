@@ -190,6 +190,7 @@ impl RobotEmulator {
         let mut actuators = Vec::with_capacity(plants.len());
         for (spec, plant) in config.actuators.iter().zip(plants) {
             let how = PowerOn {
+                bus: &config.buses[spec.bus].name,
                 bitrate_bps: config.buses[spec.bus].bitrate_bps,
                 host_id: config.host_id,
                 kept: &state,
@@ -719,7 +720,8 @@ impl Runner {
         let mut changed = false;
         for a in &mut self.actuators {
             if a.firmware.take_persist_request() {
-                a.config.keep(a.firmware.as_ref(), &mut self.state);
+                let bus = &self.ports[a.bus].name;
+                a.config.keep(bus, a.firmware.as_ref(), &mut self.state);
                 changed = true;
             }
         }

@@ -25,6 +25,9 @@ pub const STATE_FILE_KIND: &str = "robstride";
 pub struct StateFile {
     /// Per-motor state by UID (16 hex digits).
     pub motors: BTreeMap<String, PersistedMotor>,
+    /// A robot's actuators of other kinds, each kind's own JSON by its key
+    /// (`damiao:can0:1`): a robot keeps every actuator's flash in one file.
+    pub actuators: BTreeMap<String, serde_json::Value>,
 }
 
 /// The layout on disk: the header, then the motors.
@@ -34,6 +37,8 @@ struct Document {
     kind: String,
     format: u32,
     motors: BTreeMap<String, PersistedMotor>,
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    actuators: BTreeMap<String, serde_json::Value>,
 }
 
 /// UID as the file's key.
@@ -49,6 +54,7 @@ impl StateFile {
         };
         let file = Self {
             motors: document.motors,
+            actuators: document.actuators,
         };
         file.validate()
             .map_err(|invalid| StateFileError::invalid(path, invalid))?;
@@ -126,6 +132,7 @@ impl StateFile {
                 kind: STATE_FILE_KIND.to_owned(),
                 format: state_file::FORMAT,
                 motors: self.motors.clone(),
+                actuators: self.actuators.clone(),
             },
         )
     }

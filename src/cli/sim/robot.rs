@@ -279,7 +279,7 @@ fn summary(config: &RobotConfig, kept: &StateFile) -> String {
                 .actuators
                 .iter()
                 .filter(|a| a.bus == k)
-                .map(|a| match a.actuator.power_on_id(kept) {
+                .map(|a| match a.actuator.power_on_id(&b.name, kept) {
                     id if id == a.actuator.can_id() => id.to_string(),
                     id => format!("{id} (was {} in the robot file)", a.actuator.can_id()),
                 })

@@ -10,7 +10,7 @@ use crate::bounded_read::read_text_file;
 use crate::description::{Description, DescriptionError, MissingMeshes, PackagePaths};
 use crate::physics::{read_urdf, ArmModel, JointKind, Solver, WorldConfig};
 use crate::robot::{Base, BusConfig, Gantry, JointActuator, RobotConfig};
-use crate::robstride::{baud_code_bps, DEFAULT_HOST_ID};
+use crate::robstride::DEFAULT_HOST_ID;
 use crate::yaml_words::suggestion;
 
 fn pos<T>(value: &S<T>) -> Pos {
@@ -249,6 +249,20 @@ impl Checker<'_> {
                     ))
                 }
             };
+            let kind = config.kind();
+            let bitrate = buses[bus].bitrate_bps;
+            if !kind.bitrates_bps.contains(&bitrate) {
+                let rates: Vec<String> = kind.bitrates_bps.iter().map(u32::to_string).collect();
+                return Err(self.err(
+                    pos(&a.bus),
+                    format!(
+                        "bus `{}` runs at {bitrate} bit/s; a {} actuator runs at {}",
+                        names[bus],
+                        kind.name,
+                        rates.join(", ")
+                    ),
+                ));
+            }
             let model = config.model();
             let peak = model.peak_torque_nm;
             if info.effort_limit.is_finite() && peak + 1e-9 < info.effort_limit {
@@ -555,7 +569,13 @@ impl Checker<'_> {
             if buses.iter().any(|o| &o.name == name) {
                 return Err(self.err(pos(&b.name), format!("bus `{name}` is listed twice")));
             }
-            let bitrates: Vec<u32> = (1..=4).filter_map(baud_code_bps).collect();
+            // Any rate an actuator kind runs at; each actuator is checked against its bus's.
+            let mut bitrates: Vec<u32> = actuator::KINDS
+                .iter()
+                .flat_map(|k| k.bitrates_bps.iter().copied())
+                .collect();
+            bitrates.sort_unstable_by(|a, b| b.cmp(a));
+            bitrates.dedup();
             let bitrate_bps = match &b.bitrate {
                 None => 1_000_000,
                 Some(r) => match u32::try_from(r.value).ok().filter(|v| bitrates.contains(v)) {
@@ -565,7 +585,7 @@ impl Checker<'_> {
                         return Err(self.err(
                             pos(r),
                             format!(
-                                "`bitrate` {} is not one a RobStride actuator runs at ({})",
+                                "`bitrate` {} is not one an actuator runs at ({})",
                                 r.value,
                                 list.join(", ")
                             ),
