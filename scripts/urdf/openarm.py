@@ -42,6 +42,12 @@ LINKS = [
     ("link7", 0.3860, (0.00007, 0.01266, 0.06952), (0.000639, 0.000497, 0.000342, 0, 0, 8.9e-5)),
 ]
 
+# Viscous damping of each joint (N·m·s/rad): the gearbox and bearings a disabled motor's
+# shaft turns against. Not published: our estimate, larger for the 9:1 and 40:1 geared
+# shoulder and elbow motors than for the wrist's, so a limp arm settles in about a second
+# instead of swinging on. Index: joint1 … joint7, then the gripper.
+DAMPING_NM_S_PER_RAD = [0.5, 0.5, 0.3, 0.3, 0.05, 0.05, 0.05, 0.02]
+
 # A primitive per link (our own, for contacts and the views): cylinder radius, length, and
 # its centre along the link's z.
 SHAPES = {
@@ -101,6 +107,7 @@ def arm(side, reflect, mount_xyz, mount_rpy):
                    f'    <origin xyz="{fmt(xyz)}" rpy="{fmt(rpy(reflect))}"/>'
                    f'<axis xyz="{fmt(axis(reflect))}"/>\n'
                    f'    <limit lower="{lower:.6f}" upper="{upper:.6f}" effort="{effort}" velocity="{velocity}"/>\n'
+                   f'    <dynamics damping="{DAMPING_NM_S_PER_RAD[k]}" friction="0"/>\n'
                    f'  </joint>\n')
     # Flange (joint8) and hand, both fixed.
     out.append(f'  <link name="{p}link8"/>\n'
@@ -125,6 +132,7 @@ def arm(side, reflect, mount_xyz, mount_rpy):
                f'    <parent link="{p}hand"/><child link="{p}gripper_drive"/>\n'
                f'    <origin xyz="0 0 0.01"/><axis xyz="0 0 1"/>\n'
                f'    <limit lower="{g_lower:.4f}" upper="{g_upper:.4f}" effort="7" velocity="20.943946"/>\n'
+               f'    <dynamics damping="{DAMPING_NM_S_PER_RAD[7]}" friction="0"/>\n'
                f'  </joint>\n')
     multiplier = -reflect * FINGER_TRAVEL_M / GRIPPER_OPEN_RAD
     for k, (y, axis_y) in enumerate([(0.0, -1), (0.012, 1)], start=1):

@@ -104,6 +104,11 @@ macro_rules! device_kinds {
                 match self { $( Self::$variant(s) => <$module::Kind as KindSpec>::parts(s), )* }
             }
 
+            /// The actuator behind each part, in `parts` order (`KindSpec::part_actuators`).
+            pub fn part_actuators(&self) -> Vec<sim::actuator::ActuatorModel> {
+                match self { $( Self::$variant(s) => <$module::Kind as KindSpec>::part_actuators(s), )* }
+            }
+
             /// The CAN buses the device sits on (`KindSpec::buses`); `at` is its entry.
             pub fn buses(&self, at: Pos) -> Vec<BusUse> {
                 match self { $( Self::$variant(s) => <$module::Kind as KindSpec>::buses(s, at), )* }

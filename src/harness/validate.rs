@@ -63,6 +63,11 @@ pub(crate) fn validate_with(
         .map(|d| (d.name.clone(), d.kind.name()))
         .collect();
     ctx.parts = bench.devices.iter().map(|d| d.kind.parts()).collect();
+    ctx.part_actuators = bench
+        .devices
+        .iter()
+        .map(|d| d.kind.part_actuators())
+        .collect();
     ctx.buses = bench.buses.iter().map(|b| b.name.clone()).collect();
     let record = record(ctx, raw.record.as_ref())?;
 

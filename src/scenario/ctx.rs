@@ -28,6 +28,8 @@ pub(crate) struct Ctx<'a> {
     /// The parts of each device a step can address by name (a group's joints), in bench
     /// order; empty for kinds without named parts.
     pub(crate) parts: Vec<Vec<String>>,
+    /// The actuator behind each part, where the parts are actuators (a group's joints).
+    pub(crate) part_actuators: Vec<Vec<sim::actuator::ActuatorModel>>,
     /// The bench's bus names, in bench order.
     pub(crate) buses: Vec<String>,
     /// Every step's `id:`, in step order.
@@ -45,6 +47,7 @@ impl<'a> Ctx<'a> {
             text,
             devices: Vec::new(),
             parts: Vec::new(),
+            part_actuators: Vec::new(),
             buses: Vec::new(),
             step_ids: Vec::new(),
             variant: None,
@@ -282,6 +285,15 @@ impl<'a> Ctx<'a> {
                 ),
             )
         })
+    }
+
+    /// The actuator behind part `part` of device `device`, when its parts are actuators.
+    pub(crate) fn part_actuator(
+        &self,
+        device: usize,
+        part: usize,
+    ) -> Option<sim::actuator::ActuatorModel> {
+        self.part_actuators.get(device)?.get(part).copied()
     }
 
     pub(crate) fn choice<T: Copy>(

@@ -1,5 +1,6 @@
-//! The group on a bench: the RobStride emulator with every actuator on one bus (in-process
-//! runs) and one RobStride driver with a motor handle per joint.
+//! The group on a bench: the RobStride emulator with every actuator on one bus, or a robot
+//! (in-process runs), and our driver of each actuator's kind with a handle per joint
+//! (`joints`).
 
 use std::sync::Arc;
 use std::time::Duration;
@@ -7,16 +8,13 @@ use std::time::Duration;
 use async_trait::async_trait;
 use bus::virtual_bus::VirtualBus;
 use bus::CanBus;
-use driver::robstride::{
-    DriverConfig, Motor, MotorMode, OpControl, RobstrideDriver, RobstrideError, RunMode,
-};
+use sim::fault_args::FaultArgs;
 use sim::robot::{RobotEmulator, RobotHandle};
-use sim::robstride::{MotorConfig, RobstrideBus, RobstrideConfig, RobstrideHandle};
+use sim::robstride::{Fault as MotorFault, RobstrideBus, RobstrideConfig, RobstrideHandle};
 use tokio::sync::Mutex;
 
-use sim::robstride::Fault as MotorFault;
-
-use super::model::{GroupAction, GroupActuator, GroupCheck, GroupFault, GroupMode, GroupSettings};
+use super::joints::{GroupJoint, JointError, Joints};
+use super::model::{GroupAction, GroupActuator, GroupCheck, GroupFault, GroupSettings};
 use crate::devices::{Action, Check, Device, DeviceError, DeviceFault, Reply, TraceColumn};
 use crate::scenario::{ErrorClass, Signal};
 
@@ -88,27 +86,37 @@ pub(crate) enum GroupEmulator {
 }
 
 impl GroupEmulator {
-    async fn inject(&self, actuator: &GroupActuator, fault: MotorFault) -> Result<(), String> {
+    async fn inject(
+        &self,
+        actuator: &GroupActuator,
+        fault: &str,
+        args: &FaultArgs,
+    ) -> Result<(), String> {
         match self {
-            Self::Rigs(e) => e
-                .inject(actuator.can_id, fault)
-                .await
-                .map_err(|e| e.to_string()),
+            Self::Rigs(e) => {
+                let (can_id, fault) = rig_fault(actuator, fault, args)?;
+                e.inject(can_id, fault).await.map_err(|e| e.to_string())
+            }
             Self::Robot(r) => r
-                .inject(&actuator.joint, fault.name(), fault.value_args())
+                .inject(&actuator.joint, fault, args.clone())
                 .await
                 .map_err(|e| e.to_string()),
         }
     }
 
-    async fn clear(&self, actuator: &GroupActuator, fault: MotorFault) -> Result<(), String> {
+    async fn clear(
+        &self,
+        actuator: &GroupActuator,
+        fault: &str,
+        args: &FaultArgs,
+    ) -> Result<(), String> {
         match self {
-            Self::Rigs(e) => e
-                .clear(actuator.can_id, fault)
-                .await
-                .map_err(|e| e.to_string()),
+            Self::Rigs(e) => {
+                let (can_id, fault) = rig_fault(actuator, fault, args)?;
+                e.clear(can_id, fault).await.map_err(|e| e.to_string())
+            }
             Self::Robot(r) => r
-                .clear(&actuator.joint, fault.name(), fault.value_args())
+                .clear(&actuator.joint, fault, args.clone())
                 .await
                 .map_err(|e| e.to_string()),
         }
@@ -120,6 +128,33 @@ impl GroupEmulator {
             Self::Robot(r) => r.shutdown().await,
         }
     }
+}
+
+/// A bench rig's motor and the RobStride fault `fault` with `args` (a rig's actuators are
+/// RobStride's; the scenario checked the fault against that table at load).
+fn rig_fault(
+    actuator: &GroupActuator,
+    fault: &str,
+    args: &FaultArgs,
+) -> Result<(u8, MotorFault), String> {
+    let motor = actuator.actuator.robstride().ok_or_else(|| {
+        format!(
+            "joint `{}`: a rig's actuator is RobStride's",
+            actuator.joint
+        )
+    })?;
+    let fault = MotorFault::named(fault)
+        .and_then(|f| f.with_values(args))
+        .map_err(|e| e.message)?;
+    Ok((motor.can_id, fault))
+}
+
+/// A `hold` command a stream repeats.
+#[derive(Debug, Clone, Copy)]
+struct Hold {
+    angle_rad: f64,
+    kp: f64,
+    kd: f64,
 }
 
 /// A robot started for an in-process run.
@@ -168,19 +203,19 @@ pub(crate) fn spawn_emulator(
     let motors = settings
         .actuators
         .iter()
-        .map(|a| MotorConfig::new(a.can_id, a.model).with_load(a.load))
+        .filter_map(|a| a.actuator.robstride().cloned())
         .collect();
     let mut config = RobstrideConfig::new(motors);
     config.bus_bitrate_bps = bitrate_bps;
     RobstrideBus::spawn(node, config).map_err(|e| e.to_string())
 }
 
-/// A group of RobStride actuators addressed by joint name.
+/// A group of actuators addressed by joint name.
 pub(crate) struct GroupDevice {
     name: String,
     settings: GroupSettings,
     /// One handle per actuator, in settings order.
-    motors: Vec<Arc<Motor>>,
+    motors: Vec<Arc<dyn GroupJoint>>,
     /// A robot's monitor (the base's position), when the group is a robot in process.
     robot: Option<sim::robot::RobotMonitor>,
     /// Each actuator's background command stream (`hold` with `every_ms`), if any.
@@ -188,8 +223,8 @@ pub(crate) struct GroupDevice {
     /// The base's roll, pitch, yaw in the last trace row (rad), which the next row's angles
     /// stay near.
     last_rpy_rad: std::sync::Mutex<Option<[f64; 3]>>,
-    /// One driver per bus; keeps the receive tasks alive while the handles are used.
-    _drivers: Vec<RobstrideDriver>,
+    /// The drivers behind the handles; keeps their receive tasks alive.
+    _joints: Joints,
     emulator: Mutex<Option<GroupEmulator>>,
 }
 
@@ -203,34 +238,8 @@ impl GroupDevice {
         emulator: Option<GroupEmulator>,
         timeout: Duration,
     ) -> Result<Self, String> {
-        let drivers: Vec<RobstrideDriver> = hosts
-            .into_iter()
-            .map(|host| {
-                RobstrideDriver::new(
-                    host,
-                    DriverConfig {
-                        timeout,
-                        ..DriverConfig::default()
-                    },
-                )
-            })
-            .collect();
-        let motors = settings
-            .actuators
-            .iter()
-            .map(|a| {
-                let model = driver::robstride::Model::parse(a.model.name()).ok_or_else(|| {
-                    format!("device `{name}`: no driver model {}", a.model.name())
-                })?;
-                let driver = drivers.get(a.bus).ok_or_else(|| {
-                    format!("device `{name}`: joint `{}`: no bus {}", a.joint, a.bus)
-                })?;
-                driver
-                    .motor(a.can_id, model)
-                    .map(Arc::new)
-                    .map_err(|e| format!("device `{name}`: joint `{}`: {e}", a.joint))
-            })
-            .collect::<Result<Vec<_>, String>>()?;
+        let joints = Joints::start(name, &settings.actuators, hosts, timeout)?;
+        let motors = joints.handles.clone();
         Ok(Self {
             name: name.to_owned(),
             settings: settings.clone(),
@@ -241,7 +250,7 @@ impl GroupDevice {
                 _ => None,
             },
             motors,
-            _drivers: drivers,
+            _joints: joints,
             emulator: Mutex::new(emulator),
         })
     }
@@ -262,15 +271,13 @@ impl GroupDevice {
     }
 
     fn angle_rad(&self, index: usize) -> Option<f64> {
-        self.motors[index]
-            .last_feedback()
-            .map(|f| f64::from(f.angle_rad))
+        self.motors[index].angle_rad()
     }
 
     /// Replace actuator `index`'s command stream by `command` sent every `period` (or by none).
     /// A failed send is not the stream's to report: the watchdog, the feedback and the
     /// scenario's checks see what a lost command did.
-    fn stream(&self, index: usize, command: Option<(OpControl, Duration)>) {
+    fn stream(&self, index: usize, command: Option<(Hold, Duration)>) {
         let mut streams = self.streams.lock().unwrap_or_else(|e| e.into_inner());
         if let Some(old) = streams[index].take() {
             old.abort();
@@ -283,7 +290,7 @@ impl GroupDevice {
                 ticks.tick().await;
                 loop {
                     ticks.tick().await;
-                    let _ = motor.op_control(command).await;
+                    let _ = motor.hold(command.angle_rad, command.kp, command.kd).await;
                 }
             }));
         }
@@ -304,8 +311,8 @@ impl GroupDevice {
     /// configuration order) names its joint.
     async fn on_every_motor<'a, F, Fut>(&'a self, each: F) -> Result<(), DeviceError>
     where
-        F: Fn(&'a Motor) -> Fut,
-        Fut: std::future::Future<Output = Result<(), RobstrideError>>,
+        F: Fn(&'a dyn GroupJoint) -> Fut,
+        Fut: std::future::Future<Output = Result<(), JointError>>,
     {
         use futures::StreamExt;
         let each = &each;
@@ -322,6 +329,7 @@ impl GroupDevice {
                         failed.extend(done);
                     }
                 }
+                let motor: &dyn GroupJoint = motor.as_ref();
                 pending.push(async move { each(motor).await.err().map(|e| (index, e)) });
             }
             while let Some(done) = pending.next().await {
@@ -340,16 +348,11 @@ impl GroupDevice {
         }
     }
 
-    fn error(&self, index: usize, e: RobstrideError) -> DeviceError {
-        let class = match e {
-            RobstrideError::Timeout { .. } => ErrorClass::Timeout,
-            RobstrideError::Bus(_) | RobstrideError::Closed => ErrorClass::Bus,
-            RobstrideError::EnableRefused { .. } | RobstrideError::ParamRefused { .. } => {
-                ErrorClass::Rejected
-            }
-            _ => ErrorClass::InvalidArgument,
-        };
-        DeviceError::new(class, format!("joint `{}`: {e}", self.joint(index)))
+    fn error(&self, index: usize, e: JointError) -> DeviceError {
+        DeviceError::new(
+            e.class,
+            format!("joint `{}`: {}", self.joint(index), e.message),
+        )
     }
 
     fn check(&self, check: &GroupCheck) -> Result<(), (String, String)> {
@@ -394,11 +397,7 @@ impl GroupDevice {
             GroupCheck::EnabledJoints(want) => {
                 // In the file's order, whatever order the check lists them in.
                 let enabled: Vec<&str> = (0..self.motors.len())
-                    .filter(|i| {
-                        self.motors[*i]
-                            .last_feedback()
-                            .is_some_and(|f| f.mode == MotorMode::Run)
-                    })
+                    .filter(|i| self.motors[*i].is_enabled())
                     .map(|i| self.joint(i))
                     .collect();
                 let holds = enabled.len() == want.len()
@@ -454,26 +453,16 @@ impl Device for GroupDevice {
         match action {
             GroupAction::Enable => {
                 self.stop_streams();
-                self.on_every_motor(|m| async move {
-                    m.enable().await?;
-                    // The driver's view follows each motor between commands.
-                    m.set_active_reporting(true).await
-                })
-                .await?
+                self.on_every_motor(|m| m.enable()).await?
             }
             GroupAction::Disable => {
                 self.stop_streams();
-                self.on_every_motor(|m| async move { m.disable(false).await.map(|_| ()) })
-                    .await?
+                self.on_every_motor(|m| m.disable()).await?
             }
             GroupAction::Mode(mode) => {
                 self.stop_streams();
-                let mode = match mode {
-                    GroupMode::Mit => RunMode::OperationControl,
-                    GroupMode::Csp => RunMode::CyclicPosition,
-                };
-                self.on_every_motor(|m| async move { m.switch_mode(mode).await.map(|_| ()) })
-                    .await?
+                let mode = *mode;
+                self.on_every_motor(|m| m.switch_mode(mode)).await?
             }
             GroupAction::Move {
                 targets,
@@ -482,7 +471,7 @@ impl Device for GroupDevice {
                 for target in targets {
                     self.stream(target.actuator, None);
                     self.motors[target.actuator]
-                        .set_position(target.angle_rad as f32, *speed_rad_s as f32)
+                        .move_to(target.angle_rad, *speed_rad_s)
                         .await
                         .map_err(|e| self.error(target.actuator, e))?;
                 }
@@ -510,8 +499,7 @@ impl Device for GroupDevice {
             }
             GroupAction::Watchdog { window } => {
                 let window = *window;
-                self.on_every_motor(|m| async move { m.set_can_timeout(window).await.map(|_| ()) })
-                    .await?
+                self.on_every_motor(|m| m.watchdog(window)).await?
             }
             GroupAction::Hold {
                 targets,
@@ -520,16 +508,14 @@ impl Device for GroupDevice {
                 every,
             } => {
                 for target in targets {
-                    let command = OpControl {
-                        angle_rad: target.angle_rad as f32,
-                        speed_rad_s: 0.0,
-                        kp: *kp as f32,
-                        kd: *kd as f32,
-                        torque_nm: 0.0,
+                    let command = Hold {
+                        angle_rad: target.angle_rad,
+                        kp: *kp,
+                        kd: *kd,
                     };
                     self.stream(target.actuator, None);
                     self.motors[target.actuator]
-                        .op_control(command)
+                        .hold(command.angle_rad, command.kp, command.kd)
                         .await
                         .map_err(|e| self.error(target.actuator, e))?;
                     self.stream(target.actuator, every.map(|period| (command, period)));
@@ -602,7 +588,7 @@ impl Device for GroupDevice {
         let actuator = &self.settings.actuators[f.actuator];
         match self.emulator.lock().await.as_ref() {
             Some(emulator) => emulator
-                .inject(actuator, f.fault)
+                .inject(actuator, &f.fault, &f.args)
                 .await
                 .map_err(DeviceError::unsupported),
             None => Err(DeviceError::unsupported(
@@ -618,21 +604,31 @@ impl Device for GroupDevice {
                 "faults need the in-process emulator",
             ));
         };
-        let faults: Vec<(&GroupActuator, MotorFault)> = match fault {
+        let faults: Vec<(&GroupActuator, String, FaultArgs)> = match fault {
             Some(fault) => {
                 let f = self.group_fault(fault)?;
-                vec![(&self.settings.actuators[f.actuator], f.fault)]
+                vec![(
+                    &self.settings.actuators[f.actuator],
+                    f.fault.clone(),
+                    f.args.clone(),
+                )]
             }
+            // Every fault of every actuator's own table.
             None => self
                 .settings
                 .actuators
                 .iter()
-                .flat_map(|a| MotorFault::ALL.map(|f| (a, f)))
+                .flat_map(|a| {
+                    let model = a.actuator.model();
+                    (a.actuator.kind().faults)(model.name)
+                        .into_iter()
+                        .map(move |f| (a, f.name.to_owned(), FaultArgs::new()))
+                })
                 .collect(),
         };
-        for (actuator, fault) in faults {
+        for (actuator, fault, args) in faults {
             emulator
-                .clear(actuator, fault)
+                .clear(actuator, &fault, &args)
                 .await
                 .map_err(DeviceError::unsupported)?;
         }

@@ -4,6 +4,7 @@
 //! one registration line.
 
 mod device;
+mod joints;
 pub mod model;
 pub(crate) mod raw;
 pub(crate) mod validate;
@@ -83,7 +84,7 @@ impl KindSpec for Kind {
     }
 
     fn describe_fault(fault: &Fault) -> String {
-        format!("{} on joint {}", fault.fault.label(), fault.joint)
+        format!("{} on joint {}", fault.label, fault.joint)
     }
 
     fn action_needs_emulator(_action: &Action) -> Option<String> {
@@ -134,6 +135,14 @@ impl KindSpec for Kind {
         settings.actuators.iter().map(|a| a.joint.clone()).collect()
     }
 
+    fn part_actuators(settings: &Settings) -> Vec<sim::actuator::ActuatorModel> {
+        settings
+            .actuators
+            .iter()
+            .map(|a| a.actuator.model())
+            .collect()
+    }
+
     fn buses(settings: &Settings, at: Pos) -> Vec<BusUse> {
         match &settings.robot {
             // A robot's buses are its file's, at their bit rates.
@@ -180,12 +189,13 @@ impl KindSpec for Kind {
     fn frame_decoder(settings: &Settings, buses: &[String]) -> Option<Arc<dyn FrameDecoder>> {
         // Its actuators speak RobStride's private protocol, as a RobStride bus's motors do;
         // each is known by its bus and ID (a robot's IDs repeat across its buses).
+        // (Only the RobStride ones: other kinds' frames are left undecoded here.)
         Some(Arc::new(
             super::robstride::decode::RobstrideFrames::of_motors(
-                settings
-                    .actuators
-                    .iter()
-                    .map(|a| (buses.get(a.bus).cloned(), a.can_id, a.model)),
+                settings.actuators.iter().filter_map(|a| {
+                    let motor = a.actuator.robstride()?;
+                    Some((buses.get(a.bus).cloned(), motor.can_id, motor.model))
+                }),
             ),
         ))
     }

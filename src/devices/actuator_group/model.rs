@@ -2,20 +2,18 @@
 
 use std::time::Duration;
 
+use sim::actuator::ActuatorConfig;
+use sim::fault_args::FaultArgs;
 use sim::robot::RobotConfig;
-use sim::robstride::{Fault as MotorFault, Load, Model};
 
 /// One actuator: the joint it drives and its motor.
 #[derive(Debug, Clone, PartialEq)]
 pub struct GroupActuator {
     /// The joint's name (how steps, checks, faults and trace columns address it).
     pub joint: String,
-    /// The motor's CAN ID.
-    pub can_id: u8,
-    /// The motor's model.
-    pub model: Model,
-    /// What the shaft drives (a robot's actuators drive its joints instead).
-    pub load: Load,
+    /// The actuator: its kind, model and CAN ID (and, on a bench without a robot, the
+    /// RobStride rig its shaft drives).
+    pub actuator: ActuatorConfig,
     /// Index of its bus in [`GroupSettings::buses`].
     pub bus: usize,
 }
@@ -112,15 +110,19 @@ pub enum GroupCheck {
     },
 }
 
-/// A RobStride emulator fault on one actuator.
+/// A fault of an actuator's kind (its table) on one actuator.
 #[derive(Debug, Clone, PartialEq)]
 pub struct GroupFault {
     /// The joint's name.
     pub joint: String,
     /// Index of the actuator in [`GroupSettings::actuators`].
     pub actuator: usize,
-    /// The fault.
-    pub fault: MotorFault,
+    /// The fault's name in the kind's table.
+    pub fault: String,
+    /// Its values (`counts` of an encoder glitch), checked by the kind at load.
+    pub args: FaultArgs,
+    /// How it shows applied (`encoder_glitch 100 counts`).
+    pub label: String,
 }
 
 impl GroupCheck {

@@ -57,7 +57,7 @@ fn joints_are_resolved_by_name_to_their_actuators() {
     else {
         panic!("not an actuator fault");
     };
-    assert_eq!((f.actuator, f.fault.name()), (1, "over_temperature"));
+    assert_eq!((f.actuator, f.fault.as_str()), (1, "over_temperature"));
 }
 
 #[test]

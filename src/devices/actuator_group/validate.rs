@@ -1,6 +1,8 @@
 //! Layer 2 of the `actuator_group` grammar, with file:line:col errors.
 
-use sim::robstride::{Fault as MotorFault, Load, Model};
+use sim::actuator::registry::kind_named;
+use sim::actuator::ActuatorConfig;
+use sim::robstride::{Load, Model, MotorConfig};
 
 use super::model::{
     GroupAction, GroupActuator, GroupCheck, GroupFault, GroupMode, GroupSettings, JointTarget,
@@ -55,7 +57,10 @@ pub(crate) fn settings(ctx: &Ctx<'_>, raw: &RawSettings, at: Pos) -> Res<GroupSe
             ));
         }
         let can_id = a.can_id.value as u8;
-        if let Some(other) = actuators.iter().find(|b| b.can_id == can_id) {
+        if let Some(other) = actuators
+            .iter()
+            .find(|b| b.actuator.can_id() == u32::from(can_id))
+        {
             return Err(ctx.err(
                 pos(&a.can_id),
                 format!(
@@ -74,9 +79,7 @@ pub(crate) fn settings(ctx: &Ctx<'_>, raw: &RawSettings, at: Pos) -> Res<GroupSe
         };
         actuators.push(GroupActuator {
             joint: a.joint.value.clone(),
-            can_id,
-            model,
-            load,
+            actuator: ActuatorConfig::Robstride(MotorConfig::new(can_id, model).with_load(load)),
             bus: 0,
         });
     }
@@ -117,24 +120,31 @@ fn robot_settings(
             ));
         }
     }
-    // The group's driver speaks RobStride's protocols; an actuator of another kind is named.
-    let mut actuators = Vec::with_capacity(config.actuators.len());
+    // Each joint is driven by its kind's driver, one driver per bus: a bus carrying two
+    // kinds would need a host node per kind, which a bench does not open (yet).
+    let mut actuators: Vec<GroupActuator> = Vec::with_capacity(config.actuators.len());
     for a in &config.actuators {
-        let Some(motor) = a.actuator.robstride() else {
-            let model = a.actuator.model();
+        let kind = a.actuator.kind().name;
+        if let Some(other) = actuators
+            .iter()
+            .find(|o| o.bus == a.bus && o.actuator.kind().name != kind)
+        {
             return Err(ctx.err(
                 pos(file),
                 format!(
-                    "robot file `{}`: joint `{}` is driven by a {} {}; a scenario's group drives RobStride actuators only",
-                    file.value, a.joint, model.kind, model.name
+                    "robot file `{}`: bus `{}` carries a {} actuator (joint `{}`) and a {} one (joint `{}`); a scenario's group drives one kind per bus",
+                    file.value,
+                    config.buses[a.bus].name,
+                    other.actuator.kind().name,
+                    other.joint,
+                    kind,
+                    a.joint
                 ),
             ));
-        };
+        }
         actuators.push(GroupActuator {
             joint: a.joint.clone(),
-            can_id: motor.can_id,
-            model: motor.model,
-            load: Load::None,
+            actuator: a.actuator.clone(),
             bus: a.bus,
         });
     }
@@ -359,8 +369,9 @@ pub(crate) fn checks(
     Ok(checks)
 }
 
-/// `actuator_fault: {joint, fault, …}`, built by the RobStride emulator's one fault builder:
-/// its names, its values (`counts`), its ranges and messages, each shown at its argument.
+/// `actuator_fault: {joint, fault, …}`, checked by the fault table of the joint's actuator kind
+/// (the one builder its emulator uses): its names, its values (`counts`), its ranges and
+/// messages, each shown at its argument.
 pub(crate) fn fault(
     ctx: &Ctx<'_>,
     raw: &RawFault,
@@ -381,19 +392,30 @@ pub(crate) fn fault(
     let name = f.word("fault").ok_or_else(|| {
         ctx.err(
             at,
-            "`actuator_fault` needs `fault`: one of the RobStride emulator's fault names",
+            "`actuator_fault` needs `fault`: one of the joint's actuator's fault names",
         )
     })?;
-    let kind = MotorFault::named(&name.value).map_err(|e| ctx.err(pos(&name), e.message))?;
+    let model = ctx.part_actuator(device, actuator).ok_or_else(|| {
+        ctx.err(
+            at,
+            "`actuator_fault` names a device whose parts are not actuators",
+        )
+    })?;
+    let kind = kind_named(model.kind)
+        .ok_or_else(|| ctx.err(at, format!("an actuator of no known kind `{}`", model.kind)))?;
     let values = f.args_except(&["joint", "fault"]);
-    let names: Vec<&str> = kind.values().iter().map(|p| p.name).collect();
-    let fault = values
-        .only(kind.name(), &names)
-        .and_then(|()| kind.with_values(&values))
-        .map_err(|e| f.refusal(ctx, at, e))?;
+    let label = (kind.fault_label)(model.name, &name.value, &values, false).map_err(|e| {
+        if e.arg.is_none() {
+            ctx.err(pos(&name), e.message)
+        } else {
+            f.refusal(ctx, at, e)
+        }
+    })?;
     Ok(GroupFault {
         joint: joint.value,
         actuator,
-        fault,
+        fault: name.value,
+        args: values,
+        label,
     })
 }

@@ -202,6 +202,14 @@ pub(crate) trait KindSpec: 'static {
         Vec::new()
     }
 
+    /// The actuator behind each of [`Self::parts`] (its kind and model, whose fault table a
+    /// scenario's `actuator_fault` is checked by); empty for kinds whose parts are not
+    /// actuators.
+    fn part_actuators(settings: &Self::Settings) -> Vec<sim::actuator::ActuatorModel> {
+        let _ = settings;
+        Vec::new()
+    }
+
     /// The CAN buses the device sits on: one for a CAN device (named by its `bus:` or the
     /// bench's only bus), a robot's several, none for a device that speaks no CAN.
     fn buses(settings: &Self::Settings, at: Pos) -> Vec<BusUse>;

@@ -1,0 +1,104 @@
+//! The group's hand on one actuator, whatever its kind: what a `group:` step asks of a joint
+//! (enable, hold, move, a mode, a watchdog) said in that kind's protocol by our own driver.
+//! A robot file may mix kinds; each joint gets the driver of its actuator's kind.
+
+mod damiao;
+mod robstride;
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use async_trait::async_trait;
+use bus::CanBus;
+
+use super::model::{GroupActuator, GroupMode};
+use crate::scenario::ErrorClass;
+
+pub(crate) use self::damiao::DamiaoDrivers;
+pub(crate) use self::robstride::RobstrideDrivers;
+
+/// Why a joint's command failed, classed as scenario errors are.
+#[derive(Debug)]
+pub(crate) struct JointError {
+    /// What kind of failure (a timeout, a refusal …).
+    pub class: ErrorClass,
+    /// The driver's message.
+    pub message: String,
+}
+
+/// One actuator as the group drives it.
+#[async_trait]
+pub(crate) trait GroupJoint: Send + Sync {
+    /// Enable it (it holds where it is) and have it report on its own where the kind can.
+    async fn enable(&self) -> Result<(), JointError>;
+    /// Torque off.
+    async fn disable(&self) -> Result<(), JointError>;
+    /// One MIT-style command: hold `angle_rad` with stiffness `kp` and damping `kd`.
+    async fn hold(&self, angle_rad: f64, kp: f64, kd: f64) -> Result<(), JointError>;
+    /// Go to `angle_rad` at most at `speed_rad_s` (the kind's position mode).
+    async fn move_to(&self, angle_rad: f64, speed_rad_s: f64) -> Result<(), JointError>;
+    /// Switch to the kind's mode for `hold` (MIT) or `move` (a position mode).
+    async fn switch_mode(&self, mode: GroupMode) -> Result<(), JointError>;
+    /// Arm the actuator's CAN watchdog: no command for `window` and it stops.
+    async fn watchdog(&self, window: Duration) -> Result<(), JointError>;
+    /// Its angle as it last reported it (rad), if it has.
+    fn angle_rad(&self) -> Option<f64>;
+    /// Whether its last report said it is enabled.
+    fn is_enabled(&self) -> bool;
+}
+
+/// The drivers of every kind on every bus, and a joint handle per actuator.
+pub(crate) struct Joints {
+    /// One per actuator, in settings order.
+    pub handles: Vec<Arc<dyn GroupJoint>>,
+    /// Keeps the drivers' receive tasks alive while the handles are used.
+    _drivers: (RobstrideDrivers, DamiaoDrivers),
+}
+
+impl Joints {
+    /// A handle per actuator of `actuators` on `hosts` (one per bus). A bus whose actuators
+    /// are of two kinds needs a host node per kind (each driver reads every frame of its
+    /// node): `host_for(bus, kind)` opens another when asked.
+    pub(crate) fn start(
+        device: &str,
+        actuators: &[GroupActuator],
+        hosts: Vec<Arc<dyn CanBus>>,
+        timeout: Duration,
+    ) -> Result<Self, String> {
+        let mut robstride = RobstrideDrivers::new(timeout);
+        let mut damiao = DamiaoDrivers::new(timeout);
+        let mut handles: Vec<Arc<dyn GroupJoint>> = Vec::with_capacity(actuators.len());
+        for a in actuators {
+            let host = hosts.get(a.bus).ok_or_else(|| {
+                format!("device `{device}`: joint `{}`: no bus {}", a.joint, a.bus)
+            })?;
+            let kinds_on_bus = actuators
+                .iter()
+                .filter(|b| b.bus == a.bus)
+                .map(|b| b.actuator.kind().name)
+                .collect::<std::collections::BTreeSet<_>>();
+            if kinds_on_bus.len() > 1 {
+                return Err(format!(
+                    "device `{device}`: bus {} carries actuators of {} kinds ({}); a scenario's group drives one kind per bus",
+                    a.bus,
+                    kinds_on_bus.len(),
+                    kinds_on_bus.into_iter().collect::<Vec<_>>().join(", ")
+                ));
+            }
+            let handle = match &a.actuator {
+                sim::actuator::ActuatorConfig::Robstride(m) => {
+                    robstride.joint(a.bus, host, m.can_id, m.model)
+                }
+                sim::actuator::ActuatorConfig::Damiao(m) => {
+                    damiao.joint(a.bus, host, m.esc_id, m.mst_id, m.model)
+                }
+            }
+            .map_err(|e| format!("device `{device}`: joint `{}`: {e}", a.joint))?;
+            handles.push(handle);
+        }
+        Ok(Self {
+            handles,
+            _drivers: (robstride, damiao),
+        })
+    }
+}
