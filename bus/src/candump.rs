@@ -5,10 +5,16 @@
 //! to ten digits and microseconds to six, as `candump -L` prints them; standard identifiers
 //! take three hex digits, extended ones eight; data bytes are upper-case hex pairs.
 //!
+//! CAN FD frames take can-utils' `##` form: `123##1AABBCC`, where the one hex digit after `##`
+//! is the frame's flags (BRS 1, ESI 2; the reader also accepts the FDF bit 4 newer can-utils
+//! print, and refuses 8 and above) and the data follows as for a classic frame, in one of the
+//! CAN FD lengths (0-8, 12, 16, 20, 24, 32, 48, 64 bytes; any other is refused, naming the
+//! length).
+//!
 //! The reader skips blank lines and lines starting with `#` (the project's fixture files use
 //! them for comments). It also accepts `.` between data bytes and an optional trailing `R` or
-//! `T` direction marker, as newer can-utils accept. Remote frames and CAN FD frames are
-//! reported as unsupported: the bus carries classic data frames only.
+//! `T` direction marker, as newer can-utils accept. Remote frames are reported as unsupported:
+//! the bus carries data frames only.
 
 use std::fmt::Write as _;
 use std::fs::File;
@@ -16,7 +22,7 @@ use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use crate::{CanFrame, CanId, ReceivedFrame, MAX_DATA_LEN, MAX_STANDARD_ID};
+use crate::{CanFrame, CanId, FdFlags, FrameError, ReceivedFrame, MAX_STANDARD_ID};
 
 /// One frame of a candump log.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -50,9 +56,23 @@ pub enum LineError {
     /// The data is not hex byte pairs, or longer than eight bytes.
     #[error("bad data {0:?}")]
     BadData(String),
-    /// A remote or CAN FD frame, which the bus does not carry.
-    #[error("unsupported frame {0:?} (remote and CAN FD frames are not supported)")]
+    /// A remote frame, which the bus does not carry.
+    #[error("unsupported frame {0:?} (remote frames are not supported)")]
     Unsupported(String),
+    /// A CAN FD frame whose flag digit (the one after `##`) is missing or not 0-7.
+    #[error("bad CAN FD flags in {0:?} (one hex digit after '##': 0-7, BRS 1, ESI 2, FDF 4)")]
+    BadFdFlags(String),
+    /// A CAN FD frame whose payload has a length no CAN FD frame has.
+    #[error(
+        "CAN FD frame {frame:?} has {len} data bytes; a CAN FD frame has 0-8, 12, 16, 20, 24, \
+         32, 48 or 64"
+    )]
+    BadFdLength {
+        /// The frame as written.
+        frame: String,
+        /// The number of data bytes it has.
+        len: usize,
+    },
     /// Unexpected text after the frame.
     #[error("unexpected text after the frame: {0:?}")]
     TrailingText(String),
@@ -83,7 +103,7 @@ pub enum CandumpError {
 
 /// Format one frame as a candump `-L` line, without the newline.
 pub fn format_line(iface: &str, received: &ReceivedFrame) -> String {
-    let mut line = String::with_capacity(48);
+    let mut line = String::with_capacity(40 + 2 * received.frame.len());
     // Writing to a String cannot fail.
     let _ = write!(
         line,
@@ -209,7 +229,8 @@ fn parse_timestamp(token: &str) -> Result<Duration, LineError> {
     Ok(Duration::new(secs, nanos))
 }
 
-/// Parse `ID#DATA` as can-utils writes it.
+/// Parse `ID#DATA` (classic) or `ID##FDATA` (CAN FD, `F` the flags digit) as can-utils
+/// writes them.
 pub fn parse_frame(token: &str) -> Result<CanFrame, LineError> {
     let (id_text, data_text) = token
         .split_once('#')
@@ -224,15 +245,45 @@ pub fn parse_frame(token: &str) -> Result<CanFrame, LineError> {
         8 => CanId::extended(raw).map_err(|_| bad_id())?,
         _ => return Err(bad_id()),
     };
-    if data_text.starts_with(['R', 'r', '#']) {
+    if data_text.starts_with(['R', 'r']) {
         return Err(LineError::Unsupported(token.to_owned()));
     }
+    if let Some(fd_text) = data_text.strip_prefix('#') {
+        return parse_fd(token, id, fd_text);
+    }
+    let data = parse_data(data_text)?;
+    CanFrame::new(id, &data).map_err(|_| LineError::BadData(data_text.to_owned()))
+}
+
+/// The CAN FD part after `ID##`: the flags digit, then the data.
+fn parse_fd(token: &str, id: CanId, fd_text: &str) -> Result<CanFrame, LineError> {
+    let bad_flags = || LineError::BadFdFlags(token.to_owned());
+    let mut chars = fd_text.chars();
+    let flags = chars
+        .next()
+        .and_then(|digit| digit.to_digit(16))
+        .filter(|&bits| bits <= 7)
+        .ok_or_else(bad_flags)?;
+    // Cannot truncate: at most 7.
+    let flags = FdFlags::from_bits(flags as u8);
+    let data = parse_data(chars.as_str())?;
+    CanFrame::fd(id, &data, flags).map_err(|error| match error {
+        FrameError::BadFdLength { len } => LineError::BadFdLength {
+            frame: token.to_owned(),
+            len,
+        },
+        _ => LineError::BadData(chars.as_str().to_owned()),
+    })
+}
+
+/// Hex byte pairs, `.` allowed between them, however many (the frame checks the length).
+fn parse_data(data_text: &str) -> Result<Vec<u8>, LineError> {
     let bad_data = || LineError::BadData(data_text.to_owned());
-    let mut data = Vec::with_capacity(MAX_DATA_LEN);
     let digits: Vec<u8> = data_text.bytes().filter(|&b| b != b'.').collect();
     if !digits.len().is_multiple_of(2) {
         return Err(bad_data());
     }
+    let mut data = Vec::with_capacity(digits.len() / 2);
     for pair in digits.chunks(2) {
         let text = std::str::from_utf8(pair).map_err(|_| bad_data())?;
         if !text.bytes().all(|b| b.is_ascii_hexdigit()) {
@@ -240,7 +291,7 @@ pub fn parse_frame(token: &str) -> Result<CanFrame, LineError> {
         }
         data.push(u8::from_str_radix(text, 16).map_err(|_| bad_data())?);
     }
-    CanFrame::new(id, &data).map_err(|_| bad_data())
+    Ok(data)
 }
 
 #[cfg(test)]
@@ -336,9 +387,20 @@ mod tests {
                 LineError::BadData("000000000000000000".into()),
             ),
             ("(1.0) vcan0 123#R", LineError::Unsupported("123#R".into())),
+            ("(1.0) vcan0 123##", LineError::BadFdFlags("123##".into())),
             (
-                "(1.0) vcan0 123##100",
-                LineError::Unsupported("123##100".into()),
+                "(1.0) vcan0 123##8AA",
+                LineError::BadFdFlags("123##8AA".into()),
+            ),
+            ("(1.0) vcan0 123##G", LineError::BadFdFlags("123##G".into())),
+            ("(1.0) vcan0 123##1A", LineError::BadData("A".into())),
+            ("(1.0) vcan0 123##1ZZ", LineError::BadData("ZZ".into())),
+            (
+                "(1.0) vcan0 123##1000000000000000000",
+                LineError::BadFdLength {
+                    frame: "123##1000000000000000000".into(),
+                    len: 9,
+                },
             ),
             ("(1.0) vcan0 123#00 X", LineError::TrailingText("X".into())),
         ];
@@ -351,5 +413,146 @@ mod tests {
     fn read_log_reports_missing_files() {
         let missing = std::env::temp_dir().join("armhil-no-such-file.log");
         assert!(matches!(read_log(&missing), Err(CandumpError::Io { .. })));
+    }
+
+    fn fd(id: CanId, len: usize, brs: bool, esi: bool) -> CanFrame {
+        let data: Vec<u8> = (0..len).map(|i| i as u8).collect();
+        CanFrame::fd(id, &data, FdFlags { brs, esi }).unwrap()
+    }
+
+    #[test]
+    fn writes_fd_frames_in_the_double_hash_form() {
+        let frame = CanFrame::fd(
+            CanId::Standard(0x123),
+            &[0xAA, 0xBB, 0xCC],
+            FdFlags {
+                brs: true,
+                esi: false,
+            },
+        )
+        .unwrap();
+        assert_eq!(
+            format_line("vcan0", &received(frame, 1_700_000_000, 1)),
+            "(1700000000.000001) vcan0 123##1AABBCC"
+        );
+        let frame = fd(CanId::Extended(0x0200_FD01), 0, false, true);
+        assert_eq!(
+            format_line("can1", &received(frame, 5, 7)),
+            "(0000000005.000007) can1 0200FD01##2"
+        );
+        let line = format_line(
+            "can0",
+            &received(fd(CanId::Standard(1), 64, true, true), 0, 0),
+        );
+        assert_eq!(line.len(), "(0000000000.000000) can0 001##3".len() + 128);
+        assert!(line.ends_with("3C3D3E3F"), "{line}");
+    }
+
+    #[test]
+    fn fd_frames_round_trip_with_their_flags_and_classic_ones_stay_classic() {
+        let mut frames = Vec::new();
+        for (i, &len) in crate::FD_DATA_LENS.iter().enumerate() {
+            let id = if i % 2 == 0 {
+                CanId::Standard(0x100 + i as u16)
+            } else {
+                CanId::Extended(0x1000_0000 + i as u32)
+            };
+            frames.push(received(fd(id, len, i % 3 == 0, i % 4 == 1), 1, i as u32));
+        }
+        frames.push(received(CanFrame::standard(0x7FF, &[1; 8]).unwrap(), 2, 0));
+        frames.push(received(CanFrame::extended(0x5, &[]).unwrap(), 2, 1));
+        let mut writer = CandumpWriter::new(Vec::new(), "vcan0");
+        for frame in &frames {
+            writer.write(frame).unwrap();
+        }
+        let text = String::from_utf8(writer.finish().unwrap()).unwrap();
+        let entries = parse_log(&text).unwrap();
+        assert_eq!(entries.len(), frames.len());
+        for (entry, original) in entries.iter().zip(&frames) {
+            assert_eq!(entry.frame, original.frame);
+            assert_eq!(entry.frame.is_fd(), original.frame.is_fd());
+            assert_eq!(entry.frame.fd_flags(), original.frame.fd_flags());
+            assert_eq!(entry.timestamp, original.timestamp);
+        }
+        // The classic lines are written as before: one '#'.
+        assert!(text.contains(" vcan0 7FF#0101010101010101\n"), "{text}");
+        assert!(text.contains(" vcan0 00000005#\n"), "{text}");
+    }
+
+    #[test]
+    fn reads_fd_flags_as_can_utils_writes_them() {
+        // FDF (4), which newer can-utils print with the other flags, is implied and ignored.
+        for (digit, brs, esi) in [
+            ('0', false, false),
+            ('1', true, false),
+            ('2', false, true),
+            ('3', true, true),
+            ('4', false, false),
+            ('5', true, false),
+            ('7', true, true),
+        ] {
+            let frame = parse_frame(&format!("123##{digit}11.22")).unwrap();
+            assert!(frame.is_fd());
+            assert_eq!(frame.fd_flags(), Some(FdFlags { brs, esi }), "{digit}");
+            assert_eq!(frame.data(), &[0x11, 0x22]);
+        }
+        // Lower case digits, as can-utils accepts them.
+        assert_eq!(
+            parse_frame("1abcdef0##1aabb").unwrap(),
+            fd_bytes(CanId::Extended(0x1ABC_DEF0), &[0xAA, 0xBB])
+        );
+    }
+
+    fn fd_bytes(id: CanId, data: &[u8]) -> CanFrame {
+        CanFrame::fd(
+            id,
+            data,
+            FdFlags {
+                brs: true,
+                esi: false,
+            },
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn a_bad_fd_length_names_the_line_and_the_length() {
+        let twelve = "00".repeat(12);
+        let thirteen = "00".repeat(13);
+        let text =
+            format!("(1.0) vcan0 123##1{twelve}\n# a comment\n(1.1) vcan0 123##1{thirteen}\n");
+        let error = parse_log(&text).unwrap_err();
+        assert!(
+            matches!(
+                &error,
+                CandumpError::Malformed {
+                    line: 3,
+                    error: LineError::BadFdLength { len: 13, .. }
+                }
+            ),
+            "{error:?}"
+        );
+        let message = error.to_string();
+        assert!(
+            message.starts_with("line 3: CAN FD frame \"123##1"),
+            "{message}"
+        );
+        assert!(
+            message.ends_with(
+                "has 13 data bytes; a CAN FD frame has 0-8, 12, 16, 20, 24, 32, 48 or 64"
+            ),
+            "{message}"
+        );
+        // 65 bytes and beyond: the same error, never a panic.
+        let long = format!("(1.0) vcan0 123##0{}", "FF".repeat(65));
+        assert!(matches!(
+            parse_line(&long),
+            Err(LineError::BadFdLength { len: 65, .. })
+        ));
+        let longer = format!("(1.0) vcan0 123##0{}", "FF".repeat(4000));
+        assert!(matches!(
+            parse_line(&longer),
+            Err(LineError::BadFdLength { len: 4000, .. })
+        ));
     }
 }

@@ -38,7 +38,9 @@ pub enum BusError {
         iface: String,
     },
     /// Any other operating-system error from a real interface, or an interface that is not a
-    /// CAN device. No permission and a kernel without SocketCAN come with what to do.
+    /// CAN device. No permission and a kernel without SocketCAN come with what to do. Also a
+    /// CAN FD frame the endpoint cannot carry (a classic virtual bus, socket or interface,
+    /// socketcand), `iface` then naming the endpoint and `source` saying what to change.
     #[error("CAN interface {iface}: {source}{}", io_hint(.source))]
     Io {
         /// Interface name, e.g. `vcan0`.

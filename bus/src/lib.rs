@@ -1,6 +1,6 @@
 //! The bus layer every armhil emulator and driver talks through.
 //!
-//! - [`CanFrame`] / [`CanId`]: plain `Copy` classic CAN frames.
+//! - [`CanFrame`] / [`CanId`]: plain `Copy` CAN frames, classic and CAN FD ([`FdFlags`]).
 //! - [`CanBus`]: one async interface (send, receive with a timestamp, close).
 //! - [`virtual_bus`]: an in-process bus that models bit timing, arbitration, queues, load and
 //!   faults, and runs under tokio's paused clock for deterministic virtual time.
@@ -32,7 +32,8 @@ pub mod vxcan;
 
 pub use error::BusError;
 pub use frame::{
-    CanFrame, CanId, FrameError, ReceivedFrame, MAX_DATA_LEN, MAX_EXTENDED_ID, MAX_STANDARD_ID,
+    is_fd_data_len, CanFrame, CanId, FdFlags, FrameError, ReceivedFrame, FD_DATA_LENS,
+    MAX_DATA_LEN, MAX_EXTENDED_ID, MAX_FD_DATA_LEN, MAX_STANDARD_ID,
 };
 pub use iface::CanBus;
 pub use socketcan_open::open_socketcan;

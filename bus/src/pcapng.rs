@@ -2,14 +2,15 @@
 //! bus is (`can0` …), so Wireshark and tshark show each frame's bus (`frame.interface_name`).
 //!
 //! Little-endian, one section; each interface `LINKTYPE_CAN_SOCKETCAN` with the default
-//! microsecond timestamps; each frame an enhanced packet block holding the same 16-byte
-//! SocketCAN packet as [`crate::pcap`]. A capture split into several files is joined by
+//! microsecond timestamps; each frame an enhanced packet block holding the same SocketCAN
+//! packet as [`crate::pcap`] (16 bytes classic, 72 bytes CAN FD, read back as that module
+//! reads them). A capture split into several files is joined by
 //! dropping the first [`header_len`] bytes (section and interfaces) of every file but the first.
 
 use std::io::{self, Write};
 use std::time::Duration;
 
-use crate::pcap::{decode_packet, encode_packet, PcapError, LINKTYPE_CAN_SOCKETCAN, PACKET_LEN};
+use crate::pcap::{decode_packet, Packet, PcapError, FD_PACKET_LEN, LINKTYPE_CAN_SOCKETCAN};
 use crate::ReceivedFrame;
 
 const SECTION_HEADER: u32 = 0x0A0D_0D0A;
@@ -20,8 +21,8 @@ const ENHANCED_PACKET: u32 = 6;
 const IF_NAME: u16 = 2;
 /// Largest packet a reader should expect; comfortably above a CAN frame.
 const SNAPLEN: u32 = 65_535;
-/// An enhanced packet block with its 16-byte packet and no options.
-const PACKET_BLOCK_LEN: usize = 32 + PACKET_LEN;
+/// An enhanced packet block without options: 32 bytes and the packet.
+const PACKET_BLOCK_OVERHEAD: usize = 32;
 
 /// `len` rounded up to the 32-bit boundary pcapng blocks keep.
 fn padded(len: usize) -> usize {
@@ -102,18 +103,22 @@ impl<W: Write> PcapngWriter<W> {
         }
         // Microseconds since the epoch fit 64 bits for the next 500,000 years.
         let micros = received.timestamp.as_micros() as u64;
-        let len = PACKET_BLOCK_LEN as u32;
-        let mut block = [0u8; PACKET_BLOCK_LEN];
+        let packet = Packet::of(&received.frame);
+        let packet = packet.as_bytes();
+        // 16 or 72 bytes: already a multiple of four, no padding.
+        let block_len = PACKET_BLOCK_OVERHEAD + packet.len();
+        let len = block_len as u32;
+        let mut block = [0u8; PACKET_BLOCK_OVERHEAD + FD_PACKET_LEN];
         block[0..4].copy_from_slice(&ENHANCED_PACKET.to_le_bytes());
         block[4..8].copy_from_slice(&len.to_le_bytes());
         block[8..12].copy_from_slice(&interface.to_le_bytes());
         block[12..16].copy_from_slice(&((micros >> 32) as u32).to_le_bytes());
         block[16..20].copy_from_slice(&(micros as u32).to_le_bytes());
-        block[20..24].copy_from_slice(&(PACKET_LEN as u32).to_le_bytes()); // captured
-        block[24..28].copy_from_slice(&(PACKET_LEN as u32).to_le_bytes()); // original
-        block[28..28 + PACKET_LEN].copy_from_slice(&encode_packet(&received.frame));
-        block[28 + PACKET_LEN..].copy_from_slice(&len.to_le_bytes());
-        self.out.write_all(&block)
+        block[20..24].copy_from_slice(&(packet.len() as u32).to_le_bytes()); // captured
+        block[24..28].copy_from_slice(&(packet.len() as u32).to_le_bytes()); // original
+        block[28..28 + packet.len()].copy_from_slice(packet);
+        block[28 + packet.len()..block_len].copy_from_slice(&len.to_le_bytes());
+        self.out.write_all(&block[..block_len])
     }
 
     /// Push buffered blocks to the underlying sink.
@@ -218,7 +223,7 @@ pub fn parse_capture(bytes: &[u8]) -> Result<Capture, PcapError> {
                     .get(start..start.saturating_add(captured))
                     .filter(|_| start.saturating_add(captured) <= block_end)
                     .ok_or(PcapError::Truncated { offset: start })?;
-                let frame = decode_packet(packet).ok_or(PcapError::BadPacket { offset: start })?;
+                let frame = decode_packet(packet, start)?;
                 capture.frames.push((
                     interface,
                     ReceivedFrame {
@@ -237,6 +242,7 @@ pub fn parse_capture(bytes: &[u8]) -> Result<Capture, PcapError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::pcap::PACKET_LEN;
     use crate::CanFrame;
 
     fn received(id: u16, micros: u64) -> ReceivedFrame {
@@ -262,7 +268,10 @@ mod tests {
         };
         writer.write(1, &extended).unwrap();
         let bytes = writer.finish().unwrap();
-        assert_eq!(bytes.len(), header_len(&names) + 3 * PACKET_BLOCK_LEN);
+        assert_eq!(
+            bytes.len(),
+            header_len(&names) + 3 * (PACKET_BLOCK_OVERHEAD + PACKET_LEN)
+        );
         let capture = parse_capture(&bytes).unwrap();
         assert_eq!(capture.interfaces, ["can0", "left_leg"]);
         assert_eq!(
@@ -323,5 +332,45 @@ mod tests {
             parse_capture(&bytes),
             Err(PcapError::Truncated { .. })
         ));
+    }
+
+    #[test]
+    fn fd_frames_keep_their_flags_and_length_in_pcapng() {
+        let names = ["can0", "can1"];
+        let fd = ReceivedFrame {
+            frame: CanFrame::fd(
+                crate::CanId::Standard(0x321),
+                &[0x42; 48],
+                crate::FdFlags {
+                    brs: true,
+                    esi: true,
+                },
+            )
+            .unwrap(),
+            timestamp: Duration::from_micros(1_700_000_000_000_001),
+        };
+        let mut writer = PcapngWriter::new(Vec::new(), &names).unwrap();
+        writer.write(1, &fd).unwrap();
+        writer.write(0, &received(0x100, 2)).unwrap();
+        let bytes = writer.finish().unwrap();
+        let first = header_len(&names);
+        assert_eq!(
+            bytes.len(),
+            first + (PACKET_BLOCK_OVERHEAD + FD_PACKET_LEN) + (PACKET_BLOCK_OVERHEAD + PACKET_LEN)
+        );
+        // Block length, captured and original lengths of the CAN FD frame's block.
+        assert_eq!(u32_at(&bytes, first + 4).unwrap(), 104);
+        assert_eq!(u32_at(&bytes, first + 20).unwrap(), 72);
+        assert_eq!(u32_at(&bytes, first + 24).unwrap(), 72);
+        assert_eq!(u32_at(&bytes, first + 100).unwrap(), 104);
+        let capture = parse_capture(&bytes).unwrap();
+        assert_eq!(capture.frames, [(1, fd), (0, received(0x100, 2))]);
+        assert_eq!(
+            capture.frames[0].1.frame.fd_flags(),
+            Some(crate::FdFlags {
+                brs: true,
+                esi: true
+            })
+        );
     }
 }

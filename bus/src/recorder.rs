@@ -1,5 +1,7 @@
 //! Recording any bus to a file whose format follows its extension: `.pcap` for pcap, anything
-//! else (`.log` by convention) for a candump `-L` log.
+//! else (`.log` by convention) for a candump `-L` log. CAN FD frames are recorded as CAN FD
+//! frames with their BRS and ESI flags: candump's `ID##F…` form, pcap's 72-byte packet with
+//! `CANFD_FDF` (see [`crate::candump`] and [`crate::pcap`]).
 
 use std::fs::File;
 use std::io::{self, BufWriter};
@@ -139,5 +141,84 @@ pub async fn record_tap(
             }
             Err(broadcast::error::RecvError::Closed) => return Ok(summary),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::time::Duration;
+
+    use super::*;
+    use crate::{CanFrame, CanId, FdFlags};
+
+    fn frames() -> Vec<ReceivedFrame> {
+        let at = |micros| Duration::from_micros(1_700_000_000_000_000 + micros);
+        let fd = |id, len: usize, brs, esi| {
+            CanFrame::fd(id, &vec![0xA5; len], FdFlags { brs, esi }).unwrap()
+        };
+        [
+            CanFrame::standard(0x123, &[1, 2, 3]).unwrap(),
+            fd(CanId::Standard(0x124), 64, true, false),
+            fd(CanId::Extended(0x1ABC_DEF0), 12, false, true),
+            fd(CanId::Standard(0x7FF), 0, true, true),
+            fd(CanId::Standard(0x010), 8, false, false),
+            CanFrame::extended(0x0200_FD01, &[]).unwrap(),
+        ]
+        .into_iter()
+        .enumerate()
+        .map(|(i, frame)| ReceivedFrame {
+            frame,
+            timestamp: at(10 * i as u64),
+        })
+        .collect()
+    }
+
+    fn record(extension: &str) -> PathBuf {
+        let path = std::env::temp_dir().join(format!(
+            "armhil-bus-recorder-fd-{}.{extension}",
+            std::process::id()
+        ));
+        let mut recorder = Recorder::create(&path, "can0").unwrap();
+        for frame in frames() {
+            recorder.write(&frame).unwrap();
+        }
+        assert_eq!(recorder.finish().unwrap(), 6);
+        path
+    }
+
+    #[test]
+    fn fd_frames_are_recorded_with_their_flags_in_candump_logs() {
+        let path = record("log");
+        let text = std::fs::read_to_string(&path).unwrap();
+        let entries = crate::candump::parse_log(&text).unwrap();
+        let _ = std::fs::remove_file(&path);
+        assert!(text.contains(" can0 124##1A5A5"), "{text}");
+        assert!(text.contains(" can0 1ABCDEF0##2A5A5"), "{text}");
+        let read: Vec<CanFrame> = entries.iter().map(|entry| entry.frame).collect();
+        let written: Vec<CanFrame> = frames().iter().map(|r| r.frame).collect();
+        assert_eq!(read, written);
+        assert_eq!(
+            read.iter()
+                .map(|f| (f.is_fd(), f.brs(), f.esi()))
+                .collect::<Vec<_>>(),
+            [
+                (false, false, false),
+                (true, true, false),
+                (true, false, true),
+                (true, true, true),
+                (true, false, false),
+                (false, false, false)
+            ]
+        );
+    }
+
+    #[test]
+    fn fd_frames_are_recorded_with_their_flags_in_pcap_files() {
+        let path = record("pcap");
+        let bytes = std::fs::read(&path).unwrap();
+        let _ = std::fs::remove_file(&path);
+        // Four 72-byte CAN FD packets and two 16-byte classic ones, each with its header.
+        assert_eq!(bytes.len(), 24 + 6 * 16 + 4 * 72 + 2 * 16);
+        assert_eq!(crate::pcap::parse_capture(&bytes).unwrap(), frames());
     }
 }

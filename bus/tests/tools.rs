@@ -11,7 +11,7 @@ use bus::candump::{parse_log, read_log};
 use bus::pcap::parse_capture;
 use bus::recorder::{record_tap, Recorder};
 use bus::virtual_bus::{VirtualBus, VirtualBusConfig};
-use bus::{CanBus, CanFrame, ReceivedFrame};
+use bus::{CanBus, CanFrame, CanId, FdFlags, ReceivedFrame};
 use testkit::tools::{require, ASC2LOG, LOG2ASC, LOG2LONG, TSHARK};
 
 const EPOCH_S: u64 = 1_700_000_000;
@@ -32,9 +32,30 @@ fn sample_frames() -> Vec<CanFrame> {
     ]
 }
 
+/// Classic and CAN FD frames: every flag combination, both identifier widths, short and long
+/// payloads.
+fn fd_sample_frames() -> Vec<CanFrame> {
+    let fd = |id, data: &[u8], brs, esi| CanFrame::fd(id, data, FdFlags { brs, esi }).unwrap();
+    let counting: Vec<u8> = (0..64).collect();
+    vec![
+        fd(CanId::Standard(0x123), &[0xAA, 0xBB, 0xCC], true, false),
+        fd(CanId::Extended(0x1ABC_DEF0), &counting, true, true),
+        CanFrame::standard(0x2A1, &[0x00, 0x11]).unwrap(),
+        fd(CanId::Standard(0x7FF), &counting[..12], false, false),
+        fd(CanId::Standard(0x010), &[], false, true),
+        CanFrame::extended(0x0200_FD01, &[0xAB, 0xCD]).unwrap(),
+    ]
+}
+
 /// Run a virtual bus (paused clock) carrying the sample frames, 1 ms apart, and record its tap
 /// to `path`. Returns what the tap delivered.
 fn record_virtual_run(path: &Path) -> Vec<ReceivedFrame> {
+    record_frames(path, sample_frames())
+}
+
+/// Like [`record_virtual_run`] for any frames, on a bus that carries CAN FD (5 Mbit/s data).
+fn record_frames(path: &Path, frames: Vec<CanFrame>) -> Vec<ReceivedFrame> {
+    let count = frames.len() as u64;
     let runtime = tokio::runtime::Builder::new_current_thread()
         .enable_time()
         .start_paused(true)
@@ -43,6 +64,7 @@ fn record_virtual_run(path: &Path) -> Vec<ReceivedFrame> {
     runtime.block_on(async {
         let bus = VirtualBus::new(VirtualBusConfig {
             epoch: Duration::from_secs(EPOCH_S),
+            data_bitrate_bps: Some(5_000_000),
             ..VirtualBusConfig::default()
         });
         let mut tap = bus.tap();
@@ -50,7 +72,7 @@ fn record_virtual_run(path: &Path) -> Vec<ReceivedFrame> {
         let node = bus.attach("sender");
         let mut recorder = Recorder::create(path, "vcan0").unwrap();
         let sender = tokio::spawn(async move {
-            for frame in sample_frames() {
+            for frame in frames {
                 node.send(frame).await.unwrap();
                 tokio::time::sleep(Duration::from_millis(1)).await;
             }
@@ -58,9 +80,9 @@ fn record_virtual_run(path: &Path) -> Vec<ReceivedFrame> {
         drop(bus);
         let summary = record_tap(&mut tap, &mut recorder).await.unwrap();
         sender.await.unwrap();
-        assert_eq!(summary.frames, 5);
+        assert_eq!(summary.frames, count);
         assert_eq!(summary.missed, 0);
-        assert_eq!(recorder.finish().unwrap(), 5);
+        assert_eq!(recorder.finish().unwrap(), count);
         let mut seen = Vec::new();
         while let Ok(frame) = check_tap.try_recv() {
             seen.push(frame);
@@ -240,4 +262,120 @@ fn pcapng_of_several_buses_names_each_frame_s_bus_in_tshark() {
         .map(|(k, f)| format!("{}\t{}", ["can0", "can3"][k % 2], f.id().raw()))
         .collect();
     assert_eq!(rows, expected);
+}
+
+/// CAN FD lines (`ID##F…`) as can-utils reads them: log2asc writes a `CANFD` line with BRS,
+/// ESI, DLC and length; asc2log turns it back into the same frames.
+#[test]
+fn fd_candump_log_converts_with_log2asc_and_back_with_asc2log() {
+    if !require("fd_candump_log_converts_with_log2asc", &[LOG2ASC, ASC2LOG]) {
+        return;
+    }
+    let dir = scratch_dir("fd-log2asc");
+    let log = dir.join("capture.log");
+    let asc = dir.join("capture.asc");
+    let seen = record_frames(&log, fd_sample_frames());
+    assert_eq!(
+        seen.iter().map(|r| r.frame).collect::<Vec<_>>(),
+        fd_sample_frames()
+    );
+    run(Command::new("log2asc")
+        .arg("-I")
+        .arg(&log)
+        .arg("-O")
+        .arg(&asc)
+        .arg("vcan0"));
+    let asc_text = std::fs::read_to_string(&asc).unwrap();
+    let rows: Vec<Vec<&str>> = asc_text
+        .lines()
+        .filter(|line| line.contains(" Rx "))
+        .map(|line| line.split_whitespace().collect())
+        .collect();
+    assert_eq!(rows.len(), seen.len(), "{asc_text}");
+    for (row, received) in rows.iter().zip(&seen) {
+        let frame = received.frame;
+        let id = if frame.is_extended() {
+            format!("{:X}x", frame.raw_id())
+        } else {
+            format!("{:X}", frame.raw_id())
+        };
+        let bytes: Vec<String> = frame.data().iter().map(|b| format!("{b:02X}")).collect();
+        if frame.is_fd() {
+            // "<time> CANFD <channel> Rx <id> <brs> <esi> <dlc hex> <len> <bytes…> …"
+            assert_eq!(row[1], "CANFD", "{row:?}");
+            assert_eq!(row[4], id, "{row:?}");
+            assert_eq!(row[5], if frame.brs() { "1" } else { "0" }, "{row:?}");
+            assert_eq!(row[6], if frame.esi() { "1" } else { "0" }, "{row:?}");
+            assert_eq!(row[7], format!("{:x}", frame.dlc()), "{row:?}");
+            assert_eq!(row[8], frame.len().to_string(), "{row:?}");
+            assert_eq!(&row[9..9 + frame.len()], &bytes[..], "{row:?}");
+        } else {
+            // "<time> <channel> <id> Rx d <dlc> <bytes…>"
+            assert_eq!(&row[2..6], &[&id[..], "Rx", "d", &frame.len().to_string()]);
+            assert_eq!(&row[6..], &bytes[..], "{row:?}");
+        }
+    }
+    let back = parse_log(&run(Command::new("asc2log").arg("-I").arg(&asc))).unwrap();
+    assert_eq!(
+        back.iter().map(|e| e.frame).collect::<Vec<_>>(),
+        fd_sample_frames()
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// A pcap of classic and CAN FD frames as tshark dissects it: the identifier, the length and
+/// the payload of each, and for the CAN FD ones their BRS and ESI flags.
+#[test]
+fn fd_pcap_opens_in_tshark_with_flags_and_lengths() {
+    if !require("fd_pcap_opens_in_tshark", &[TSHARK]) {
+        return;
+    }
+    let dir = scratch_dir("fd-tshark");
+    let pcap = dir.join("capture.pcap");
+    let seen = record_frames(&pcap, fd_sample_frames());
+    let bytes = std::fs::read(&pcap).unwrap();
+    // CAN FD frames end between microseconds; pcap keeps microseconds.
+    let to_micros = |r: &ReceivedFrame| (r.frame, r.timestamp.as_micros());
+    assert_eq!(
+        parse_capture(&bytes)
+            .unwrap()
+            .iter()
+            .map(to_micros)
+            .collect::<Vec<_>>(),
+        seen.iter().map(to_micros).collect::<Vec<_>>()
+    );
+    let fields = run(Command::new("tshark")
+        .arg("-r")
+        .arg(&pcap)
+        .args(["-T", "fields"])
+        .args(["-e", "_ws.col.Protocol", "-e", "can.id", "-e", "can.len"])
+        .args(["-e", "canfd.flags.brs", "-e", "canfd.flags.esi"])
+        .args(["-e", "data.data"]));
+    let rows: Vec<Vec<&str>> = fields
+        .lines()
+        .map(|line| line.split('\t').collect())
+        .collect();
+    assert_eq!(rows.len(), seen.len(), "{fields}");
+    for (row, received) in rows.iter().zip(&seen) {
+        let frame = received.frame;
+        let hex: String = frame.data().iter().map(|b| format!("{b:02x}")).collect();
+        // tshark prints booleans as 1/0 and the identifier in decimal; a classic frame has
+        // no CAN FD flags.
+        let flag = |on: bool| if on { "1" } else { "0" }.to_owned();
+        let (protocol, brs, esi) = if frame.is_fd() {
+            ("CANFD", flag(frame.brs()), flag(frame.esi()))
+        } else {
+            ("CAN", String::new(), String::new())
+        };
+        let expected = [
+            protocol.to_owned(),
+            frame.raw_id().to_string(),
+            frame.len().to_string(),
+            brs,
+            esi,
+            hex,
+        ];
+        assert_eq!(row, &expected, "{fields}");
+    }
+    std::fs::remove_dir_all(dir).unwrap();
 }

@@ -277,6 +277,20 @@ impl CanBus for SocketcandBus {
         if *self.closed.borrow() {
             return Err(BusError::Closed);
         }
+        if frame.is_fd() {
+            return Err(BusError::Io {
+                iface: self.name.clone(),
+                source: std::io::Error::new(
+                    std::io::ErrorKind::Unsupported,
+                    format!(
+                        "CAN FD frame {} ({} bytes) not sent: the socketcand protocol carries \
+                         classic CAN frames only",
+                        frame.id(),
+                        frame.len()
+                    ),
+                ),
+            });
+        }
         match self.tx.try_send(frame) {
             Ok(()) => Ok(()),
             Err(mpsc::error::TrySendError::Full(_)) => {

@@ -11,6 +11,15 @@
 //! - `frame` carries `seconds.microseconds` and the data as one run of hex digits; an empty
 //!   payload leaves two spaces before `>` (`< frame 123 1.000000  >`), which python-can needs
 //!   to split the element into its three fields.
+//!
+//! **Classic CAN only.** socketcand's protocol document has no CAN FD element. Newer
+//! socketcand sources write `< fdframe ID FLAGS SECS.USECS DATA >` and read
+//! `< fdsend ID FLAGS LEN BYTES… >` on CAN FD interfaces, but python-can's `socketcand`
+//! interface parses `< frame … >` only (it logs any other element as invalid) and sends only
+//! `< send … >`. So nothing here writes or reads a CAN FD form: the server does not forward
+//! CAN FD frames (it counts them), the client refuses to send one, and `fdsend` is an unknown
+//! command. [`format_send`] and [`format_frame`] are for classic frames; given a CAN FD frame
+//! they would write its payload as if classic, which no reader accepts past eight bytes.
 
 use std::fmt::Write as _;
 use std::time::Duration;

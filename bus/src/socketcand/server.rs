@@ -121,6 +121,9 @@ pub struct ServerStats {
     pub refused: u64,
     /// Connections closed because they carried HTTP (see [`HttpGuard`]).
     pub http_refused: u64,
+    /// CAN FD frames not written to clients in raw mode: the protocol carries classic frames
+    /// only (see [`super::protocol`]). The first is logged, once per server.
+    pub fd_frames_not_forwarded: u64,
 }
 
 #[derive(Debug, Default)]
@@ -133,6 +136,7 @@ struct Counters {
     errors: AtomicU64,
     refused: AtomicU64,
     http_refused: AtomicU64,
+    fd_frames_not_forwarded: AtomicU64,
 }
 
 impl Counters {
@@ -146,6 +150,7 @@ impl Counters {
             errors: self.errors.load(Ordering::Relaxed),
             refused: self.refused.load(Ordering::Relaxed),
             http_refused: self.http_refused.load(Ordering::Relaxed),
+            fd_frames_not_forwarded: self.fd_frames_not_forwarded.load(Ordering::Relaxed),
         }
     }
 }
@@ -812,6 +817,13 @@ impl Forwarder<'_> {
                     let Ok(received) = received else {
                         return Err(End::BusClosed);
                     };
+                    if received.frame.is_fd() {
+                        // No form a client understands (see the protocol module).
+                        if Forwarding::of(&raw, Instant::now()) != Forwarding::Off {
+                            self.fd_not_forwarded();
+                        }
+                        continue;
+                    }
                     // The node drains the bus in every mode; only raw mode forwards.
                     match Forwarding::of(&raw, Instant::now()) {
                         Forwarding::Off => {}
@@ -872,6 +884,23 @@ impl Forwarder<'_> {
                 Ok(())
             }
             Err(mpsc::error::TrySendError::Closed(_)) => Err(End::ClientClosed),
+        }
+    }
+
+    /// Count a CAN FD frame left out; the server's first one is logged.
+    fn fd_not_forwarded(&self) {
+        let counters = &self.shared.counters;
+        if counters
+            .fd_frames_not_forwarded
+            .fetch_add(1, Ordering::Relaxed)
+            == 0
+        {
+            tracing::warn!(
+                peer = %self.peer,
+                "CAN FD frames on the bus are not forwarded to socketcand clients: the protocol \
+                 python-can speaks has no CAN FD frame (counted in \
+                 ServerStats::fd_frames_not_forwarded; logged once)"
+            );
         }
     }
 
@@ -1225,5 +1254,53 @@ mod tests {
         // Unread data in its receive buffer: the kernel resets instead of closing cleanly.
         drop(stream);
         expect_numbered(&emulator, count).await;
+    }
+
+    /// A CAN FD frame has no form python-can reads: clients in raw mode do not get it (the
+    /// server counts it), they still get the classic frames around it, and armhil's client
+    /// refuses to send one.
+    #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+    async fn fd_frames_are_counted_not_forwarded() {
+        let bus = VirtualBus::new(VirtualBusConfig {
+            data_bitrate_bps: Some(5_000_000),
+            ..VirtualBusConfig::default()
+        });
+        let emulator = bus.attach("emulator");
+        let server = SocketcandServer::bind("127.0.0.1:0", bus, ServerConfig::default())
+            .await
+            .unwrap();
+        let addr = server.local_addr().to_string();
+        let client = super::super::SocketcandBus::connect(&addr, "can0")
+            .await
+            .unwrap();
+        let fd = CanFrame::fd(
+            crate::CanId::Standard(0x123),
+            &[0xAB; 64],
+            crate::FdFlags {
+                brs: true,
+                esi: false,
+            },
+        )
+        .unwrap();
+        put(&emulator, CanFrame::standard(0x100, &[1]).unwrap()).await;
+        put(&emulator, fd).await;
+        put(&emulator, CanFrame::standard(0x101, &[2]).unwrap()).await;
+        let first = timeout(WAIT, client.recv()).await.unwrap().unwrap();
+        let second = timeout(WAIT, client.recv()).await.unwrap().unwrap();
+        assert_eq!(
+            [first.frame.raw_id(), second.frame.raw_id()],
+            [0x100, 0x101]
+        );
+        assert!(!first.frame.is_fd() && !second.frame.is_fd());
+        assert_eq!(server.stats().fd_frames_not_forwarded, 1);
+        assert_eq!(server.stats().frames_to_clients, 2);
+        let Err(error) = client.send(fd).await else {
+            panic!("a CAN FD frame was accepted for socketcand");
+        };
+        let text = error.to_string();
+        assert!(
+            text.contains("CAN FD frame 123 (64 bytes) not sent: the socketcand protocol carries classic CAN frames only"),
+            "{text}"
+        );
     }
 }

@@ -6,6 +6,13 @@
 //! - **Timing**: a frame occupies `bits / bitrate` of bus time, its length counted by
 //!   [`frame_bits`](crate::timing::frame_bits) under the configured
 //!   [`StuffingPolicy`] (default: exact stuff bits). Frames follow each other back to back.
+//! - **CAN FD**: a bus given a data bit rate ([`VirtualBusConfig::data_bitrate_bps`]) carries
+//!   CAN FD frames next to classic ones: an FD frame's arbitration phase takes the nominal bit
+//!   rate, its data phase (with BRS) the data bit rate, as
+//!   [`phase_bits`](crate::timing::phase_bits) splits it. A bus without a data bit rate is a
+//!   classic bus: sending a CAN FD frame on it fails at once with [`BusError::Io`] naming the
+//!   node (where a classic controller on a real bus would answer the frame with an error
+//!   frame), and nothing reaches the wire.
 //! - **Arbitration**: whenever the wire becomes free, the head frames of all node queues that
 //!   were ready by then compete and the lowest [`CanId::arbitration_key`](crate::CanId) wins;
 //!   ties between nodes go to the node attached first. Each node sends its own frames in FIFO
@@ -42,8 +49,13 @@ use crate::{BusError, CanBus, CanFrame, ReceivedFrame};
 /// How a virtual bus behaves.
 #[derive(Debug, Clone, PartialEq)]
 pub struct VirtualBusConfig {
-    /// Bit rate of the modelled wire (default 1 Mbit/s). Zero is treated as 1 bit/s.
+    /// Bit rate of the modelled wire (default 1 Mbit/s), the nominal (arbitration) bit rate
+    /// of CAN FD. Zero is treated as 1 bit/s.
     pub bitrate_bps: u32,
+    /// CAN FD data-phase bit rate, used by FD frames with BRS set (FD frames without BRS run
+    /// at `bitrate_bps` throughout). `None` (the default) is a classic CAN bus, which refuses
+    /// CAN FD frames. Zero is treated as 1 bit/s.
+    pub data_bitrate_bps: Option<u32>,
     /// Default transmit queue length per node (default 10). Zero is treated as 1.
     pub tx_queue_len: usize,
     /// Added to bus time to form timestamps (default zero; use a Unix time to make candump
@@ -63,6 +75,7 @@ impl Default for VirtualBusConfig {
     fn default() -> Self {
         Self {
             bitrate_bps: 1_000_000,
+            data_bitrate_bps: None,
             tx_queue_len: 10,
             epoch: Duration::ZERO,
             stuffing: StuffingPolicy::Exact,
@@ -124,6 +137,7 @@ impl VirtualBus {
         let (tap, _) = broadcast::channel(config.tap_capacity.max(1));
         let params = WireParams {
             bitrate_bps: config.bitrate_bps.max(1),
+            data_bitrate_bps: config.data_bitrate_bps.map(|bps| bps.max(1)),
             stuffing: config.stuffing,
             epoch: config.epoch,
         };

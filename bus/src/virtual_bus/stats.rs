@@ -13,7 +13,8 @@ pub struct BusStats {
     pub frames_by_id: BTreeMap<CanId, u64>,
     /// Frames delivered in total (duplicates included).
     pub frames: u64,
-    /// Bits that occupied the wire, delivered and corrupted frames alike.
+    /// Bits that occupied the wire, delivered and corrupted frames alike (a CAN FD frame's
+    /// bits at both its bit rates).
     pub bits: u64,
     /// Time the wire was busy.
     pub busy: Duration,

@@ -130,6 +130,116 @@ async fn an_eight_byte_standard_frame_takes_its_documented_bit_times() {
     );
 }
 
+fn fd_config(nominal_bps: u32, data_bps: u32) -> VirtualBusConfig {
+    VirtualBusConfig {
+        bitrate_bps: nominal_bps,
+        data_bitrate_bps: Some(data_bps),
+        ..VirtualBusConfig::default()
+    }
+}
+
+fn fd_frame(id: u16, data: &[u8], brs: bool) -> CanFrame {
+    let flags = crate::FdFlags { brs, esi: false };
+    CanFrame::fd(CanId::Standard(id), data, flags).unwrap()
+}
+
+/// Computed by hand, independently of `timing`: id 0x555 and 0x55 bytes never make five
+/// equal bits, so a 64-byte frame with BRS is SOF + 11 id bits + RRS, IDE, FDF, res, BRS (17)
+/// and ACK, ACK delimiter, EOF (7), intermission (3): 29 bits at 1 Mbit/s = 29 µs; ESI + DLC
+/// (5) + 512 data bits + stuff count (4) + CRC-21 + 7 fixed stuff bits + CRC delimiter: 550
+/// bits at 5 Mbit/s = 110 µs. 139 µs in all. 64 zero bytes add one stuff bit per five zeros,
+/// 102 bits = 20.4 µs.
+#[tokio::test(start_paused = true)]
+async fn a_64_byte_fd_frame_at_1m_5m_takes_its_time_on_the_wire() {
+    let bus = VirtualBus::new(fd_config(1_000_000, 5_000_000));
+    let tx = bus.attach("tx");
+    let rx = bus.attach("rx");
+    let sparse = fd_frame(0x555, &[0x55; 64], true);
+    let zeros = fd_frame(0x555, &[0; 64], true);
+    let slow = fd_frame(0x555, &[0x55; 64], false);
+    tx.send(sparse).await.unwrap();
+    tx.send(zeros).await.unwrap();
+    tx.send(slow).await.unwrap();
+    tx.send(sff(0x2A1, &[0; 8])).await.unwrap();
+    let got = drain(&rx, Duration::from_millis(5)).await;
+    let nanos: Vec<u128> = got.iter().map(|f| f.timestamp.as_nanos()).collect();
+    let sparse_ns = 29_000 + 550 * 200;
+    let zeros_ns = 29_000 + (550 + 102) * 200;
+    // Without BRS: all 579 bits at 1 Mbit/s.
+    let slow_ns = 579_000;
+    // The classic frame after them: 8 zero bytes, exact stuffing (the bus default).
+    let classic_ns = 1000 * u128::from(frame_bits(&sff(0x2A1, &[0; 8]), StuffingPolicy::Exact));
+    assert_eq!(
+        nanos,
+        [
+            sparse_ns,
+            sparse_ns + zeros_ns,
+            sparse_ns + zeros_ns + slow_ns,
+            sparse_ns + zeros_ns + slow_ns + classic_ns
+        ]
+    );
+    assert_eq!(
+        got.iter().map(|f| f.frame).collect::<Vec<_>>(),
+        [sparse, zeros, slow, sff(0x2A1, &[0; 8])]
+    );
+    let stats = bus.stats();
+    assert_eq!(stats.frames, 4);
+    assert_eq!(
+        stats.busy,
+        Duration::from_nanos((sparse_ns + zeros_ns + slow_ns + classic_ns) as u64)
+    );
+}
+
+#[tokio::test(start_paused = true)]
+async fn a_classic_bus_refuses_fd_frames_naming_the_node() {
+    let bus = VirtualBus::new(VirtualBusConfig::default());
+    let tx = bus.attach("arm");
+    let rx = bus.attach("rx");
+    let error = tx.send(fd_frame(0x123, &[0; 64], true)).await.unwrap_err();
+    assert!(
+        matches!(&error, BusError::Io { iface, .. } if iface == "arm"),
+        "{error:?}"
+    );
+    let text = error.to_string();
+    assert!(
+        text.starts_with(
+            "CAN interface arm: CAN FD frame 123 (64 bytes) refused: this virtual bus is \
+             classic CAN"
+        ),
+        "{text}"
+    );
+    assert!(
+        text.contains("VirtualBusConfig::data_bitrate_bps"),
+        "{text}"
+    );
+    // Also when sent with a delay, and without BRS: the format is what a classic bus lacks.
+    let later = tx.send_after(fd_frame(0x124, &[1], false), Duration::from_millis(1));
+    assert!(later.await.is_err());
+    // Nothing reached the wire; classic frames still do.
+    tx.send(sff(0x125, &[1])).await.unwrap();
+    let got = drain(&rx, Duration::from_millis(3)).await;
+    assert_eq!(ids(&got), [0x125]);
+    assert_eq!(bus.stats().frames, 1);
+    assert_eq!(tx.pending_tx(), 0);
+}
+
+#[tokio::test(start_paused = true)]
+async fn fd_and_classic_frames_arbitrate_by_identifier() {
+    let bus = VirtualBus::new(fd_config(500_000, 2_000_000));
+    let a = bus.attach("a");
+    let b = bus.attach("b");
+    let observer = bus.attach("observer");
+    a.send(sff(0x300, &[1])).await.unwrap();
+    b.send(fd_frame(0x200, &[2; 48], true)).await.unwrap();
+    a.send(fd_frame(0x100, &[3; 12], false)).await.unwrap();
+    let got = drain(&observer, Duration::from_millis(5)).await;
+    // a's own frames leave in FIFO order; b's FD frame wins against a's classic 0x300.
+    assert_eq!(ids(&got), [0x200, 0x300, 0x100]);
+    assert!(got[0].frame.is_fd() && got[0].frame.brs());
+    assert!(!got[1].frame.is_fd());
+    assert!(got[2].frame.is_fd() && !got[2].frame.brs());
+}
+
 #[tokio::test(start_paused = true)]
 async fn frames_sent_after_an_idle_gap_start_when_sent() {
     let bus = VirtualBus::new(config(1_000_000, StuffingPolicy::None));

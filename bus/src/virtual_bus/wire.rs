@@ -18,7 +18,7 @@ use tokio::time::Instant;
 use super::faults::{ActiveFault, Fault, FaultId, Verdict};
 use super::stats::StatsCounter;
 use crate::fine_timer::Sleeper;
-use crate::timing::{bits_duration, frame_bits, StuffingPolicy};
+use crate::timing::{bits_duration, frame_bits, phase_bits, phases_duration, StuffingPolicy};
 use crate::{BusError, CanFrame, CanId, ReceivedFrame};
 
 /// State shared by the bus handle, the nodes, the fault handle and the wire task.
@@ -114,6 +114,8 @@ struct InFlight {
 /// Wire parameters fixed at creation.
 pub(super) struct WireParams {
     pub(super) bitrate_bps: u32,
+    /// CAN FD data bit rate; `None` on a classic bus, which refuses CAN FD frames.
+    pub(super) data_bitrate_bps: Option<u32>,
     pub(super) stuffing: StuffingPolicy,
     pub(super) epoch: Duration,
 }
@@ -181,6 +183,9 @@ impl WireState {
         };
         if slot.rx.is_none() {
             return Err(BusError::Closed);
+        }
+        if frame.is_fd() && self.params.data_bitrate_bps.is_none() {
+            return Err(fd_on_classic_bus(&slot.name, &frame));
         }
         if slot.is_bus_off(now) {
             return Err(BusError::BusOff);
@@ -304,8 +309,20 @@ impl WireState {
     }
 
     fn put_on_wire(&mut self, frame: CanFrame, node: usize, start: Duration, fate: Fate) {
-        let bits = frame_bits(&frame, self.params.stuffing);
-        let end = start + bits_duration(bits, self.params.bitrate_bps);
+        let (bits, duration) = if frame.is_fd() {
+            let phases = phase_bits(&frame, self.params.stuffing);
+            // Only queued on a bus with a data bit rate (see `enqueue`).
+            let data_bps = self
+                .params
+                .data_bitrate_bps
+                .unwrap_or(self.params.bitrate_bps);
+            let duration = phases_duration(phases, self.params.bitrate_bps, data_bps);
+            (phases.total(), duration)
+        } else {
+            let bits = frame_bits(&frame, self.params.stuffing);
+            (bits, bits_duration(bits, self.params.bitrate_bps))
+        };
+        let end = start + duration;
         self.in_flight = Some(InFlight {
             frame,
             node,
@@ -377,6 +394,23 @@ impl WireState {
             // No subscribers is fine: the tap is optional.
             let _ = tap.send(received);
         }
+    }
+}
+
+/// The refusal of a CAN FD frame by a classic bus, naming the node that sent it.
+fn fd_on_classic_bus(node: &str, frame: &CanFrame) -> BusError {
+    BusError::Io {
+        iface: node.to_owned(),
+        source: std::io::Error::new(
+            std::io::ErrorKind::Unsupported,
+            format!(
+                "CAN FD frame {} ({} bytes) refused: this virtual bus is classic CAN (a classic \
+                 controller answers a CAN FD frame with an error frame); give the bus a data \
+                 bit rate (VirtualBusConfig::data_bitrate_bps) to carry CAN FD",
+                frame.id(),
+                frame.len()
+            ),
+        ),
     }
 }
 

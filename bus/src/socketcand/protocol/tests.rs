@@ -273,3 +273,26 @@ fn error_texts_keep_their_quoting_and_stay_ascii() {
         assert!(text.is_ascii() && text.matches('>').count() == 1, "{text}");
     }
 }
+
+/// socketcand's newer CAN FD elements have no form here (python-can reads neither): `fdsend`
+/// is an unknown command, and a `< fdframe … >` from a server is not a frame.
+#[test]
+fn the_can_fd_elements_of_newer_socketcand_are_not_understood() {
+    let error = parse_command("< fdsend 123 01 3 AA BB CC >").unwrap_err();
+    assert_eq!(
+        error,
+        ParseError::Unknown {
+            word: "fdsend".into()
+        }
+    );
+    assert_eq!(error.to_string(), "unknown command `fdsend`");
+    assert!(matches!(
+        parse_reply("< fdframe 123 01 1.000000 AABBCC >"),
+        Err(ParseError::Unknown { word }) if word == "fdframe"
+    ));
+    // A 12-byte payload in a classic element is refused, not read as CAN FD.
+    assert!(matches!(
+        parse_reply("< frame 123 1.000000 000102030405060708090A0B >"),
+        Err(ParseError::BadHex { .. })
+    ));
+}
