@@ -270,6 +270,35 @@ class RobstrideEmulator:
     def __enter__(self) -> "RobstrideEmulator": ...
     def __exit__(self, *args: Any) -> bool: ...
 
+class DamiaoEmulator:
+    @property
+    def host(self) -> Optional[str]: ...
+    @property
+    def port(self) -> Optional[int]: ...
+    @property
+    def params(self) -> Dict[str, str]: ...
+    @property
+    def running(self) -> bool: ...
+    def faults(self) -> List[Dict[str, Any]]:
+        """Every fault it takes: name, description, params (name, description, required,
+        default, min, max, words), as scenario files name them."""
+    @property
+    def active_faults(self) -> List[str]:
+        """Faults injected from Python and not cleared, as labels."""
+    def inject(self, name: str, **kwargs: Union[int, float, str]) -> None:
+        """Injects fault `name` of `faults()`, its arguments by keyword: `motor=` (ESC_ID) and
+        the fault's own values, e.g. `inject("over_voltage", motor=1, voltage_v=40)`.
+        `ValueError` when the fault builder refuses them."""
+    def clear(self, name: str, **kwargs: Union[int, float, str]) -> None:
+        """Removes fault `name`'s cause on `motor=` (the error stays latched until the host
+        clears it)."""
+    def state(self) -> List[Dict[str, Any]]:
+        """Per motor: can_id, mst_id, model, enabled, mode, ctrl_mode, state, angle_rad,
+        speed_rad_s, torque_nm, temperature_c, mos_temperature_c, bus_voltage_v, faults."""
+    def stop(self) -> None: ...
+    def __enter__(self) -> "DamiaoEmulator": ...
+    def __exit__(self, *args: Any) -> bool: ...
+
 class RobotEmulator:
     @property
     def name(self) -> str: ...
@@ -329,6 +358,11 @@ def sim_robstride(
     iface: Optional[str] = None,
     socketcand: str = "127.0.0.1:0",
 ) -> RobstrideEmulator: ...
+def sim_damiao(
+    motors: Optional[List[str]] = None,
+    iface: Optional[str] = None,
+    socketcand: str = "127.0.0.1:0",
+) -> DamiaoEmulator: ...
 def sim_robot(
     file: str,
     socketcand: str = "127.0.0.1:0",

@@ -7,7 +7,8 @@ them. Each is a context manager (the emulator stops at the end of the ``with`` b
 Faults use each emulator's own names and its fault table's arguments, by keyword, on every
 kind: ``emu.inject("reply_delay", delay_ms=600)`` on the Realman, ``emu.inject("comm_loss",
 joint=3)`` on the Piper, ``emu.inject("encoder_glitch", motor=3, counts=100)`` on RobStride
-actuators, then ``emu.clear(...)``; ``emu.faults()`` lists them.
+actuators, ``emu.inject("over_voltage", motor=1, voltage_v=40)`` on Damiao motors, then
+``emu.clear(...)``; ``emu.faults()`` lists them.
 
 A whole robot from its robot file, every bus a channel of one socketcand server:
 
@@ -21,10 +22,12 @@ import os
 from typing import List, Optional, Sequence, Union
 
 from armhil._armhil import (
+    DamiaoEmulator,
     PiperEmulator,
     RealmanEmulator,
     RobotEmulator,
     RobstrideEmulator,
+    sim_damiao as _damiao,
     sim_piper as _piper,
     sim_realman as _realman,
     sim_robot as _robot,
@@ -32,10 +35,12 @@ from armhil._armhil import (
 )
 
 __all__ = [
+    "DamiaoEmulator",
     "PiperEmulator",
     "RealmanEmulator",
     "RobotEmulator",
     "RobstrideEmulator",
+    "damiao",
     "piper",
     "realman",
     "robot",
@@ -76,6 +81,18 @@ def robstride(
     """RobStride actuators (``motors``: "ID:MODEL" strings, default ``["127:RS03"]``) on
     SocketCAN ``iface`` or (default) behind a socketcand server."""
     return _robstride(motors, iface, socketcand)
+
+
+def damiao(
+    motors: Optional[List[str]] = None,
+    iface: Optional[str] = None,
+    socketcand: str = "127.0.0.1:0",
+) -> DamiaoEmulator:
+    """Damiao (DM) joint motors (``motors``: "ESC_ID:MODEL" strings answering on ESC_ID + 0x10
+    as on the OpenArm, or "ESC_ID:MODEL:FEEDBACK_ID"; default ``["1:DM4310"]``) on SocketCAN
+    ``iface`` or (default) behind a socketcand server (HOST:PORT, port 0 = a free port; see
+    ``emu.host`` / ``emu.port``). A bad motor string raises ``ValueError``."""
+    return _damiao(motors, iface, socketcand)
 
 
 def robot(

@@ -1,5 +1,6 @@
 //! `armhil decode`: print every frame of a candump log or pcap/pcapng capture decoded with
-//! units, through the driver's codecs: by one protocol (`--device`, one of the protocols the
+//! units (the Piper's and RobStride's through the driver's codecs, Damiao's by a decoder of
+//! its own, `armhil::interop::decode_damiao`): by one protocol (`--device`, one of the protocols the
 //! registered device kinds own, [`armhil::devices::wire_decoders`]), or by the devices of a
 //! scenario's bench (`--scenario`), each frame named by the device that owns it, as the report
 //! names them.
@@ -43,6 +44,11 @@ pub struct Args {
     /// RobStride: the model whose ranges scale status frames (RS00 … RS06, EL05).
     #[arg(long, default_value = "RS03")]
     pub model: String,
+    /// Damiao: a motor on the bus as ESC_ID:MODEL (answering on ESC_ID + 0x10) or
+    /// ESC_ID:MODEL:MST_ID, e.g. `1:DM8009` or `0x01:DM4310:0x11`; its model's ranges scale its
+    /// MIT commands and feedback (repeat for more motors; default `1:DM4310`).
+    #[arg(long = "motor", value_name = "ESC_ID:MODEL[:MST_ID]")]
+    pub motors: Vec<armhil::interop::DamiaoWireMotor>,
 }
 
 /// The largest capture read (whole, into memory, so bounded by what a laptop holds): 4 GiB,
@@ -185,11 +191,22 @@ impl Decoder {
             );
             return Ok(Self::Bench(Box::new(bench)));
         }
-        let model = driver::robstride::Model::parse(&args.model)
-            .with_context(|| format!("unknown RobStride model {:?}", args.model))?;
+        let model = driver::robstride::Model::parse(&args.model).with_context(|| {
+            let damiao = driver::damiao::Model::parse(&args.model).is_some();
+            format!(
+                "unknown RobStride model {:?}{}",
+                args.model,
+                if damiao {
+                    " (`--model` is RobStride's: a Damiao motor is given as --motor ESC_ID:MODEL)"
+                } else {
+                    ""
+                }
+            )
+        })?;
         let options = WireOptions {
             host_id: args.host_id,
             model,
+            damiao_motors: args.motors.clone(),
         };
         Ok(Self::Protocol(protocol(
             args.device.as_deref().unwrap_or(DEFAULT_DEVICE),

@@ -55,8 +55,9 @@ macro_rules! device_kinds {
         /// The scenario names of every device kind.
         pub const KIND_NAMES: &[&str] = &[$($name),*];
 
-        /// Every kind's `KindSpec::WIRE_DECODERS`, in registration order.
-        const WIRE_DECODER_LISTS: &[&[WireDecoder]] = &[$( <$module::Kind as KindSpec>::WIRE_DECODERS ),*];
+        /// Every kind's `KindSpec::WIRE_DECODERS`, in registration order, then the actuators'
+        /// protocols no kind owns ([`ACTUATOR_WIRE_DECODERS`]).
+        const WIRE_DECODER_LISTS: &[&[WireDecoder]] = &[$( <$module::Kind as KindSpec>::WIRE_DECODERS, )* ACTUATOR_WIRE_DECODERS];
 
         // Each protocol is registered once: by the kind that owns it.
         const _: () = assert!(
@@ -354,8 +355,29 @@ pub const fn same_text(a: &str, b: &str) -> bool {
     true
 }
 
+/// The protocols of actuators that no scenario device kind owns, which `armhil decode --device`
+/// reads by all the same: a robot's Damiao motors (which `armhil sim damiao` also serves on a
+/// bus of their own). Listed after the kinds' protocols and checked with them (each name once).
+const ACTUATOR_WIRE_DECODERS: &[WireDecoder] = &[WireDecoder {
+    name: "damiao",
+    help: "Damiao (DM) joint motors (11-bit ids; each motor by --motor ESC_ID:MODEL[:MST_ID], default 1:DM4310)",
+    decoder: wire_damiao,
+}];
+
+/// `armhil decode --device damiao`: the commands and replies of the motors `--motor` lists
+/// (the default motor when none is), each scaled by its own model's ranges; a frame on one of
+/// their identifiers that does not decode says why.
+fn wire_damiao(options: WireOptions) -> WireDecode {
+    let motors = match options.damiao_motors {
+        motors if motors.is_empty() => vec![crate::interop::DamiaoWireMotor::DEFAULT],
+        motors => motors,
+    };
+    Box::new(move |frame| crate::interop::decode_damiao(frame, &motors))
+}
+
 /// Every protocol `armhil decode --device NAME` reads captures by: each registered kind's own
-/// (`KindSpec::WIRE_DECODERS`), in registration order, each name once.
+/// (`KindSpec::WIRE_DECODERS`), in registration order, then the actuators' that no kind owns
+/// (Damiao's), each name once.
 pub fn wire_decoders() -> impl Iterator<Item = &'static WireDecoder> {
     WIRE_DECODER_LISTS.iter().flat_map(|list| list.iter())
 }
@@ -456,14 +478,16 @@ mod tests {
     const OPTIONS: WireOptions = WireOptions {
         host_id: 0xFD,
         model: Model::RS03,
+        damiao_motors: Vec::new(),
     };
 
     /// Each protocol is registered once, by the kind that owns it: `arm` and `actuator_group`
-    /// speak the Piper's and RobStride's and add none, the Realman speaks no CAN.
+    /// speak the Piper's and RobStride's and add none, the Realman speaks no CAN; Damiao's
+    /// motors are no scenario kind and come last.
     #[test]
     fn the_decode_protocols_are_those_of_the_kinds_that_own_them() {
         let names: Vec<&str> = wire_decoders().map(|d| d.name).collect();
-        assert_eq!(names, ["piper", "robstride", "robstride-mit"]);
+        assert_eq!(names, ["piper", "robstride", "robstride-mit", "damiao"]);
         assert!(wire_decoders().all(|d| !d.help.is_empty() && !d.help.contains('\n')));
     }
 
@@ -490,5 +514,12 @@ mod tests {
         let named = decoder("piper")(&feedback).expect("no error");
         assert_eq!(named.map(|d| d.name), Some("ArmStatus".to_owned()));
         assert_eq!(decoder("robstride")(&feedback), Ok(None));
+        assert_eq!(decoder("damiao")(&feedback), Ok(None));
+        // The default Damiao motor's enable (ESC_ID 1).
+        let enable =
+            CanFrame::standard(0x001, &[0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFC]).unwrap();
+        let named = decoder("damiao")(&enable).expect("no error");
+        assert_eq!(named.map(|d| d.name), Some("enable".to_owned()));
+        assert_eq!(decoder("robstride")(&enable), Ok(None));
     }
 }

@@ -68,6 +68,7 @@ pub(crate) async fn build(
                 .map(|spec| {
                     VirtualBus::new(VirtualBusConfig {
                         bitrate_bps: spec.bitrate_bps,
+                        data_bitrate_bps: spec.data_bitrate_bps,
                         timer: timer.clone(),
                         ..VirtualBusConfig::default()
                     })

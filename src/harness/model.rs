@@ -93,8 +93,11 @@ pub const DEFAULT_BUS: &str = "vcan0";
 pub struct BusSpec {
     /// Its name: in bus.log, in bus faults (`bus:`), and a robot's bus names.
     pub name: String,
-    /// Its bit rate.
+    /// Its bit rate (the arbitration phase's, for CAN FD).
     pub bitrate_bps: u32,
+    /// CAN FD's data-phase bit rate, when a device on it runs CAN FD (a robot file's
+    /// `data_bitrate`); `None`: classic CAN.
+    pub data_bitrate_bps: Option<u32>,
 }
 
 /// One device on the bench.

@@ -265,8 +265,13 @@ fn bench(ctx: &Ctx<'_>, raw: &S<RawBench>) -> Res<Bench> {
             let Some(name) = used.name.clone() else {
                 continue;
             };
-            match buses.iter().find(|b| b.name == name) {
+            match buses.iter_mut().find(|b| b.name == name) {
                 Some(bus) => {
+                    // A device running the bus as CAN FD makes it one (classic devices on it
+                    // are the device's settings' to refuse).
+                    if used.data_bitrate_bps.is_some() {
+                        bus.data_bitrate_bps = used.data_bitrate_bps;
+                    }
                     if let Some(rate) = used.bitrate_bps.filter(|r| *r != bus.bitrate_bps) {
                         return Err(ctx.err(
                             used.at,
@@ -292,6 +297,7 @@ fn bench(ctx: &Ctx<'_>, raw: &S<RawBench>) -> Res<Bench> {
                 None => buses.push(BusSpec {
                     name,
                     bitrate_bps: used.bitrate_bps.unwrap_or(bitrate_bps),
+                    data_bitrate_bps: used.data_bitrate_bps,
                 }),
             }
         }
@@ -300,6 +306,7 @@ fn bench(ctx: &Ctx<'_>, raw: &S<RawBench>) -> Res<Bench> {
         buses.push(BusSpec {
             name: DEFAULT_BUS.to_owned(),
             bitrate_bps,
+            data_bitrate_bps: None,
         });
     }
     let mut placed = Vec::new();
@@ -361,7 +368,11 @@ fn declared_buses(ctx: &Ctx<'_>, raw: &S<RawBench>, default_bps: u32) -> Res<Vec
             Some(rate) => bitrate(ctx, rate)?,
             None => default_bps,
         };
-        buses.push(BusSpec { name, bitrate_bps });
+        buses.push(BusSpec {
+            name,
+            bitrate_bps,
+            data_bitrate_bps: None,
+        });
     }
     Ok(buses)
 }

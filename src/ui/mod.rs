@@ -20,6 +20,7 @@
 
 mod access;
 pub mod bus_tap;
+pub mod damiao;
 mod fault_args;
 mod listener;
 pub mod piper;

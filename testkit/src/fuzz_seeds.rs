@@ -28,6 +28,8 @@ pub fn seeds(target: &str, root: &Path) -> std::io::Result<Vec<Seed>> {
         "piper_emulator" => per_log(&fixtures.join("piper"), piper_ops)?,
         "robstride_driver_decode" => per_log(&fixtures.join("robstride"), rs_decode)?,
         "robstride_emulator" => per_log(&fixtures.join("robstride"), rs_ops)?,
+        "damiao_driver_decode" => per_log(&fixtures.join("damiao"), dm_decode)?,
+        "damiao_emulator" => per_log(&fixtures.join("damiao"), dm_ops)?,
         "scenario_check" => files(&root.join("scenarios"), &["yaml", "yml"])?
             .into_iter()
             .map(|p| Ok((name_of(&p), std::fs::read(&p)?)))
@@ -183,6 +185,47 @@ fn rs_ops(frames: &[ReceivedFrame]) -> Vec<u8> {
             0x7F => out.push(0),
             dst => out.extend_from_slice(&[0xF0, dst]),
         }
+        if f.frame.len() == 8 {
+            out.push(0);
+        } else {
+            out.extend_from_slice(&[0xF0, f.frame.len() as u8]);
+        }
+        out.extend_from_slice(f.frame.data());
+        out.extend_from_slice(&[0, 4]);
+    }
+    out
+}
+
+/// `damiao_driver_decode`: model DM4310, each standard frame as an 8-byte frame (selector 0),
+/// expecting the ESC_ID of the OpenArm convention (MST_ID − 0x10; ESC_ID 1 for the frames
+/// below 0x11, the host's commands).
+fn dm_decode(frames: &[ReceivedFrame]) -> Vec<u8> {
+    let mut out = Vec::new();
+    for f in frames.iter().filter(|f| !f.frame.is_extended()) {
+        let id = f.frame.raw_id() as u16;
+        let esc = if (0x11..0x7FF).contains(&id) {
+            id - 0x10
+        } else {
+            1
+        };
+        out.push(1);
+        out.extend_from_slice(&esc.to_be_bytes());
+        out.push(0);
+        out.extend_from_slice(&id.to_be_bytes());
+        let mut data = f.frame.data().to_vec();
+        data.resize(8, 0);
+        out.extend_from_slice(&data);
+    }
+    out
+}
+
+/// `damiao_emulator`: model DM4310 (ESC_ID 1), each standard frame on its own identifier
+/// (selector 7) with its own length, then 5 ticks.
+fn dm_ops(frames: &[ReceivedFrame]) -> Vec<u8> {
+    let mut out = vec![1];
+    for f in frames.iter().filter(|f| !f.frame.is_extended()) {
+        out.extend_from_slice(&[1, 7]);
+        out.extend_from_slice(&(f.frame.raw_id() as u16).to_be_bytes());
         if f.frame.len() == 8 {
             out.push(0);
         } else {

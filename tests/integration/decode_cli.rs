@@ -252,3 +252,190 @@ fn device_accepts_each_registered_protocol_and_suggests_one_for_an_unknown_name(
         "{stderr}"
     );
 }
+
+/// The Damiao decoder (`armhil::interop::decode_damiao`, written apart from both Damiao
+/// codecs) against every shared vector of `fixtures/damiao/`: each frame is named by its
+/// `cmd` and its fields carry the annotated values (MIT and feedback within the quantisation
+/// step, the rest exactly as printed).
+#[test]
+fn every_damiao_vector_decodes_to_its_annotated_fields() {
+    use armhil::interop::{decode_damiao, DamiaoWireMotor};
+    use driver::damiao::Model;
+
+    let dir = testkit::fixtures::repo_path("damiao");
+    let vectors = testkit::fixtures::read_dir(&dir).expect("fixtures/damiao reads");
+    let text = |v: &testkit::fixtures::Vector, key: &str| -> String {
+        v.text(key)
+            .unwrap_or_else(|e| panic!("{}: {e}", v.name))
+            .to_owned()
+    };
+    let int = |v: &testkit::fixtures::Vector, key: &str| v.int(key).expect(key);
+    let real = |v: &testkit::fixtures::Vector, key: &str| v.float(key).expect(key);
+    let mut count = 0;
+    for v in &vectors {
+        let model = Model::parse(&text(v, "model")).expect("a model the driver knows");
+        let motor = DamiaoWireMotor {
+            esc_id: int(v, "esc_id") as u16,
+            mst_id: int(v, "mst_id") as u16,
+            model,
+        };
+        let decoded = decode_damiao(&v.frame, &[motor])
+            .unwrap_or_else(|e| panic!("{}: {e}", v.name))
+            .unwrap_or_else(|| panic!("{}: not decoded", v.name));
+        let field = |name: &str| -> String {
+            decoded
+                .fields
+                .iter()
+                .find(|f| f.name == name)
+                .unwrap_or_else(|| panic!("{}: no field {name} in {decoded:?}", v.name))
+                .value
+                .clone()
+        };
+        let number = |name: &str| -> f64 { field(name).parse().expect("a number") };
+        assert_eq!(number("motor"), int(v, "esc_id") as f64, "{}", v.name);
+        let ranges = model.ranges(driver::damiao::RangeTable::Current);
+        let (pmax, vmax, tmax) = (
+            f64::from(ranges.pmax),
+            f64::from(ranges.vmax),
+            f64::from(ranges.tmax),
+        );
+        // A packed field: its code (`raw`) and its value clamped into the range, within
+        // one step (the codes truncate) and the four printed decimals.
+        let packed = |name: &str, key: &str, raw: &str, (lo, hi): (f64, f64), bits: u32| {
+            let step = (hi - lo) / f64::from((1u32 << bits) - 1);
+            let got = number(name);
+            let from_raw = int(v, raw) as f64 * step + lo;
+            assert!(
+                (got - from_raw).abs() <= 5e-5,
+                "{}: {name} {got} vs code {from_raw}",
+                v.name
+            );
+            let want = real(v, key).clamp(lo, hi);
+            assert!(
+                (got - want).abs() <= step + 5e-5,
+                "{}: {name} {got} vs {want}",
+                v.name
+            );
+        };
+        let cmd = text(v, "cmd");
+        let expected_name = match cmd.as_str() {
+            "reg_read" => "register_read",
+            "reg_write" => "register_write",
+            "reg_save" => "register_save",
+            "reg_reply" if int(v, "op") == 0x33 => "register_read_reply",
+            "reg_reply" => "register_write_reply",
+            other => other,
+        };
+        assert_eq!(decoded.name, expected_name, "{}", v.name);
+        match cmd.as_str() {
+            "enable" | "disable" | "set_zero" | "clear_error" | "reg_save" | "refresh" => {}
+            "mit" => {
+                packed("p", "p_des_rad", "p_raw", (-pmax, pmax), 16);
+                packed("v", "v_des_rad_s", "v_raw", (-vmax, vmax), 12);
+                packed("kp", "kp", "kp_raw", (0.0, 500.0), 12);
+                packed("kd", "kd", "kd_raw", (0.0, 5.0), 12);
+                packed("t", "t_ff_nm", "t_raw", (-tmax, tmax), 12);
+            }
+            "pos_vel" => {
+                assert_eq!(number("p"), real(v, "p_des_rad"), "{}", v.name);
+                assert_eq!(number("v"), real(v, "v_des_rad_s"), "{}", v.name);
+            }
+            "velocity" => assert_eq!(number("v"), real(v, "v_des_rad_s"), "{}", v.name),
+            "force_pos" => {
+                assert_eq!(number("p"), real(v, "p_des_rad"), "{}", v.name);
+                assert_eq!(number("v"), int(v, "v_raw") as f64 / 100.0, "{}", v.name);
+                assert_eq!(number("i"), int(v, "i_raw") as f64 / 10_000.0, "{}", v.name);
+                assert_eq!(number("v"), real(v, "v_des_rad_s").min(100.0), "{}", v.name);
+                assert_eq!(number("i"), real(v, "i_des").min(1.0), "{}", v.name);
+            }
+            "reg_read" => assert_eq!(field("reg"), text(v, "reg"), "{}", v.name),
+            "reg_write" | "reg_reply" => {
+                assert_eq!(field("reg"), text(v, "reg"), "{}", v.name);
+                // f32 registers print as the f32 reads (`0.945`), u32 ones whole.
+                assert_eq!(
+                    number("value") as f32,
+                    real(v, "value") as f32,
+                    "{}",
+                    v.name
+                );
+            }
+            "feedback" => {
+                let tol = real(v, "tol");
+                assert_eq!(field("state"), text(v, "state_name"), "{}", v.name);
+                for (name, key) in [("p", "pos_rad"), ("v", "vel_rad_s"), ("t", "torque_nm")] {
+                    let (got, want) = (number(name), real(v, key));
+                    assert!(
+                        (got - want).abs() <= tol,
+                        "{}: {name} {got} vs {want}",
+                        v.name
+                    );
+                }
+                assert_eq!(number("mos"), real(v, "t_mos_c"), "{}", v.name);
+                assert_eq!(number("rotor"), real(v, "t_rotor_c"), "{}", v.name);
+            }
+            other => panic!("{}: no check for cmd={other}", v.name),
+        }
+        count += 1;
+    }
+    assert_eq!(count, 66, "every vector of fixtures/damiao/");
+}
+
+/// `armhil decode --device damiao` on the command vectors of three OpenArm-like motors: each
+/// frame named with its values in units, by its own motor's model.
+#[test]
+fn decode_device_damiao_names_each_command_with_its_motor_s_ranges() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let log = root.join("fixtures/damiao/commands.log");
+    let out = armhil_ok(&[
+        "decode".as_ref(),
+        log.as_ref(),
+        "--device".as_ref(),
+        "damiao".as_ref(),
+        "--motor".as_ref(),
+        "1:DM4310".as_ref(),
+        "--motor".as_ref(),
+        "2:DM8009".as_ref(),
+        "--motor".as_ref(),
+        "0x03:DM4340:0x13".as_ref(),
+    ]);
+    let lines: Vec<&str> = out.lines().collect();
+    assert_eq!(lines.len(), 21, "{out}");
+    assert_eq!(lines[0], "0.000000  001  enable  motor=1");
+    assert_eq!(
+        lines[5],
+        "0.005000  001  mit  motor=1  p=0.9997 rad  v=2.1905 rad/s  kp=49.9389  kd=1.1990  t=1.4969 N.m"
+    );
+    // The DM4340's VMAX is 10 rad/s (v 5.0 in the vector), the DM8009's TMAX 54 N·m (t -20).
+    assert!(
+        lines[11].contains("  mit  motor=3  p=0.4999 rad  v=4.9988 rad/s"),
+        "{}",
+        lines[11]
+    );
+    assert!(
+        lines[12].contains("  mit  motor=2  ") && lines[12].contains("t=-20.0044 N.m"),
+        "{}",
+        lines[12]
+    );
+    assert_eq!(
+        lines[13],
+        "0.013000  101  pos_vel  motor=1  p=1.5000 rad  v=2.0000 rad/s"
+    );
+    assert_eq!(
+        lines[15],
+        "0.015000  201  velocity  motor=1  v=5.0000 rad/s"
+    );
+    assert_eq!(
+        lines[18],
+        "0.018000  301  force_pos  motor=1  p=1.0000 rad  v=5.00 rad/s  i=0.5000"
+    );
+    // Without --motor, the default motor (1:DM4310): motor 3's frame is nobody's.
+    let default = armhil_ok(&[
+        "decode".as_ref(),
+        log.as_ref(),
+        "--device".as_ref(),
+        "damiao".as_ref(),
+    ]);
+    let default: Vec<&str> = default.lines().collect();
+    assert_eq!(default[5], lines[5]);
+    assert_eq!(default[11], "0.011000  003  ?  raw=851EBFF23D6B78DA");
+}

@@ -36,14 +36,20 @@ struct Running {
     /// Per bus, its motors in robot-file order (J1..J7, gripper).
     motors: Vec<Vec<DamiaoMotor>>,
     _drivers: Vec<DamiaoDriver>,
-    _buses: Vec<VirtualBus>,
+    buses: Vec<VirtualBus>,
 }
 
 fn start(config: RobotConfig) -> Running {
     let buses: Vec<VirtualBus> = config
         .buses
         .iter()
-        .map(|_| VirtualBus::new(VirtualBusConfig::default()))
+        .map(|b| {
+            VirtualBus::new(VirtualBusConfig {
+                bitrate_bps: b.bitrate_bps,
+                data_bitrate_bps: b.data_bitrate_bps,
+                ..VirtualBusConfig::default()
+            })
+        })
         .collect();
     let nodes = buses
         .iter()
@@ -74,7 +80,7 @@ fn start(config: RobotConfig) -> Running {
         robot,
         motors,
         _drivers: drivers,
-        _buses: buses,
+        buses,
     }
 }
 
@@ -224,4 +230,47 @@ async fn a_robot_mixes_robstride_and_damiao_actuators_each_on_its_protocol() {
         [("damiao", true), ("robstride", true), ("robstride", false)]
     );
     robot.shutdown().await;
+}
+
+#[tokio::test(start_paused = true)]
+async fn the_openarm_answers_a_can_fd_frame_in_can_fd_and_a_classic_one_in_classic() {
+    let config = openarm();
+    assert_eq!(
+        config.buses[0].data_bitrate_bps,
+        Some(5_000_000),
+        "CAN FD at 1/5 Mbit/s"
+    );
+    let running = start(config);
+    let host = running.buses[1].attach("fd host");
+    let enable = [0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFC];
+    let brs = bus::FdFlags {
+        brs: true,
+        esi: false,
+    };
+    host.send(CanFrame::fd(bus::CanId::standard(3).unwrap(), &enable, brs).unwrap())
+        .await
+        .unwrap();
+    let reply = tokio::time::timeout(Duration::from_millis(50), host.recv())
+        .await
+        .expect("a reply")
+        .unwrap()
+        .frame;
+    assert_eq!(reply.raw_id(), 0x13);
+    assert!(
+        reply.is_fd() && reply.brs(),
+        "answered in CAN FD with BRS: {reply:?}"
+    );
+    assert_eq!(reply.data()[0], 0x13, "enabled, motor 3");
+    let disable = [0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFD];
+    host.send(CanFrame::standard(3, &disable).unwrap())
+        .await
+        .unwrap();
+    let reply = tokio::time::timeout(Duration::from_millis(50), host.recv())
+        .await
+        .expect("a reply")
+        .unwrap()
+        .frame;
+    assert!(!reply.is_fd(), "a classic request gets a classic reply");
+    assert_eq!(reply.data()[0], 0x03, "disabled, motor 3");
+    running.robot.shutdown().await;
 }

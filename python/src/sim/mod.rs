@@ -1,11 +1,12 @@
 //! The emulators under Python control, in-process and in real time, started the way
-//! `armhil sim <device>` starts them: the Realman controller on TCP/UDP, the Piper and the
-//! RobStride actuators on a SocketCAN interface or behind a socketcand server (CAN over TCP,
-//! for hosts without kernel CAN), and a whole robot from its robot file with every bus at
-//! once. Each is a context manager; faults use the emulator's own names (`comm_loss`,
-//! `reply_delay`, `over_temperature`, …).
+//! `armhil sim <device>` starts them: the Realman controller on TCP/UDP, the Piper, the
+//! RobStride actuators and the Damiao motors on a SocketCAN interface or behind a socketcand
+//! server (CAN over TCP, for hosts without kernel CAN), and a whole robot from its robot file
+//! with every bus at once. Each is a context manager; faults use the emulator's own names
+//! (`comm_loss`, `reply_delay`, `over_temperature`, …).
 
 mod can_place;
+mod damiao;
 mod emulated;
 mod piper;
 mod realman;
@@ -16,6 +17,7 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use std::sync::Mutex;
 
+use damiao::DamiaoEmulator;
 use piper::PiperEmulator;
 use realman::RealmanEmulator;
 use robot::RobotEmulator;
@@ -38,11 +40,13 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<RealmanEmulator>()?;
     m.add_class::<PiperEmulator>()?;
     m.add_class::<RobstrideEmulator>()?;
+    m.add_class::<DamiaoEmulator>()?;
     m.add_class::<RobotEmulator>()?;
     let py = m.py();
     m.add("sim_realman", wrap_pyfunction!(realman::realman, py)?)?;
     m.add("sim_piper", wrap_pyfunction!(piper::piper, py)?)?;
     m.add("sim_robstride", wrap_pyfunction!(robstride::robstride, py)?)?;
+    m.add("sim_damiao", wrap_pyfunction!(damiao::damiao, py)?)?;
     m.add("sim_robot", wrap_pyfunction!(robot::robot, py)?)?;
     Ok(())
 }

@@ -23,6 +23,19 @@ pub use registry::{
 };
 pub use snapshot::{ActuatorSnapshot, Detail};
 
+/// `replies` in the format of `request`: CAN FD frames with its flags when it was one (a
+/// firmware answers in the format it was addressed in), as they are otherwise.
+pub fn in_format_of(request: &CanFrame, replies: Vec<CanFrame>) -> Vec<CanFrame> {
+    let Some(flags) = request.fd_flags() else {
+        return replies;
+    };
+    // A classic payload (0..=8 bytes) is a valid FD length: the conversion cannot fail.
+    replies
+        .into_iter()
+        .map(|reply| CanFrame::fd(reply.id(), reply.data(), flags).unwrap_or(reply))
+        .collect()
+}
+
 /// A single shaft an actuator drives: a rig on a bench, or one joint of a robot's world.
 pub trait ShaftPlant: Send + Sync {
     /// Advance by `dt_s` with the motor applying `torque_nm`.
@@ -46,7 +59,15 @@ pub trait ActuatorFirmware: Send {
     /// The CAN identifier the actuator is addressed by now (a host may have moved it).
     fn can_id(&self) -> u32;
     /// Answers one frame from the bus (most frames get one reply; frames for others none).
+    /// A CAN FD frame reaches only a firmware that [`speaks_fd`](Self::speaks_fd); its replies
+    /// then leave as CAN FD frames with the request's flags (the robot's runner does both).
     fn handle_frame(&mut self, frame: &CanFrame) -> Vec<CanFrame>;
+    /// Whether its CAN controller takes CAN FD frames (and answers in the format it was
+    /// addressed in). A classic controller never sees them, as on hardware: false unless the
+    /// kind says.
+    fn speaks_fd(&self) -> bool {
+        false
+    }
     /// Runs one millisecond: control loops, plant substeps, periodic frames it sends.
     fn tick(&mut self) -> Vec<CanFrame>;
     /// Whether the actuator is enabled (its loops drive the joint).

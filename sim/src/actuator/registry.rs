@@ -39,6 +39,9 @@ pub struct ActuatorKind {
     pub configure: fn(model: &str, can_id: u32) -> Option<ActuatorConfig>,
     /// The bit rates (bit/s) its actuators run a bus at.
     pub bitrates_bps: &'static [u32],
+    /// Whether its CAN controllers take CAN FD frames (a classic one on an FD bus destroys
+    /// every FD frame with an error frame).
+    pub fd: bool,
     /// The fault table of a `model` actuator at power-on (what its firmware's
     /// [`super::ActuatorFirmware::fault_table`] says), for a front end to offer before a
     /// robot runs.
@@ -83,6 +86,7 @@ pub static ROBSTRIDE: ActuatorKind = ActuatorKind {
         )))
     },
     bitrates_bps: &[1_000_000, 500_000, 250_000, 125_000],
+    fd: false,
     faults: |_| crate::robstride::faults::actuator_fault_table(),
     fault_label: |_, name, args, clearing| {
         let fault = RobstrideFault::named(name)?;
@@ -105,6 +109,7 @@ pub static DAMIAO: ActuatorKind = ActuatorKind {
     // identifier 0x7FF.
     ids: (1, 0x4FE),
     bitrates_bps: &[1_000_000, 500_000, 250_000, 200_000, 125_000],
+    fd: true,
     configure: |model, can_id| {
         let model = DamiaoModel::from_name(model)?;
         let esc_id = u16::try_from(can_id).unwrap_or(u16::MAX);

@@ -9,7 +9,9 @@
 //!   state nibble as injectable faults.
 //! - [`DamiaoBus::spawn`]: several motors on one [`bus::CanBus`], with a [`DamiaoHandle`] for
 //!   the harness (`inject`, `clear`, `set_temperature`, `set_external_torque`, `snapshot`,
-//!   `shutdown`). Works under a paused tokio clock.
+//!   `shutdown`) and a [`DamiaoMonitor`] for front ends (`target`: its faults through
+//!   [`crate::fault_desk::FaultTarget`]). Works under a paused tokio clock. With a state file
+//!   ([`state_file`]) the motors keep their saved registers, ids and zero across restarts.
 //!
 //! Behaviour the note leaves open, and what the emulator does:
 //! - Frames: classic standard frames only (extended ones are ignored). CAN FD is not modelled
@@ -51,6 +53,8 @@ mod firmware;
 pub mod model;
 pub mod registers;
 mod runner;
+pub mod state_file;
+mod target;
 
 pub use faults::{ErrorSet, Fault, Injection, Thresholds};
 pub use firmware::{
@@ -58,4 +62,5 @@ pub use firmware::{
     MAX_ID, OPENARM_MST_OFFSET, TURNAROUND,
 };
 pub use model::{MitRanges, Model, ModelSpec};
-pub use runner::{DamiaoBus, DamiaoConfig, DamiaoError, DamiaoHandle};
+pub use runner::{DamiaoBus, DamiaoConfig, DamiaoError, DamiaoHandle, DamiaoMonitor};
+pub use target::{MotorFault, MOTOR};

@@ -84,8 +84,11 @@ impl Gantry {
 pub struct BusConfig {
     /// Its name (`can0` …): the interface or socketcand channel it is served on.
     pub name: String,
-    /// Bit rate (bit/s).
+    /// Bit rate (bit/s): the arbitration phase's, for CAN FD.
     pub bitrate_bps: u32,
+    /// CAN FD's data-phase bit rate (bit/s) when the bus runs CAN FD (the OpenArm's: 1 and
+    /// 5 Mbit/s); `None`: classic CAN.
+    pub data_bitrate_bps: Option<u32>,
 }
 
 /// An actuated joint: which motor drives it, on which bus, and how the shaft meets the joint.

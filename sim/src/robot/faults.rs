@@ -187,7 +187,18 @@ impl RobotLayout {
             }
             fault => {
                 // Every other name is an actuator kind's, with its values (which clearing
-                // may leave out), checked by the kind of the joint's actuator.
+                // may leave out), checked by the kind of the joint's actuator. An argument no
+                // kind's fault of this name takes is refused first, by name.
+                let known: Vec<&str> = std::iter::once("joint")
+                    .chain(
+                        self.actuator_faults()
+                            .iter()
+                            .filter(|f| f.name == fault)
+                            .flat_map(|f| f.params.iter().map(|p| p.name))
+                            .collect::<Vec<_>>(),
+                    )
+                    .collect();
+                args.only(name, &known)?;
                 let (joint, model) = self.joint(name, args)?;
                 let kind = kind_named(model.kind).filter(|k| k.has_fault(model.name, fault));
                 let Some(kind) = kind else {

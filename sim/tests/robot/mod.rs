@@ -44,6 +44,7 @@ fn arm_config(start: &[(&str, f64)]) -> RobotConfig {
             .map(|name| BusConfig {
                 name: (*name).into(),
                 bitrate_bps: 1_000_000,
+                data_bitrate_bps: None,
             })
             .collect(),
         actuators: joints

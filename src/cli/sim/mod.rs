@@ -8,6 +8,7 @@ use sim::supervise::{DeathWatch, EmulatorDied};
 
 use super::signals::StopSignals;
 
+pub mod damiao;
 pub mod piper;
 pub mod realman;
 pub mod rig;
@@ -70,6 +71,8 @@ served_kinds! {
     "realman" => Realman(realman),
     /// RobStride actuators (CAN, 29-bit IDs), any number on one bus.
     "robstride" => Robstride(robstride),
+    /// Damiao (DM) joint motors (CAN, 11-bit IDs), any number on one bus.
+    "damiao" => Damiao(damiao),
     /// A whole robot from its robot file: one physics world, every bus served at once.
     "robot" => Robot(robot),
 }

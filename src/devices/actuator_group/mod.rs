@@ -152,6 +152,7 @@ impl KindSpec for Kind {
                 .map(|b| BusUse {
                     name: Some(b.name.clone()),
                     bitrate_bps: Some(b.bitrate_bps),
+                    data_bitrate_bps: b.data_bitrate_bps,
                     at,
                 })
                 .collect(),

@@ -61,6 +61,8 @@ pub struct BusUse {
     pub name: Option<String>,
     /// The bit rate the device needs, when its settings fix one (a robot's file does).
     pub bitrate_bps: Option<u32>,
+    /// The CAN FD data-phase bit rate it needs, when it runs the bus as CAN FD.
+    pub data_bitrate_bps: Option<u32>,
     /// Where the name is written, for errors.
     pub at: Pos,
 }
@@ -77,6 +79,7 @@ pub(crate) fn one_bus(named: &Option<(String, Pos)>, at: Pos) -> Vec<BusUse> {
     vec![BusUse {
         name: named.as_ref().map(|(name, _)| name.clone()),
         bitrate_bps: None,
+        data_bitrate_bps: None,
         at: named.as_ref().map_or(at, |(_, p)| *p),
     }]
 }
@@ -99,13 +102,16 @@ pub trait FrameDecoder: Send + Sync {
 }
 
 /// The options of `armhil decode` a protocol's decoder reads: RobStride's protocols address
-/// replies to a host and scale values by the motor model's ranges.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// replies to a host and scale values by the motor model's ranges; Damiao's name each motor's
+/// identifiers and model.
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub struct WireOptions {
     /// The host id replies are addressed to (`--host-id`).
     pub host_id: u8,
     /// The model whose ranges scale the frames (`--model`).
     pub model: driver::robstride::Model,
+    /// The Damiao motors on the bus (`--motor`; none given: the default motor).
+    pub damiao_motors: Vec<crate::interop::DamiaoWireMotor>,
 }
 
 /// Decodes a capture's frames by one protocol: `Ok(Some(_))` names a frame and its fields,

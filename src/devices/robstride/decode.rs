@@ -81,7 +81,7 @@ impl FrameDecoder for RobstrideFrames {
 /// `armhil decode --device robstride`: the private protocol both ways, the motors' replies to
 /// `--host-id` and the host's commands, scaled by `--model`'s ranges.
 pub(crate) fn wire_private(options: WireOptions) -> WireDecode {
-    let WireOptions { host_id, model } = options;
+    let WireOptions { host_id, model, .. } = options;
     Box::new(move |frame| {
         Ok(decode_robstride(frame, host_id, model)
             .or_else(|| decode_robstride_command(frame, host_id, model)))
@@ -91,7 +91,7 @@ pub(crate) fn wire_private(options: WireOptions) -> WireDecode {
 /// `armhil decode --device robstride-mit`: the MIT variant's 11-bit frames, scaled by
 /// `--model`'s ranges.
 pub(crate) fn wire_mit(options: WireOptions) -> WireDecode {
-    let WireOptions { host_id, model } = options;
+    let WireOptions { host_id, model, .. } = options;
     Box::new(move |frame| Ok(decode_robstride_mit(frame, host_id, model)))
 }
 

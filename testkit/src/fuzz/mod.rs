@@ -11,6 +11,7 @@
 //! Only public APIs of the crates are used. A failed invariant panics (that is what libFuzzer
 //! reports as a crash); an input that is merely invalid must return quietly.
 
+mod damiao;
 mod input;
 mod logs;
 mod piper;
@@ -20,6 +21,7 @@ mod scenario;
 pub mod smoke;
 mod urdf;
 
+pub use damiao::{damiao_driver_decode, damiao_emulator};
 pub use logs::{candump_reader, pcap_reader};
 pub use piper::{piper_driver_decode, piper_emulator};
 pub use realman::{realman_command, realman_framing, realman_reply};
@@ -44,6 +46,8 @@ pub const TARGETS: &[(&str, Entry)] = &[
     ("realman_command", realman_command),
     ("realman_reply", realman_reply),
     ("urdf_reader", urdf_reader),
+    ("damiao_emulator", damiao_emulator),
+    ("damiao_driver_decode", damiao_driver_decode),
 ];
 
 /// The entry point of target `name`, if there is one.

@@ -27,6 +27,12 @@ impl ActuatorFirmware for DamiaoMotor {
         DamiaoMotor::handle_frame(self, frame)
     }
 
+    /// The OpenArm runs its Damiao buses as CAN FD (1 Mbit/s nominal, 5 Mbit/s data) with the
+    /// classic payloads inside FD frames: the motors take both.
+    fn speaks_fd(&self) -> bool {
+        true
+    }
+
     fn tick(&mut self) -> Vec<CanFrame> {
         DamiaoMotor::tick(self)
     }

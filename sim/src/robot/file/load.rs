@@ -17,6 +17,10 @@ fn pos<T>(value: &S<T>) -> Pos {
     Pos::of(value)
 }
 
+/// The CAN FD data-phase bit rates a robot file's bus may give (bit/s): what FD controllers
+/// and transceivers commonly run (the OpenArm: 5 Mbit/s).
+const FD_DATA_BITRATES_BPS: [u32; 5] = [1_000_000, 2_000_000, 4_000_000, 5_000_000, 8_000_000];
+
 /// Largest robot file read (bytes). The humanoid's is under 4 KB.
 const MAX_ROBOT_FILE_BYTES: u64 = 1024 * 1024;
 
@@ -250,6 +254,15 @@ impl Checker<'_> {
                 }
             };
             let kind = config.kind();
+            if buses[bus].data_bitrate_bps.is_some() && !kind.fd {
+                return Err(self.err(
+                    pos(&a.bus),
+                    format!(
+                        "bus `{}` runs CAN FD (`data_bitrate`); a {} actuator is a classic CAN controller and would destroy every FD frame on it",
+                        names[bus], kind.name
+                    ),
+                ));
+            }
             let bitrate = buses[bus].bitrate_bps;
             if !kind.bitrates_bps.contains(&bitrate) {
                 let rates: Vec<String> = kind.bitrates_bps.iter().map(u32::to_string).collect();
@@ -593,9 +606,31 @@ impl Checker<'_> {
                     }
                 },
             };
+            let data_bitrate_bps = match &b.data_bitrate {
+                None => None,
+                Some(r) => match u32::try_from(r.value)
+                    .ok()
+                    .filter(|v| FD_DATA_BITRATES_BPS.contains(v) && *v >= bitrate_bps)
+                {
+                    Some(v) => Some(v),
+                    None => {
+                        let list: Vec<String> =
+                            FD_DATA_BITRATES_BPS.iter().map(u32::to_string).collect();
+                        return Err(self.err(
+                            pos(r),
+                            format!(
+                                "`data_bitrate` {} must be one of {} and at least the bus's `bitrate` ({bitrate_bps})",
+                                r.value,
+                                list.join(", ")
+                            ),
+                        ));
+                    }
+                },
+            };
             buses.push(BusConfig {
                 name: name.clone(),
                 bitrate_bps,
+                data_bitrate_bps,
             });
         }
         Ok(buses)

@@ -57,6 +57,8 @@ pub(super) struct RawBus {
     pub name: S<String>,
     /// Bit rate (bit/s); 1 Mbit/s when left out.
     pub bitrate: Option<S<i64>>,
+    /// CAN FD's data-phase bit rate (bit/s): the bus runs CAN FD. Classic when left out.
+    pub data_bitrate: Option<S<i64>>,
 }
 
 /// One actuated joint.
