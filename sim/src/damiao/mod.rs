@@ -1,5 +1,5 @@
 //! Damiao (DM) joint-motor emulator: the 11-bit CAN protocol of DM-J4310/4340/8009/… motors
-//! (protocol note `shared/protocols/damiao.md`), the OpenArm's actuators. Any number of motors
+//! (protocol page `docs/protocols/damiao.md`), the OpenArm's actuators. Any number of motors
 //! on one bus, each driving a single shaft.
 //!
 //! - [`DamiaoMotor`]: one motor's firmware (pure: frames in, frames out, 1 ms ticks), also
