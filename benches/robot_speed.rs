@@ -3,7 +3,9 @@
 //! - Virtual time: how many times faster than real time the robot runs on one core (a
 //!   current-thread runtime under a paused clock, as `armhil run` does), for the 6-DoF arm,
 //!   the humanoid standing (every actuator enabled in operation control, its feet on the
-//!   ground), one and two humanoids in one process (20 and 40 actuators), and a one-actuator
+//!   ground), one and two humanoids in one process (20 and 40 actuators), the OpenArm (16
+//!   Damiao motors on two CAN FD buses, both arms holding in MIT mode at the vendor's gains),
+//!   and a one-actuator
 //!   robot (the arm with only its shoulder actuated is not a robot file; the arm with all six
 //!   is the smallest shipped).
 //! - The Unitree G1 of the public corpus (example-robot-data 6.0.0, when `ARMHIL_URDF_CORPUS`
@@ -47,14 +49,30 @@ struct Subject {
     gains: Vec<(f64, f64)>,
 }
 
+/// The OpenArm vendor's MIT gains per joint (J1..J7, gripper): kp, kd.
+const OPENARM_GAINS: [(f64, f64); 8] = [
+    (70.0, 2.75),
+    (70.0, 2.5),
+    (70.0, 2.0),
+    (60.0, 2.0),
+    (10.0, 0.7),
+    (10.0, 0.6),
+    (10.0, 0.5),
+    (10.0, 0.2),
+];
+
 /// A shipped robot (`robots/NAME.yaml`): legs (every actuator but the arms' RS02, ankles
-/// included) at kp 300, kd 5; arms at kp 50, kd 1, as `scenarios/robot/humanoid_stand.yaml`.
+/// included) at kp 300, kd 5; arms at kp 50, kd 1, as `scenarios/robot/humanoid_stand.yaml`;
+/// a Damiao motor at the OpenArm's gains for its place on its bus (J1..J7, gripper).
 fn shipped(name: &str) -> Subject {
     let config = robot(name);
     let gains = config
         .actuators
         .iter()
         .map(|a| {
+            if let sim::actuator::ActuatorConfig::Damiao(m) = &a.actuator {
+                return OPENARM_GAINS[usize::from(m.esc_id.saturating_sub(1)) % 8];
+            }
             let leg = a.actuator.model().name != "RS02" || a.joint.contains("ankle");
             if leg {
                 (300.0, 5.0)
@@ -169,6 +187,40 @@ fn enable_frame(motor: u8) -> CanFrame {
     CanFrame::extended((3 << 24) | (HOST << 8) | u32::from(motor), &[0; 8]).expect("a frame")
 }
 
+/// A Damiao MIT frame holding `angle_rad` with kp/kd (the protocol page's packing: p 16 bits
+/// over ±PMAX, v and t_ff at 0, kp over 0..500, kd over 0..5, truncated).
+fn damiao_hold_frame(m: &sim::damiao::MotorConfig, angle_rad: f64, kp: f64, kd: f64) -> CanFrame {
+    let ranges = m.model.ranges();
+    let bits = |v: f64, lo: f64, hi: f64, n: u32| {
+        let top = f64::from((1u32 << n) - 1);
+        ((v.clamp(lo, hi) - lo) * top / (hi - lo)) as u32
+    };
+    let pmax = f64::from(ranges.p_max_rad);
+    let (vmax, tmax) = (f64::from(ranges.v_max_rad_s), f64::from(ranges.t_max_nm));
+    let p = bits(angle_rad, -pmax, pmax, 16);
+    let v = bits(0.0, -vmax, vmax, 12);
+    let kp = bits(kp, 0.0, 500.0, 12);
+    let kd = bits(kd, 0.0, 5.0, 12);
+    let t = bits(0.0, -tmax, tmax, 12);
+    let data = [
+        (p >> 8) as u8,
+        p as u8,
+        (v >> 4) as u8,
+        (((v & 0xF) << 4) | (kp >> 8)) as u8,
+        kp as u8,
+        (kd >> 4) as u8,
+        (((kd & 0xF) << 4) | (t >> 8)) as u8,
+        t as u8,
+    ];
+    CanFrame::standard(m.esc_id, &data).expect("a frame")
+}
+
+/// A Damiao enable (`FF … FC` on its command id).
+fn damiao_enable_frame(m: &sim::damiao::MotorConfig) -> CanFrame {
+    CanFrame::standard(m.esc_id, &[0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFC])
+        .expect("a frame")
+}
+
 /// The hold frame of every actuator (where it is, at its gains), with the bus it goes on.
 fn hold_frames(running: &Running, start: &sim::robot::RobotSnapshot) -> Vec<(usize, CanFrame)> {
     running
@@ -178,12 +230,14 @@ fn hold_frames(running: &Running, start: &sim::robot::RobotSnapshot) -> Vec<(usi
         .zip(&start.joints)
         .zip(&running.gains)
         .map(|((a, j), (kp, kd))| {
-            // The shipped robots carry RobStride actuators only.
-            let motor = a.actuator.robstride().expect("a RobStride actuator");
-            (
-                a.bus,
-                hold_frame(motor.can_id, motor.model, j.actuator.angle_rad, *kp, *kd),
-            )
+            let angle = j.actuator.angle_rad;
+            let frame = match &a.actuator {
+                sim::actuator::ActuatorConfig::Robstride(m) => {
+                    hold_frame(m.can_id, m.model, angle, *kp, *kd)
+                }
+                sim::actuator::ActuatorConfig::Damiao(m) => damiao_hold_frame(m, angle, *kp, *kd),
+            };
+            (a.bus, frame)
         })
         .collect()
 }
@@ -204,11 +258,11 @@ async fn hold_all(running: &Running) {
         send(&running.hosts[*bus], *frame).await;
     }
     for a in &running.config.actuators {
-        send(
-            &running.hosts[a.bus],
-            enable_frame(a.actuator.can_id() as u8),
-        )
-        .await;
+        let enable = match &a.actuator {
+            sim::actuator::ActuatorConfig::Robstride(m) => enable_frame(m.can_id),
+            sim::actuator::ActuatorConfig::Damiao(m) => damiao_enable_frame(m),
+        };
+        send(&running.hosts[a.bus], enable).await;
     }
     for (bus, frame) in frames {
         send(&running.hosts[bus], frame).await;
@@ -393,6 +447,7 @@ fn main() {
     }
     let arm = shipped("robstride_arm6");
     let humanoid = shipped("humanoid");
+    let openarm = shipped("openarm");
     let g1 = corpus_g1();
     for subject in [Some(&arm), Some(&humanoid), g1.as_ref()]
         .into_iter()
@@ -408,7 +463,7 @@ fn main() {
         "virtual time ({} s emulated per run, one core):",
         VIRTUAL_RUN.as_secs()
     );
-    let mut runs = vec![(&arm, 1), (&humanoid, 1), (&humanoid, 2)];
+    let mut runs = vec![(&arm, 1), (&humanoid, 1), (&humanoid, 2), (&openarm, 1)];
     if let Some(g1) = &g1 {
         runs.push((g1, 1));
     }
