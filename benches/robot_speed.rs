@@ -187,38 +187,25 @@ fn enable_frame(motor: u8) -> CanFrame {
     CanFrame::extended((3 << 24) | (HOST << 8) | u32::from(motor), &[0; 8]).expect("a frame")
 }
 
-/// A Damiao MIT frame holding `angle_rad` with kp/kd (the protocol page's packing: p 16 bits
-/// over ±PMAX, v and t_ff at 0, kp over 0..500, kd over 0..5, truncated).
+/// A Damiao MIT frame holding `angle_rad` with kp/kd, packed by our Damiao driver's codec (the
+/// host's side of the wire, over the model's ranges as the driver knows them).
 fn damiao_hold_frame(m: &sim::damiao::MotorConfig, angle_rad: f64, kp: f64, kd: f64) -> CanFrame {
-    let ranges = m.model.ranges();
-    let bits = |v: f64, lo: f64, hi: f64, n: u32| {
-        let top = f64::from((1u32 << n) - 1);
-        ((v.clamp(lo, hi) - lo) * top / (hi - lo)) as u32
+    use driver::damiao::{codec, MitCommand, Model, RangeTable};
+    let model = Model::parse(m.model.name()).expect("the driver knows every Damiao model");
+    let command = MitCommand {
+        p_des_rad: angle_rad as f32,
+        v_des_rad_s: 0.0,
+        kp: kp as f32,
+        kd: kd as f32,
+        t_ff_nm: 0.0,
     };
-    let pmax = f64::from(ranges.p_max_rad);
-    let (vmax, tmax) = (f64::from(ranges.v_max_rad_s), f64::from(ranges.t_max_nm));
-    let p = bits(angle_rad, -pmax, pmax, 16);
-    let v = bits(0.0, -vmax, vmax, 12);
-    let kp = bits(kp, 0.0, 500.0, 12);
-    let kd = bits(kd, 0.0, 5.0, 12);
-    let t = bits(0.0, -tmax, tmax, 12);
-    let data = [
-        (p >> 8) as u8,
-        p as u8,
-        (v >> 4) as u8,
-        (((v & 0xF) << 4) | (kp >> 8)) as u8,
-        kp as u8,
-        (kd >> 4) as u8,
-        (((kd & 0xF) << 4) | (t >> 8)) as u8,
-        t as u8,
-    ];
-    CanFrame::standard(m.esc_id, &data).expect("a frame")
+    codec::mit(m.esc_id, &command, &model.ranges(RangeTable::Current)).expect("a frame")
 }
 
 /// A Damiao enable (`FF … FC` on its command id).
 fn damiao_enable_frame(m: &sim::damiao::MotorConfig) -> CanFrame {
-    CanFrame::standard(m.esc_id, &[0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFC])
-        .expect("a frame")
+    use driver::damiao::codec;
+    codec::special(m.esc_id, codec::special::ENABLE).expect("a frame")
 }
 
 /// The hold frame of every actuator (where it is, at its gains), with the bus it goes on.

@@ -84,9 +84,10 @@ impl RobotLayout {
         table
     }
 
-    /// Every fault name: the actuators' tables, then the push and the bus cut.
-    fn names(&self) -> Vec<&'static str> {
-        let mut names: Vec<&str> = self.actuator_faults().iter().map(|f| f.name).collect();
+    /// Every fault name: the actuators' tables (`actuator_faults`), then the push and the
+    /// bus cut.
+    fn names(actuator_faults: &[FaultInfo]) -> Vec<&'static str> {
+        let mut names: Vec<&str> = actuator_faults.iter().map(|f| f.name).collect();
         names.extend([EXTERNAL_TORQUE, BUS_LOST, GANTRY_RELEASE]);
         names
     }
@@ -143,7 +144,8 @@ impl RobotLayout {
         args: &FaultArgs,
         clearing: bool,
     ) -> Result<RobotFault, FaultArgError> {
-        match fault_args::named("robot", name, &self.names(), |n| n)? {
+        let actuator_faults = self.actuator_faults();
+        match fault_args::named("robot", name, &Self::names(&actuator_faults), |n| n)? {
             EXTERNAL_TORQUE => {
                 args.only(name, &["joint", "torque_nm"])?;
                 let (joint, model) = self.joint(name, args)?;
@@ -191,11 +193,10 @@ impl RobotLayout {
                 // kind's fault of this name takes is refused first, by name.
                 let known: Vec<&str> = std::iter::once("joint")
                     .chain(
-                        self.actuator_faults()
+                        actuator_faults
                             .iter()
                             .filter(|f| f.name == fault)
-                            .flat_map(|f| f.params.iter().map(|p| p.name))
-                            .collect::<Vec<_>>(),
+                            .flat_map(|f| f.params.iter().map(|p| p.name)),
                     )
                     .collect();
                 args.only(name, &known)?;

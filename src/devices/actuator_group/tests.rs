@@ -257,3 +257,27 @@ fn a_robot_group_decodes_its_actuators_frames_for_reports() {
         .expect("a frame");
     assert!(bench.decode(None, &stranger).is_none());
 }
+
+#[test]
+fn a_robot_bus_carrying_two_actuator_kinds_is_refused_at_load_naming_both_joints() {
+    // The 6-DoF arm with its wrist roll (can1) a Damiao motor beside RobStride wrist motors.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let arm = std::fs::read_to_string(root.join("robots/robstride_arm6.yaml")).unwrap();
+    let urdf = root.join("urdf/robstride_arm6.urdf");
+    let mixed = arm
+        .replace("../urdf/robstride_arm6.urdf", &urdf.display().to_string())
+        .replace(
+            "{joint: wrist_roll, model: RS02, id: 4, bus: can1}",
+            "{joint: wrist_roll, model: DM4310, id: 4, bus: can1}",
+        );
+    assert_ne!(mixed, arm, "the wrist roll became a Damiao motor");
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("mixed.yaml"), mixed).unwrap();
+    let scenario = dir.path().join("x.yaml");
+    let text = "bench:\n  devices:\n    arm:\n      kind: actuator_group\n      robot: mixed.yaml\nsteps: []\n";
+    let error = parse_scenario(&scenario, text).unwrap_err().to_string();
+    assert!(
+        error.contains("bus `can1` carries a damiao actuator (joint `wrist_roll`) and a robstride one (joint `wrist_pitch`)"),
+        "{error}"
+    );
+}

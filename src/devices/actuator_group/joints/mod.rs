@@ -56,9 +56,9 @@ pub(crate) struct Joints {
 }
 
 impl Joints {
-    /// A handle per actuator of `actuators` on `hosts` (one per bus). A bus whose actuators
-    /// are of two kinds needs a host node per kind (each driver reads every frame of its
-    /// node): `host_for(bus, kind)` opens another when asked.
+    /// A handle per actuator of `actuators` on `hosts` (one per bus), each by the driver of
+    /// its kind. Each driver reads every frame of its host node, so a bus carries one kind:
+    /// the group's settings refuse two at load (`validate::robot_settings`).
     pub(crate) fn start(
         device: &str,
         actuators: &[GroupActuator],
@@ -72,19 +72,6 @@ impl Joints {
             let host = hosts.get(a.bus).ok_or_else(|| {
                 format!("device `{device}`: joint `{}`: no bus {}", a.joint, a.bus)
             })?;
-            let kinds_on_bus = actuators
-                .iter()
-                .filter(|b| b.bus == a.bus)
-                .map(|b| b.actuator.kind().name)
-                .collect::<std::collections::BTreeSet<_>>();
-            if kinds_on_bus.len() > 1 {
-                return Err(format!(
-                    "device `{device}`: bus {} carries actuators of {} kinds ({}); a scenario's group drives one kind per bus",
-                    a.bus,
-                    kinds_on_bus.len(),
-                    kinds_on_bus.into_iter().collect::<Vec<_>>().join(", ")
-                ));
-            }
             let handle = match &a.actuator {
                 sim::actuator::ActuatorConfig::Robstride(m) => {
                     robstride.joint(a.bus, host, m.can_id, m.model)
