@@ -7,7 +7,10 @@
 //! - [`ActuatorFirmware`]: one actuator's firmware, frames in and frames out, ticked every
 //!   millisecond; its state as an [`ActuatorSnapshot`]; its faults by name, from its table.
 //! - [`registry`]: the actuator kinds and the model names each answers to.
+//! - `bus_runner`: actuators of one kind on one bus, one task serving them (what
+//!   `RobstrideBus` and `DamiaoBus` run on).
 
+pub(crate) mod bus_runner;
 pub mod registry;
 mod snapshot;
 
@@ -36,6 +39,17 @@ pub fn in_format_of(request: &CanFrame, replies: Vec<CanFrame>) -> Vec<CanFrame>
         .collect()
 }
 
+/// `frame` handed to `firmware` as its CAN controller takes it: a CAN FD frame only if it
+/// [`speaks_fd`](ActuatorFirmware::speaks_fd) (a classic controller never sees one, as on
+/// hardware), and its replies in the frame's format ([`in_format_of`]). What every runner
+/// does with a frame from the bus.
+pub fn deliver<F: ActuatorFirmware + ?Sized>(firmware: &mut F, frame: &CanFrame) -> Vec<CanFrame> {
+    if frame.is_fd() && !firmware.speaks_fd() {
+        return Vec::new();
+    }
+    in_format_of(frame, firmware.handle_frame(frame))
+}
+
 /// A single shaft an actuator drives: a rig on a bench, or one joint of a robot's world.
 pub trait ShaftPlant: Send + Sync {
     /// Advance by `dt_s` with the motor applying `torque_nm`.
@@ -60,7 +74,8 @@ pub trait ActuatorFirmware: Send {
     fn can_id(&self) -> u32;
     /// Answers one frame from the bus (most frames get one reply; frames for others none).
     /// A CAN FD frame reaches only a firmware that [`speaks_fd`](Self::speaks_fd); its replies
-    /// then leave as CAN FD frames with the request's flags (the robot's runner does both).
+    /// then leave as CAN FD frames with the request's flags (the runners do both, through
+    /// [`deliver`]).
     fn handle_frame(&mut self, frame: &CanFrame) -> Vec<CanFrame>;
     /// Whether its CAN controller takes CAN FD frames (and answers in the format it was
     /// addressed in). A classic controller never sees them, as on hardware: false unless the

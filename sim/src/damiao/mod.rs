@@ -14,8 +14,9 @@
 //!   ([`state_file`]) the motors keep their saved registers, ids and zero across restarts.
 //!
 //! Behaviour the note leaves open, and what the emulator does:
-//! - Frames: classic standard frames only (extended ones are ignored). CAN FD is not modelled
-//!   yet (`bus::CanFrame` has no FD flag), so "answer in the kind addressed" is a later step.
+//! - Frames: standard frames only (extended ones are ignored), classic or CAN FD (the OpenArm
+//!   runs its buses as CAN FD with the classic payloads inside): a motor answers in the format
+//!   it was addressed in, a CAN FD request with CAN FD frames carrying its flags (BRS, ESI).
 //! - A command whose payload is shorter than its layout (MIT, pos-vel, force-pos and
 //!   specials 8 bytes; velocity 4; register requests 3, plus the RID for read/write and the
 //!   value for write) is ignored without a reply. A NaN or infinite f32 setpoint leaves the

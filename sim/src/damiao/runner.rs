@@ -1,27 +1,26 @@
-//! Several Damiao motors on one bus: the task that feeds them frames, steps them every
-//! millisecond and sends their replies after the firmware's turnaround; and the handle the
-//! harness holds. The same pattern as the RobStride runner (`crate::can_runner`'s step clock,
-//! receive tasks and transmit backlog, a supervised task), so it runs under a paused tokio
-//! clock in virtual time. With a state file, every save or zero a motor takes is written to it
-//! at once ([`crate::damiao::state_file`]), and a file that cannot be written stops the runner.
+//! Several Damiao motors on one bus, served by the shared runner
+//! (`crate::actuator::bus_runner`: frames in, 1 ms steps in virtual time under a paused tokio
+//! clock, replies after the firmware's turnaround in the format the request came in — a CAN
+//! FD request gets CAN FD replies — and a supervised task): here what is Damiao's own, its
+//! configuration's checks, its state file's keys ([`crate::damiao::state_file`]: every save or
+//! zero a motor takes is written at once, and a file that cannot be written stops the runner),
+//! ESC_ID clashes, its side doors and the handle the harness holds.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use bus::{CanBus, CanFrame};
-use tokio::sync::{mpsc, oneshot};
-use tokio::task::JoinHandle;
+use bus::CanBus;
 
+use crate::actuator::bus_runner::{self, BusKind, BusMonitor, BusTask};
 use crate::actuator::{ActuatorFirmware, ActuatorSnapshot};
-use crate::can_runner::{receive_frames, StepClock, TxBacklog};
 use crate::damiao::faults::TEMPERATURE_MAX_C;
-use crate::damiao::firmware::{DamiaoMotor, MotorConfig, TURNAROUND};
+use crate::damiao::firmware::{DamiaoMotor, MotorConfig};
 use crate::damiao::model::Model;
 use crate::damiao::state_file::{motor_key, StateFile};
 use crate::fault_args::{FaultArgError, FaultArgs};
 use crate::piper::faults::Shown;
 use crate::state_file::{InvalidField, StateFileError};
-use crate::supervise::{DeathWatch, Supervisor};
+use crate::supervise::DeathWatch;
 
 /// Coldest temperature the side door sets (°C): the coldest rating of industrial electronics.
 const TEMPERATURE_MIN_C: f64 = -40.0;
@@ -122,25 +121,13 @@ pub enum DamiaoError {
 #[derive(Debug)]
 pub struct DamiaoBus;
 
-type Reply<T> = oneshot::Sender<Result<T, DamiaoError>>;
-
-enum Request {
-    Inject(u16, String, FaultArgs, Reply<()>),
-    Clear(u16, String, FaultArgs, Reply<()>),
-    SetTemperature(u16, f64, Reply<()>),
-    SetExternalTorque(u16, f64, Reply<()>),
-    Snapshot(oneshot::Sender<Vec<ActuatorSnapshot>>),
-    Flash(oneshot::Sender<Vec<serde_json::Value>>),
-    Shutdown(oneshot::Sender<()>),
-}
-
 /// The harness's handle on running motors; dropping it stops them.
 #[derive(Debug)]
 pub struct DamiaoHandle {
-    /// The request channel to the runner, shared with the monitors it hands out.
+    /// The runner's requests, shared with the monitors it hands out.
     view: DamiaoMonitor,
-    task: Option<JoinHandle<()>>,
-    death: DeathWatch,
+    /// The runner's task: dropping the handle stops it.
+    task: BusTask<Flash>,
 }
 
 /// A shared view of running motors, from [`DamiaoHandle::monitor`]: faults, snapshots and
@@ -150,7 +137,8 @@ pub struct DamiaoHandle {
 /// (`crate::damiao::target`).
 #[derive(Debug, Clone)]
 pub struct DamiaoMonitor {
-    requests: mpsc::UnboundedSender<Request>,
+    /// The runner's requests.
+    bus: BusMonitor<Flash>,
     /// The ESC_IDs the motors powered on with, in configuration order.
     esc_ids: Arc<[u16]>,
     /// The MST_IDs they powered on with, in the same order.
@@ -216,36 +204,55 @@ impl DamiaoBus {
             });
         }
         let mst_ids: Vec<u16> = motors.iter().map(DamiaoMotor::mst_id).collect();
-        let flash = motors.iter().map(ActuatorFirmware::persisted).collect();
-        let (requests, inbox) = mpsc::unbounded_channel();
         let models: Vec<Model> = config.motors.iter().map(|m| m.model).collect();
-        let runner = Runner {
-            bus,
-            backlog: TxBacklog::default(),
-            motors,
-            flash,
-            keys: configured,
+        let flash = Flash {
             state,
-            state_path: config.state_file,
-            quiet_steps: 0,
+            keys: configured,
         };
-        // A panic or a state file that cannot be written ends the runner; the watch says so.
-        let (supervisor, death) = Supervisor::new();
-        let task = supervisor.spawn(
-            &tokio::runtime::Handle::current(),
-            "Damiao runner",
-            runner.run(inbox),
-        );
+        let (task, bus) = bus_runner::spawn(bus, motors, flash, config.state_file);
         Ok(DamiaoHandle {
             view: DamiaoMonitor {
-                requests,
+                bus,
                 esc_ids: esc_ids.into(),
                 mst_ids: mst_ids.into(),
                 models: models.into(),
             },
-            task: Some(task),
-            death,
+            task,
         })
+    }
+}
+
+/// The motors' flash as the shared runner keeps it: the state file, an entry per motor under
+/// its configured ESC_ID.
+struct Flash {
+    /// What the state file holds (other motors' entries included).
+    state: StateFile,
+    /// Each motor's configured ESC_ID: its key in the state file.
+    keys: Vec<u16>,
+}
+
+impl BusKind for Flash {
+    type Firmware = DamiaoMotor;
+    type Id = u16;
+    type Error = DamiaoError;
+    const LABEL: &'static str = "damiao";
+    const TASK: &'static str = "Damiao runner";
+
+    fn stopped() -> DamiaoError {
+        DamiaoError::Stopped
+    }
+
+    fn unknown(esc_id: u16) -> DamiaoError {
+        DamiaoError::UnknownMotor { esc_id }
+    }
+
+    fn keep(&mut self, index: usize, motor: &DamiaoMotor) {
+        self.state
+            .keep(self.keys[index], ActuatorFirmware::persisted(motor));
+    }
+
+    fn save(&self, path: &Path) -> Result<(), StateFileError> {
+        self.state.save(path)
     }
 }
 
@@ -258,13 +265,6 @@ fn first_repeat(ids: &[u16]) -> Option<u16> {
 }
 
 impl DamiaoHandle {
-    async fn ask<T>(
-        &self,
-        make: impl FnOnce(oneshot::Sender<T>) -> Request,
-    ) -> Result<T, DamiaoError> {
-        self.view.ask(make).await
-    }
-
     /// Inject the fault `name` (see [`crate::damiao::faults`]) into the motor on `esc_id`: its
     /// cause is set and the error latched; the motor stops.
     pub async fn inject(
@@ -288,8 +288,14 @@ impl DamiaoHandle {
 
     /// Set a motor's coil temperature (°C, −40..=200).
     pub async fn set_temperature(&self, esc_id: u16, celsius: f64) -> Result<(), DamiaoError> {
-        self.ask(|reply| Request::SetTemperature(esc_id, celsius, reply))
-            .await?
+        self.view
+            .bus
+            .side_door(esc_id, move |motor| {
+                let range = (TEMPERATURE_MIN_C, TEMPERATURE_MAX_C);
+                motor.set_coil_temperature(within(esc_id, "temperature_c", celsius, range)?);
+                Ok(Vec::new())
+            })
+            .await
     }
 
     /// Push a motor's shaft with an external torque (N·m, within ten times its peak).
@@ -298,8 +304,14 @@ impl DamiaoHandle {
         esc_id: u16,
         torque_nm: f64,
     ) -> Result<(), DamiaoError> {
-        self.ask(|reply| Request::SetExternalTorque(esc_id, torque_nm, reply))
-            .await?
+        self.view
+            .bus
+            .side_door(esc_id, move |motor| {
+                let max = motor.max_external_torque_nm();
+                motor.push(within(esc_id, "torque_nm", torque_nm, (-max, max))?);
+                Ok(Vec::new())
+            })
+            .await
     }
 
     /// Every motor's state, in configuration order.
@@ -311,7 +323,12 @@ impl DamiaoHandle {
     /// [`ActuatorFirmware::persisted`] writes it), in configuration order: what a restart
     /// passes to [`MotorConfig::from_persisted`].
     pub async fn flash(&self) -> Result<Vec<serde_json::Value>, DamiaoError> {
-        self.ask(Request::Flash).await
+        // A motor's image changes only with a persist request, which the runner writes at
+        // once: what it holds now is what it last kept.
+        self.view
+            .bus
+            .read(|motors| motors.iter().map(ActuatorFirmware::persisted).collect())
+            .await
     }
 
     /// The ESC_IDs the motors powered on with, in configuration order: a state file's where
@@ -333,30 +350,16 @@ impl DamiaoHandle {
     /// A watch that tells when the emulator stops serving on its own (its task panicked, or
     /// its state file could not be written).
     pub fn death_watch(&self) -> DeathWatch {
-        self.death.clone()
+        self.task.death_watch()
     }
 
     /// Stop the motors ("power off"); what they saved is already on disk.
-    pub async fn shutdown(mut self) {
-        let _ = self.ask(Request::Shutdown).await;
-        if let Some(task) = self.task.take() {
-            let _ = task.await;
-        }
+    pub async fn shutdown(self) {
+        self.task.shutdown().await;
     }
 }
 
 impl DamiaoMonitor {
-    async fn ask<T>(
-        &self,
-        make: impl FnOnce(oneshot::Sender<T>) -> Request,
-    ) -> Result<T, DamiaoError> {
-        let (reply, answer) = oneshot::channel();
-        self.requests
-            .send(make(reply))
-            .map_err(|_| DamiaoError::Stopped)?;
-        answer.await.map_err(|_| DamiaoError::Stopped)
-    }
-
     /// See [`DamiaoHandle::inject`].
     pub async fn inject(
         &self,
@@ -365,8 +368,12 @@ impl DamiaoMonitor {
         args: &FaultArgs,
     ) -> Result<(), DamiaoError> {
         let (name, args) = (name.to_owned(), args.clone());
-        self.ask(|reply| Request::Inject(esc_id, name, args, reply))
-            .await?
+        self.bus
+            .side_door(esc_id, move |motor| {
+                ActuatorFirmware::inject(motor, &name, &args)
+                    .map_err(|source| DamiaoError::Fault { esc_id, source })
+            })
+            .await
     }
 
     /// See [`DamiaoHandle::clear`].
@@ -377,13 +384,20 @@ impl DamiaoMonitor {
         args: &FaultArgs,
     ) -> Result<(), DamiaoError> {
         let (name, args) = (name.to_owned(), args.clone());
-        self.ask(|reply| Request::Clear(esc_id, name, args, reply))
-            .await?
+        self.bus
+            .side_door(esc_id, move |motor| {
+                ActuatorFirmware::clear(motor, &name, &args)
+                    .map_err(|source| DamiaoError::Fault { esc_id, source })?;
+                Ok(Vec::new())
+            })
+            .await
     }
 
     /// See [`DamiaoHandle::snapshot`].
     pub async fn snapshot(&self) -> Result<Vec<ActuatorSnapshot>, DamiaoError> {
-        self.ask(Request::Snapshot).await
+        self.bus
+            .read(|motors| motors.iter().map(ActuatorFirmware::snapshot).collect())
+            .await
     }
 
     /// See [`DamiaoHandle::power_on_ids`].
@@ -399,204 +413,6 @@ impl DamiaoMonitor {
     /// The motors' models, in configuration order.
     pub fn models(&self) -> &[Model] {
         &self.models
-    }
-}
-
-impl Drop for DamiaoHandle {
-    fn drop(&mut self) {
-        if let Some(task) = self.task.take() {
-            task.abort();
-        }
-    }
-}
-
-struct Runner {
-    bus: Arc<dyn CanBus>,
-    /// Frames the bus's full transmit queue refused, sent first at the next chance.
-    backlog: TxBacklog,
-    motors: Vec<DamiaoMotor>,
-    /// Each motor's flash image as of its last save or zero.
-    flash: Vec<serde_json::Value>,
-    /// Each motor's configured ESC_ID: its key in the state file.
-    keys: Vec<u16>,
-    /// What the state file holds (other motors' entries included).
-    state: StateFile,
-    /// Where it is written, if anywhere.
-    state_path: Option<PathBuf>,
-    /// Steps in a row in which every motor was disabled.
-    quiet_steps: u32,
-}
-
-/// Quiet steps after which the clock rests ([`StepClock::rest`]): 0.1 s.
-const QUIET_STEPS_BEFORE_REST: u32 = 100;
-
-impl Runner {
-    /// Serve until shut down; an `Err` (the state file could not be written) ends it early.
-    async fn run(mut self, mut inbox: mpsc::UnboundedReceiver<Request>) -> Result<(), String> {
-        let (mut frames, receivers) =
-            receive_frames(vec![(Arc::clone(&self.bus), "bus".to_owned())], "damiao");
-        // 1 ms steps; a late wake-up runs every step owed (up to the catch-up limit).
-        let mut clock = StepClock::start("damiao-clock");
-        let outcome = loop {
-            tokio::select! {
-                biased;
-                request = inbox.recv() => match request {
-                    Some(Request::Shutdown(done)) => {
-                        let _ = done.send(());
-                        break Ok(());
-                    }
-                    Some(request) => {
-                        self.catch_up(&mut clock).await;
-                        self.serve(request);
-                        // A fault or push may change what the next steps do.
-                        self.wake(&mut clock);
-                    }
-                    None => break Ok(()),
-                },
-                frame = frames.recv() => match frame {
-                    Some((_, frame)) => {
-                        self.catch_up(&mut clock).await;
-                        // A motor told to keep something that cannot be kept: stop, rather
-                        // than let the host believe it was saved.
-                        if let Err(error) = self.on_frame(&frame).await {
-                            break Err(error.to_string());
-                        }
-                        if !self.quiet() {
-                            self.wake(&mut clock);
-                        }
-                    }
-                    None => break Ok(()),
-                },
-                steps = clock.next() => {
-                    if steps.dropped > 0 {
-                        tracing::debug!(dropped = steps.dropped, "damiao emulator: steps dropped behind the wall clock");
-                    }
-                    self.run_steps(steps.run, &mut clock).await;
-                }
-            }
-        };
-        for receiver in receivers {
-            receiver.abort();
-        }
-        outcome
-    }
-
-    async fn run_steps(&mut self, steps: u64, clock: &mut StepClock) {
-        for _ in 0..steps {
-            let mut out = Vec::new();
-            for motor in &mut self.motors {
-                out.extend(motor.tick());
-            }
-            let sent = !out.is_empty();
-            self.send_after(out, std::time::Duration::ZERO).await;
-            if sent || !self.quiet() {
-                self.wake(clock);
-            } else {
-                self.quiet_steps = self.quiet_steps.saturating_add(1);
-            }
-        }
-        if self.quiet_steps >= QUIET_STEPS_BEFORE_REST {
-            clock.rest(true);
-        }
-    }
-
-    /// A resting clock's owed steps, run before a frame or request is handled: the answer
-    /// comes from the latest step's state.
-    async fn catch_up(&mut self, clock: &mut StepClock) {
-        if clock.is_resting() {
-            let steps = clock.due();
-            self.run_steps(steps.run, clock).await;
-        }
-    }
-
-    fn quiet(&self) -> bool {
-        self.motors
-            .iter()
-            .all(ActuatorFirmware::sends_nothing_on_its_own)
-    }
-
-    fn wake(&mut self, clock: &mut StepClock) {
-        self.quiet_steps = 0;
-        clock.rest(false);
-    }
-
-    fn motor_mut(&mut self, esc_id: u16) -> Result<&mut DamiaoMotor, DamiaoError> {
-        self.motors
-            .iter_mut()
-            .find(|m| m.esc_id() == esc_id)
-            .ok_or(DamiaoError::UnknownMotor { esc_id })
-    }
-
-    fn serve(&mut self, request: Request) {
-        match request {
-            Request::Inject(esc_id, name, args, reply) => {
-                let result = self.motor_mut(esc_id).and_then(|motor| {
-                    ActuatorFirmware::inject(motor, &name, &args)
-                        .map(drop)
-                        .map_err(|source| DamiaoError::Fault { esc_id, source })
-                });
-                let _ = reply.send(result);
-            }
-            Request::Clear(esc_id, name, args, reply) => {
-                let result = self.motor_mut(esc_id).and_then(|motor| {
-                    ActuatorFirmware::clear(motor, &name, &args)
-                        .map_err(|source| DamiaoError::Fault { esc_id, source })
-                });
-                let _ = reply.send(result);
-            }
-            Request::SetTemperature(esc_id, celsius, reply) => {
-                let result = self.motor_mut(esc_id).and_then(|motor| {
-                    let range = (TEMPERATURE_MIN_C, TEMPERATURE_MAX_C);
-                    within(esc_id, "temperature_c", celsius, range)?;
-                    motor.set_coil_temperature(celsius);
-                    Ok(())
-                });
-                let _ = reply.send(result);
-            }
-            Request::SetExternalTorque(esc_id, torque, reply) => {
-                let result = self.motor_mut(esc_id).and_then(|motor| {
-                    let max = motor.max_external_torque_nm();
-                    within(esc_id, "torque_nm", torque, (-max, max))?;
-                    motor.push(torque);
-                    Ok(())
-                });
-                let _ = reply.send(result);
-            }
-            Request::Snapshot(reply) => {
-                let _ = reply.send(self.motors.iter().map(ActuatorFirmware::snapshot).collect());
-            }
-            Request::Flash(reply) => {
-                let _ = reply.send(self.flash.clone());
-            }
-            Request::Shutdown(done) => {
-                let _ = done.send(());
-            }
-        }
-    }
-
-    async fn on_frame(&mut self, frame: &CanFrame) -> Result<(), StateFileError> {
-        let mut replies = Vec::new();
-        let mut changed = false;
-        for ((motor, flash), key) in self.motors.iter_mut().zip(&mut self.flash).zip(&self.keys) {
-            replies.extend(motor.handle_frame(frame));
-            if motor.take_persist_request() {
-                *flash = motor.persisted();
-                self.state.keep(*key, flash.clone());
-                changed = true;
-            }
-        }
-        if let (true, Some(path)) = (changed, &self.state_path) {
-            self.state.save(path)?;
-        }
-        // Answered from the latest step's state, after the firmware's turnaround.
-        self.send_after(replies, TURNAROUND).await;
-        Ok(())
-    }
-
-    async fn send_after(&mut self, frames: Vec<CanFrame>, delay: std::time::Duration) {
-        self.backlog
-            .send_after(self.bus.as_ref(), frames, delay, "damiao", "bus")
-            .await;
     }
 }
 
@@ -625,6 +441,7 @@ mod tests {
     use std::time::Duration;
 
     use bus::virtual_bus::{VirtualBus, VirtualBusConfig};
+    use bus::CanFrame;
 
     use super::*;
     use crate::damiao::codec::{register_payload, RegisterCmd};

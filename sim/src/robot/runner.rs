@@ -12,7 +12,7 @@ use tokio::task::JoinHandle;
 use super::base_pose::BasePose;
 use super::config::{Gantry, RobotConfig, RobotConfigError};
 use super::world::{RobotWorld, RobotWorldError};
-use crate::actuator::{in_format_of, ActuatorConfig, ActuatorFirmware, ActuatorSnapshot, PowerOn};
+use crate::actuator::{deliver, ActuatorConfig, ActuatorFirmware, ActuatorSnapshot, PowerOn};
 use crate::can_runner::{receive_frames, StepClock, TxBacklog};
 use crate::fault_args::{FaultArgError, FaultArgs};
 use crate::physics::PhysicsError;
@@ -676,11 +676,8 @@ impl Runner {
         let mut replies = Vec::new();
         let mut turnaround = Duration::ZERO;
         for a in self.actuators.iter_mut().filter(|a| a.bus == port) {
-            // A classic controller does not take a CAN FD frame.
-            if frame.is_fd() && !a.firmware.speaks_fd() {
-                continue;
-            }
-            let answer = in_format_of(frame, a.firmware.handle_frame(frame));
+            // A classic controller does not take a CAN FD frame; replies in the frame's format.
+            let answer = deliver(a.firmware.as_mut(), frame);
             if !answer.is_empty() {
                 turnaround = turnaround.max(a.firmware.turnaround());
             }

@@ -13,6 +13,8 @@
 //!   Works under a paused tokio clock; a state file (atomic JSON) is the motors' flash.
 //!
 //! Behaviour the spec leaves open, and what the emulator does:
+//! - The motors' CAN controllers are classic: a CAN FD frame reaches none of them (a real one
+//!   would destroy it with an error frame; the emulator only ignores it).
 //! - Replies go to the last host ID seen in bits 15..8 (type 1 carries none).
 //! - Type 7 is refused (no reply) while running; the new ID is kept at once (persisted).
 //! - A write to a read-only or unknown index is answered with the type-17 failure flag

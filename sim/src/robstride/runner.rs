@@ -1,22 +1,21 @@
-//! Many actuators on one bus: the task that feeds them frames, steps them every millisecond,
-//! and sends what they answer; plus the handle the harness holds.
+//! Many actuators on one bus, served by the shared runner (`crate::actuator::bus_runner`:
+//! frames in, 1 ms steps, replies after the turnaround, the state file written at each
+//! save): here what is RobStride's own, its configuration's checks, its state file's keys and
+//! ID clashes, its side doors (typed faults, supply, temperature, push) and the handle the
+//! harness holds. A CAN FD frame reaches no motor (a classic CAN controller).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use bus::{CanBus, CanFrame};
-use tokio::sync::{mpsc, oneshot};
-use tokio::task::JoinHandle;
+use bus::CanBus;
 
-use crate::can_runner::{receive_frames, StepClock, TxBacklog};
+use crate::actuator::bus_runner::{self, BusKind, BusMonitor, BusTask};
 use crate::robstride::faults::{
     check_bus_voltage_v, check_external_torque_nm, check_temperature_c, Fault, ValueError,
 };
-use crate::robstride::firmware::{
-    Actuator, MotorConfig, MotorSnapshot, DEFAULT_HOST_ID, TURNAROUND,
-};
+use crate::robstride::firmware::{Actuator, MotorConfig, MotorSnapshot, DEFAULT_HOST_ID};
 use crate::robstride::state_file::{uid_key, IdClash, StateFile, StateFileError};
-use crate::supervise::{DeathWatch, Supervisor};
+use crate::supervise::DeathWatch;
 
 /// Configuration of an emulated RobStride bus.
 #[derive(Debug, Clone, PartialEq)]
@@ -89,23 +88,13 @@ pub enum RobstrideError {
 #[derive(Debug)]
 pub struct RobstrideBus;
 
-enum Request {
-    Inject(u8, Fault, oneshot::Sender<Result<(), RobstrideError>>),
-    RemoveCause(u8, Fault, oneshot::Sender<Result<(), RobstrideError>>),
-    SetVoltage(u8, f64, oneshot::Sender<Result<(), RobstrideError>>),
-    SetTemperature(u8, f64, oneshot::Sender<Result<(), RobstrideError>>),
-    SetExternalTorque(u8, f64, oneshot::Sender<Result<(), RobstrideError>>),
-    Snapshot(oneshot::Sender<Vec<MotorSnapshot>>),
-    Shutdown(oneshot::Sender<()>),
-}
-
 /// The harness's handle on a running emulator.
 #[derive(Debug)]
 pub struct RobstrideHandle {
-    /// The request channel to the runner, shared with the monitors it hands out.
+    /// The runner's requests, shared with the monitors it hands out.
     view: RobstrideMonitor,
-    task: Option<JoinHandle<()>>,
-    death: DeathWatch,
+    /// The runner's task: dropping the handle stops it.
+    task: BusTask<Flash>,
 }
 
 impl RobstrideBus {
@@ -160,42 +149,50 @@ impl RobstrideBus {
                 actuator
             })
             .collect();
-        let (requests, inbox) = mpsc::unbounded_channel();
         let configured_ids = motors.iter().map(Actuator::can_id).collect();
-        let runner = Runner {
-            bus,
-            backlog: TxBacklog::default(),
-            motors,
-            state,
-            state_path: config.state_file,
-            quiet_steps: 0,
-        };
-        // A panic or a state file that cannot be written ends the runner; the watch says so.
-        let (supervisor, death) = Supervisor::new();
-        let task = supervisor.spawn(
-            &tokio::runtime::Handle::current(),
-            "RobStride runner",
-            runner.run(inbox),
-        );
+        let (task, bus) = bus_runner::spawn(bus, motors, Flash { state }, config.state_file);
         Ok(RobstrideHandle {
             view: RobstrideMonitor {
-                requests,
+                bus,
                 configured_ids,
             },
-            task: Some(task),
-            death,
+            task,
         })
     }
 }
 
-impl RobstrideHandle {
-    async fn ask<T>(
-        &self,
-        make: impl FnOnce(oneshot::Sender<T>) -> Request,
-    ) -> Result<T, RobstrideError> {
-        self.view.ask(make).await
+/// The motors' flash as the shared runner keeps it: the state file, an entry per motor's uid.
+struct Flash {
+    state: StateFile,
+}
+
+impl BusKind for Flash {
+    type Firmware = Actuator;
+    type Id = u8;
+    type Error = RobstrideError;
+    const LABEL: &'static str = "robstride";
+    const TASK: &'static str = "RobStride runner";
+
+    fn stopped() -> RobstrideError {
+        RobstrideError::Stopped
     }
 
+    fn unknown(can_id: u8) -> RobstrideError {
+        RobstrideError::UnknownMotor { can_id }
+    }
+
+    fn keep(&mut self, _index: usize, motor: &Actuator) {
+        self.state
+            .motors
+            .insert(uid_key(motor.uid()), motor.persisted());
+    }
+
+    fn save(&self, path: &Path) -> Result<(), StateFileError> {
+        self.state.save(path)
+    }
+}
+
+impl RobstrideHandle {
     /// Inject a fault into a motor: its cause is set (heat, supply) or a one-shot event
     /// latched; the motor drops to reset and sends a type-21 frame.
     pub async fn inject(&self, can_id: u8, fault: Fault) -> Result<(), RobstrideError> {
@@ -207,16 +204,28 @@ impl RobstrideHandle {
         self.view.clear(can_id, fault).await
     }
 
+    // Every value is range-checked where the request reaches its motor: a physically absurd
+    // one (1e308 N·m) is refused instead of turning the physics into NaN that the wire would
+    // carry as zeros.
+
     /// Set a motor's supply voltage (V).
     pub async fn set_bus_voltage(&self, can_id: u8, volts: f64) -> Result<(), RobstrideError> {
-        self.ask(|reply| Request::SetVoltage(can_id, volts, reply))
-            .await?
+        self.view
+            .set(can_id, move |motor| {
+                motor.set_bus_voltage(check_bus_voltage_v(volts)?);
+                Ok(())
+            })
+            .await
     }
 
     /// Set a motor's winding temperature (°C).
     pub async fn set_temperature(&self, can_id: u8, celsius: f64) -> Result<(), RobstrideError> {
-        self.ask(|reply| Request::SetTemperature(can_id, celsius, reply))
-            .await?
+        self.view
+            .set(can_id, move |motor| {
+                motor.set_temperature(check_temperature_c(celsius)?);
+                Ok(())
+            })
+            .await
     }
 
     /// Push a motor's load with an external torque (N·m).
@@ -225,8 +234,13 @@ impl RobstrideHandle {
         can_id: u8,
         torque_nm: f64,
     ) -> Result<(), RobstrideError> {
-        self.ask(|reply| Request::SetExternalTorque(can_id, torque_nm, reply))
-            .await?
+        self.view
+            .set(can_id, move |motor| {
+                let model = motor.config().model;
+                motor.set_external_torque(check_external_torque_nm(model, torque_nm)?);
+                Ok(())
+            })
+            .await
     }
 
     /// Every motor's state, in configuration order.
@@ -250,22 +264,20 @@ impl RobstrideHandle {
     /// A watch that tells when the emulator stops serving on its own (its task panicked, or
     /// its state file could not be written); `armhil sim` exits non-zero on it.
     pub fn death_watch(&self) -> DeathWatch {
-        self.death.clone()
+        self.task.death_watch()
     }
 
     /// Stop the emulator (the motors "lose power"); persistent state is already on disk.
-    pub async fn shutdown(mut self) {
-        let _ = self.ask(Request::Shutdown).await;
-        if let Some(task) = self.task.take() {
-            let _ = task.await;
-        }
+    pub async fn shutdown(self) {
+        self.task.shutdown().await;
     }
 }
 
 /// A shared view of a running emulator, from [`RobstrideHandle::monitor`].
 #[derive(Debug, Clone)]
 pub struct RobstrideMonitor {
-    requests: mpsc::UnboundedSender<Request>,
+    /// The runner's requests.
+    bus: BusMonitor<Flash>,
     /// The CAN IDs the motors answered on at power-on (the state file's, else the configured
     /// ones; a host may change them at run time): what a front end suggests as a fault's
     /// `motor`.
@@ -273,32 +285,30 @@ pub struct RobstrideMonitor {
 }
 
 impl RobstrideMonitor {
-    async fn ask<T>(
-        &self,
-        make: impl FnOnce(oneshot::Sender<T>) -> Request,
-    ) -> Result<T, RobstrideError> {
-        let (reply, answer) = oneshot::channel();
-        self.requests
-            .send(make(reply))
-            .map_err(|_| RobstrideError::Stopped)?;
-        answer.await.map_err(|_| RobstrideError::Stopped)
-    }
-
     /// See [`RobstrideHandle::inject`].
     pub async fn inject(&self, can_id: u8, fault: Fault) -> Result<(), RobstrideError> {
-        self.ask(|reply| Request::Inject(can_id, fault, reply))
-            .await?
+        self.bus
+            .side_door(can_id, move |motor| {
+                Ok(motor.inject(fault).into_iter().collect())
+            })
+            .await
     }
 
     /// See [`RobstrideHandle::clear`].
     pub async fn clear(&self, can_id: u8, fault: Fault) -> Result<(), RobstrideError> {
-        self.ask(|reply| Request::RemoveCause(can_id, fault, reply))
-            .await?
+        self.bus
+            .side_door(can_id, move |motor| {
+                motor.remove_cause(fault);
+                Ok(Vec::new())
+            })
+            .await
     }
 
     /// See [`RobstrideHandle::snapshot`].
     pub async fn snapshot(&self) -> Result<Vec<MotorSnapshot>, RobstrideError> {
-        self.ask(Request::Snapshot).await
+        self.bus
+            .read(|motors| motors.iter().map(Actuator::snapshot).collect())
+            .await
     }
 
     /// The CAN IDs the motors answered on at power-on, in configuration order: a state
@@ -307,238 +317,20 @@ impl RobstrideMonitor {
     pub fn configured_ids(&self) -> &[u8] {
         &self.configured_ids
     }
-}
 
-impl Drop for RobstrideHandle {
-    fn drop(&mut self) {
-        if let Some(task) = self.task.take() {
-            task.abort();
-        }
-    }
-}
-
-struct Runner {
-    bus: Arc<dyn CanBus>,
-    /// Frames the bus's full transmit queue refused, sent first at the next chance.
-    backlog: TxBacklog,
-    motors: Vec<Actuator>,
-    state: StateFile,
-    state_path: Option<PathBuf>,
-    /// Steps in a row in which no motor sent or could send anything of its own.
-    quiet_steps: u32,
-}
-
-/// Quiet steps after which the clock rests ([`StepClock::rest`]): 0.1 s.
-const QUIET_STEPS_BEFORE_REST: u32 = 100;
-
-impl Runner {
-    /// Serve until shut down; an `Err` (the state file could not be written) ends it early.
-    async fn run(mut self, mut inbox: mpsc::UnboundedReceiver<Request>) -> Result<(), String> {
-        let (mut frames, receivers) =
-            receive_frames(vec![(Arc::clone(&self.bus), "bus".to_owned())], "robstride");
-        // 1 ms control steps; the pacer (absolute deadlines in real time) only prompts them.
-        // Every step the clock owes runs, so a late wake-up catches up as the firmware's own
-        // clock would, up to MAX_CATCH_UP_STEPS (a stalled machine drops the rest).
-        let mut clock = StepClock::start("robstride-clock");
-        let outcome = loop {
-            tokio::select! {
-                biased;
-                request = inbox.recv() => match request {
-                    Some(Request::Shutdown(done)) => {
-                        let _ = done.send(());
-                        break Ok(());
-                    }
-                    Some(request) => {
-                        self.catch_up(&mut clock).await;
-                        let side_door = !matches!(request, Request::Snapshot(_));
-                        self.serve(request).await;
-                        if side_door {
-                            // A fault, a supply or a temperature may make the next step send.
-                            self.wake(&mut clock);
-                        }
-                    }
-                    None => break Ok(()),
-                },
-                frame = frames.recv() => match frame {
-                    Some((_, frame)) => {
-                        self.catch_up(&mut clock).await;
-                        // A motor told to keep something that cannot be kept: stop, rather
-                        // than let the host believe it was saved.
-                        if let Err(error) = self.on_frame(&frame).await {
-                            break Err(error.to_string());
-                        }
-                        if !self.quiet() {
-                            self.wake(&mut clock);
-                        }
-                    }
-                    None => break Ok(()),
-                },
-                steps = clock.next() => {
-                    if steps.dropped > 0 {
-                        tracing::debug!(dropped = steps.dropped, "robstride emulator: steps dropped behind the wall clock");
-                    }
-                    self.run_steps(steps.run, &mut clock).await;
-                }
-            }
-        };
-        for receiver in receivers {
-            receiver.abort();
-        }
-        outcome
-    }
-
-    /// Runs `steps` steps; after enough quiet ones in a row, lets the clock rest.
-    async fn run_steps(&mut self, steps: u64, clock: &mut StepClock) {
-        for _ in 0..steps {
-            let sent = self.on_tick().await;
-            if sent || !self.quiet() {
-                self.wake(clock);
-            } else {
-                self.quiet_steps = self.quiet_steps.saturating_add(1);
-            }
-        }
-        if self.quiet_steps >= QUIET_STEPS_BEFORE_REST {
-            clock.rest(true);
-        }
-    }
-
-    /// A resting clock's steps owed until now, run before a frame or request is handled: the
-    /// answer comes from the state of the latest step, as it would without the rest.
-    async fn catch_up(&mut self, clock: &mut StepClock) {
-        if clock.is_resting() {
-            let steps = clock.due();
-            self.run_steps(steps.run, clock).await;
-        }
-    }
-
-    /// Every motor's steps send nothing of their own for now.
-    fn quiet(&self) -> bool {
-        self.motors.iter().all(Actuator::sends_nothing_on_its_own)
-    }
-
-    /// Back to a step every 1 ms.
-    fn wake(&mut self, clock: &mut StepClock) {
-        self.quiet_steps = 0;
-        clock.rest(false);
-    }
-
-    fn motor_mut(&mut self, can_id: u8) -> Result<&mut Actuator, RobstrideError> {
-        self.motors
-            .iter_mut()
-            .find(|motor| motor.can_id() == can_id)
-            .ok_or(RobstrideError::UnknownMotor { can_id })
-    }
-
-    async fn serve(&mut self, request: Request) {
-        match request {
-            Request::Inject(can_id, fault, reply) => {
-                let frame = self.motor_mut(can_id).map(|motor| motor.inject(fault));
-                let result = match frame {
-                    Ok(frame) => {
-                        self.send_all(frame).await;
-                        Ok(())
-                    }
-                    Err(error) => Err(error),
-                };
-                let _ = reply.send(result);
-            }
-            Request::RemoveCause(can_id, fault, reply) => {
-                let result = self
-                    .motor_mut(can_id)
-                    .map(|motor| motor.remove_cause(fault));
-                let _ = reply.send(result);
-            }
-            // Every value is range-checked here, where each request reaches its motor: a
-            // physically absurd one (1e308 N·m) is refused instead of turning the physics
-            // into NaN that the wire would carry as zeros.
-            Request::SetVoltage(can_id, volts, reply) => {
-                let result = self.motor_mut(can_id).and_then(|motor| {
-                    let volts = check_bus_voltage_v(volts)
-                        .map_err(|source| RobstrideError::BadValue { can_id, source })?;
-                    motor.set_bus_voltage(volts);
-                    Ok(())
-                });
-                let _ = reply.send(result);
-            }
-            Request::SetTemperature(can_id, celsius, reply) => {
-                let result = self.motor_mut(can_id).and_then(|motor| {
-                    let celsius = check_temperature_c(celsius)
-                        .map_err(|source| RobstrideError::BadValue { can_id, source })?;
-                    motor.set_temperature(celsius);
-                    Ok(())
-                });
-                let _ = reply.send(result);
-            }
-            Request::SetExternalTorque(can_id, torque, reply) => {
-                let result = self.motor_mut(can_id).and_then(|motor| {
-                    let torque = check_external_torque_nm(motor.config().model, torque)
-                        .map_err(|source| RobstrideError::BadValue { can_id, source })?;
-                    motor.set_external_torque(torque);
-                    Ok(())
-                });
-                let _ = reply.send(result);
-            }
-            Request::Snapshot(reply) => {
-                let _ = reply.send(self.motors.iter().map(Actuator::snapshot).collect());
-            }
-            Request::Shutdown(done) => {
-                let _ = done.send(());
-            }
-        }
-    }
-
-    async fn on_frame(&mut self, frame: &CanFrame) -> Result<(), StateFileError> {
-        let mut replies = Vec::new();
-        for motor in &mut self.motors {
-            replies.extend(motor.handle_frame(frame));
-        }
-        self.persist_if_requested()?;
-        // Answered with the state of the latest control step, after the firmware's
-        // turnaround — not at the next step.
-        self.send_after(replies, TURNAROUND).await;
-        Ok(())
-    }
-
-    /// One step of every motor; whether any sent a frame.
-    async fn on_tick(&mut self) -> bool {
-        let mut out = Vec::new();
-        for motor in &mut self.motors {
-            out.extend(motor.tick());
-        }
-        let sent = !out.is_empty();
-        self.send_all(out).await;
-        sent
-    }
-
-    fn persist_if_requested(&mut self) -> Result<(), StateFileError> {
-        let mut changed = false;
-        for motor in &mut self.motors {
-            if motor.take_persist_request() {
-                self.state
-                    .motors
-                    .insert(uid_key(motor.uid()), motor.persisted());
-                changed = true;
-            }
-        }
-        if let (true, Some(path)) = (changed, &self.state_path) {
-            self.state.save(path)?;
-        }
-        Ok(())
-    }
-
-    async fn send_all(&mut self, frames: impl IntoIterator<Item = CanFrame>) {
-        self.send_after(frames, std::time::Duration::ZERO).await;
-    }
-
-    /// Hands `frames` to the bus to leave `delay` from now (a firmware's turnaround).
-    async fn send_after(
-        &mut self,
-        frames: impl IntoIterator<Item = CanFrame>,
-        delay: std::time::Duration,
-    ) {
-        self.backlog
-            .send_after(self.bus.as_ref(), frames, delay, "robstride", "bus")
-            .await;
+    /// Sets a value on the motor on `can_id` with `set`, whose range check's refusal is the
+    /// motor's [`RobstrideError::BadValue`].
+    async fn set(
+        &self,
+        can_id: u8,
+        set: impl FnOnce(&mut Actuator) -> Result<(), ValueError> + Send + 'static,
+    ) -> Result<(), RobstrideError> {
+        self.bus
+            .side_door(can_id, move |motor| {
+                set(motor).map_err(|source| RobstrideError::BadValue { can_id, source })?;
+                Ok(Vec::new())
+            })
+            .await
     }
 }
 
@@ -547,6 +339,7 @@ mod tests {
     use super::*;
     use crate::robstride::{Load, Model};
     use bus::virtual_bus::{VirtualBus, VirtualBusConfig};
+    use bus::CanFrame;
 
     #[tokio::test(start_paused = true)]
     async fn absurd_values_are_refused_and_the_state_stays_finite() {

@@ -5,7 +5,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use bus::virtual_bus::{VirtualBus, VirtualBusConfig, VirtualNode};
-use bus::{CanBus, CanFrame};
+use bus::{CanBus, CanFrame, FdFlags};
 use sim::damiao::codec::{register_payload, RegisterCmd, Special};
 use sim::damiao::registers::rid;
 use sim::damiao::{
@@ -213,4 +213,44 @@ async fn configurations_the_firmware_would_refuse_do_not_start() {
     let wide = DamiaoConfig::new(vec![MotorConfig::new(0x800, Model::DM4310)]);
     let error = DamiaoBus::spawn(wide, node()).unwrap_err();
     assert!(error.to_string().contains("esc_id"), "{error}");
+}
+
+/// The OpenArm runs its Damiao buses as CAN FD: a motor addressed in CAN FD answers in CAN FD
+/// with the request's flags (BRS as sent), one addressed in classic CAN in classic CAN.
+#[tokio::test(start_paused = true)]
+async fn a_motor_answers_in_the_format_it_was_addressed_in() {
+    let bus = VirtualBus::new(VirtualBusConfig {
+        data_bitrate_bps: Some(5_000_000),
+        ..VirtualBusConfig::default()
+    });
+    let emulator = spawn(&bus, vec![MotorConfig::new(0x01, Model::DM4310)]);
+    let host = bus.attach("host");
+    let fd = |frame: CanFrame, flags: FdFlags| CanFrame::fd(frame.id(), frame.data(), flags);
+    let switched = FdFlags {
+        brs: true,
+        esi: false,
+    };
+    host.send(fd(special(0x01, Special::Enable), switched).unwrap())
+        .await
+        .unwrap();
+    let replies = collect(&host, Duration::from_millis(5)).await;
+    assert_eq!(replies.len(), 1, "{replies:?}");
+    let (_, reply) = replies[0];
+    assert_eq!(reply.raw_id(), 0x11, "{reply}");
+    assert_eq!(reply.fd_flags(), Some(switched), "{reply}");
+    assert_eq!(reply.data()[0] >> 4, 1, "enabled: {reply}");
+
+    let refresh = register(0x01, RegisterCmd::Refresh, 0, [0; 4]);
+    host.send(fd(refresh, FdFlags::default()).unwrap())
+        .await
+        .unwrap();
+    let replies = collect(&host, Duration::from_millis(5)).await;
+    assert_eq!(replies.len(), 1, "{replies:?}");
+    assert_eq!(replies[0].1.fd_flags(), Some(FdFlags::default()));
+
+    host.send(refresh).await.unwrap();
+    let replies = collect(&host, Duration::from_millis(5)).await;
+    assert_eq!(replies.len(), 1, "{replies:?}");
+    assert!(!replies[0].1.is_fd(), "classic request: {}", replies[0].1);
+    emulator.shutdown().await;
 }

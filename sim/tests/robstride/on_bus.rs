@@ -5,7 +5,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use bus::virtual_bus::{VirtualBus, VirtualBusConfig, VirtualNode};
-use bus::{CanBus, CanFrame};
+use bus::{CanBus, CanFrame, CanId, FdFlags};
 use sim::robstride::{
     Fault, Model, MotorConfig, RobstrideBus, RobstrideConfig, RobstrideError, RobstrideHandle,
     DEFAULT_HOST_ID,
@@ -193,5 +193,46 @@ async fn injected_faults_send_type21_on_the_bus() {
     // Stop + clear answers with a status frame; the word is clean afterwards.
     assert!(frames.iter().any(|f| f.raw_id() == 0x0200_07FD));
     assert_eq!(emulator.snapshot().await.unwrap()[0].fault_word, 0);
+    emulator.shutdown().await;
+}
+
+/// A RobStride motor's CAN controller is classic: on a bus that carries CAN FD for other nodes
+/// an FD frame on its identifier reaches no motor (no answer, no enable); the classic frame
+/// then does.
+#[tokio::test(start_paused = true)]
+async fn a_can_fd_frame_reaches_no_motor() {
+    let bus = VirtualBus::new(VirtualBusConfig {
+        data_bitrate_bps: Some(5_000_000),
+        ..VirtualBusConfig::default()
+    });
+    let emulator = spawn(
+        &bus,
+        RobstrideConfig::new(vec![MotorConfig::new(1, Model::RS03)]),
+    );
+    let host = bus.attach("host");
+    // Type 3 (enable) to motor 1 from host 0xFD, as CAN FD.
+    let enable = 0x0300_FD01;
+    for flags in [
+        FdFlags::default(),
+        FdFlags {
+            brs: true,
+            esi: false,
+        },
+    ] {
+        let id = CanId::extended(enable).unwrap();
+        host.send(CanFrame::fd(id, &[0; 8], flags).unwrap())
+            .await
+            .unwrap();
+        let replies = collect(&host, Duration::from_millis(20)).await;
+        assert!(replies.is_empty(), "{flags:?}: {replies:?}");
+    }
+    let snapshot = emulator.snapshot().await.unwrap();
+    assert_eq!(snapshot[0].mode, sim::robstride::ModeState::Reset);
+    host.send(ext(enable, [0; 8])).await.unwrap();
+    let replies = collect(&host, Duration::from_millis(20)).await;
+    assert_eq!(replies.len(), 1, "{replies:?}");
+    assert!(!replies[0].is_fd());
+    let snapshot = emulator.snapshot().await.unwrap();
+    assert_eq!(snapshot[0].mode, sim::robstride::ModeState::Run);
     emulator.shutdown().await;
 }
