@@ -36,4 +36,4 @@ pub use frame::{
     MAX_DATA_LEN, MAX_EXTENDED_ID, MAX_FD_DATA_LEN, MAX_STANDARD_ID,
 };
 pub use iface::CanBus;
-pub use socketcan_open::open_socketcan;
+pub use socketcan_open::{open_socketcan, open_socketcan_fd, open_socketcan_for};

@@ -34,6 +34,50 @@ pub fn open_socketcan(iface: &str) -> Result<Arc<dyn CanBus>, BusError> {
     Err(BusError::Unsupported)
 }
 
+/// Open `iface` as [`open_socketcan`] does, for CAN FD: the socket receives classic and CAN FD
+/// frames and sends CAN FD frames when the interface's MTU is 72 (`ip link set IFACE mtu 72`;
+/// on an interface of MTU 16 it works as a classic socket, and an FD frame sent is refused
+/// with an error that says how to set the MTU). For an emulator whose devices speak CAN FD.
+///
+/// # Errors
+///
+/// As [`open_socketcan`].
+#[cfg(target_os = "linux")]
+pub fn open_socketcan_fd(iface: &str) -> Result<Arc<dyn CanBus>, BusError> {
+    let options = crate::socketcan_bus::SocketCanOptions {
+        fd: true,
+        ..Default::default()
+    };
+    Ok(Arc::new(crate::socketcan_bus::SocketCanBus::open_with(
+        iface, options,
+    )?))
+}
+
+/// Open `iface` for CAN FD: SocketCAN exists only on Linux.
+///
+/// # Errors
+///
+/// Always [`BusError::Unsupported`] on this platform.
+#[cfg(not(target_os = "linux"))]
+pub fn open_socketcan_fd(iface: &str) -> Result<Arc<dyn CanBus>, BusError> {
+    let _ = iface;
+    Err(BusError::Unsupported)
+}
+
+/// Open `iface` for CAN FD when `fd`, else classic: [`open_socketcan_fd`] or
+/// [`open_socketcan`].
+///
+/// # Errors
+///
+/// As [`open_socketcan`].
+pub fn open_socketcan_for(iface: &str, fd: bool) -> Result<Arc<dyn CanBus>, BusError> {
+    if fd {
+        open_socketcan_fd(iface)
+    } else {
+        open_socketcan(iface)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

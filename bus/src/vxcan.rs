@@ -11,6 +11,8 @@ use std::io;
 use std::path::Path;
 use std::process::Command;
 
+use crate::socketcan_bus::CANFD_MTU;
+
 /// Longest interface name Linux accepts (IFNAMSIZ − 1).
 const MAX_NAME_LEN: usize = 15;
 
@@ -72,8 +74,19 @@ pub enum VxcanError {
 }
 
 /// Make sure the vxcan pair `ours` ↔ `peer` exists and both ends are up, creating it if
-/// neither exists.
+/// neither exists. The MTU of each end is left as it is (16, classic CAN, on a new pair).
 pub fn ensure_pair(ours: &str, peer: &str) -> Result<PairSetup, VxcanError> {
+    ensure_pair_with(ours, peer, false)
+}
+
+/// [`ensure_pair`] for CAN FD: both ends get the CAN FD MTU (72) so that FD frames cross the
+/// pair. An end that is up with a classic MTU is taken down for the change (the kernel
+/// refuses to change a running interface's MTU) and brought up again.
+pub fn ensure_fd_pair(ours: &str, peer: &str) -> Result<PairSetup, VxcanError> {
+    ensure_pair_with(ours, peer, true)
+}
+
+fn ensure_pair_with(ours: &str, peer: &str, fd: bool) -> Result<PairSetup, VxcanError> {
     for name in [ours, peer] {
         check_name(name)?;
     }
@@ -90,6 +103,14 @@ pub fn ensure_pair(ours: &str, peer: &str) -> Result<PairSetup, VxcanError> {
         (true, false) => return Err(half_there(ours, peer)),
         (false, true) => return Err(half_there(peer, ours)),
     };
+    if fd {
+        for name in [ours, peer] {
+            if mtu(name) != Some(CANFD_MTU) {
+                ip(ours, peer, &["link", "set", name, "down"])?;
+                ip(ours, peer, &["link", "set", name, "mtu", CANFD_MTU_TEXT])?;
+            }
+        }
+    }
     for name in [ours, peer] {
         ip(ours, peer, &["link", "set", name, "up"])?;
     }
@@ -122,6 +143,18 @@ fn check_name(name: &str) -> Result<(), VxcanError> {
 
 fn exists(name: &str) -> bool {
     Path::new("/sys/class/net").join(name).exists()
+}
+
+/// [`CANFD_MTU`] as `ip` takes it.
+const CANFD_MTU_TEXT: &str = "72";
+
+/// The interface's MTU as the kernel reports it, if readable.
+fn mtu(name: &str) -> Option<usize> {
+    std::fs::read_to_string(Path::new("/sys/class/net").join(name).join("mtu"))
+        .ok()?
+        .trim()
+        .parse()
+        .ok()
 }
 
 /// Run `ip ARGS`, classifying a failure from what it printed.
@@ -166,6 +199,11 @@ fn classify(ours: &str, peer: &str, command: &str, stderr: String) -> VxcanError
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_mtu_given_to_ip_is_the_fd_frame_size() {
+        assert_eq!(CANFD_MTU_TEXT, CANFD_MTU.to_string());
+    }
 
     #[test]
     fn bad_names_are_refused_before_anything_runs() {

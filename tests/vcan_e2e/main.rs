@@ -5,6 +5,7 @@
 //! `ARMHIL_VCAN_IFACE` names the interface (default `vcan0`); `ARMHIL_BIN` the `armhil` binary.
 
 mod bus;
+mod damiao_fd;
 mod piper_driver;
 mod piper_sdk;
 mod robstride;

@@ -40,10 +40,10 @@ async fn socketcand_place(addr: &str, node_name: &str) -> Result<CanPlace, Strin
 
 /// The SocketCAN interface `iface`; the error is the bus crate's, which names the interface
 /// and says what to do.
-fn iface_place(iface: &str) -> Result<CanPlace, String> {
+fn iface_place(iface: &str, fd: bool) -> Result<CanPlace, String> {
     // The socket registers with the runtime the emulator runs on (this is no runtime thread).
     let _runtime = sim_runtime().enter();
-    let node = bus::open_socketcan(iface).map_err(|e| e.to_string())?;
+    let node = bus::open_socketcan_for(iface, fd).map_err(|e| e.to_string())?;
     Ok(CanPlace {
         node,
         virtual_bus: None,
@@ -53,14 +53,17 @@ fn iface_place(iface: &str) -> Result<CanPlace, String> {
 }
 
 /// `iface` when given, else a socketcand server on `socketcand` (a bare port = loopback).
+/// `fd`: the device speaks CAN FD, so a SocketCAN node is a CAN FD socket (socketcand
+/// carries classic frames only).
 pub(super) fn open_place(
     py: Python<'_>,
     iface: Option<&str>,
     socketcand: &str,
     node: &str,
+    fd: bool,
 ) -> PyResult<CanPlace> {
     let r = match iface {
-        Some(i) => iface_place(i),
+        Some(i) => iface_place(i, fd),
         None => {
             let addr = match socketcand.parse::<u16>() {
                 Ok(port) => format!("127.0.0.1:{port}"),

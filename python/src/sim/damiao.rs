@@ -226,7 +226,7 @@ pub(super) fn damiao(
         .map_err(value_err)?;
     check_feedback_ids(&specs, &configs).map_err(value_err)?;
     let config = DamiaoConfig::new(configs);
-    let place = open_place(py, iface, socketcand, "damiao")?;
+    let place = open_place(py, iface, socketcand, "damiao", true)?;
     let node = Arc::clone(&place.node);
     let handle = block_on(
         py,

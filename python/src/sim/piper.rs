@@ -196,7 +196,7 @@ pub(super) fn piper(
         initial_joints_rad,
         ..PiperConfig::default()
     };
-    let place = open_place(py, iface, socketcand, "piper")?;
+    let place = open_place(py, iface, socketcand, "piper", false)?;
     let node = Arc::clone(&place.node);
     let handle = block_on(py, sim_runtime(), async move {
         sim::piper::PiperEmulator::spawn(node, config)

@@ -256,23 +256,26 @@ impl RobotEmulator {
     }
 }
 
+/// Each bus by its name and whether it is a CAN FD bus (the robot file gives it a data rate).
 async fn serve_buses(
-    names: &[String],
+    buses: &[(String, bool)],
     interfaces: bool,
     socketcand: &str,
 ) -> Result<Served, String> {
     if interfaces {
-        // The bus crate's errors name the interface and say what to do.
-        let nodes = names
+        // The bus crate's errors name the interface and say what to do. A CAN FD bus gets
+        // CAN FD sockets, as `armhil sim robot` gives it.
+        let nodes = buses
             .iter()
-            .map(|iface| bus::open_socketcan(iface).map_err(|e| e.to_string()))
+            .map(|(iface, fd)| bus::open_socketcan_for(iface, *fd).map_err(|e| e.to_string()))
             .collect::<Result<Vec<_>, _>>()?;
         return Ok(Served {
             nodes,
             server: None,
         });
     }
-    let (buses, server) = SocketcandServer::bind_realtime_channels(socketcand, names)
+    let names: Vec<String> = buses.iter().map(|(name, _)| name.clone()).collect();
+    let (buses, server) = SocketcandServer::bind_realtime_channels(socketcand, &names)
         .await
         .map_err(|e| format!("cannot serve socketcand on {socketcand}: {e}"))?;
     let nodes = buses
@@ -318,9 +321,13 @@ pub(super) fn robot(
         .collect();
     let name = config.name.clone();
     let socketcand = socketcand.to_owned();
-    let bus_names = names.clone();
+    let buses: Vec<(String, bool)> = config
+        .buses
+        .iter()
+        .map(|b| (b.name.clone(), b.data_bitrate_bps.is_some()))
+        .collect();
     let (handle, served, addr) = block_on(py, sim_runtime(), async move {
-        let served = serve_buses(&bus_names, interfaces, &socketcand).await?;
+        let served = serve_buses(&buses, interfaces, &socketcand).await?;
         let addr = served.server.as_ref().map(SocketcandServer::local_addr);
         match Emulator::spawn(config, served.nodes.clone()) {
             Ok(handle) => Ok((handle, served, addr)),

@@ -187,7 +187,7 @@ pub(super) fn robstride(
         })
         .collect::<PyResult<Vec<_>>>()?;
     let config = RobstrideConfig::new(motors);
-    let place = open_place(py, iface, socketcand, "robstride")?;
+    let place = open_place(py, iface, socketcand, "robstride", false)?;
     let node = Arc::clone(&place.node);
     let handle = block_on(py, sim_runtime(), async move {
         RobstrideBus::spawn(node, config)

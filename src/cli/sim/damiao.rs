@@ -12,7 +12,7 @@ use armhil::ui::damiao::DamiaoLive;
 use sim::damiao::{DamiaoBus, DamiaoConfig, Model, MotorConfig, MAX_ID, OPENARM_MST_OFFSET};
 
 use super::robstride::LoadSpec;
-use super::served_bus::{ServeArgs, ServedBus};
+use super::served_bus::{Frames, ServeArgs, ServedBus};
 
 /// Highest ESC_ID a motor may be given here: its force-position command goes to 0x300 +
 /// ESC_ID, which must stay below the register identifier 0x7FF (as in robot files).
@@ -206,7 +206,8 @@ fn shown(spec: &MotorSpec) -> String {
 /// Serve until `stop` asks (a signal, or the rig this device is part of stopping).
 pub(crate) async fn serve(args: Args, mut stop: super::StopSource) -> anyhow::Result<ExitCode> {
     let config = config(&args)?;
-    let served = ServedBus::open(&args.bus, stop.rig_buses()).await?;
+    // Damiao motors answer CAN FD as well as classic frames: FD sockets on SocketCAN.
+    let served = ServedBus::open_for(&args.bus, stop.rig_buses(), Frames::Fd).await?;
     let place = served.place();
     let bus = served.node("damiao")?;
     let ui_tap = args.ui.as_ref().map(|_| served.node("ui")).transpose()?;

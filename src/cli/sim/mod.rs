@@ -154,21 +154,29 @@ pub(crate) fn announce_ui(device: &str, server: &armhil::ui::UiServer) {
     eprintln!("armhil sim {device}: web view on {}", server.url());
 }
 
-/// `--create-vxcan PEER`: make sure the vxcan pair `iface` ↔ `peer` exists and is up, and tell
-/// the user which end their client takes.
-fn create_vxcan(iface: &str, peer: &str) -> anyhow::Result<()> {
+/// `--create-vxcan PEER`: make sure the vxcan pair `iface` ↔ `peer` exists and is up (with the
+/// CAN FD MTU when `fd`, for devices that speak CAN FD), and tell the user which end their
+/// client takes.
+fn create_vxcan(iface: &str, peer: &str, fd: bool) -> anyhow::Result<()> {
     #[cfg(target_os = "linux")]
     {
-        use bus::vxcan::{ensure_pair, PairSetup};
-        let done = match ensure_pair(iface, peer)? {
+        use bus::vxcan::{ensure_fd_pair, ensure_pair, PairSetup};
+        let setup = if fd {
+            ensure_fd_pair(iface, peer)?
+        } else {
+            ensure_pair(iface, peer)?
+        };
+        let done = match setup {
             PairSetup::Created => "created",
             PairSetup::AlreadyThere => "using the existing",
         };
-        eprintln!("{done} vxcan pair {iface} ↔ {peer}: the emulator is on {iface}, point your client at {peer}");
+        let frames = if fd { " (CAN FD, MTU 72)" } else { "" };
+        eprintln!("{done} vxcan pair {iface} ↔ {peer}{frames}: the emulator is on {iface}, point your client at {peer}");
         Ok(())
     }
     #[cfg(not(target_os = "linux"))]
     {
+        let _ = (iface, fd);
         anyhow::bail!("--create-vxcan {peer}: vxcan pairs exist only on Linux (use --socketcand)")
     }
 }

@@ -15,6 +15,8 @@ use bus::CanBus;
 use sim::robot::{Base, Gantry, RobotConfig, RobotEmulator};
 use sim::robstride::state_file::StateFile;
 
+use super::served_bus::Frames;
+
 /// Arguments of `armhil sim robot`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
@@ -88,8 +90,8 @@ struct Served {
     server: Option<SocketcandServer>,
     /// The socketcand channels' buses (empty on SocketCAN).
     channels: Vec<bus::virtual_bus::VirtualBus>,
-    /// The SocketCAN interfaces (empty on socketcand).
-    ifaces: Vec<String>,
+    /// The SocketCAN interfaces (empty on socketcand), each with the frames its bus carries.
+    ifaces: Vec<(String, Frames)>,
 }
 
 impl Served {
@@ -98,7 +100,7 @@ impl Served {
     fn tap(&self, k: usize) -> anyhow::Result<Arc<dyn CanBus>> {
         match (self.channels.get(k), self.ifaces.get(k)) {
             (Some(bus), _) => Ok(Arc::new(bus.attach("ui"))),
-            (None, Some(iface)) => super::served_bus::open_socketcan(iface),
+            (None, Some((iface, frames))) => super::served_bus::open_socketcan(iface, *frames),
             (None, None) => anyhow::bail!("no bus {k} to tap"),
         }
     }
@@ -136,24 +138,38 @@ async fn open_buses(args: &Args, config: &RobotConfig) -> anyhow::Result<Served>
     }
     let mut nodes = Vec::with_capacity(names.len());
     let mut ifaces = Vec::with_capacity(names.len());
-    for name in &names {
+    for bus in &config.buses {
+        let name = &bus.name;
+        // A bus the robot file gives a data rate is a CAN FD bus: FD sockets, FD vxcan pairs.
+        let frames = if bus.data_bitrate_bps.is_some() {
+            Frames::Fd
+        } else {
+            Frames::Classic
+        };
         let iface = if args.create_vxcan {
             let ours = format!("{VXCAN_PREFIX}{name}");
             anyhow::ensure!(
                 ours.len() <= MAX_IFACE_CHARS,
                 "bus `{name}`: the vxcan end `{ours}` would be longer than {MAX_IFACE_CHARS} characters, the limit for an interface name; shorten the bus name"
             );
-            super::create_vxcan(&ours, name)?;
+            super::create_vxcan(&ours, name, frames == Frames::Fd)?;
             ours
         } else {
             name.clone()
         };
-        nodes.push(super::served_bus::open_socketcan(&iface)?);
-        ifaces.push(iface);
+        nodes.push(super::served_bus::open_socketcan(&iface, frames)?);
+        ifaces.push((iface, frames));
     }
     Ok(Served {
         nodes,
-        place: ifaces.join(", "),
+        place: ifaces
+            .iter()
+            .map(|(iface, frames)| match frames {
+                Frames::Fd => format!("{iface} (CAN FD)"),
+                Frames::Classic => iface.clone(),
+            })
+            .collect::<Vec<_>>()
+            .join(", "),
         server: None,
         channels: Vec::new(),
         ifaces,

@@ -84,6 +84,16 @@ impl RigBuses {
     }
 }
 
+/// The frames a served device speaks, which decides the sockets it is given.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Frames {
+    /// Classic CAN only (RobStride, the Piper): classic sockets, which never see an FD frame,
+    /// as a classic controller ignores them.
+    Classic,
+    /// Classic CAN and CAN FD (Damiao): CAN FD sockets.
+    Fd,
+}
+
 /// The bus an emulator serves, opened from [`ServeArgs`].
 pub(crate) struct ServedBus {
     medium: Medium,
@@ -102,15 +112,26 @@ enum Medium {
         local: std::net::SocketAddr,
         rig: Arc<RigBuses>,
     },
-    /// A SocketCAN interface: every node is a socket of its own on it.
-    SocketCan { iface: String },
+    /// A SocketCAN interface: every node is a socket of its own on it, of the frames the device speaks.
+    SocketCan { iface: String, frames: Frames },
 }
 
 impl ServedBus {
-    /// Open the bus `args` names: start the socketcand server (warning if other machines can
-    /// reach it) or, on a rig, join the one the rig's devices share on that address; or
-    /// create the vxcan pair when asked and take the interface.
+    /// Open the bus `args` names for a classic CAN device: start the socketcand server
+    /// (warning if other machines can reach it) or, on a rig, join the one the rig's devices
+    /// share on that address; or create the vxcan pair when asked and take the interface.
     pub async fn open(args: &ServeArgs, rig: Option<&Arc<RigBuses>>) -> anyhow::Result<Self> {
+        Self::open_for(args, rig, Frames::Classic).await
+    }
+
+    /// [`ServedBus::open`] for a device that speaks `frames`: with [`Frames::Fd`] every
+    /// SocketCAN node is a CAN FD socket and a vxcan pair it creates gets the CAN FD MTU.
+    /// (socketcand carries classic frames only, whatever the device speaks.)
+    pub async fn open_for(
+        args: &ServeArgs,
+        rig: Option<&Arc<RigBuses>>,
+        frames: Frames,
+    ) -> anyhow::Result<Self> {
         match args.link() {
             Link::Socketcand(addr) => {
                 let addr = super::socketcand_addr(&addr);
@@ -133,10 +154,10 @@ impl ServedBus {
             }
             Link::SocketCan(iface) => {
                 if let Some(peer) = &args.create_vxcan {
-                    super::create_vxcan(&iface, peer)?;
+                    super::create_vxcan(&iface, peer, frames == Frames::Fd)?;
                 }
                 Ok(Self {
-                    medium: Medium::SocketCan { iface },
+                    medium: Medium::SocketCan { iface, frames },
                 })
             }
         }
@@ -149,7 +170,7 @@ impl ServedBus {
             Medium::Socketcand { bus, .. } | Medium::SharedSocketcand { bus, .. } => {
                 Ok(Arc::new(bus.attach(name)))
             }
-            Medium::SocketCan { iface } => open_socketcan(iface),
+            Medium::SocketCan { iface, frames } => open_socketcan(iface, *frames),
         }
     }
 
@@ -158,7 +179,7 @@ impl ServedBus {
         match &self.medium {
             Medium::Socketcand { server, .. } => format!("socketcand {}", server.local_addr()),
             Medium::SharedSocketcand { local, .. } => format!("socketcand {local}"),
-            Medium::SocketCan { iface } => iface.clone(),
+            Medium::SocketCan { iface, .. } => iface.clone(),
         }
     }
 
@@ -166,7 +187,7 @@ impl ServedBus {
     pub fn channel(&self) -> &str {
         match &self.medium {
             Medium::Socketcand { .. } | Medium::SharedSocketcand { .. } => "socketcand",
-            Medium::SocketCan { iface } => iface,
+            Medium::SocketCan { iface, .. } => iface,
         }
     }
 
@@ -182,10 +203,10 @@ impl ServedBus {
     }
 }
 
-/// A node on the SocketCAN interface `iface`; the error is the bus crate's, which names the
-/// interface and says what to do.
-pub(crate) fn open_socketcan(iface: &str) -> anyhow::Result<Arc<dyn CanBus>> {
-    Ok(bus::open_socketcan(iface)?)
+/// A node on the SocketCAN interface `iface`, a CAN FD socket for [`Frames::Fd`]; the error is
+/// the bus crate's, which names the interface and says what to do.
+pub(crate) fn open_socketcan(iface: &str, frames: Frames) -> anyhow::Result<Arc<dyn CanBus>> {
+    Ok(bus::open_socketcan_for(iface, frames == Frames::Fd)?)
 }
 
 #[cfg(test)]
