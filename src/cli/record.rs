@@ -67,7 +67,7 @@ mod imp {
         // The output first: a bad path is reported before any bus is touched.
         let mut recorder = Recorder::create(&args.output, link.channel())
             .with_context(|| format!("cannot create {}", args.output.display()))?;
-        let bus = link.open("recorder").await.map_err(anyhow::Error::msg)?;
+        let bus = link.open_fd("recorder").await.map_err(anyhow::Error::msg)?;
         tracing::info!(on = %bus.name(), output = %args.output.display(), "recording; Ctrl-C stops");
         let stop_after = async {
             match duration {

@@ -96,8 +96,15 @@ mod imp {
             .build()
             .context("cannot start the async runtime")?;
         runtime.block_on(async {
-            // The bus crate's error names the interface and says what to do.
-            let bus = SocketCanBus::open(&args.iface)?;
+            // The bus crate's error names the interface and says what to do. A log with CAN FD
+            // frames needs a CAN FD socket (and an interface of MTU 72, which the send's error
+            // explains otherwise).
+            let fd = plan.iter().any(|(_, frame)| frame.is_fd());
+            let options = bus::socketcan_bus::SocketCanOptions {
+                fd,
+                ..Default::default()
+            };
+            let bus = SocketCanBus::open_with(&args.iface, options)?;
             tokio::select! {
                 result = replay(&bus, &plan, &args) => result,
                 signal = tokio::signal::ctrl_c() => {

@@ -100,7 +100,7 @@ pub(crate) async fn build(
             }
             (
                 Vec::new(),
-                Recorder::from_bus(link.open("recorder").await?, spool),
+                Recorder::from_bus(link.open_fd("recorder").await?, spool),
             )
         }
     };

@@ -45,8 +45,19 @@ impl Link {
     /// of a CAN device kind). On a SocketCAN interface a second socket sees every frame, the
     /// driver's and the emulator's; on a socketcand server so does a second connection.
     pub async fn open(&self, what: &str) -> Result<Arc<dyn bus::CanBus>, String> {
+        self.open_for(what, false).await
+    }
+
+    /// [`Link::open`] for a node that must see CAN FD frames too, such as a recorder: on
+    /// SocketCAN a CAN FD socket (classic and FD frames alike; a classic socket never receives
+    /// an FD frame). socketcand carries classic frames only.
+    pub async fn open_fd(&self, what: &str) -> Result<Arc<dyn bus::CanBus>, String> {
+        self.open_for(what, true).await
+    }
+
+    async fn open_for(&self, what: &str, fd: bool) -> Result<Arc<dyn bus::CanBus>, String> {
         match self {
-            Self::SocketCan(iface) => super::open_iface(iface, what),
+            Self::SocketCan(iface) => super::open_iface(iface, what, fd),
             Self::Socketcand(addr) => bus::socketcand::SocketcandBus::connect(addr, "can0")
                 .await
                 .map(|b| Arc::new(b) as Arc<dyn bus::CanBus>)

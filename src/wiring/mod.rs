@@ -20,8 +20,13 @@ pub use options::{RunOptions, DEFAULT_RECORDING_LIMIT_BYTES, MAX_DEADLINE, MAX_T
 /// Node name of the drivers on the virtual bus (bus faults can target it as `host`).
 pub const HOST_NODE: &str = "host";
 
-/// Open the SocketCAN interface `iface` for `what` (the recorder, the driver): the bus
-/// crate's error, which names the interface and says what to do, after what it was for.
-pub(crate) fn open_iface(iface: &str, what: &str) -> Result<Arc<dyn bus::CanBus>, String> {
-    bus::open_socketcan(iface).map_err(|e| format!("cannot open the {what}'s bus: {e}"))
+/// Open the SocketCAN interface `iface` for `what` (the recorder, the driver), a CAN FD socket
+/// when `fd`: the bus crate's error, which names the interface and says what to do, after what
+/// it was for.
+pub(crate) fn open_iface(
+    iface: &str,
+    what: &str,
+    fd: bool,
+) -> Result<Arc<dyn bus::CanBus>, String> {
+    bus::open_socketcan_for(iface, fd).map_err(|e| format!("cannot open the {what}'s bus: {e}"))
 }

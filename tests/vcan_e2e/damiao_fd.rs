@@ -2,7 +2,8 @@
 //! robots/openarm.yaml --create-vxcan` give their vxcan pairs the CAN FD MTU (72) and answer a
 //! CAN FD request in CAN FD (bit-rate switch kept) and a classic one in classic CAN, on the
 //! peer a client such as the OpenArm's own library opens with `CAN_RAW_FD_FRAMES`. can-utils'
-//! `candump -L` shows the FD replies in its `##` syntax.
+//! `candump -L` shows the FD replies in its `##` syntax, `armhil record` keeps them and
+//! `armhil replay` sends a log's FD frames as FD.
 
 use std::process::{Child, Command, Stdio};
 use std::time::Duration;
@@ -143,6 +144,17 @@ async fn sim_damiao_answers_can_fd_in_can_fd_and_classic_in_classic() {
         .stdout(Stdio::piped())
         .spawn()
         .expect("candump (can-utils) runs");
+    // armhil's own recorder on the emulator's end: it opens a CAN FD socket.
+    let files = tempfile::tempdir().expect("a temporary folder");
+    let recording = files.path().join("fd.log");
+    let recorder = spawn(&[
+        "record",
+        "--iface",
+        OURS,
+        "-o",
+        recording.to_str().expect("a UTF-8 path"),
+    ]);
+    tokio::time::sleep(Duration::from_millis(500)).await;
 
     let reply = ask(&peer, &fd(0x001, &ENABLE), 0x011).await;
     assert!(reply.is_fd(), "an FD enable answered classic: {reply:?}");
@@ -158,6 +170,46 @@ async fn sim_damiao_answers_can_fd_in_can_fd_and_classic_in_classic() {
     );
     assert_eq!(state_and_id(&reply), (0, 1), "disabled, motor 1: {reply:?}");
 
+    // `armhil replay` sends a log's CAN FD frames as CAN FD: an FD enable, answered in FD.
+    let replayed = files.path().join("enable.log");
+    std::fs::write(&replayed, "(0.000000) vcan0 001##1FFFFFFFFFFFFFFFC\n").expect("written");
+    while let Ok(Ok(_)) = timeout(Duration::from_millis(300), peer.recv()).await {}
+    let replay = Command::new(armhil_bin())
+        .args(["replay", replayed.to_str().expect("UTF-8"), "--iface", PEER])
+        .output()
+        .expect("armhil replay runs");
+    assert!(
+        replay.status.success(),
+        "replay: {}",
+        String::from_utf8_lossy(&replay.stderr)
+    );
+    let reply = timeout(WAIT, async {
+        loop {
+            if let Ok(received) = peer.recv().await {
+                if received.frame.raw_id() == 0x011 {
+                    return received.frame;
+                }
+            }
+        }
+    })
+    .await
+    .expect("the replayed enable is answered");
+    assert!(reply.is_fd(), "{reply:?}");
+    assert_eq!(state_and_id(&reply), (1, 1), "{reply:?}");
+
+    let recorder_stderr = recorder.stop();
+    let recorded = std::fs::read_to_string(&recording)
+        .unwrap_or_else(|e| panic!("{}: {e}; {recorder_stderr}", recording.display()));
+    assert!(
+        recorded
+            .lines()
+            .any(|l| l.ends_with(" 001##1FFFFFFFFFFFFFFFC")),
+        "the FD enable in armhil's recording: {recorded}"
+    );
+    assert!(
+        recorded.lines().any(|l| l.contains(" 011##1")),
+        "an FD reply in armhil's recording: {recorded}"
+    );
     let _ = Command::new("kill")
         .args(["-TERM", &candump.id().to_string()])
         .status();
@@ -209,22 +261,19 @@ async fn sim_robot_serves_the_openarm_on_can_fd_vxcan_pairs() {
     let reply = ask(&left, &fd(0x008, &ENABLE), 0x018).await;
     assert!(reply.is_fd(), "{reply:?}");
     assert_eq!(state_and_id(&reply), (1, 8), "{reply:?}");
-    // The right arm has no motor 8: nothing answers there.
-    right.send(fd(0x008, &ENABLE)).await.expect("sent");
+    // Each arm has motors 1..=8 (the gripper is 8): nothing answers on 9.
+    right.send(fd(0x009, &ENABLE)).await.expect("sent");
     let silent = timeout(Duration::from_millis(500), async {
         loop {
             if let Ok(received) = right.recv().await {
-                if received.frame.raw_id() == 0x018 {
+                if received.frame.raw_id() == 0x019 {
                     return received.frame;
                 }
             }
         }
     })
     .await;
-    assert!(
-        silent.is_err(),
-        "the right arm answered for a gripper: {silent:?}"
-    );
+    assert!(silent.is_err(), "a motor 9 answered on can0: {silent:?}");
 
     let stderr = emulator.stop();
     for end in ["sim-can0", "sim-can1", "can0", "can1"] {
