@@ -11,7 +11,11 @@
 //!   are theirs to lose; the others' answers must all come);
 //! - one socketcand client pings another through the bus (client-to-client echo);
 //! - CPU of the emulator process (% of one core, from /proc) at rest and under that load, and
-//!   at rest for `sim robstride` (five motors) and `sim realman`.
+//!   at rest for `sim robstride` (five motors) and `sim realman`;
+//! - Damiao: `sim damiao --motor 1:DM4310` and `sim robot robots/openarm.yaml` over socketcand,
+//!   a host sending enabled motors a zero-gain MIT command (a pure status exchange) and timing
+//!   each feedback from its send: one request alone on the wire every 2 ms (the firmware's
+//!   turnaround as the host sees it), on both OpenArm buses at once; CPU at rest and under it.
 //!
 //! Prints figures; judges nothing. Run: `cargo bench --bench wire_latency` (Linux).
 
@@ -106,6 +110,119 @@ fn op_command(motor: u8) -> CanFrame {
     // Type 1 with zero torque, p = v = 0, kp = kd = 0: a pure status exchange.
     let id = (1 << 24) | (0x7FFF << 8) | u32::from(motor);
     CanFrame::extended(id, &[0x7F, 0xFF, 0x7F, 0xFF, 0, 0, 0, 0]).expect("valid frame")
+}
+
+/// A zero-gain MIT command to Damiao motor `esc_id` (a DM4310's ranges), packed by our
+/// driver's codec: the motor answers with its feedback and applies no torque.
+fn damiao_status_command(esc_id: u16) -> CanFrame {
+    use driver::damiao::{codec, MitCommand, Model, RangeTable};
+    let ranges = Model::parse("DM4310")
+        .expect("a model the driver knows")
+        .ranges(RangeTable::Current);
+    codec::mit(esc_id, &MitCommand::default(), &ranges).expect("a frame")
+}
+
+/// On each `(channel, motor ids)` at once: enable the motors, then one zero-gain MIT command
+/// every 2 ms, the motors in turn, for `LOAD_SECONDS`; the latency of each feedback (on
+/// ESC_ID + 0x10) from its send, and how many were sent.
+async fn damiao_round_trips(addr: &str, buses: &[(&str, &[u16])]) -> (Vec<Duration>, u64, u64) {
+    let latencies = Arc::new(Mutex::new(Vec::new()));
+    let sent_total = Arc::new(AtomicU64::new(0));
+    let mut tasks = Vec::new();
+    for &(name, ids) in buses {
+        let bus: Arc<dyn CanBus> = Arc::new(
+            SocketcandBus::connect(addr, name)
+                .await
+                .expect("channel opens"),
+        );
+        for &id in ids {
+            let enable = driver::damiao::codec::special(id, driver::damiao::codec::special::ENABLE)
+                .expect("a frame");
+            send(bus.as_ref(), enable).await;
+        }
+        // The enables' feedback, before the timed exchanges.
+        tokio::time::sleep(Duration::from_millis(100)).await;
+        while let Ok(Ok(_)) = tokio::time::timeout(Duration::from_millis(5), bus.recv()).await {}
+        let sent_at: Arc<Mutex<[Option<Instant>; 32]>> = Arc::new(Mutex::new([None; 32]));
+        let end = Instant::now() + Duration::from_secs(LOAD_SECONDS);
+        let receiver = {
+            let (bus, sent_at, latencies) = (
+                Arc::clone(&bus),
+                Arc::clone(&sent_at),
+                Arc::clone(&latencies),
+            );
+            tokio::spawn(async move {
+                while let Ok(Ok(received)) =
+                    tokio::time::timeout(Duration::from_millis(200), bus.recv()).await
+                {
+                    let id = received.frame.raw_id();
+                    if (0x10..0x30).contains(&id) {
+                        let motor = (id - 0x10) as usize;
+                        if let Some(at) = sent_at.lock().unwrap()[motor].take() {
+                            latencies.lock().unwrap().push(at.elapsed());
+                        }
+                    }
+                }
+            })
+        };
+        let ids = ids.to_vec();
+        let sender = {
+            let sent_total = Arc::clone(&sent_total);
+            tokio::spawn(async move {
+                let mut ticks = tokio::time::interval(Duration::from_millis(2));
+                let mut next = ids.iter().copied().cycle();
+                while Instant::now() < end {
+                    ticks.tick().await;
+                    let motor = next.next().expect("a motor");
+                    sent_at.lock().unwrap()[usize::from(motor)] = Some(Instant::now());
+                    send(bus.as_ref(), damiao_status_command(motor)).await;
+                    sent_total.fetch_add(1, Ordering::Relaxed);
+                }
+                bus
+            })
+        };
+        tasks.push((sender, receiver));
+    }
+    for (sender, receiver) in tasks {
+        let _bus = sender.await.expect("sender");
+        receiver.await.expect("receiver");
+    }
+    let mut latencies = std::mem::take(&mut *latencies.lock().unwrap());
+    latencies.sort();
+    let answered = latencies.len() as u64;
+    (latencies, answered, sent_total.load(Ordering::Relaxed))
+}
+
+/// Start `sim ARGS --socketcand` on a free port, measure its CPU at rest and under
+/// [`damiao_round_trips`] on `buses`, and print both.
+fn damiao_figures(
+    runtime: &tokio::runtime::Runtime,
+    label: &str,
+    args: &[&str],
+    buses: &[(&str, &[u16])],
+) {
+    let port = free_port();
+    let addr = format!("127.0.0.1:{port}");
+    let mut command = vec!["sim"];
+    command.extend(args.iter().copied());
+    command.extend(["--socketcand", &addr]);
+    let emulator = start(&command);
+    wait_for_port(port);
+    std::thread::sleep(Duration::from_secs(1));
+    let pid = emulator.child.id();
+    let idle = cpu_percent(pid, || {
+        std::thread::sleep(Duration::from_secs(IDLE_SECONDS))
+    });
+    let mut trips = None;
+    let loaded = cpu_percent(pid, || {
+        trips = Some(runtime.block_on(damiao_round_trips(&addr, buses)));
+    });
+    println!("{label} over socketcand, real time:");
+    print_latencies(
+        "MIT status exchange, 1 per bus every 2 ms",
+        trips.as_ref().expect("ran"),
+    );
+    println!("  CPU: {idle:.1} % of a core at rest, {loaded:.1} % under the exchanges");
 }
 
 fn percentile(sorted: &[Duration], p: f64) -> Duration {
@@ -349,4 +466,18 @@ fn main() {
         });
         println!("{label}: {idle:.1} % of a core at rest");
     }
+
+    damiao_figures(
+        &runtime,
+        "sim damiao (one DM4310)",
+        &["damiao", "--motor", "1:DM4310"],
+        &[("can0", &[1])],
+    );
+    let arm: &[u16] = &[1, 2, 3, 4, 5, 6, 7, 8];
+    damiao_figures(
+        &runtime,
+        "sim robot robots/openarm.yaml (16 Damiao motors, 2 channels)",
+        &["robot", "robots/openarm.yaml"],
+        &[("can0", arm), ("can1", arm)],
+    );
 }
