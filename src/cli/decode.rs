@@ -1,16 +1,18 @@
 //! `armhil decode`: print every frame of a candump log or pcap/pcapng capture decoded with
 //! units (the Piper's and RobStride's through the driver's codecs, Damiao's by a decoder of
-//! its own, `armhil::interop::decode_damiao`): by one protocol (`--device`, one of the protocols the
-//! registered device kinds own, [`armhil::devices::wire_decoders`]), or by the devices of a
-//! scenario's bench (`--scenario`), each frame named by the device that owns it, as the report
-//! names them.
+//! its own, `armhil::devices::damiao::decode_damiao`): by one protocol (`--device`, one of the
+//! protocols the registered device kinds own, [`armhil::devices::wire_decoders`]), or by the
+//! devices of a scenario's bench (`--scenario`), each frame named by the device that owns it,
+//! as the report names them. The options (`--host-id`, `--model`, `--motor`) are handed to the
+//! protocol as written; it resolves them through its own tables and names a flag that does
+//! not fit it.
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Duration;
 
 use anyhow::Context;
-use armhil::devices::{wire_decoders, WireDecode, WireOptions};
+use armhil::devices::{wire_decoders, WireDecode, WireMotor, WireOptions};
 use armhil::interop::DecodedFrame;
 use bus::{CanFrame, CanId};
 
@@ -38,17 +40,22 @@ pub struct Args {
     /// it (a robot's actuators, a Piper and a RobStride bus side by side), as its report does.
     #[arg(long, value_name = "SCENARIO")]
     pub scenario: Option<PathBuf>,
-    /// RobStride: the host id replies are addressed to.
-    #[arg(long, default_value_t = 0xFD)]
-    pub host_id: u8,
-    /// RobStride: the model whose ranges scale status frames (RS00 … RS06, EL05).
-    #[arg(long, default_value = "RS03")]
-    pub model: String,
-    /// Damiao: a motor on the bus as ESC_ID:MODEL (answering on ESC_ID + 0x10) or
-    /// ESC_ID:MODEL:MST_ID, e.g. `1:DM8009` or `0x01:DM4310:0x11`; its model's ranges scale its
-    /// MIT commands and feedback (repeat for more motors; default `1:DM4310`).
-    #[arg(long = "motor", value_name = "ESC_ID:MODEL[:MST_ID]")]
-    pub motors: Vec<armhil::interop::DamiaoWireMotor>,
+    /// RobStride: the host id replies are addressed to (default 253, 0xFD).
+    #[arg(long, conflicts_with = "scenario")]
+    pub host_id: Option<u8>,
+    /// RobStride: the model whose ranges scale every frame (RS00 … RS06, EL05; default RS03).
+    #[arg(long, conflicts_with = "scenario")]
+    pub model: Option<String>,
+    /// A motor on the bus: the id it is commanded on, its model and, for a Damiao motor, the id
+    /// it answers on (ESC_ID + 0x10 unless given), e.g. `1:DM8009`, `0x01:DM4310:0x11` or
+    /// `3:RS00`; its model's ranges scale its frames (repeat for more motors). Damiao: default
+    /// `1:DM4310`; RobStride: only the listed motors' frames, each by its own model.
+    #[arg(
+        long = "motor",
+        value_name = "ID:MODEL[:FEEDBACK_ID]",
+        conflicts_with = "scenario"
+    )]
+    pub motors: Vec<WireMotor>,
 }
 
 /// The largest capture read (whole, into memory, so bounded by what a laptop holds): 4 GiB,
@@ -162,10 +169,11 @@ enum Decoder {
     Bench(Box<armhil::harness::result::BenchInfo>),
 }
 
-/// The decoder of the protocol named `name`, or an error naming the known ones.
-fn protocol(name: &str, options: WireOptions) -> anyhow::Result<WireDecode> {
+/// The decoder of the protocol named `name` with `options`, or an error naming the known
+/// ones or the option the protocol refuses.
+fn protocol(name: &str, options: &WireOptions) -> anyhow::Result<WireDecode> {
     match wire_decoders().find(|d| d.name == name) {
-        Some(wire) => Ok((wire.decoder)(options)),
+        Some(wire) => (wire.decoder)(options).map_err(|e| anyhow::anyhow!("{e}")),
         None => {
             let known: Vec<&str> = wire_decoders().map(|d| d.name).collect();
             anyhow::bail!(
@@ -191,26 +199,14 @@ impl Decoder {
             );
             return Ok(Self::Bench(Box::new(bench)));
         }
-        let model = driver::robstride::Model::parse(&args.model).with_context(|| {
-            let damiao = driver::damiao::Model::parse(&args.model).is_some();
-            format!(
-                "unknown RobStride model {:?}{}",
-                args.model,
-                if damiao {
-                    " (`--model` is RobStride's: a Damiao motor is given as --motor ESC_ID:MODEL)"
-                } else {
-                    ""
-                }
-            )
-        })?;
         let options = WireOptions {
             host_id: args.host_id,
-            model,
-            damiao_motors: args.motors.clone(),
+            model: args.model.clone(),
+            motors: args.motors.clone(),
         };
         Ok(Self::Protocol(protocol(
             args.device.as_deref().unwrap_or(DEFAULT_DEVICE),
-            options,
+            &options,
         )?))
     }
 

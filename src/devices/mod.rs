@@ -16,14 +16,15 @@ use crate::scenario::read_in::KindSet;
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 
 pub mod contract;
-pub(crate) use contract::{named_bus, one_bus, KindSpec, RawKindStep, Wiring};
+pub(crate) use contract::{named_bus, one_bus, FirstOf, KindSpec, RawKindStep, Wiring};
 pub use contract::{
     BaseColumns, BusUse, Device, DeviceError, Drawing, FrameDecoder, JointColumn, Posing, Reply,
-    TraceColumn, WireDecode, WireDecoder, WireOptions,
+    TraceColumn, WireDecode, WireDecoder, WireMotor, WireOptions,
 };
 
 pub mod actuator_group;
 pub mod arm;
+pub mod damiao;
 pub mod piper;
 pub mod realman;
 pub mod robstride;
@@ -55,9 +56,8 @@ macro_rules! device_kinds {
         /// The scenario names of every device kind.
         pub const KIND_NAMES: &[&str] = &[$($name),*];
 
-        /// Every kind's `KindSpec::WIRE_DECODERS`, in registration order, then the actuators'
-        /// protocols no kind owns ([`ACTUATOR_WIRE_DECODERS`]).
-        const WIRE_DECODER_LISTS: &[&[WireDecoder]] = &[$( <$module::Kind as KindSpec>::WIRE_DECODERS, )* ACTUATOR_WIRE_DECODERS];
+        /// Every kind's `KindSpec::WIRE_DECODERS`, in registration order.
+        const WIRE_DECODER_LISTS: &[&[WireDecoder]] = &[$( <$module::Kind as KindSpec>::WIRE_DECODERS, )*];
 
         // Each protocol is registered once: by the kind that owns it.
         const _: () = assert!(
@@ -280,12 +280,14 @@ macro_rules! device_kinds {
                 keys
             }
 
-            /// The first kind among `kinds` whose conditions include `key`.
+            /// The first kind among `kinds` whose conditions include `key`, or the kind a
+            /// qualified `kind.key` names (how a bench of two kinds that share a condition key,
+            /// `motors` of RobStride and Damiao, picks the other one).
             pub(crate) fn kind_of_key(key: &str, kinds: KindSet) -> Option<KindIndex> {
                 let tables: &[(&str, &[&str])] = &[$( ($name, <$module::Kind as KindSpec>::CONDITION_KEYS) ),*];
                 tables
                     .iter()
-                    .position(|(kind, keys)| on_bench(kind, kinds) && keys.contains(&key))
+                    .position(|(kind, keys)| for_kind(kind, key, kinds).is_some_and(|k| keys.contains(&k)))
                     .map(KindIndex)
             }
 
@@ -355,29 +357,8 @@ pub const fn same_text(a: &str, b: &str) -> bool {
     true
 }
 
-/// The protocols of actuators that no scenario device kind owns, which `armhil decode --device`
-/// reads by all the same: a robot's Damiao motors (which `armhil sim damiao` also serves on a
-/// bus of their own). Listed after the kinds' protocols and checked with them (each name once).
-const ACTUATOR_WIRE_DECODERS: &[WireDecoder] = &[WireDecoder {
-    name: "damiao",
-    help: "Damiao (DM) joint motors (11-bit ids; each motor by --motor ESC_ID:MODEL[:MST_ID], default 1:DM4310)",
-    decoder: wire_damiao,
-}];
-
-/// `armhil decode --device damiao`: the commands and replies of the motors `--motor` lists
-/// (the default motor when none is), each scaled by its own model's ranges; a frame on one of
-/// their identifiers that does not decode says why.
-fn wire_damiao(options: WireOptions) -> WireDecode {
-    let motors = match options.damiao_motors {
-        motors if motors.is_empty() => vec![crate::interop::DamiaoWireMotor::DEFAULT],
-        motors => motors,
-    };
-    Box::new(move |frame| crate::interop::decode_damiao(frame, &motors))
-}
-
 /// Every protocol `armhil decode --device NAME` reads captures by: each registered kind's own
-/// (`KindSpec::WIRE_DECODERS`), in registration order, then the actuators' that no kind owns
-/// (Damiao's), each name once.
+/// (`KindSpec::WIRE_DECODERS`), in registration order, each name once.
 pub fn wire_decoders() -> impl Iterator<Item = &'static WireDecoder> {
     WIRE_DECODER_LISTS.iter().flat_map(|list| list.iter())
 }
@@ -404,6 +385,11 @@ const fn distinct_wire_names(lists: &[&[WireDecoder]]) -> bool {
         a += 1;
     }
     true
+}
+
+/// A condition key as its kind reads it: `motors` of a qualified `damiao.motors`.
+pub(crate) fn unqualified(key: &str) -> &str {
+    key.split_once('.').map_or(key, |(_, rest)| rest)
 }
 
 /// The kinds named `names` (the kinds on a bench), for reading its steps, faults and
@@ -440,6 +426,7 @@ device_kinds! {
     "realman" => Realman(realman),
     "arm" => Arm(arm),
     "actuator_group" => ActuatorGroup(actuator_group),
+    "damiao" => Damiao(damiao),
 }
 
 impl<'de> Deserialize<'de> for RawDevice {
@@ -471,19 +458,11 @@ impl<'de> Deserialize<'de> for RawDevice {
 #[cfg(test)]
 mod tests {
     use bus::CanFrame;
-    use driver::robstride::Model;
 
-    use super::{wire_decoders, WireOptions};
-
-    const OPTIONS: WireOptions = WireOptions {
-        host_id: 0xFD,
-        model: Model::RS03,
-        damiao_motors: Vec::new(),
-    };
+    use super::{wire_decoders, WireDecode, WireOptions};
 
     /// Each protocol is registered once, by the kind that owns it: `arm` and `actuator_group`
-    /// speak the Piper's and RobStride's and add none, the Realman speaks no CAN; Damiao's
-    /// motors are no scenario kind and come last.
+    /// speak the Piper's and RobStride's and add none, the Realman speaks no CAN.
     #[test]
     fn the_decode_protocols_are_those_of_the_kinds_that_own_them() {
         let names: Vec<&str> = wire_decoders().map(|d| d.name).collect();
@@ -491,15 +470,17 @@ mod tests {
         assert!(wire_decoders().all(|d| !d.help.is_empty() && !d.help.contains('\n')));
     }
 
+    fn decoder_with(name: &str, options: &WireOptions) -> Result<WireDecode, String> {
+        let wire = wire_decoders()
+            .find(|d| d.name == name)
+            .expect("registered");
+        (wire.decoder)(options)
+    }
+
     /// A protocol's decoder names its own frames and leaves the others' undecoded.
     #[test]
     fn each_protocol_decodes_its_own_frames() {
-        let decoder = |name: &str| {
-            let wire = wire_decoders()
-                .find(|d| d.name == name)
-                .expect("registered");
-            (wire.decoder)(OPTIONS)
-        };
+        let decoder = |name: &str| decoder_with(name, &WireOptions::default()).expect("decoder");
         // RobStride type 2 status from motor 1 to host 0xFD.
         let status = CanFrame::extended(
             0x0200_01FD,
@@ -521,5 +502,79 @@ mod tests {
         let named = decoder("damiao")(&enable).expect("no error");
         assert_eq!(named.map(|d| d.name), Some("enable".to_owned()));
         assert_eq!(decoder("robstride")(&enable), Ok(None));
+    }
+
+    /// The options are the command's words: each protocol resolves `--motor` and `--model`
+    /// through its own tables and names the flag that does not fit it.
+    #[test]
+    fn each_protocol_resolves_the_options_and_names_the_flag_that_does_not_fit() {
+        let motors = |list: &[&str]| WireOptions {
+            motors: list.iter().map(|m| m.parse().expect("ID:MODEL")).collect(),
+            ..WireOptions::default()
+        };
+        let error =
+            |name: &str, options: &WireOptions| decoder_with(name, options).err().expect("refused");
+        assert!(decoder_with("damiao", &motors(&["1:DM8009", "2:DM4310:0x22"])).is_ok());
+        let e = error("damiao", &motors(&["1:DM9999"]));
+        assert!(
+            e.starts_with("`--motor 1:DM9999`: unknown Damiao model `DM9999`"),
+            "{e}"
+        );
+        let e = error("damiao", &motors(&["0x7FF:DM4310"]));
+        assert!(e.starts_with("`--motor 0x7FF:DM4310`: "), "{e}");
+        let e = error(
+            "damiao",
+            &WireOptions {
+                model: Some("DM4310".into()),
+                ..WireOptions::default()
+            },
+        );
+        assert!(
+            e.starts_with("`--model` is not read by `--device damiao`"),
+            "{e}"
+        );
+        // RobStride reads `--motor` too: each listed motor's frames by its own model.
+        let rs = decoder_with("robstride", &motors(&["1:RS03"])).expect("decoder");
+        let status = CanFrame::extended(
+            0x0200_01FD,
+            &[0x80, 0x00, 0x80, 0x00, 0x80, 0x00, 0x01, 0x2C],
+        )
+        .unwrap();
+        assert_eq!(
+            rs(&status).expect("no error").map(|d| d.name),
+            Some("Status".to_owned())
+        );
+        let other = CanFrame::extended(0x0200_02FD, &[0x80, 0, 0x80, 0, 0x80, 0, 1, 0x2C]).unwrap();
+        assert_eq!(rs(&other), Ok(None));
+        let e = error("robstride", &motors(&["1:DM4310"]));
+        assert!(
+            e.starts_with("`--motor 1:DM4310`: unknown RobStride model"),
+            "{e}"
+        );
+        let e = error("robstride", &motors(&["1:RS03:0x11"]));
+        assert!(e.contains("feedback id"), "{e}");
+        let e = error("robstride", &motors(&["300:RS03"]));
+        assert!(e.contains("1..=127"), "{e}");
+        let e = error(
+            "robstride",
+            &WireOptions {
+                model: Some("DM4310".into()),
+                ..WireOptions::default()
+            },
+        );
+        assert!(
+            e.starts_with("`--model DM4310`: unknown RobStride model"),
+            "{e}"
+        );
+        assert!(
+            e.contains("a Damiao motor is given as --motor ID:MODEL"),
+            "{e}"
+        );
+        // The Piper's frames need no option: one given is a capture read without `--device`.
+        let e = error("piper", &motors(&["1:RS03"]));
+        assert!(
+            e.starts_with("`--motor` is not read by `--device piper`"),
+            "{e}"
+        );
     }
 }

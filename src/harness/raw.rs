@@ -229,7 +229,7 @@ impl ReadIn for RawConditions {
                         return Err(crate::scenario::onekey::unknown("condition", &key, &keys));
                     };
                     let rest = CondMap {
-                        first: Some(key),
+                        first: Some(crate::devices::unqualified(&key).to_owned()),
                         map: &mut map,
                         generic: &mut out,
                     };

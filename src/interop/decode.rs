@@ -150,7 +150,7 @@ pub fn decode_piper(frame: &CanFrame) -> Result<Option<DecodedFrame>, codec::Dec
 }
 
 /// A field shown as written (a label, a hex word), without a unit.
-pub(super) fn text(name: &str, value: String) -> Field {
+pub(crate) fn text(name: &str, value: String) -> Field {
     Field {
         name: name.to_owned(),
         value,
@@ -159,7 +159,7 @@ pub(super) fn text(name: &str, value: String) -> Field {
 }
 
 /// A number with `places` decimals in `unit`.
-pub(super) fn num(name: &str, value: f64, places: usize, unit: &'static str) -> Field {
+pub(crate) fn num(name: &str, value: f64, places: usize, unit: &'static str) -> Field {
     Field {
         name: name.to_owned(),
         value: format!("{value:.places$}"),

@@ -253,13 +253,13 @@ fn device_accepts_each_registered_protocol_and_suggests_one_for_an_unknown_name(
     );
 }
 
-/// The Damiao decoder (`armhil::interop::decode_damiao`, written apart from both Damiao
+/// The Damiao decoder (`armhil::devices::damiao::decode_damiao`, written apart from both Damiao
 /// codecs) against every shared vector of `fixtures/damiao/`: each frame is named by its
 /// `cmd` and its fields carry the annotated values (MIT and feedback within the quantisation
 /// step, the rest exactly as printed).
 #[test]
 fn every_damiao_vector_decodes_to_its_annotated_fields() {
-    use armhil::interop::{decode_damiao, DamiaoWireMotor};
+    use armhil::devices::damiao::{decode_damiao, DamiaoWireMotor};
     use driver::damiao::Model;
 
     let dir = testkit::fixtures::repo_path("damiao");
@@ -438,4 +438,119 @@ fn decode_device_damiao_names_each_command_with_its_motor_s_ranges() {
     let default: Vec<&str> = default.lines().collect();
     assert_eq!(default[5], lines[5]);
     assert_eq!(default[11], "0.011000  003  ?  raw=851EBFF23D6B78DA");
+}
+
+/// A Damiao bench's capture decoded by its scenario: every frame is named by the `damiao`
+/// device (commands, the host's reads, the motor's feedback with its DM4310 ranges), and
+/// `--device damiao` with the motor given by `--motor` reads the same lines.
+#[test]
+fn a_damiao_bench_s_capture_is_decoded_by_its_scenario() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let scenario = root.join("scenarios/damiao/mit_hold.yaml");
+    let out = tempfile::tempdir().expect("a temporary folder");
+    armhil_ok(&[
+        "run".as_ref(),
+        scenario.as_ref(),
+        "--out".as_ref(),
+        out.path().as_ref(),
+    ]);
+    let capture = out.path().join("mit_hold/bus.log");
+    let by_scenario = armhil_ok(&[
+        "decode".as_ref(),
+        capture.as_ref(),
+        "--scenario".as_ref(),
+        scenario.as_ref(),
+    ]);
+    assert!(
+        by_scenario.lines().all(|l| !l.contains("  ?  raw=")),
+        "an undecoded frame:\n{by_scenario}"
+    );
+    assert!(
+        by_scenario.contains("  001  enable  motor=1"),
+        "{by_scenario}"
+    );
+    assert!(
+        by_scenario.contains("  7FF  refresh  motor=1"),
+        "{by_scenario}"
+    );
+    // The driver's codes truncate: kp 20 is sent as 163 of 4095 over 0..=500.
+    assert!(
+        by_scenario
+            .contains("  001  mit  motor=1  p=0.9997 rad  v=-0.0073 rad/s  kp=19.9023  kd=1.0000"),
+        "{by_scenario}"
+    );
+    // Holding against gravity: the feedback's torque is the 0.80 N·m the snapshot shows.
+    assert!(
+        by_scenario
+            .lines()
+            .any(|l| l.contains("feedback  motor=1  state=enabled  p=0.95") && l.contains("t=0.80")),
+        "{by_scenario}"
+    );
+    let by_protocol = armhil_ok(&[
+        "decode".as_ref(),
+        capture.as_ref(),
+        "--device".as_ref(),
+        "damiao".as_ref(),
+        "--motor".as_ref(),
+        "1:DM4310".as_ref(),
+    ]);
+    assert_eq!(by_scenario, by_protocol);
+}
+
+/// The options are the protocols' to read: a flag a protocol cannot read, or a motor its model
+/// table does not know, is an error naming the flag, and nothing is printed.
+#[test]
+fn decode_names_the_flag_a_protocol_refuses() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let log = root.join("fixtures/damiao/commands.log");
+    let refused = |args: &[&str]| {
+        let out = Command::new(ARMHIL)
+            .arg("decode")
+            .arg(&log)
+            .args(args)
+            .output()
+            .expect("armhil runs");
+        assert!(!out.status.success(), "{args:?} accepted");
+        assert!(out.stdout.is_empty(), "{args:?} printed frames");
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let e = refused(&["--device", "damiao", "--model", "DM4310"]);
+    assert!(
+        e.contains("`--model` is not read by `--device damiao`: give each Damiao motor as --motor ESC_ID:MODEL[:MST_ID]"),
+        "{e}"
+    );
+    let e = refused(&["--device", "damiao", "--motor", "1:DM431"]);
+    assert!(
+        e.contains("`--motor 1:DM431`: unknown Damiao model `DM431`")
+            && e.contains("did you mean `DM4310`?"),
+        "{e}"
+    );
+    let e = refused(&["--device", "robstride", "--motor", "1:DM4310"]);
+    assert!(
+        e.contains("`--motor 1:DM4310`: unknown RobStride model `DM4310`"),
+        "{e}"
+    );
+    let e = refused(&["--device", "robstride", "--model", "DM4310"]);
+    assert!(
+        e.contains("a Damiao motor is given as --motor ID:MODEL with --device damiao"),
+        "{e}"
+    );
+    let e = refused(&["--device", "robstride-mit", "--motor", "1:RS03"]);
+    assert!(
+        e.contains("`--motor` is not read by `--device robstride-mit`"),
+        "{e}"
+    );
+    // A value that is no ID:MODEL at all is the command line's error.
+    let e = refused(&["--device", "damiao", "--motor", "DM4310"]);
+    assert!(
+        e.contains("expected ID:MODEL or ID:MODEL:FEEDBACK_ID"),
+        "{e}"
+    );
+    let e = refused(&[
+        "--scenario",
+        "scenarios/damiao/mit_hold.yaml",
+        "--motor",
+        "1:DM4310",
+    ]);
+    assert!(e.contains("cannot be used with"), "{e}");
 }

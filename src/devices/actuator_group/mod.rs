@@ -22,8 +22,8 @@ pub use model::{
 };
 
 use super::{
-    one_bus, BaseColumns, BusUse, Device, Drawing, FrameDecoder, JointColumn, KindSpec, Posing,
-    RawKindStep, Wiring,
+    one_bus, BaseColumns, BusUse, Device, Drawing, FirstOf, FrameDecoder, JointColumn, KindSpec,
+    Posing, RawKindStep, Wiring,
 };
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 use crate::wiring::{Clock, HOST_NODE};
@@ -184,21 +184,31 @@ impl KindSpec for Kind {
         })
     }
 
-    /// Its actuators' frames are RobStride's: without a scenario `armhil decode --device
-    /// robstride` reads them, which the `robstride` kind registers (so this kind registers no
-    /// `WIRE_DECODERS`).
+    /// Its actuators' frames are their kinds' (RobStride's, Damiao's): without a scenario
+    /// `armhil decode --device robstride|damiao` reads them, which those kinds register (so
+    /// this kind registers no `WIRE_DECODERS`).
     fn frame_decoder(settings: &Settings, buses: &[String]) -> Option<Arc<dyn FrameDecoder>> {
-        // Its actuators speak RobStride's private protocol, as a RobStride bus's motors do;
-        // each is known by its bus and ID (a robot's IDs repeat across its buses).
-        // (Only the RobStride ones: other kinds' frames are left undecoded here.)
-        Some(Arc::new(
-            super::robstride::decode::RobstrideFrames::of_motors(
-                settings.actuators.iter().filter_map(|a| {
-                    let motor = a.actuator.robstride()?;
-                    Some((buses.get(a.bus).cloned(), motor.can_id, motor.model))
-                }),
-            ),
-        ))
+        // Each actuator is known by its bus and ID (a robot's IDs repeat across its buses),
+        // and decoded by its own kind's decoder with its own model.
+        let bus_of = |a: &model::GroupActuator| buses.get(a.bus).cloned();
+        let robstride = super::robstride::decode::RobstrideFrames::of_motors(
+            settings.actuators.iter().filter_map(|a| {
+                let motor = a.actuator.robstride()?;
+                Some((bus_of(a), motor.can_id, motor.model))
+            }),
+        );
+        let damiao = super::damiao::decode::DamiaoFrames::of_motors(
+            settings.actuators.iter().filter_map(|a| match &a.actuator {
+                sim::actuator::ActuatorConfig::Damiao(m) => {
+                    Some((bus_of(a), m.esc_id, m.mst_id, m.model))
+                }
+                _ => None,
+            }),
+        );
+        Some(Arc::new(FirstOf(vec![
+            Box::new(robstride),
+            Box::new(damiao),
+        ])))
     }
 }
 

@@ -258,6 +258,40 @@ fn a_robot_group_decodes_its_actuators_frames_for_reports() {
     assert!(bench.decode(None, &stranger).is_none());
 }
 
+/// The OpenArm's buses carry Damiao frames: the report names them by the robot's motors,
+/// each by its own model on its own bus (motor 1 is a DM8009 on both arms; motor 5 a DM4310).
+#[test]
+fn a_robot_group_decodes_its_damiao_actuators_frames_by_bus_and_id() {
+    let text = "bench:\n  devices:\n    openarm:\n      kind: actuator_group\n      robot: ../../robots/openarm.yaml\nsteps:\n  - wait_ms: 1\n";
+    let s = parse_scenario(&robot_scenario(), text).expect("valid");
+    let bench = crate::harness::report::bench_info(&s);
+    // Feedback of ESC_ID 5 on its MST_ID 0x15: enabled, at rest mid-range.
+    let feedback = bus::CanFrame::standard(0x015, &[0x15, 0x80, 0x00, 0x80, 0x08, 0x00, 30, 28])
+        .expect("a frame");
+    for bus in [Some("can0"), Some("can1"), None] {
+        let named = bench.decode(bus, &feedback).expect("motor 5's feedback");
+        assert_eq!(named.name, "feedback");
+        assert!(
+            named
+                .fields
+                .iter()
+                .any(|f| f.name == "state" && f.value == "enabled"),
+            "{named:?}"
+        );
+    }
+    // No motor commanded on 0x009.
+    let enable = [0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFC];
+    let stranger = bus::CanFrame::standard(0x009, &enable).expect("a frame");
+    assert!(bench.decode(Some("can0"), &stranger).is_none());
+    let named = bench
+        .decode(
+            Some("can1"),
+            &bus::CanFrame::standard(0x001, &enable).expect("a frame"),
+        )
+        .expect("left_joint1's enable");
+    assert_eq!(named.name, "enable");
+}
+
 #[test]
 fn a_robot_bus_carrying_two_actuator_kinds_is_refused_at_load_naming_both_joints() {
     // The 6-DoF arm with its wrist roll (can1) a Damiao motor beside RobStride wrist motors.

@@ -18,6 +18,7 @@
 
 mod device;
 mod drawing;
+mod wire;
 
 use std::fmt::Debug;
 use std::sync::Arc;
@@ -27,6 +28,7 @@ use bus::CanFrame;
 
 pub use device::{Device, DeviceError, Reply, TraceColumn};
 pub use drawing::{BaseColumns, Drawing, JointColumn, Posing};
+pub use wire::{WireDecode, WireDecoder, WireMotor, WireOptions};
 
 use crate::interop::DecodedFrame;
 use crate::scenario::onekey::OneKey;
@@ -101,35 +103,14 @@ pub trait FrameDecoder: Send + Sync {
     fn decode(&self, bus: Option<&str>, frame: &CanFrame) -> Option<DecodedFrame>;
 }
 
-/// The options of `armhil decode` a protocol's decoder reads: RobStride's protocols address
-/// replies to a host and scale values by the motor model's ranges; Damiao's name each motor's
-/// identifiers and model.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct WireOptions {
-    /// The host id replies are addressed to (`--host-id`).
-    pub host_id: u8,
-    /// The model whose ranges scale the frames (`--model`).
-    pub model: driver::robstride::Model,
-    /// The Damiao motors on the bus (`--motor`; none given: the default motor).
-    pub damiao_motors: Vec<crate::interop::DamiaoWireMotor>,
-}
+/// Several decoders as one: a frame is named by the first that knows it (a robot whose
+/// actuators are of several kinds, each kind's decoder knowing its own motors by bus and id).
+pub(crate) struct FirstOf(pub Vec<Box<dyn FrameDecoder>>);
 
-/// Decodes a capture's frames by one protocol: `Ok(Some(_))` names a frame and its fields,
-/// `Ok(None)` is a frame the protocol does not know, `Err` says why a frame of the protocol
-/// does not decode (`armhil decode` prints it beside the frame's bytes).
-pub type WireDecode = Box<dyn Fn(&CanFrame) -> Result<Option<DecodedFrame>, String>>;
-
-/// A protocol `armhil decode --device NAME` reads a capture by, when no scenario says which
-/// device owns which frame. Each is registered once, by the kind that owns the protocol
-/// (`KindSpec::WIRE_DECODERS`); `crate::devices::wire_decoders` lists them all.
-#[derive(Debug, Clone, Copy)]
-pub struct WireDecoder {
-    /// Its name, the value of `--device` (`robstride-mit`).
-    pub name: &'static str,
-    /// One line for `armhil decode --help`.
-    pub help: &'static str,
-    /// The decoder, given the command's options.
-    pub decoder: fn(WireOptions) -> WireDecode,
+impl FrameDecoder for FirstOf {
+    fn decode(&self, bus: Option<&str>, frame: &CanFrame) -> Option<DecodedFrame> {
+        self.0.iter().find_map(|d| d.decode(bus, frame))
+    }
 }
 
 /// One device kind. Implemented by a unit struct `Kind` in each kind's `mod.rs`.

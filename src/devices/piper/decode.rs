@@ -18,7 +18,15 @@ impl FrameDecoder for PiperFrames {
 }
 
 /// `armhil decode --device piper`: every frame by the Piper's protocol (the driver's codec);
-/// a frame of it that does not decode says why. The options are RobStride's.
-pub(crate) fn wire(_options: WireOptions) -> WireDecode {
-    Box::new(|frame| decode_piper(frame).map_err(|e| e.to_string()))
+/// a frame of it that does not decode says why. Its frames need none of the options, and one
+/// given is refused by name (a RobStride or Damiao capture read without `--device`).
+pub(crate) fn wire(options: &WireOptions) -> Result<WireDecode, String> {
+    options.refuse(
+        "piper",
+        &["--host-id", "--model", "--motor"],
+        "the Piper's frames carry every value they need (is the capture another device's?)",
+    )?;
+    Ok(Box::new(|frame| {
+        decode_piper(frame).map_err(|e| e.to_string())
+    }))
 }

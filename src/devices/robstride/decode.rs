@@ -5,7 +5,7 @@ use bus::CanFrame;
 use driver::robstride::Model;
 
 use super::Settings;
-use crate::devices::{FrameDecoder, WireDecode, WireOptions};
+use crate::devices::{FrameDecoder, WireDecode, WireMotor, WireOptions};
 use crate::interop::{
     decode_robstride, decode_robstride_command, decode_robstride_mit, DecodedFrame,
 };
@@ -19,6 +19,8 @@ const HOST_ID: u8 = 0xFD;
 pub(crate) struct RobstrideFrames {
     /// The motors: the bus they sit on (`None`: unknown), CAN ID and model.
     motors: Vec<(Option<String>, u8, Model)>,
+    /// The host ID replies are addressed to (the driver's, [`HOST_ID`], unless told).
+    host_id: u8,
 }
 
 impl RobstrideFrames {
@@ -43,6 +45,7 @@ impl RobstrideFrames {
                 .into_iter()
                 .filter_map(|(bus, id, model)| Some((bus, id, Model::parse(model.name())?)))
                 .collect(),
+            host_id: HOST_ID,
         }
     }
 
@@ -70,29 +73,105 @@ impl FrameDecoder for RobstrideFrames {
         let replier = ((frame.raw_id() >> 8) & 0xFF) as u8;
         let addressee = (frame.raw_id() & 0xFF) as u8;
         self.model_of(bus, replier)
-            .and_then(|model| decode_robstride(frame, HOST_ID, model))
+            .and_then(|model| decode_robstride(frame, self.host_id, model))
             .or_else(|| {
                 self.model_of(bus, addressee)
-                    .and_then(|model| decode_robstride_command(frame, HOST_ID, model))
+                    .and_then(|model| decode_robstride_command(frame, self.host_id, model))
             })
     }
 }
 
-/// `armhil decode --device robstride`: the private protocol both ways, the motors' replies to
-/// `--host-id` and the host's commands, scaled by `--model`'s ranges.
-pub(crate) fn wire_private(options: WireOptions) -> WireDecode {
-    let WireOptions { host_id, model, .. } = options;
-    Box::new(move |frame| {
-        Ok(decode_robstride(frame, host_id, model)
-            .or_else(|| decode_robstride_command(frame, host_id, model)))
+/// The model `--model` names (RS03 when not given), resolved through the driver's table.
+fn wire_model(options: &WireOptions) -> Result<Model, String> {
+    let Some(name) = &options.model else {
+        return Ok(Model::RS03);
+    };
+    Model::parse(name).ok_or_else(|| {
+        let damiao = driver::damiao::Model::parse(name).is_some();
+        format!(
+            "`--model {name}`: {}{}",
+            unknown_model(name),
+            if damiao {
+                " (`--model` is RobStride's: a Damiao motor is given as --motor ID:MODEL with --device damiao)"
+            } else {
+                ""
+            }
+        )
     })
 }
 
+/// "unknown RobStride model `X`; expected one of: RS00, …", with the nearest name.
+fn unknown_model(name: &str) -> String {
+    let known: Vec<&str> = sim::robstride::Model::ALL
+        .iter()
+        .map(|m| m.name())
+        .collect();
+    format!(
+        "unknown RobStride model `{name}`; expected one of: {}{}",
+        known.join(", "),
+        sim::yaml_words::suggestion(&name.to_ascii_uppercase(), &known)
+    )
+}
+
+/// One `--motor ID:MODEL` as a RobStride motor: a CAN ID 1..=127 and a model of the driver's
+/// table; RobStride motors answer on their own ID, so a feedback id is refused.
+fn wire_motor(motor: &WireMotor) -> Result<(Option<String>, u8, sim::robstride::Model), String> {
+    let flag = motor.flag();
+    if motor.feedback_id.is_some() {
+        return Err(format!(
+            "{flag}: a RobStride motor has no feedback id (it answers under its own CAN ID): give ID:MODEL"
+        ));
+    }
+    let id = u8::try_from(motor.id)
+        .ok()
+        .filter(|id| (1..=0x7F).contains(id))
+        .ok_or_else(|| format!("{flag}: CAN ID {} out of range, expected 1..=127", motor.id))?;
+    let model = sim::robstride::Model::from_name(&motor.model)
+        .ok_or_else(|| format!("{flag}: {}", unknown_model(&motor.model)))?;
+    Ok((None, id, model))
+}
+
+/// `armhil decode --device robstride`: the private protocol both ways, the motors' replies to
+/// `--host-id` (0xFD unless given) and the host's commands, scaled by `--model`'s ranges (RS03
+/// unless given); with `--motor ID:MODEL` only the listed motors' frames, each by its own
+/// model's ranges.
+pub(crate) fn wire_private(options: &WireOptions) -> Result<WireDecode, String> {
+    let host_id = options.host_id.unwrap_or(HOST_ID);
+    if !options.motors.is_empty() {
+        if let Some(model) = &options.model {
+            return Err(format!(
+                "`--model {model}` and `--motor` both given: `--motor ID:MODEL` names each motor's model"
+            ));
+        }
+        let motors = options
+            .motors
+            .iter()
+            .map(wire_motor)
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut frames = RobstrideFrames::of_motors(motors);
+        frames.host_id = host_id;
+        return Ok(Box::new(move |frame| Ok(frames.decode(None, frame))));
+    }
+    let model = wire_model(options)?;
+    Ok(Box::new(move |frame| {
+        Ok(decode_robstride(frame, host_id, model)
+            .or_else(|| decode_robstride_command(frame, host_id, model)))
+    }))
+}
+
 /// `armhil decode --device robstride-mit`: the MIT variant's 11-bit frames, scaled by
-/// `--model`'s ranges.
-pub(crate) fn wire_mit(options: WireOptions) -> WireDecode {
-    let WireOptions { host_id, model, .. } = options;
-    Box::new(move |frame| Ok(decode_robstride_mit(frame, host_id, model)))
+/// `--model`'s ranges (RS03 unless given).
+pub(crate) fn wire_mit(options: &WireOptions) -> Result<WireDecode, String> {
+    options.refuse(
+        "robstride-mit",
+        &["--motor"],
+        "its frames are scaled by one `--model`",
+    )?;
+    let host_id = options.host_id.unwrap_or(HOST_ID);
+    let model = wire_model(options)?;
+    Ok(Box::new(move |frame| {
+        Ok(decode_robstride_mit(frame, host_id, model))
+    }))
 }
 
 #[cfg(test)]

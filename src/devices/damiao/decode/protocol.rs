@@ -15,12 +15,11 @@
 //! the decoder is told about ([`DamiaoWireMotor`]); register requests on 0x7FF name their
 //! motor themselves and are decoded for any.
 
-use std::str::FromStr;
-
 use bus::CanFrame;
 use driver::damiao::{Model, RangeTable, Register, RegisterKind};
 
-use super::decode::{num, text, DecodedFrame, Field};
+use crate::devices::WireMotor;
+use crate::interop::{num, text, DecodedFrame, Field};
 
 /// Position-velocity commands: `POS_VEL + ESC_ID` (note §2).
 const POS_VEL: u16 = 0x100;
@@ -60,36 +59,32 @@ impl DamiaoWireMotor {
     };
 }
 
-impl FromStr for DamiaoWireMotor {
-    type Err = String;
-
-    /// `ESC_ID:MODEL` (answering on ESC_ID + 0x10, the OpenArm's convention) or
-    /// `ESC_ID:MODEL:MST_ID`; ids in decimal or `0x` hexadecimal, 11 bits.
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        let parts: Vec<&str> = s.split(':').collect();
-        let (esc, model, mst) = match parts.as_slice() {
-            [esc, model] => (esc, model, None),
-            [esc, model, mst] => (esc, model, Some(mst)),
-            _ => {
-                return Err(format!(
-                    "expected ESC_ID:MODEL or ESC_ID:MODEL:MST_ID (e.g. 1:DM4310 or 0x01:DM4310:0x11), got {s:?}"
-                ))
-            }
-        };
-        let esc_id = id(esc)?;
-        let model = Model::parse(model).ok_or_else(|| {
+impl DamiaoWireMotor {
+    /// `--motor ID:MODEL[:FEEDBACK_ID]` as a Damiao motor: the ESC_ID, a model of the driver's
+    /// table (any case, `-48V` or `_48V`) and the MST_ID (ESC_ID + 0x10, the OpenArm's
+    /// convention, when not given); ids 11 bits, below the register identifier 0x7FF. An error
+    /// starts with the flag as given.
+    pub fn resolve(motor: &WireMotor) -> Result<Self, String> {
+        let flag = motor.flag();
+        let esc_id = id(motor.id).map_err(|e| format!("{flag}: ESC_ID {e}"))?;
+        let model = Model::parse(&motor.model).ok_or_else(|| {
             let known: Vec<String> = Model::ALL.iter().map(|m| format!("{m:?}")).collect();
+            let names: Vec<&str> = known.iter().map(String::as_str).collect();
             format!(
-                "unknown Damiao model {model:?}; expected one of: {}",
-                known.join(", ")
+                "{flag}: unknown Damiao model `{}`; expected one of: {}{}",
+                motor.model,
+                known.join(", "),
+                sim::yaml_words::suggestion(&motor.model.to_ascii_uppercase(), &names)
             )
         })?;
-        let mst_id = match mst {
-            Some(mst) => id(mst)?,
+        let mst_id = match motor.feedback_id {
+            Some(mst) => id(mst).map_err(|e| format!("{flag}: MST_ID {e}"))?,
             None => esc_id
                 .checked_add(0x10)
-                .filter(|&m| m <= REGISTER)
-                .ok_or_else(|| format!("ESC_ID {esc} + 0x10 is past 0x7FF: give MST_ID"))?,
+                .filter(|&m| m < REGISTER)
+                .ok_or_else(|| {
+                    format!("{flag}: ESC_ID 0x{esc_id:X} + 0x10 is past 0x7FE: give the MST_ID (ID:MODEL:MST_ID)")
+                })?,
         };
         Ok(Self {
             esc_id,
@@ -99,15 +94,12 @@ impl FromStr for DamiaoWireMotor {
     }
 }
 
-/// An 11-bit identifier, decimal or `0x` hexadecimal.
-fn id(text: &str) -> Result<u16, String> {
-    let parsed = match text.strip_prefix("0x").or_else(|| text.strip_prefix("0X")) {
-        Some(hex) => u16::from_str_radix(hex, 16),
-        None => text.parse(),
-    };
-    match parsed {
-        Ok(id) if id <= REGISTER => Ok(id),
-        _ => Err(format!("identifier {text:?} must be 0..=0x7FF")),
+/// An 11-bit identifier below the register identifier 0x7FF (which carries every motor's
+/// register requests).
+fn id(value: u32) -> Result<u16, String> {
+    match u16::try_from(value) {
+        Ok(id) if id < REGISTER => Ok(id),
+        _ => Err(format!("0x{value:X} out of range, expected 0..=0x7FE")),
     }
 }
 
@@ -470,10 +462,14 @@ mod tests {
     }
 
     #[test]
-    fn motors_parse_with_an_optional_mst_id() {
-        assert_eq!("1:DM4310".parse(), Ok(DamiaoWireMotor::DEFAULT));
+    fn motors_resolve_with_an_optional_mst_id() {
+        let resolve = |text: &str| {
+            let motor: WireMotor = text.parse().map_err(|e: String| e)?;
+            DamiaoWireMotor::resolve(&motor)
+        };
+        assert_eq!(resolve("1:DM4310"), Ok(DamiaoWireMotor::DEFAULT));
         assert_eq!(
-            "0x1A:dm4340-48v:0x30".parse(),
+            resolve("0x1A:dm4340-48v:0x30"),
             Ok(DamiaoWireMotor {
                 esc_id: 0x1A,
                 mst_id: 0x30,
@@ -485,9 +481,18 @@ mod tests {
             "1:DM9999",
             "0x800:DM4310",
             "0x7FF:DM4310",
+            "0x7F0:DM4310",
             "1:DM4310:x",
+            "1:DM4310:0x7FF",
         ] {
-            assert!(bad.parse::<DamiaoWireMotor>().is_err(), "{bad}");
+            assert!(resolve(bad).is_err(), "{bad}");
         }
+        let e = resolve("1:DM431").unwrap_err();
+        assert!(
+            e.starts_with(
+                "`--motor 1:DM431`: unknown Damiao model `DM431`; expected one of: DM3507"
+            ) && e.ends_with("did you mean `DM4310`?"),
+            "{e}"
+        );
     }
 }

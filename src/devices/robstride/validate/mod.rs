@@ -68,6 +68,66 @@ fn bounded(ctx: &Ctx<'_>, v: &S<f64>, key: &str, positive_only: bool, max: f64) 
     Ok(x)
 }
 
+/// A motor's rig as its entry gives it (each `None` where not written): what a RobStride and a
+/// Damiao motor's shaft drives alike (`sim::robstride::Load`).
+pub(crate) struct Rig {
+    /// `load:`.
+    pub load: Option<Load>,
+    /// `start_angle_rad:`.
+    pub start_angle_rad: Option<f64>,
+    /// `friction_nm_s_per_rad:`.
+    pub friction_nm_s_per_rad: Option<f64>,
+}
+
+/// A motor entry's `load`, `start_angle_rad` and `friction_nm_s_per_rad`, each checked within
+/// what keeps the rig's physics finite.
+pub(crate) fn rig(
+    ctx: &Ctx<'_>,
+    load: &Option<S<RawRsLoad>>,
+    start_angle_rad: &Option<S<f64>>,
+    friction: &Option<S<f64>>,
+) -> Res<Rig> {
+    let load = load
+        .as_ref()
+        .map(|load| -> Res<Load> {
+            Ok(match &load.value {
+                RawRsLoad::NoLoad(_) => Load::None,
+                RawRsLoad::Disc(disc) => Load::Disc {
+                    mass_kg: bounded(ctx, &disc.mass_kg, "mass_kg", true, MAX_MASS_KG)?,
+                    radius_m: bounded(ctx, &disc.radius_m, "radius_m", true, MAX_LENGTH_M)?,
+                },
+                RawRsLoad::Pendulum(p) => Load::Pendulum {
+                    mass_kg: bounded(ctx, &p.mass_kg, "mass_kg", true, MAX_MASS_KG)?,
+                    length_m: bounded(ctx, &p.length_m, "length_m", true, MAX_LENGTH_M)?,
+                },
+            })
+        })
+        .transpose()?;
+    let start_angle_rad = start_angle_rad
+        .as_ref()
+        .map(|a| bounded(ctx, a, "start_angle_rad", false, MAX_START_ANGLE_RAD))
+        .transpose()?;
+    let friction_nm_s_per_rad = friction
+        .as_ref()
+        .map(|f| {
+            let friction = ctx.non_negative(f, "friction_nm_s_per_rad")?;
+            bounded(
+                ctx,
+                f,
+                "friction_nm_s_per_rad",
+                false,
+                MAX_FRICTION_NM_S_PER_RAD,
+            )
+            .map(|_| friction)
+        })
+        .transpose()?;
+    Ok(Rig {
+        load,
+        start_angle_rad,
+        friction_nm_s_per_rad,
+    })
+}
+
 /// The settings of a `kind: robstride` device.
 pub(crate) fn settings(ctx: &Ctx<'_>, d: &RawSettings, at: Pos) -> Res<RobstrideSettings> {
     let Some(list) = &d.motors else {
@@ -88,33 +148,20 @@ pub(crate) fn settings(ctx: &Ctx<'_>, d: &RawSettings, at: Pos) -> Res<Robstride
         let model = Model::named(&m.value.model.value)
             .map_err(|e| ctx.err(pos(&m.value.model), format!("`model`: {e}")))?;
         let mut config = MotorConfig::new(id, model);
-        if let Some(load) = &m.value.load {
-            config.load = match &load.value {
-                RawRsLoad::NoLoad(_) => Load::None,
-                RawRsLoad::Disc(disc) => Load::Disc {
-                    mass_kg: bounded(ctx, &disc.mass_kg, "mass_kg", true, MAX_MASS_KG)?,
-                    radius_m: bounded(ctx, &disc.radius_m, "radius_m", true, MAX_LENGTH_M)?,
-                },
-                RawRsLoad::Pendulum(p) => Load::Pendulum {
-                    mass_kg: bounded(ctx, &p.mass_kg, "mass_kg", true, MAX_MASS_KG)?,
-                    length_m: bounded(ctx, &p.length_m, "length_m", true, MAX_LENGTH_M)?,
-                },
-            };
+        let rig = rig(
+            ctx,
+            &m.value.load,
+            &m.value.start_angle_rad,
+            &m.value.friction_nm_s_per_rad,
+        )?;
+        if let Some(load) = rig.load {
+            config.load = load;
         }
-        if let Some(a) = &m.value.start_angle_rad {
-            config.start_angle_rad =
-                bounded(ctx, a, "start_angle_rad", false, MAX_START_ANGLE_RAD)?;
+        if let Some(angle) = rig.start_angle_rad {
+            config.start_angle_rad = angle;
         }
-        if let Some(f) = &m.value.friction_nm_s_per_rad {
-            let friction = ctx.non_negative(f, "friction_nm_s_per_rad")?;
-            config.friction_nm_s_per_rad = bounded(
-                ctx,
-                f,
-                "friction_nm_s_per_rad",
-                false,
-                MAX_FRICTION_NM_S_PER_RAD,
-            )
-            .map(|_| friction)?;
+        if let Some(friction) = rig.friction_nm_s_per_rad {
+            config.friction_nm_s_per_rad = friction;
         }
         motors.push(config);
     }
