@@ -1,8 +1,10 @@
 // Browser tests in headless Chromium (playwright-core, the system's /usr/bin/chromium):
-// the live view of `armhil sim piper --ui` follows a MOVE J and injects/clears a fault, and a
-// failing scenario's report.html opened from disk shows the failure and replays with the
-// slider, and a meshed robot's report draws its links' visuals. Screenshots go to
-// $ARMHIL_SCREENSHOTS (default out/web).
+// the live view of `armhil sim piper --ui` follows a MOVE J and injects/clears a fault; the
+// RobStride, Damiao, Realman, humanoid and OpenArm live views show their devices, follow their
+// clients (socketcand, TCP) and report faults from the page's desk; a failing scenario's
+// report.html opened from disk shows the failure and replays with the slider, and a meshed
+// robot's report draws its links' visuals. Screenshots go to $ARMHIL_SCREENSHOTS (default
+// out/web).
 //
 // Needs ARMHIL_BIN (the armhil binary); scripts/ci/web.sh sets it.
 const test = require("node:test");
@@ -76,6 +78,48 @@ async function livePage(t, args, ui) {
   await page.waitForFunction(() => window.armhilLive && window.armhilLive.ready && window.armhilLive.state, null, { timeout: 10000 });
   return page;
 }
+
+// A socketcand client (CAN over TCP, docs/socketcand.md) in raw mode on `channel` of the
+// emulator's server: `send(id, bytes)` puts a frame on the bus, `frames` collects what it
+// receives ([id hex, data hex] pairs).
+async function socketcand(t, port, channel) {
+  const sock = net.connect(port, "127.0.0.1");
+  t.after(() => sock.destroy());
+  let text = "";
+  const frames = [];
+  sock.on("data", (d) => {
+    text += d;
+    for (const m of text.matchAll(/< frame ([0-9A-Fa-f]+) [0-9.]+ ([0-9A-Fa-f]*) >/g)) frames.push([m[1], m[2]]);
+    text = text.replace(/< frame [^>]* >/g, "");
+  });
+  const reply = async (what, word) => {
+    await until(what, () => text.includes(word), 5000);
+    text = text.replace(word, "");
+  };
+  await reply("the socketcand greeting", "< hi >");
+  sock.write(`< open ${channel} >`);
+  await reply(`${channel} open`, "< ok >");
+  sock.write("< rawmode >");
+  await reply("raw mode", "< ok >");
+  const hex = (b) => b.toString(16).toUpperCase().padStart(2, "0");
+  return {
+    frames,
+    send(id, bytes) { sock.write(`< send ${id.toString(16).toUpperCase().padStart(3, "0")} ${bytes.length} ${bytes.map(hex).join(" ")} >`); },
+  };
+}
+
+// Damiao's host commands (docs/protocols/damiao.md): a special command `FF … FF code` (FC
+// enable, FD disable, FB clear a latched error), and an MIT command packed over the motor's
+// ranges (PMAX rad, VMAX rad/s, TMAX N·m).
+const damiao = {
+  special: (code) => [0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, code],
+  mit({ p, v = 0, kp, kd, t = 0 }, { pmax = 12.5, vmax, tmax }) {
+    const u = (x, lo, hi, bits) => Math.trunc(((Math.min(hi, Math.max(lo, x)) - lo) * (2 ** bits - 1)) / (hi - lo));
+    const P = u(p, -pmax, pmax, 16), V = u(v, -vmax, vmax, 12), KP = u(kp, 0, 500, 12);
+    const KD = u(kd, 0, 5, 12), T = u(t, -tmax, tmax, 12);
+    return [P >> 8, P & 0xFF, V >> 4, ((V & 0xF) << 4) | (KP >> 8), KP & 0xFF, KD >> 4, ((KD & 0xF) << 4) | (T >> 8), T & 0xFF];
+  },
+};
 
 test("the live view follows a MOVE J and injects and clears a fault", async (t) => {
   const can = await freePort();
@@ -199,6 +243,190 @@ test("the robot live view draws the fallen humanoid at its base pose and cuts a 
   await page.screenshot({ path: path.join(SHOTS, "live_robot.png") });
   await page.click("#fault-clear");
   await until("can2 back", () => page.evaluate(() => window.armhilLive.state.faults.length === 0), 3000);
+});
+
+test("the Damiao live view shows a dial per motor, follows a socketcand client and reports an injected fault", async (t) => {
+  const can = await freePort();
+  const ui = await freePort();
+  const page = await livePage(t, ["damiao", "--motor", "1:DM4310", "--motor", "2:DM4340", "--socketcand", `127.0.0.1:${can}`], ui);
+  const errors = [];
+  page.on("pageerror", (e) => errors.push(String(e)));
+  // A dial per motor, named by its ESC_ID; both motors power on disabled, in MIT mode.
+  assert.deepEqual(await page.evaluate(() => window.armhilLive.hello.motors), [1, 2]);
+  await until("two dials drawn", async () => ((await page.getAttribute("#arm-view", "data-angles")) || "").split(",").length === 2, 5000);
+  const motors = await page.evaluate(() => window.armhilLive.state.motors.map((m) => [m.id, m.model, m.mst_id, m.state_name]));
+  assert.deepEqual(motors, [[1, "DM4310", 0x11, "disabled"], [2, "DM4340", 0x12, "disabled"]]);
+  assert.equal(await page.locator("canvas.plot").count(), 4, "position, velocity, torque and temperature strips");
+
+  // A host on the socketcand bus enables motor 1 and turns it to 1 rad with an MIT command:
+  // the motor answers on its feedback id, the page says enabled and its dial follows.
+  const host = await socketcand(t, can, "can0");
+  host.send(0x001, damiao.special(0xFC));
+  await until("motor 1's feedback to the enable", () => host.frames.some(([id]) => id === "011"), 5000);
+  await until("the page to say motor 1 enabled", () => page.evaluate(() => {
+    const [m1, m2] = window.armhilLive.state.motors;
+    return m1.enabled && m1.state_name === "enabled" && !m2.enabled && m2.state_name === "disabled";
+  }), 5000);
+  // Commanded every 10 ms, as a host's control loop does.
+  const turn = damiao.mit({ p: 1.0, kp: 5, kd: 0.3 }, { vmax: 30, tmax: 10 });
+  const loop = setInterval(() => host.send(0x001, turn), 10);
+  t.after(() => clearInterval(loop));
+  const dial = await until("motor 1's dial at 1 rad", async () => {
+    const a = await page.evaluate(() => window.armhilLive.renderedDeg());
+    return a.length === 2 && Math.abs(a[0] - 57.3) < 3 && Math.abs(a[1]) < 0.5 ? a : null;
+  }, 10000);
+  const reported = await page.evaluate(() => window.armhilLive.state.motors[0].position_rad);
+  assert.ok(Math.abs((reported * 180) / Math.PI - dial[0]) < 2, `dial ${dial[0]}° for ${reported} rad`);
+  await until("the panel to show motor 1 enabled", async () => /enabled, mit, state enabled/.test(await page.textContent("#status")), 2000);
+  // The bus figures count the host's commands and the motor's answers, about 100 a second
+  // each (the timer is late on a busy machine).
+  const rate = (id) => page.evaluate((id) => (window.armhilLive.state.bus.ids.find((r) => r[0] === id) || [id, 0, 0])[2], id);
+  await until("the bus figures to count the control loop", async () => (await rate("001")) > 30 && (await rate("011")) > 30, 5000);
+
+  // A fault from the page's desk: over-voltage on motor 2, the Damiao table's own.
+  const offered = await page.evaluate(() => window.armhilLive.hello.faults.map((f) => f.name));
+  for (const f of ["over_voltage", "under_voltage", "mos_over_temperature", "coil_over_temperature", "comm_lost", "overload"]) {
+    assert.ok(offered.includes(f), `the fault desk offers ${f}: ${offered}`);
+  }
+  await page.selectOption("#fault-kind", "over_voltage");
+  await page.fill("#fault-arg-motor", "2");
+  await page.fill("#fault-arg-voltage_v", "40");
+  await page.click("#fault-inject");
+  await until("motor 2 to report over_voltage", () => page.evaluate(() => {
+    const m = window.armhilLive.state.motors.find((x) => x.id === 2);
+    return m.faults.includes("over_voltage") && m.state_name === "over_voltage" && Math.abs(m.bus_voltage_v - 40) < 0.5;
+  }), 5000);
+  assert.match(await page.textContent("#fault-ack"), /injected over_voltage voltage_v=40 on motor 2/);
+  const m1 = await page.evaluate(() => window.armhilLive.state.motors.find((x) => x.id === 1));
+  assert.deepEqual([m1.faults, m1.state_name], [[], "enabled"], "motor 1 untouched");
+  await until("the panel to show the fault", async () => /state over_voltage[^]*faults: over_voltage/.test(await page.textContent("#status")), 2000);
+  assert.match(await page.textContent("#faults-active"), /over_voltage voltage_v=40 on motor 2/);
+  await page.screenshot({ path: path.join(SHOTS, "live_damiao.png") });
+
+  // The host stops: the bus goes quiet and its figures fall to 0 within two seconds (they
+  // are the last second's), the totals kept.
+  clearInterval(loop);
+  await until("the quiet bus to read 0 frames/s", async () => (await rate("001")) === 0 && (await rate("011")) === 0
+    && (await page.evaluate(() => window.armhilLive.state.bus.load_percent)) === 0, 5000);
+  assert.ok(await page.evaluate(() => window.armhilLive.state.bus.ids.find((r) => r[0] === "011")[1] > 30), "totals kept");
+  assert.equal(await page.evaluate(() => window.armhilLive.state.motors[0].state_name), "enabled", "the motor holds its last command");
+
+  // Clear removes the cause; the latch stays until the host's clear-error command, as on the
+  // motor.
+  await page.click("#fault-clear");
+  await until("the supply back to normal", () => page.evaluate(() => window.armhilLive.state.faults.length === 0
+    && window.armhilLive.state.motors[1].bus_voltage_v < 30), 5000);
+  assert.equal(await page.evaluate(() => window.armhilLive.state.motors[1].state_name), "over_voltage", "latched until cleared on the bus");
+  host.send(0x002, damiao.special(0xFB));
+  await until("motor 2's latch cleared", () => page.evaluate(() => {
+    const m = window.armhilLive.state.motors[1];
+    return m.faults.length === 0 && m.state_name === "disabled";
+  }), 5000);
+  assert.deepEqual(errors, []);
+});
+
+test("the OpenArm live view draws both 7-DoF arms with grippers on their 16 Damiao motors", async (t) => {
+  const can = await freePort();
+  const ui = await freePort();
+  const page = await livePage(t, ["robot", path.join(ROOT, "robots", "openarm.yaml"), "--socketcand", `127.0.0.1:${can}`], ui);
+  const errors = [];
+  page.on("pageerror", (e) => errors.push(String(e)));
+  // The model from urdf/openarm.urdf: 16 revolute joints (7 per arm and a gripper each), the
+  // fingers mimic their gripper; a strip per actuator.
+  const model = await page.evaluate(() => {
+    const h = window.armhilLive.hello;
+    return { joints: window.ArmHil.armJoints(h.model).map((j) => j.name), strips: h.strip_names, links: h.model.visuals.length };
+  });
+  const names = (side) => [1, 2, 3, 4, 5, 6, 7].map((i) => `${side}_joint${i}`).concat(`${side}_gripper`);
+  assert.equal(model.joints.length, 16);
+  assert.deepEqual([...model.joints].sort(), [...names("left"), ...names("right")].sort());
+  assert.deepEqual(model.strips, [...names("right"), ...names("left")]);
+  // A visual per link: the pedestal, and per arm link0..link7, the hand and two fingers.
+  assert.equal(model.links, 23);
+  // Drawn where the emulator's physics has it, every link solid (no fallback to sticks).
+  const drawn = await until("the drawn angles", () => page.evaluate(() => {
+    const a = window.armhilLive.renderedDeg();
+    const s = window.armhilLive.state.physical_deg;
+    return a.length === 16 && s.length === 16 && a.every((v, i) => Math.abs(v - s[i]) < 2) ? a : null;
+  }), 5000);
+  assert.equal(drawn.length, 16);
+  assert.equal(await page.getAttribute("#arm-view", "data-fallbacks"), "0");
+  const triangles = Number(await page.getAttribute("#arm-view", "data-triangles"));
+  assert.ok(triangles > 200, `${triangles} triangles drawn`);
+  assert.equal(await page.getAttribute("#arm-view", "data-root"), "0.000,0.000,0.000", "a fixed pedestal at the origin");
+
+  // Link poses as the page computes them from the angles it drew (the same kinematics the
+  // canvas is drawn with): positions in the world, metres.
+  const poses = () => page.evaluate(() => {
+    const L = window.armhilLive, A = window.ArmHil, m = L.hello.model;
+    const frames = A.linkFrames(m, A.valuesFromDeg(m, L.renderedDeg()), L.state.base_pose);
+    return Object.fromEntries(Object.entries(frames).map(([k, f]) => [k, A.origin(f)]));
+  });
+  const p = await poses();
+  const dist = (a, b) => Math.hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]);
+  for (const side of ["left", "right"]) {
+    for (const link of [0, 1, 2, 3, 4, 5, 6, 7].map((i) => `${side}_link${i}`).concat(`${side}_hand`, `${side}_finger1`, `${side}_finger2`)) {
+      assert.ok(p[link] && p[link].every(Number.isFinite), `${link} posed: ${p[link]}`);
+    }
+    // Each arm is a chain of its own: the hand is well away from the shoulder, above the floor.
+    assert.ok(dist(p[`${side}_link0`], p[`${side}_hand`]) > 0.3, `${side} arm's reach ${dist(p[`${side}_link0`], p[`${side}_hand`])}`);
+    assert.ok(p[`${side}_hand`][2] > 0.05, `${side} hand above the floor: ${p[`${side}_hand`]}`);
+  }
+  // The two arms stand apart, mounted either side of the pedestal (right at -y, left at +y, at
+  // the URDF's 0.698 m), and nothing overlaps: every link of one arm is away from the other's.
+  assert.ok(Math.abs(p.right_link0[1] + 0.031) < 1e-3 && Math.abs(p.left_link0[1] - 0.031) < 1e-3, `bases ${p.right_link0} ${p.left_link0}`);
+  assert.ok(Math.abs(p.right_link0[2] - 0.698) < 1e-3 && Math.abs(p.left_link0[2] - 0.698) < 1e-3);
+  for (const i of [2, 3, 4, 5, 6, 7]) {
+    assert.ok(p[`right_link${i}`][1] < -0.1 && p[`left_link${i}`][1] > 0.1, `link${i}: right ${p[`right_link${i}`]}, left ${p[`left_link${i}`]}`);
+  }
+  assert.ok(p.right_hand[1] < -0.1 && p.left_hand[1] > 0.1 && dist(p.right_hand, p.left_hand) > 0.2, `hands ${p.right_hand} ${p.left_hand}`);
+
+  // The panel: a row per joint with its Damiao motor (model, id, bus), and the fault desk
+  // offers the Damiao table.
+  await until("the actuator panel", async () => /left_gripper/.test(await page.textContent("#status")), 2000);
+  const rows = await page.evaluate(() => window.armhilLive.state.panel.map((r) => r[0]));
+  const models = { joint1: "DM8009", joint2: "DM8009", joint3: "DM4340", joint4: "DM4340", joint5: "DM4310", joint6: "DM4310", joint7: "DM4310", gripper: "DM4310" };
+  for (const [bus, side] of [["can0", "right"], ["can1", "left"]]) {
+    Object.entries(models).forEach(([j, m], i) => {
+      const row = `${side}_${j} (${m} id ${i + 1} on ${bus})`;
+      assert.ok(rows.includes(row), `panel lists ${row}: ${rows}`);
+    });
+  }
+  const faults = await page.evaluate(() => window.armhilLive.hello.faults.map((f) => f.name));
+  for (const f of ["over_voltage", "mos_over_temperature", "coil_over_temperature", "comm_lost", "bus_lost", "external_torque"]) {
+    assert.ok(faults.includes(f), `the fault desk offers ${f}: ${faults}`);
+  }
+
+  // A host on can1 enables the left elbow (left_joint4, id 4) and bends it to 1.2 rad with an
+  // MIT command: the left arm is drawn bent, the right one keeps hanging (each arm's joints
+  // reach their own chain; the left shoulder, free, swings under the bent arm's weight).
+  const host = await socketcand(t, can, "can1");
+  host.send(0x004, damiao.special(0xFC));
+  await until("the elbow's feedback on can1", () => host.frames.some(([id]) => id === "014"), 5000);
+  host.send(0x004, damiao.mit({ p: 1.2, kp: 40, kd: 1.5 }, { vmax: 10, tmax: 28 }));
+  const elbow = model.joints.indexOf("left_joint4");
+  await until("the left elbow drawn bent", () => page.evaluate((k) => {
+    const a = window.armhilLive.renderedDeg();
+    const s = window.armhilLive.state.physical_deg;
+    return Math.abs(a[k] - 68.8) < 6 && Math.abs(a[k] - s[k]) < 2;
+  }, elbow), 10000);
+  const q = await poses();
+  assert.ok(dist(q.left_hand, p.left_hand) > 0.1, `the left hand moved: ${p.left_hand} → ${q.left_hand}`);
+  assert.ok(dist(q.right_hand, p.right_hand) < 0.05, `the right hand stayed: ${p.right_hand} → ${q.right_hand}`);
+  // The enable and its answer are counted on can1.
+  const ids = await page.evaluate(() => window.armhilLive.state.bus.ids.map((r) => r[0]));
+  assert.ok(ids.includes("can1 004") && ids.includes("can1 014"), `bus figures: ${ids}`);
+
+  // A Damiao fault on one joint shows in its row.
+  await page.selectOption("#fault-kind", "mos_over_temperature");
+  await page.fill("#fault-arg-joint", "right_joint2");
+  await page.click("#fault-inject");
+  await until("right_joint2 to report it", async () => /right_joint2 \(DM8009 id 2 on can0\)mit, [\d.]+ °C, faults: mos_over_temperature/.test(await page.textContent("#status")), 5000);
+  await page.evaluate(() => window.scrollTo(0, 0));
+  await page.screenshot({ path: path.join(SHOTS, "live_openarm.png") });
+  await page.click("#fault-clear");
+  await until("the fault's cause cleared", () => page.evaluate(() => window.armhilLive.state.faults.length === 0), 5000);
+  assert.deepEqual(errors, []);
 });
 
 test("the Realman live view follows a movej, lists its TCP client and reports a joint error", async (t) => {
