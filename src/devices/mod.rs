@@ -16,7 +16,7 @@ use crate::scenario::read_in::KindSet;
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
 
 pub mod contract;
-pub(crate) use contract::{named_bus, one_bus, FirstOf, KindSpec, RawKindStep, Wiring};
+pub(crate) use contract::{named_bus, one_bus, within, FirstOf, KindSpec, RawKindStep, Wiring};
 pub use contract::{
     BaseColumns, BusUse, Device, DeviceError, Drawing, FrameDecoder, JointColumn, Posing, Reply,
     TraceColumn, WireDecode, WireDecoder, WireMotor, WireOptions,

@@ -26,7 +26,6 @@ use super::{
     Posing, RawKindStep, Wiring,
 };
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
-use crate::wiring::{Clock, HOST_NODE};
 use device::GroupDevice;
 
 /// How long the driver waits for each reply (before time scaling): the RobStride driver's.
@@ -100,26 +99,25 @@ impl KindSpec for Kind {
         settings: &Settings,
         wiring: &Wiring<'_>,
     ) -> Result<Arc<dyn Device>, String> {
-        let (hosts, emulator) = match (&settings.robot, wiring.bus(), wiring.clock) {
-            (Some(robot), Some(_), _) => {
+        let (hosts, emulator) = match (&settings.robot, wiring.bus()) {
+            (Some(robot), Some(_)) => {
                 let robot = device::spawn_robot(name, robot, &wiring.buses)
                     .map_err(|e| format!("device `{name}`: robot: {e}"))?;
                 (robot.hosts, Some(robot.emulator))
             }
-            (Some(_), None, _) => {
+            (Some(_), None) => {
                 return Err(format!(
                     "device `{name}`: a robot runs in process only (on the bench's virtual buses)"
                 ))
             }
-            (None, Some(bus), _) => {
+            (None, Some(bus)) => {
                 let node: Arc<dyn CanBus> = Arc::new(bus.attach(name));
                 let emulator = device::spawn_emulator(node, settings, wiring.bitrate_bps)
                     .map_err(|e| format!("device `{name}`: emulator: {e}"))?;
-                let host: Arc<dyn CanBus> = Arc::new(bus.attach(HOST_NODE));
+                let host = wiring.driver_bus(name).await?;
                 (vec![host], Some(device::GroupEmulator::Rigs(emulator)))
             }
-            (None, None, Clock::Iface(link)) => (vec![link.open("driver").await?], None),
-            (None, None, _) => return Err(format!("device `{name}`: no bus to attach to")),
+            (None, None) => (vec![wiring.driver_bus(name).await?], None),
         };
         let device = GroupDevice::start(
             name,

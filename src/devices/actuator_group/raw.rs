@@ -5,16 +5,9 @@ use std::collections::BTreeMap;
 
 use serde::Deserialize;
 
+use crate::devices::contract::motor_rig::RawPendulum;
 use crate::scenario::onekey::one_key_enum;
 use crate::scenario::S;
-
-/// A point mass on a massless arm, hanging from the actuator's shaft.
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct RawPendulum {
-    pub mass_kg: S<f64>,
-    pub length_m: S<f64>,
-}
 
 /// One actuator of the group: the joint it drives and the RobStride motor behind it.
 #[derive(Debug, Deserialize)]
@@ -23,6 +16,7 @@ pub(crate) struct RawActuator {
     pub joint: S<String>,
     pub can_id: S<i64>,
     pub model: S<String>,
+    /// A point mass on a massless arm, hanging from the actuator's shaft.
     pub pendulum: Option<S<RawPendulum>>,
 }
 

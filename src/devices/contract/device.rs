@@ -1,6 +1,7 @@
 //! The device on a bench, as the runner drives it: one implementation per device kind (its
 //! `device/` folder), built by the kind's [`KindSpec::build`](super::KindSpec::build).
 
+use std::future::Future;
 use std::time::Duration;
 
 use async_trait::async_trait;
@@ -30,6 +31,42 @@ impl DeviceError {
     /// The action or fault is not available on this device / in this mode.
     pub fn unsupported(message: impl Into<String>) -> Self {
         Self::new(ErrorClass::InvalidArgument, message)
+    }
+
+    /// An action of another kind sent to device `device`, which `is` (`a Damiao bus`): "a
+    /// piper step needs a piper device".
+    pub fn step_of_another_kind(device: &str, is: &str, action: &Action) -> Self {
+        let kind = action.kind_name();
+        Self::unsupported(format!(
+            "`{device}` is {is}: a {kind} step needs a {kind} device"
+        ))
+    }
+
+    /// A fault of another kind sent to device `device`, which `is` (`a Damiao bus`).
+    pub fn fault_of_another_kind(device: &str, is: &str, fault: &DeviceFault) -> Self {
+        Self::unsupported(format!(
+            "`{device}` is {is}: `{}` is a {} fault",
+            fault.describe(),
+            fault.kind_name()
+        ))
+    }
+}
+
+/// A step's action `act` within its `timeout` (none: the driver's own deadlines), or a
+/// timeout error "`late` within N ms" (`late` says what did not come: `enable: no reply`).
+pub(crate) async fn within<T>(
+    timeout: Option<Duration>,
+    late: impl FnOnce() -> String,
+    act: impl Future<Output = Result<T, DeviceError>>,
+) -> Result<T, DeviceError> {
+    match timeout {
+        Some(limit) => tokio::time::timeout(limit, act).await.unwrap_or_else(|_| {
+            Err(DeviceError::new(
+                ErrorClass::Timeout,
+                format!("{} within {} ms", late(), limit.as_millis()),
+            ))
+        }),
+        None => act.await,
     }
 }
 

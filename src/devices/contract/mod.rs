@@ -16,8 +16,12 @@
 //!   a scenario (`KindSpec::WIRE_DECODERS`);
 //! - its **trace columns**, observations and fault injection, through [`Device`].
 
+pub(crate) mod bus_emulator;
 mod device;
 mod drawing;
+pub(crate) mod health;
+pub(crate) mod motor_bus;
+pub(crate) mod motor_rig;
 mod wire;
 
 use std::fmt::Debug;
@@ -26,6 +30,7 @@ use std::sync::Arc;
 use async_trait::async_trait;
 use bus::CanFrame;
 
+pub(crate) use device::within;
 pub use device::{Device, DeviceError, Reply, TraceColumn};
 pub use drawing::{BaseColumns, Drawing, JointColumn, Posing};
 pub use wire::{WireDecode, WireDecoder, WireMotor, WireOptions};
@@ -33,7 +38,7 @@ pub use wire::{WireDecode, WireDecoder, WireMotor, WireOptions};
 use crate::interop::DecodedFrame;
 use crate::scenario::onekey::OneKey;
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
-use crate::wiring::{Clock, RunOptions};
+use crate::wiring::{Clock, RunOptions, HOST_NODE};
 
 /// What a kind's `build` gets: the scenario's clock and options, and, for CAN devices, the
 /// in-process virtual buses or the SocketCAN interface to open. One device's share of the
@@ -53,6 +58,17 @@ impl<'a> Wiring<'a> {
     /// The device's (first) in-process virtual bus (virtual and real-time clocks).
     pub fn bus(&self) -> Option<&'a bus::virtual_bus::VirtualBus> {
         self.buses.first().copied()
+    }
+
+    /// The driver's end of the device's (first) bus: a node named [`HOST_NODE`] on the
+    /// in-process virtual bus, or the link to the real interface opened for the driver;
+    /// `name` (the device's) names it in the error when there is neither.
+    pub async fn driver_bus(&self, name: &str) -> Result<Arc<dyn bus::CanBus>, String> {
+        match (self.bus(), self.clock) {
+            (Some(bus), _) => Ok(Arc::new(bus.attach(HOST_NODE))),
+            (None, Clock::Iface(link)) => link.open("driver").await,
+            (None, _) => Err(format!("device `{name}`: no bus to attach to")),
+        }
     }
 }
 

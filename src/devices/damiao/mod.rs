@@ -14,19 +14,17 @@ pub(crate) mod validate;
 use std::sync::Arc;
 use std::time::Duration;
 
-use bus::CanBus;
-
 pub use decode::{decode_damiao, DamiaoWireMotor};
 pub use model::{
     DamiaoAction as Action, DamiaoSettings as Settings, DmFault as Fault, MotorCheck as Check,
 };
 pub use observe::{MotorObservation, Observation};
 
+use super::contract::motor_bus::PER_MOTOR_CONDITION_KEYS;
 use super::{
     one_bus, BusUse, Device, Drawing, FrameDecoder, KindSpec, RawKindStep, WireDecoder, Wiring,
 };
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
-use crate::wiring::{Clock, HOST_NODE};
 use device::DamiaoDevice;
 
 /// How long the Damiao driver waits for each reply (its default, before time scaling).
@@ -46,7 +44,7 @@ impl KindSpec for Kind {
     type RawStep = raw::RawStep;
     type RawConds = raw::RawConds;
     type RawFault = raw::RawFault;
-    const CONDITION_KEYS: &'static [&'static str] = &raw::CONDITION_KEYS;
+    const CONDITION_KEYS: &'static [&'static str] = &PER_MOTOR_CONDITION_KEYS;
     const WIRE_DECODERS: &'static [WireDecoder] = &[WireDecoder {
         name: "damiao",
         help: "Damiao (DM) joint motors (11-bit ids; each motor by --motor ESC_ID:MODEL[:MST_ID], default 1:DM4310)",
@@ -112,15 +110,10 @@ impl KindSpec for Kind {
         settings: &Settings,
         wiring: &Wiring<'_>,
     ) -> Result<Arc<dyn Device>, String> {
-        let host: Arc<dyn CanBus> = match (wiring.bus(), wiring.clock) {
-            (Some(bus), _) => Arc::new(bus.attach(HOST_NODE)),
-            (None, Clock::Iface(link)) => link.open("driver").await?,
-            (None, _) => return Err(format!("device `{name}`: no bus to attach to")),
-        };
         Ok(Arc::new(DamiaoDevice::start(
             name,
             settings,
-            host,
+            wiring.driver_bus(name).await?,
             wiring.bus(),
             wiring.options.deadline(DRIVER_TIMEOUT),
         )?))

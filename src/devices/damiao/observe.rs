@@ -7,6 +7,7 @@ use std::collections::BTreeMap;
 use driver::damiao::Feedback;
 
 use super::model::{state_name, MotorCond};
+use crate::devices::contract::motor_bus::fixed;
 use crate::scenario::Near;
 
 /// Every motor of the bus by ESC_ID.
@@ -46,19 +47,6 @@ impl MotorObservation {
             mos_temp_c: Some(f64::from(f.mos_temp_c)),
             rotor_temp_c: Some(f64::from(f.rotor_temp_c)),
         }
-    }
-}
-
-/// `v` with `places` decimals, never `-0.00`.
-pub(super) fn fixed(v: f64, places: usize) -> String {
-    let t = format!("{v:.places$}");
-    if t.trim_start_matches('-')
-        .chars()
-        .all(|c| c == '0' || c == '.')
-    {
-        t.trim_start_matches('-').to_owned()
-    } else {
-        t
     }
 }
 

@@ -1,11 +1,10 @@
 //! Layer 1 of the Damiao grammar: the `motors:` list of a `damiao` device, the `damiao:` step
 //! and the per-motor conditions (`motors: {ESC_ID: {...}}`), as written.
 
-use std::collections::BTreeMap;
-
 use serde::Deserialize;
 
-use crate::devices::robstride::raw::RawRsLoad;
+use crate::devices::contract::motor_bus::{RawMotorBus, RawPerMotor};
+use crate::devices::contract::motor_rig::RawLoad;
 use crate::scenario::onekey::one_key_enum;
 use crate::scenario::S;
 
@@ -19,18 +18,13 @@ pub(crate) struct RawDmMotor {
     /// MST_ID: the identifier it answers on (default `id` + 0x10).
     pub feedback_id: Option<S<i64>>,
     /// What its shaft drives on the built-in rig (the same rig a RobStride motor drives).
-    pub load: Option<S<RawRsLoad>>,
+    pub load: Option<S<RawLoad>>,
     pub start_angle_rad: Option<S<f64>>,
     pub friction_nm_s_per_rad: Option<S<f64>>,
 }
 
 /// A Damiao bus's settings (after `kind: damiao`).
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct RawSettings {
-    pub bus: Option<S<String>>,
-    pub motors: Option<S<Vec<S<RawDmMotor>>>>,
-}
+pub(crate) type RawSettings = RawMotorBus<RawDmMotor>;
 
 /// The `damiao:` step: `do:` names the command, the other keys are its arguments.
 #[derive(Debug, Default, Deserialize)]
@@ -76,14 +70,7 @@ pub(crate) struct RawMotorConds {
 }
 
 /// Damiao conditions in `expect` and `wait_until`: per motor, by ESC_ID.
-#[derive(Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct RawConds {
-    pub motors: Option<S<BTreeMap<i64, S<RawMotorConds>>>>,
-}
-
-/// The keys of [`RawConds`].
-pub(crate) const CONDITION_KEYS: [&str; 1] = ["motors"];
+pub(crate) type RawConds = RawPerMotor<RawMotorConds>;
 
 one_key_enum! {
     /// Damiao steps.

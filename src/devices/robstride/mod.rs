@@ -11,18 +11,16 @@ pub(crate) mod validate;
 use std::sync::Arc;
 use std::time::Duration;
 
-use bus::CanBus;
-
 pub use model::{
     MotorCheck as Check, RobstrideAction as Action, RobstrideSettings as Settings, RsFault as Fault,
 };
 pub use observe::{MotorObservation, Observation};
 
+use super::contract::motor_bus::PER_MOTOR_CONDITION_KEYS;
 use super::{
     one_bus, BusUse, Device, Drawing, FrameDecoder, KindSpec, RawKindStep, WireDecoder, Wiring,
 };
 use crate::scenario::{Ctx, DeviceStep, Pos, Res, S};
-use crate::wiring::{Clock, HOST_NODE};
 use device::RobstrideDevice;
 
 /// How long the RobStride driver waits for each reply (its default, before time scaling).
@@ -42,7 +40,7 @@ impl KindSpec for Kind {
     type RawStep = raw::RawStep;
     type RawConds = raw::RawConds;
     type RawFault = raw::RawFault;
-    const CONDITION_KEYS: &'static [&'static str] = &raw::CONDITION_KEYS;
+    const CONDITION_KEYS: &'static [&'static str] = &PER_MOTOR_CONDITION_KEYS;
     const WIRE_DECODERS: &'static [WireDecoder] = &[
         WireDecoder {
             name: "robstride",
@@ -117,15 +115,10 @@ impl KindSpec for Kind {
         settings: &Settings,
         wiring: &Wiring<'_>,
     ) -> Result<Arc<dyn Device>, String> {
-        let host: Arc<dyn CanBus> = match (wiring.bus(), wiring.clock) {
-            (Some(bus), _) => Arc::new(bus.attach(HOST_NODE)),
-            (None, Clock::Iface(link)) => link.open("driver").await?,
-            (None, _) => return Err(format!("device `{name}`: no bus to attach to")),
-        };
         Ok(Arc::new(RobstrideDevice::start(
             name,
             settings,
-            host,
+            wiring.driver_bus(name).await?,
             wiring.bus(),
             wiring.bitrate_bps,
             wiring.options.deadline(DRIVER_TIMEOUT),

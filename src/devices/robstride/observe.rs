@@ -7,6 +7,7 @@ use std::collections::BTreeMap;
 use driver::robstride::{FaultReport, Feedback, FeedbackKind, MotorMode};
 
 use super::model::{MotorCond, REPORT_FLAGS, STATUS_FAULTS};
+use crate::devices::contract::motor_bus::fixed;
 use crate::scenario::Near;
 
 /// Every motor of the bus by CAN ID.
@@ -33,13 +34,9 @@ pub struct MotorObservation {
     pub feedback: Option<&'static str>,
 }
 
+/// `v` with 2 decimals, never `-0.00`.
 pub(super) fn f2(v: f64) -> String {
-    let t = format!("{v:.2}");
-    if t == "-0.00" {
-        "0.00".to_owned()
-    } else {
-        t
-    }
+    fixed(v, 2)
 }
 
 pub(super) fn near_text(n: &Near) -> String {

@@ -3,8 +3,8 @@
 
 use serde::Deserialize;
 
-use std::collections::BTreeMap;
-
+use crate::devices::contract::motor_bus::{RawMotorBus, RawPerMotor};
+use crate::devices::contract::motor_rig::RawLoad;
 use crate::scenario::onekey::one_key_enum;
 use crate::scenario::S;
 
@@ -14,36 +14,9 @@ use crate::scenario::S;
 pub(crate) struct RawRsMotor {
     pub id: S<i64>,
     pub model: S<String>,
-    pub load: Option<S<RawRsLoad>>,
+    pub load: Option<S<RawLoad>>,
     pub start_angle_rad: Option<S<f64>>,
     pub friction_nm_s_per_rad: Option<S<f64>>,
-}
-
-#[derive(Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct RawNoLoad {}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct RawDisc {
-    pub mass_kg: S<f64>,
-    pub radius_m: S<f64>,
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct RawPendulum {
-    pub mass_kg: S<f64>,
-    pub length_m: S<f64>,
-}
-
-one_key_enum! {
-    /// What a motor drives.
-    pub(crate) enum RawRsLoad ("load") {
-        "none" => NoLoad(RawNoLoad) [bare],
-        "disc" => Disc(RawDisc),
-        "pendulum" => Pendulum(RawPendulum),
-    }
 }
 
 /// The `robstride:` step: `do:` names the command, the other keys are its arguments.
@@ -103,22 +76,10 @@ pub(crate) struct RawMotorConds {
 }
 
 /// A RobStride bus's settings (after `kind: robstride`).
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct RawSettings {
-    pub bus: Option<S<String>>,
-    pub motors: Option<S<Vec<S<RawRsMotor>>>>,
-}
+pub(crate) type RawSettings = RawMotorBus<RawRsMotor>;
 
 /// RobStride conditions in `expect` and `wait_until`: per motor, by CAN ID.
-#[derive(Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct RawConds {
-    pub motors: Option<S<BTreeMap<i64, S<RawMotorConds>>>>,
-}
-
-/// The keys of [`RawConds`].
-pub(crate) const CONDITION_KEYS: [&str; 1] = ["motors"];
+pub(crate) type RawConds = RawPerMotor<RawMotorConds>;
 
 one_key_enum! {
     /// RobStride steps.

@@ -3,6 +3,7 @@
 
 use super::model::{MODE_STATES, STATUS_FAULTS};
 use super::observe::MotorObservation;
+use crate::devices::contract::motor_bus::{motor_columns, motor_row, MotorColumn};
 use crate::devices::TraceColumn;
 use crate::scenario::Signal;
 
@@ -13,7 +14,7 @@ const NM_Q: f64 = 0.01;
 const TEMP_Q: f64 = 1.0;
 
 /// The per-motor columns of one signal (empty for signals a RobStride has no value for).
-fn signal_columns(signal: Signal) -> &'static [(&'static str, f64, &'static str)] {
+fn signal_columns(signal: Signal) -> &'static [MotorColumn] {
     match signal {
         Signal::Joints => &[("rad", RAD_Q, "angles")],
         Signal::Speeds => &[("rad_s", RAD_S_Q, "speeds")],
@@ -26,19 +27,7 @@ fn signal_columns(signal: Signal) -> &'static [(&'static str, f64, &'static str)
 
 /// The columns for `signals` and the motors `ids` (power-on CAN IDs, in bench order).
 pub(super) fn columns(signals: &[Signal], ids: &[u8]) -> Vec<TraceColumn> {
-    let mut cols = Vec::new();
-    for signal in signals {
-        for (suffix, quantum, group) in signal_columns(*signal) {
-            for id in ids {
-                cols.push(TraceColumn {
-                    name: format!("m{id}_{suffix}"),
-                    quantum: *quantum,
-                    group,
-                });
-            }
-        }
-    }
-    cols
+    motor_columns(signals, ids, signal_columns)
 }
 
 /// The status-frame fault bits as a number (bit `i` = [`STATUS_FAULTS`]`[i]`).
@@ -53,15 +42,7 @@ fn fault_bits(m: &MotorObservation) -> f64 {
 
 /// One row, matching [`columns`]; `motors` in the same order as the ids given there.
 pub(super) fn row(signals: &[Signal], motors: &[Option<&MotorObservation>]) -> Vec<Option<f64>> {
-    let mut out = Vec::new();
-    for signal in signals {
-        for (suffix, _, _) in signal_columns(*signal) {
-            for m in motors {
-                out.push(m.and_then(|m| value(suffix, m)));
-            }
-        }
-    }
-    out
+    motor_row(signals, motors, signal_columns, value)
 }
 
 fn value(suffix: &str, m: &MotorObservation) -> Option<f64> {

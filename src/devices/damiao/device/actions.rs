@@ -2,17 +2,15 @@
 //! reads, emulator commands through the in-process emulator, and the driver's errors as
 //! scenario error classes.
 
-use std::sync::Arc;
 use std::time::Duration;
 
-use bus::CanBus;
 use driver::damiao::{DamiaoError, Feedback, Register, RegisterValue};
-use sim::damiao::DamiaoBus;
 
 use super::{emulator_error, DamiaoDevice};
+use crate::devices::contract::motor_bus::fixed;
 use crate::devices::damiao::model::{state_name, DamiaoAction, DmCommand, MODES};
-use crate::devices::damiao::observe::{fixed, near_text};
-use crate::devices::{DeviceError, Reply};
+use crate::devices::damiao::observe::near_text;
+use crate::devices::{within, DeviceError, Reply};
 use crate::scenario::{ErrorClass, Near};
 
 pub(super) fn classify(error: &DamiaoError) -> ErrorClass {
@@ -36,20 +34,8 @@ impl DamiaoDevice {
         action: &DamiaoAction,
         timeout: Option<Duration>,
     ) -> Result<Reply, DeviceError> {
-        let fut = self.act_inner(action);
-        match timeout {
-            Some(limit) => tokio::time::timeout(limit, fut).await.unwrap_or_else(|_| {
-                Err(DeviceError::new(
-                    ErrorClass::Timeout,
-                    format!(
-                        "{}: no reply within {} ms",
-                        action.command.name(),
-                        limit.as_millis()
-                    ),
-                ))
-            }),
-            None => fut.await,
-        }
+        let late = || format!("{}: no reply", action.command.name());
+        within(timeout, late, self.act_inner(action)).await
     }
 
     async fn act_inner(&self, action: &DamiaoAction) -> Result<Reply, DeviceError> {
@@ -59,7 +45,8 @@ impl DamiaoDevice {
             DmCommand::Restart => self.restart().await?,
             DmCommand::SetTemperature { temp_c } => {
                 self.motor(id)?;
-                self.emulator_handle()
+                self.emulator
+                    .running()
                     .await?
                     .set_temperature(id, *temp_c)
                     .await
@@ -67,7 +54,8 @@ impl DamiaoDevice {
             }
             DmCommand::ExternalTorque { torque_nm } => {
                 self.motor(id)?;
-                self.emulator_handle()
+                self.emulator
+                    .running()
                     .await?
                     .set_external_torque(id, *torque_nm)
                     .await
@@ -85,22 +73,7 @@ impl DamiaoDevice {
     /// Power-cycle the emulator: its motors come back with what they saved (registers, zero),
     /// and the host opens fresh handles on them.
     async fn restart(&self) -> Result<(), DeviceError> {
-        let Some(emu) = &self.emulator else {
-            return Err(DeviceError::unsupported(
-                "restart needs the in-process emulator (not available with --iface)",
-            ));
-        };
-        self.close_handles().await;
-        {
-            let mut guard = self.handle.lock().await;
-            if let Some(old) = guard.take() {
-                old.shutdown().await;
-            }
-            let node: Arc<dyn CanBus> = Arc::new(emu.bus.attach(&emu.node));
-            let handle = DamiaoBus::spawn(emu.config.clone(), node)
-                .map_err(|e| DeviceError::unsupported(format!("emulator restart: {e}")))?;
-            *guard = Some(handle);
-        }
+        self.emulator.power_cycle(self.close_handles()).await?;
         self.open_handles().map_err(DeviceError::unsupported)
     }
 

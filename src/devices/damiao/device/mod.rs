@@ -12,6 +12,7 @@ mod actions;
 mod tests;
 
 use std::collections::BTreeMap;
+use std::future::Future;
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::Duration;
 
@@ -24,22 +25,14 @@ use sim::damiao::{DamiaoBus, DamiaoConfig, DamiaoHandle};
 
 use super::model::{DamiaoSettings, DmFault, MotorCheck};
 use super::observe::{MotorObservation, Observation};
+use crate::devices::contract::bus_emulator::{BenchEmulator, BusEmulator};
+use crate::devices::contract::health::{motors_finite, HealthProbe, MotorPhysics};
 use crate::devices::{Action, Check, DeviceFault};
 use crate::devices::{Device, DeviceError, Reply, TraceColumn};
 use crate::scenario::Signal;
 
 /// How often the host reads each motor's state unless a `poll` step says otherwise.
 pub(crate) const DEFAULT_POLL_PERIOD: Duration = Duration::from_millis(10);
-
-/// The emulator side: what a power cycle needs.
-pub(crate) struct DmEmulator {
-    /// The virtual bus to re-attach to after a restart.
-    pub bus: VirtualBus,
-    /// Node name of the emulator.
-    pub node: String,
-    /// Emulator configuration (with its state file).
-    pub config: DamiaoConfig,
-}
 
 /// One motor as the bench knows it: its identifiers and model, in bench order.
 #[derive(Debug, Clone, Copy)]
@@ -69,17 +62,12 @@ pub(crate) struct DamiaoDevice {
     polls: Mutex<BTreeMap<u16, Poll>>,
     /// Emulator faults injected and not yet cleared, so `clear_faults` can undo them.
     active: Mutex<Vec<DmFault>>,
-    emulator: Option<DmEmulator>,
-    handle: tokio::sync::Mutex<Option<DamiaoHandle>>,
-    /// The emulator's state folder; dropping it deletes the folder.
-    state_dir: Mutex<Option<tempfile::TempDir>>,
+    /// The in-process emulator (none on a real interface).
+    emulator: BenchEmulator<DamiaoBus>,
     /// The emulator's state, asked for after the last step and read after the next one (see
     /// [`Device::emulator_health`]).
-    health_probe: Mutex<Option<HealthProbe>>,
+    health: HealthProbe<Vec<ActuatorSnapshot>, sim::damiao::DamiaoError>,
 }
-
-/// A snapshot of every emulated motor, on its way.
-type HealthProbe = tokio::task::JoinHandle<Result<Vec<ActuatorSnapshot>, sim::damiao::DamiaoError>>;
 
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
     // A poisoned map of handles is still consistent (inserts and removes are atomic).
@@ -96,30 +84,10 @@ impl DamiaoDevice {
         emulator_bus: Option<&VirtualBus>,
         timeout: Duration,
     ) -> Result<Self, String> {
-        let mut state_dir = None;
-        let mut emulator = None;
-        let mut handle = None;
-        if let Some(bus) = emulator_bus {
-            let dir = tempfile::Builder::new()
-                .prefix(&format!("armhil-dm-{name}-"))
-                .tempdir()
-                .map_err(|e| format!("device `{name}`: state directory: {e}"))?;
-            let config = DamiaoConfig {
-                motors: settings.motors.clone(),
-                state_file: Some(dir.path().join("state.json")),
-            };
-            let node: Arc<dyn CanBus> = Arc::new(bus.attach(name));
-            handle = Some(
-                DamiaoBus::spawn(config.clone(), node)
-                    .map_err(|e| format!("device `{name}`: emulator: {e}"))?,
-            );
-            emulator = Some(DmEmulator {
-                bus: bus.clone(),
-                node: name.to_owned(),
-                config,
-            });
-            state_dir = Some(dir);
-        }
+        let emulator = BenchEmulator::start(name, "dm", emulator_bus, |state_file| DamiaoConfig {
+            motors: settings.motors.clone(),
+            state_file: Some(state_file),
+        })?;
         let driver = DamiaoDriver::new(
             host,
             DriverConfig {
@@ -160,9 +128,7 @@ impl DamiaoDevice {
             ),
             active: Mutex::new(Vec::new()),
             emulator,
-            handle: tokio::sync::Mutex::new(handle),
-            state_dir: Mutex::new(state_dir),
-            health_probe: Mutex::new(None),
+            health: HealthProbe::new(),
         };
         device.open_handles()?;
         Ok(device)
@@ -245,17 +211,6 @@ impl DamiaoDevice {
             .map(|(id, m)| (*id, MotorObservation::of(m.last_feedback())))
             .collect()
     }
-
-    /// The running emulator's handle, or why there is none.
-    async fn emulator_handle(
-        &self,
-    ) -> Result<tokio::sync::MappedMutexGuard<'_, DamiaoHandle>, DeviceError> {
-        tokio::sync::MutexGuard::try_map(self.handle.lock().await, Option::as_mut).map_err(|_| {
-            DeviceError::unsupported(
-                "emulator commands need the in-process emulator (not available with --iface)",
-            )
-        })
-    }
 }
 
 impl Drop for DamiaoDevice {
@@ -281,12 +236,11 @@ impl Device for DamiaoDevice {
     ) -> Result<Reply, DeviceError> {
         match action {
             Action::Damiao(a) => self.act(a, timeout).await,
-            other => Err(DeviceError::unsupported(format!(
-                "`{}` is a Damiao bus: a {} step needs a {} device",
-                self.name,
-                other.kind_name(),
-                other.kind_name()
-            ))),
+            other => Err(DeviceError::step_of_another_kind(
+                &self.name,
+                "a Damiao bus",
+                other,
+            )),
         }
     }
 
@@ -317,7 +271,8 @@ impl Device for DamiaoDevice {
     async fn inject(&self, fault: &DeviceFault) -> Result<(), DeviceError> {
         let f = dm_fault(fault, &self.name)?;
         self.motor(f.motor)?;
-        self.emulator_handle()
+        self.emulator
+            .running()
             .await?
             .inject(f.motor, f.fault.name(), &f.values)
             .await
@@ -338,7 +293,8 @@ impl Device for DamiaoDevice {
             None => std::mem::take(&mut *lock(&self.active)),
         };
         for f in faults {
-            self.emulator_handle()
+            self.emulator
+                .running()
                 .await?
                 .clear(f.motor, f.fault.name(), &f.values)
                 .await
@@ -348,47 +304,32 @@ impl Device for DamiaoDevice {
     }
 
     async fn emulator_health(&self, last: bool) -> Result<(), String> {
-        // The emulator answers through its own task: waiting for it between steps would let it
-        // run a tick before the next step's frames and shift every recorded run. So the
-        // question asked after one step is answered (and judged) after the next one.
-        let previous = lock(&self.health_probe).take();
-        let verdict = match previous {
-            Some(probe) if last || probe.is_finished() => match probe.await {
-                Ok(Ok(motors)) => dm_health(&motors),
-                // A stopped emulator answers nothing; the steps that need it report that.
-                _ => Ok(()),
-            },
-            Some(probe) => {
-                *lock(&self.health_probe) = Some(probe);
-                Ok(())
-            }
-            None => Ok(()),
+        let ask = || {
+            let monitor = self.emulator.try_with(DamiaoHandle::monitor)?;
+            Some(async move { monitor.snapshot().await })
         };
-        if verdict.is_ok() {
-            if let Ok(guard) = self.handle.try_lock() {
-                if let Some(handle) = guard.as_ref() {
-                    let monitor = handle.monitor();
-                    let probe = tokio::spawn(async move { monitor.snapshot().await });
-                    if last {
-                        return match probe.await {
-                            Ok(Ok(motors)) => dm_health(&motors),
-                            _ => Ok(()),
-                        };
-                    }
-                    *lock(&self.health_probe) = Some(probe);
-                }
-            }
-        }
-        verdict
+        self.health
+            .judge(last, ask, |motors| dm_health(motors))
+            .await
     }
 
     async fn shutdown(&self) {
         self.close_handles().await;
-        if let Some(handle) = self.handle.lock().await.take() {
-            handle.shutdown().await;
-        }
-        // Deletes the state folder (best effort: a leftover temp folder is harmless).
-        drop(lock(&self.state_dir).take());
+        self.emulator.shutdown().await;
+    }
+}
+
+impl BusEmulator for DamiaoBus {
+    type Config = DamiaoConfig;
+    type Handle = DamiaoHandle;
+    type Error = sim::damiao::DamiaoError;
+
+    fn power_on(config: DamiaoConfig, node: Arc<dyn CanBus>) -> Result<DamiaoHandle, Self::Error> {
+        DamiaoBus::spawn(config, node)
+    }
+
+    fn power_off(handle: DamiaoHandle) -> impl Future<Output = ()> + Send {
+        handle.shutdown()
     }
 }
 
@@ -399,14 +340,12 @@ fn emulator_error(e: sim::damiao::DamiaoError) -> DeviceError {
 
 /// Whether every emulated motor's physical state is finite.
 fn dm_health(motors: &[ActuatorSnapshot]) -> Result<(), String> {
-    crate::devices::finite_state(motors.iter().flat_map(|m| {
-        let id = m.can_id;
-        [
-            (format!("motor {id} angle"), m.angle_rad),
-            (format!("motor {id} speed"), m.speed_rad_s),
-            (format!("motor {id} torque"), m.torque_nm),
-            (format!("motor {id} temperature"), m.temperature_c),
-        ]
+    motors_finite(motors.iter().map(|m| MotorPhysics {
+        id: m.can_id,
+        angle_rad: m.angle_rad,
+        speed_rad_s: m.speed_rad_s,
+        torque_nm: m.torque_nm,
+        temperature_c: m.temperature_c,
     }))
 }
 
@@ -414,10 +353,10 @@ fn dm_health(motors: &[ActuatorSnapshot]) -> Result<(), String> {
 fn dm_fault(fault: &DeviceFault, name: &str) -> Result<DmFault, DeviceError> {
     match fault {
         DeviceFault::Damiao(f) => Ok(f.clone()),
-        other => Err(DeviceError::unsupported(format!(
-            "`{name}` is a Damiao bus: `{}` is a {} fault",
-            other.describe(),
-            other.kind_name()
-        ))),
+        other => Err(DeviceError::fault_of_another_kind(
+            name,
+            "a Damiao bus",
+            other,
+        )),
     }
 }

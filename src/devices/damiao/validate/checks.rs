@@ -3,16 +3,13 @@
 use std::collections::BTreeMap;
 
 use super::{esc_id_at, on_device};
+use crate::devices::contract::motor_bus::motion_conditions;
 use crate::devices::damiao::model::{state_named, MotorCheck, MotorCond, STATES};
 use crate::devices::damiao::raw::{RawConds, RawMotorConds};
 use crate::scenario::error::{suggestion, Pos};
 use crate::scenario::{pos, Ctx, Near, Res, S};
 
-/// Default tolerances of the per-motor conditions.
-const DEFAULT_TOLERANCE_RAD: f64 = 0.05;
-const DEFAULT_TOLERANCE_RAD_S: f64 = 0.2;
-const DEFAULT_TOLERANCE_NM: f64 = 0.5;
-/// The feedback carries whole degrees.
+/// Default tolerance of the temperature conditions: the feedback carries whole degrees.
 const DEFAULT_TOLERANCE_C: f64 = 1.0;
 
 /// The `motors:` conditions of `expect` / `wait_until` on device `device`.
@@ -66,34 +63,17 @@ fn motor_checks(
                 tolerance: tol(t, t_key, default)?,
             })
         };
+        let motion = motion_conditions(
+            ctx,
+            [
+                (&c.position_rad, &c.tolerance_rad),
+                (&c.velocity_rad_s, &c.tolerance_rad_s),
+                (&c.torque_nm, &c.tolerance_nm),
+            ],
+            [MotorCond::Position, MotorCond::Velocity, MotorCond::Torque],
+        )?;
+        out.extend(motion.into_iter().map(|cond| MotorCheck { motor, cond }));
         let mut push = |cond: MotorCond| out.push(MotorCheck { motor, cond });
-        if let Some(p) = &c.position_rad {
-            push(MotorCond::Position(near(
-                p,
-                "position_rad",
-                &c.tolerance_rad,
-                "tolerance_rad",
-                DEFAULT_TOLERANCE_RAD,
-            )?));
-        }
-        if let Some(v) = &c.velocity_rad_s {
-            push(MotorCond::Velocity(near(
-                v,
-                "velocity_rad_s",
-                &c.tolerance_rad_s,
-                "tolerance_rad_s",
-                DEFAULT_TOLERANCE_RAD_S,
-            )?));
-        }
-        if let Some(t) = &c.torque_nm {
-            push(MotorCond::Torque(near(
-                t,
-                "torque_nm",
-                &c.tolerance_nm,
-                "tolerance_nm",
-                DEFAULT_TOLERANCE_NM,
-            )?));
-        }
         if let Some(s) = &c.state {
             push(MotorCond::State(state(ctx, s)?));
         }

@@ -6,8 +6,9 @@ use sim::damiao::{Model, MotorConfig, OPENARM_MST_OFFSET};
 
 use super::model::DamiaoSettings;
 use super::raw::{RawDmMotor, RawSettings};
+use crate::devices::contract::motor_bus::listed;
+use crate::devices::contract::motor_rig::rig;
 use crate::devices::named_bus;
-use crate::devices::robstride::validate::rig;
 use crate::scenario::error::{suggestion, Pos};
 use crate::scenario::S;
 use crate::scenario::{pos, Ctx, Res};
@@ -81,17 +82,14 @@ fn command_ids(esc_id: u16) -> [u16; 4] {
 
 /// The settings of a `kind: damiao` device.
 pub(crate) fn settings(ctx: &Ctx<'_>, d: &RawSettings, at: Pos) -> Res<DamiaoSettings> {
-    let Some(list) = &d.motors else {
-        return Err(ctx.err(
-            at,
-            "a damiao device needs `motors: [{id: 1, model: DM4310}, ...]`",
-        ));
-    };
-    if list.value.is_empty() {
-        return Err(ctx.err(pos(list), "`motors` is empty"));
-    }
+    let list = listed(
+        ctx,
+        &d.motors,
+        "a damiao device needs `motors: [{id: 1, model: DM4310}, ...]`",
+        at,
+    )?;
     let mut motors: Vec<MotorConfig> = Vec::new();
-    for m in &list.value {
+    for m in list {
         let config = motor(ctx, &m.value)?;
         if motors.iter().any(|other| other.esc_id == config.esc_id) {
             return Err(ctx.err(
@@ -103,7 +101,7 @@ pub(crate) fn settings(ctx: &Ctx<'_>, d: &RawSettings, at: Pos) -> Res<DamiaoSet
     }
     // Every motor answers on an identifier of its own, on which no motor is commanded: a
     // feedback frame on another motor's command identifier would be taken as a command.
-    for (k, (m, config)) in list.value.iter().zip(&motors).enumerate() {
+    for (k, (m, config)) in list.iter().zip(&motors).enumerate() {
         let at = m.value.feedback_id.as_ref().map_or(pos(&m.value.id), pos);
         let given = if m.value.feedback_id.is_some() {
             "`feedback_id`"
@@ -156,15 +154,10 @@ fn motor(ctx: &Ctx<'_>, m: &RawDmMotor) -> Res<MotorConfig> {
             }
         },
     };
-    let rig = rig(ctx, &m.load, &m.start_angle_rad, &m.friction_nm_s_per_rad)?;
-    if let Some(load) = rig.load {
-        config.load = load;
-    }
-    if let Some(angle) = rig.start_angle_rad {
-        config.start_angle_rad = angle;
-    }
-    if let Some(friction) = rig.friction_nm_s_per_rad {
-        config.friction_nm_s_per_rad = friction;
-    }
+    rig(ctx, &m.load, &m.start_angle_rad, &m.friction_nm_s_per_rad)?.apply(
+        &mut config.load,
+        &mut config.start_angle_rad,
+        &mut config.friction_nm_s_per_rad,
+    );
     Ok(config)
 }

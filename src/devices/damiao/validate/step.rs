@@ -5,6 +5,7 @@ use sim::damiao::faults::TEMPERATURE_MAX_C;
 use sim::damiao::EXTERNAL_TORQUE_PEAK_MULTIPLE;
 
 use super::{esc_id, on_device};
+use crate::devices::contract::motor_bus::{expectation, wire_f32};
 use crate::devices::damiao::model::{DamiaoAction, DmCommand, MODES};
 use crate::devices::damiao::raw::{RawDmStep, RawStep};
 use crate::scenario::error::{suggestion, Pos};
@@ -68,20 +69,6 @@ fn present_keys(a: &RawDmStep) -> Vec<(&'static str, Pos)> {
         temp_c => "temp_c", torque_nm => "torque_nm",
     );
     out
-}
-
-/// A number the driver sends as `f32`: finite in `f32` too (1e308 would become infinity on
-/// the way).
-fn f32_of(ctx: &Ctx<'_>, v: &S<f64>, key: &str) -> Res<f32> {
-    let single = ctx.finite(v, key)? as f32;
-    if single.is_finite() {
-        Ok(single)
-    } else {
-        Err(ctx.err(
-            pos(v),
-            format!("`{key}` is too large (beyond ±3.4e38, the range of the motor's numbers)"),
-        ))
-    }
 }
 
 /// A Damiao step.
@@ -182,12 +169,12 @@ impl CommandArgs<'_, '_> {
     /// A required number, as the wire's f32.
     fn need(&self, v: &Option<S<f64>>, key: &str) -> Res<f32> {
         let v = self.ctx.required(v, key, self.name, self.at)?;
-        f32_of(self.ctx, v, key)
+        wire_f32(self.ctx, v, key)
     }
 
     /// An optional number, 0 when left out.
     fn opt(&self, v: &Option<S<f64>>, key: &str) -> Res<f32> {
-        v.as_ref().map_or(Ok(0.0), |v| f32_of(self.ctx, v, key))
+        v.as_ref().map_or(Ok(0.0), |v| wire_f32(self.ctx, v, key))
     }
 
     /// A required number within `min..=max`.
@@ -231,19 +218,12 @@ impl CommandArgs<'_, '_> {
 
     /// `expect:` (and `tolerance:`) of a register read.
     fn expectation(&self) -> Res<Option<Near>> {
-        let (ctx, a) = (self.ctx, self.a);
-        match &a.expect {
-            Some(e) => Ok(Some(Near {
-                value: ctx.finite(e, "expect")?,
-                tolerance: a
-                    .tolerance
-                    .as_ref()
-                    .map_or(Ok(DEFAULT_REGISTER_TOLERANCE), |t| {
-                        ctx.non_negative(t, "tolerance")
-                    })?,
-            })),
-            None => Ok(None),
-        }
+        expectation(
+            self.ctx,
+            &self.a.expect,
+            &self.a.tolerance,
+            DEFAULT_REGISTER_TOLERANCE,
+        )
     }
 
     /// `write_register`'s register and value, in the register's wire type.
@@ -281,7 +261,7 @@ impl CommandArgs<'_, '_> {
                 // Whole and within u32: the cast is exact.
                 RegisterValue::U32(x as u32)
             }
-            RegisterKind::F32 => RegisterValue::F32(f32_of(self.ctx, v, "value")?),
+            RegisterKind::F32 => RegisterValue::F32(wire_f32(self.ctx, v, "value")?),
         };
         Ok(DmCommand::WriteRegister { register, value })
     }

@@ -14,7 +14,7 @@ use driver::piper::{
 use super::stream;
 use super::PiperDevice;
 use crate::devices::piper::model::{CtrlMode, Install, MoveMode, Payload, PiperAction, Pose, Role};
-use crate::devices::{DeviceError, Reply};
+use crate::devices::{within, DeviceError, Reply};
 use crate::scenario::{ErrorClass, Near};
 
 /// Deadline of a `mode` step's confirmation on 0x2A1 when the step gives none.
@@ -102,16 +102,8 @@ impl PiperDevice {
         what: &str,
         fut: impl Future<Output = Result<T, PiperError>>,
     ) -> Result<T, DeviceError> {
-        match timeout {
-            Some(limit) => match tokio::time::timeout(limit, fut).await {
-                Ok(r) => r.map_err(derr),
-                Err(_) => Err(DeviceError::new(
-                    ErrorClass::Timeout,
-                    format!("{what}: no confirmation within {} ms", limit.as_millis()),
-                )),
-            },
-            None => fut.await.map_err(derr),
-        }
+        let late = || format!("{what}: no confirmation");
+        within(timeout, late, async { fut.await.map_err(derr) }).await
     }
 
     /// Carry out a Piper action through the driver.

@@ -74,12 +74,9 @@ impl Device for PiperDevice {
     ) -> Result<Reply, DeviceError> {
         match action {
             Action::Piper(a) => self.act(a, timeout).await,
-            other => Err(DeviceError::unsupported(format!(
-                "`{}` is a Piper: a {} step needs a {} device",
-                self.name,
-                other.kind_name(),
-                other.kind_name()
-            ))),
+            other => Err(DeviceError::step_of_another_kind(
+                &self.name, "a Piper", other,
+            )),
         }
     }
 
@@ -139,11 +136,7 @@ impl Device for PiperDevice {
 fn piper_fault<'f>(fault: &'f DeviceFault, name: &str) -> Result<&'f PiperFault, DeviceError> {
     match fault {
         DeviceFault::Piper(f) => Ok(f),
-        other => Err(DeviceError::unsupported(format!(
-            "`{name}` is a Piper: `{}` is a {} fault",
-            other.describe(),
-            other.kind_name()
-        ))),
+        other => Err(DeviceError::fault_of_another_kind(name, "a Piper", other)),
     }
 }
 

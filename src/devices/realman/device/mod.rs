@@ -25,8 +25,8 @@ use tokio::time::Instant;
 use super::model::{Motion, PoseDeg, RealmanAction, RealmanSettings, RmCommand, RmFault};
 use super::observe::Observation;
 use super::trace;
+use crate::devices::{within, Device, DeviceError, Reply, TraceColumn};
 use crate::devices::{Action, Check, DeviceFault};
-use crate::devices::{Device, DeviceError, Reply, TraceColumn};
 use crate::scenario::{ErrorClass, Signal};
 
 /// The IP the driver's host has on the emulated network (the push aims at it).
@@ -397,27 +397,14 @@ impl Device for RealmanDevice {
         timeout: Option<Duration>,
     ) -> Result<Reply, DeviceError> {
         let Action::Realman(a) = action else {
-            return Err(DeviceError::unsupported(format!(
-                "`{}` is a Realman arm: a {} step needs a {} device",
-                self.name,
-                action.kind_name(),
-                action.kind_name()
-            )));
+            return Err(DeviceError::step_of_another_kind(
+                &self.name,
+                "a Realman arm",
+                action,
+            ));
         };
-        let fut = self.act(a);
-        match timeout {
-            Some(limit) => tokio::time::timeout(limit, fut).await.unwrap_or_else(|_| {
-                Err(DeviceError::new(
-                    ErrorClass::Timeout,
-                    format!(
-                        "{}: not done within {} ms",
-                        a.command.name(),
-                        limit.as_millis()
-                    ),
-                ))
-            }),
-            None => fut.await,
-        }
+        let late = || format!("{}: not done", a.command.name());
+        within(timeout, late, self.act(a)).await
     }
 
     fn evaluate(&self, checks: &[Check]) -> Result<(), (String, String)> {
@@ -491,11 +478,11 @@ impl Device for RealmanDevice {
 fn rm_fault(fault: &DeviceFault, name: &str) -> Result<RmFault, DeviceError> {
     match fault {
         DeviceFault::Realman(f) => Ok(f.clone()),
-        other => Err(DeviceError::unsupported(format!(
-            "`{name}` is a Realman arm: `{}` is a {} fault",
-            other.describe(),
-            other.kind_name()
-        ))),
+        other => Err(DeviceError::fault_of_another_kind(
+            name,
+            "a Realman arm",
+            other,
+        )),
     }
 }
 

@@ -5,14 +5,13 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use bus::CanBus;
 use driver::robstride::{Feedback, ParamValue, RobstrideError};
-use sim::robstride::{RobstrideBus, RobstrideHandle};
+use sim::robstride::RobstrideHandle;
 
 use super::{lock, RobstrideDevice};
 use crate::devices::robstride::model::{RobstrideAction, RsCommand};
 use crate::devices::robstride::observe::{f2, near_text};
-use crate::devices::{DeviceError, Reply};
+use crate::devices::{within, DeviceError, Reply};
 use crate::scenario::ErrorClass;
 
 pub(super) fn classify(error: &RobstrideError) -> ErrorClass {
@@ -98,32 +97,14 @@ impl RobstrideDevice {
         )
             -> futures::future::BoxFuture<'_, Result<(), sim::robstride::RobstrideError>>,
     ) -> Result<(), DeviceError> {
-        let guard = self.handle.lock().await;
-        let Some(handle) = guard.as_ref() else {
-            return Err(DeviceError::unsupported(
-                "emulator commands need the in-process emulator (not available with --iface)",
-            ));
-        };
-        what(handle)
+        let handle = self.emulator.running().await?;
+        what(&handle)
             .await
             .map_err(|e| DeviceError::unsupported(format!("emulator: {e}")))
     }
 
     async fn restart(&self) -> Result<(), DeviceError> {
-        let Some(emu) = &self.emulator else {
-            return Err(DeviceError::unsupported(
-                "restart needs the in-process emulator (not available with --iface)",
-            ));
-        };
-        let mut guard = self.handle.lock().await;
-        if let Some(old) = guard.take() {
-            old.shutdown().await;
-        }
-        let node: Arc<dyn CanBus> = Arc::new(emu.bus.attach(&emu.node));
-        let handle = RobstrideBus::spawn(node, emu.config.clone())
-            .map_err(|e| DeviceError::unsupported(format!("emulator restart: {e}")))?;
-        *guard = Some(handle);
-        Ok(())
+        self.emulator.power_cycle(async {}).await
     }
 
     pub(super) async fn act(
@@ -131,20 +112,8 @@ impl RobstrideDevice {
         action: &RobstrideAction,
         timeout: Option<Duration>,
     ) -> Result<Reply, DeviceError> {
-        let fut = self.act_inner(action);
-        match timeout {
-            Some(limit) => tokio::time::timeout(limit, fut).await.unwrap_or_else(|_| {
-                Err(DeviceError::new(
-                    ErrorClass::Timeout,
-                    format!(
-                        "{}: no reply within {} ms",
-                        action.command.name(),
-                        limit.as_millis()
-                    ),
-                ))
-            }),
-            None => fut.await,
-        }
+        let late = || format!("{}: no reply", action.command.name());
+        within(timeout, late, self.act_inner(action)).await
     }
 
     async fn act_inner(&self, action: &RobstrideAction) -> Result<Reply, DeviceError> {

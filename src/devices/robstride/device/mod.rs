@@ -2,6 +2,7 @@
 //! in-process `sim::robstride` emulator (or a separate emulator process on a real interface).
 
 use std::collections::{BTreeMap, BTreeSet};
+use std::future::Future;
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::Duration;
 
@@ -12,6 +13,8 @@ use driver::robstride::{MitMotor, Motor, RobstrideDriver};
 use sim::robstride::{RobstrideBus, RobstrideConfig, RobstrideHandle};
 
 use super::model::{MotorCheck, RobstrideSettings, RsFault};
+use crate::devices::contract::bus_emulator::{BenchEmulator, BusEmulator};
+use crate::devices::contract::health::{motors_finite, HealthProbe, MotorPhysics};
 use crate::devices::{Action, Check, DeviceFault};
 use crate::devices::{Device, DeviceError, Reply, TraceColumn};
 use crate::scenario::Signal;
@@ -22,16 +25,6 @@ mod observation;
 mod tests;
 
 use actions::derr;
-
-/// The emulator side: the running bus emulator and what a power cycle needs.
-pub(crate) struct RsEmulator {
-    /// The virtual bus to re-attach to after a restart.
-    pub bus: VirtualBus,
-    /// Node name of the emulator.
-    pub node: String,
-    /// Emulator configuration (with its state file).
-    pub config: RobstrideConfig,
-}
 
 /// A bus of RobStride motors: one driver, one handle per motor, and the emulator.
 pub(crate) struct RobstrideDevice {
@@ -48,19 +41,12 @@ pub(crate) struct RobstrideDevice {
     ids: Mutex<Vec<(u8, u8)>>,
     /// Emulator faults injected and not yet cleared, so `clear_faults` can undo them.
     active: Mutex<Vec<RsFault>>,
-    emulator: Option<RsEmulator>,
-    handle: tokio::sync::Mutex<Option<RobstrideHandle>>,
-    /// The emulator's state folder; dropping it deletes the folder.
-    state_dir: Mutex<Option<tempfile::TempDir>>,
+    /// The in-process emulator (none on a real interface).
+    emulator: BenchEmulator<RobstrideBus>,
     /// The emulator's state, asked for after the last step and read after the next one (see
     /// [`Device::emulator_health`]).
-    health_probe: Mutex<Option<HealthProbe>>,
+    health: HealthProbe<Vec<sim::robstride::MotorSnapshot>, sim::robstride::RobstrideError>,
 }
-
-/// A snapshot of every emulated motor, on its way.
-type HealthProbe = tokio::task::JoinHandle<
-    Result<Vec<sim::robstride::MotorSnapshot>, sim::robstride::RobstrideError>,
->;
 
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
     // A poisoned map of handles is still consistent (inserts and removes are atomic).
@@ -77,29 +63,12 @@ impl RobstrideDevice {
         bitrate_bps: u32,
         timeout: Duration,
     ) -> Result<Self, String> {
-        let mut state_dir = None;
-        let mut emulator = None;
-        let mut handle = None;
-        if let Some(bus) = emulator_bus {
-            let dir = tempfile::Builder::new()
-                .prefix(&format!("armhil-rs-{name}-"))
-                .tempdir()
-                .map_err(|e| format!("device `{name}`: state directory: {e}"))?;
+        let emulator = BenchEmulator::start(name, "rs", emulator_bus, |state_file| {
             let mut config = RobstrideConfig::new(settings.motors.clone());
-            config.state_file = Some(dir.path().join("state.json"));
+            config.state_file = Some(state_file);
             config.bus_bitrate_bps = bitrate_bps;
-            let node: Arc<dyn CanBus> = Arc::new(bus.attach(name));
-            handle = Some(
-                RobstrideBus::spawn(node, config.clone())
-                    .map_err(|e| format!("device `{name}`: emulator: {e}"))?,
-            );
-            emulator = Some(RsEmulator {
-                bus: bus.clone(),
-                node: name.to_owned(),
-                config,
-            });
-            state_dir = Some(dir);
-        }
+            config
+        })?;
         let driver = RobstrideDriver::new(
             host,
             driver::robstride::DriverConfig {
@@ -131,9 +100,7 @@ impl RobstrideDevice {
             ),
             active: Mutex::new(Vec::new()),
             emulator,
-            handle: tokio::sync::Mutex::new(handle),
-            state_dir: Mutex::new(state_dir),
-            health_probe: Mutex::new(None),
+            health: HealthProbe::new(),
         })
     }
 
@@ -173,12 +140,11 @@ impl Device for RobstrideDevice {
     ) -> Result<Reply, DeviceError> {
         match action {
             Action::Robstride(a) => self.act(a, timeout).await,
-            other => Err(DeviceError::unsupported(format!(
-                "`{}` is a RobStride bus: a {} step needs a {} device",
-                self.name,
-                other.kind_name(),
-                other.kind_name()
-            ))),
+            other => Err(DeviceError::step_of_another_kind(
+                &self.name,
+                "a RobStride bus",
+                other,
+            )),
         }
     }
 
@@ -238,61 +204,47 @@ impl Device for RobstrideDevice {
     }
 
     async fn emulator_health(&self, last: bool) -> Result<(), String> {
-        // The emulator answers through its own task: waiting for it between steps would let it
-        // run a tick before the next step's frames and shift every recorded run. So the
-        // question asked after one step is answered (and judged) after the next one.
-        let previous = lock(&self.health_probe).take();
-        let verdict = match previous {
-            Some(probe) if last || probe.is_finished() => match probe.await {
-                Ok(Ok(motors)) => rs_health(&motors),
-                // A stopped emulator answers nothing; the steps that need it report that.
-                _ => Ok(()),
-            },
-            Some(probe) => {
-                *lock(&self.health_probe) = Some(probe);
-                Ok(())
-            }
-            None => Ok(()),
+        let ask = || {
+            let monitor = self.emulator.try_with(RobstrideHandle::monitor)?;
+            Some(async move { monitor.snapshot().await })
         };
-        if verdict.is_ok() {
-            if let Ok(guard) = self.handle.try_lock() {
-                if let Some(handle) = guard.as_ref() {
-                    let monitor = handle.monitor();
-                    let probe = tokio::spawn(async move { monitor.snapshot().await });
-                    if last {
-                        return match probe.await {
-                            Ok(Ok(motors)) => rs_health(&motors),
-                            _ => Ok(()),
-                        };
-                    }
-                    *lock(&self.health_probe) = Some(probe);
-                }
-            }
-        }
-        verdict
+        self.health
+            .judge(last, ask, |motors| rs_health(motors))
+            .await
     }
 
     async fn shutdown(&self) {
-        if let Some(handle) = self.handle.lock().await.take() {
-            handle.shutdown().await;
-        }
+        self.emulator.shutdown().await;
         lock(&self.motors).clear();
         lock(&self.mit_motors).clear();
-        // Deletes the state folder (best effort: a leftover temp folder is harmless).
-        drop(lock(&self.state_dir).take());
+    }
+}
+
+impl BusEmulator for RobstrideBus {
+    type Config = RobstrideConfig;
+    type Handle = RobstrideHandle;
+    type Error = sim::robstride::RobstrideError;
+
+    fn power_on(
+        config: RobstrideConfig,
+        node: Arc<dyn CanBus>,
+    ) -> Result<RobstrideHandle, Self::Error> {
+        RobstrideBus::spawn(node, config)
+    }
+
+    fn power_off(handle: RobstrideHandle) -> impl Future<Output = ()> + Send {
+        handle.shutdown()
     }
 }
 
 /// Whether every emulated motor's physical state is finite.
 fn rs_health(motors: &[sim::robstride::MotorSnapshot]) -> Result<(), String> {
-    crate::devices::finite_state(motors.iter().flat_map(|m| {
-        let id = m.can_id;
-        [
-            (format!("motor {id} angle"), m.angle_rad),
-            (format!("motor {id} speed"), m.speed_rad_s),
-            (format!("motor {id} torque"), m.torque_nm),
-            (format!("motor {id} temperature"), m.temperature_c),
-        ]
+    motors_finite(motors.iter().map(|m| MotorPhysics {
+        id: u32::from(m.can_id),
+        angle_rad: m.angle_rad,
+        speed_rad_s: m.speed_rad_s,
+        torque_nm: m.torque_nm,
+        temperature_c: m.temperature_c,
     }))
 }
 
@@ -300,10 +252,10 @@ fn rs_health(motors: &[sim::robstride::MotorSnapshot]) -> Result<(), String> {
 fn rs_fault(fault: &DeviceFault, name: &str) -> Result<RsFault, DeviceError> {
     match fault {
         DeviceFault::Robstride(f) => Ok(*f),
-        other => Err(DeviceError::unsupported(format!(
-            "`{name}` is a RobStride bus: `{}` is a {} fault",
-            other.describe(),
-            other.kind_name()
-        ))),
+        other => Err(DeviceError::fault_of_another_kind(
+            name,
+            "a RobStride bus",
+            other,
+        )),
     }
 }

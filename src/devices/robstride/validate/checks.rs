@@ -2,19 +2,14 @@
 
 use std::collections::BTreeMap;
 
+use crate::devices::contract::motor_bus::motion_conditions;
 use crate::devices::robstride::model::{
     MotorCheck, MotorCond, FEEDBACK_KINDS, MODE_STATES, REPORT_FLAGS, STATUS_FAULTS,
 };
 use crate::devices::robstride::raw::{RawConds, RawMotorConds};
 use crate::scenario::error::Pos;
-use crate::scenario::Near;
 use crate::scenario::S;
 use crate::scenario::{pos, Ctx, Res};
-
-/// Default tolerances of the per-motor conditions.
-const DEFAULT_TOLERANCE_RAD: f64 = 0.05;
-const DEFAULT_TOLERANCE_RAD_S: f64 = 0.2;
-const DEFAULT_TOLERANCE_NM: f64 = 0.5;
 
 fn names(
     ctx: &Ctx<'_>,
@@ -83,32 +78,17 @@ fn motor_checks(
         }
         let motor = *id as u8;
         let c = &conds.value;
-        let tol = |t: &Option<S<f64>>, key: &str, default: f64| {
-            t.as_ref().map_or(Ok(default), |t| ctx.non_negative(t, key))
-        };
+        let motion = motion_conditions(
+            ctx,
+            [
+                (&c.position_rad, &c.tolerance_rad),
+                (&c.velocity_rad_s, &c.tolerance_rad_s),
+                (&c.torque_nm, &c.tolerance_nm),
+            ],
+            [MotorCond::Position, MotorCond::Velocity, MotorCond::Torque],
+        )?;
+        out.extend(motion.into_iter().map(|cond| MotorCheck { motor, cond }));
         let mut push = |cond: MotorCond| out.push(MotorCheck { motor, cond });
-        if let Some(p) = &c.position_rad {
-            push(MotorCond::Position(Near {
-                value: ctx.finite(p, "position_rad")?,
-                tolerance: tol(&c.tolerance_rad, "tolerance_rad", DEFAULT_TOLERANCE_RAD)?,
-            }));
-        }
-        if let Some(v) = &c.velocity_rad_s {
-            push(MotorCond::Velocity(Near {
-                value: ctx.finite(v, "velocity_rad_s")?,
-                tolerance: tol(
-                    &c.tolerance_rad_s,
-                    "tolerance_rad_s",
-                    DEFAULT_TOLERANCE_RAD_S,
-                )?,
-            }));
-        }
-        if let Some(t) = &c.torque_nm {
-            push(MotorCond::Torque(Near {
-                value: ctx.finite(t, "torque_nm")?,
-                tolerance: tol(&c.tolerance_nm, "tolerance_nm", DEFAULT_TOLERANCE_NM)?,
-            }));
-        }
         if let Some(t) = &c.temp_min_c {
             push(MotorCond::TempMin(ctx.finite(t, "temp_min_c")?));
         }

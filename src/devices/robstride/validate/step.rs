@@ -10,6 +10,7 @@ use sim::robstride::faults::{
 use sim::robstride::{Fault, Model};
 
 use super::can_id;
+use crate::devices::contract::motor_bus::{expectation, wire_f32};
 use crate::devices::robstride::model::{
     params, RobstrideAction, RsCommand, MIT_MODES, PROTOCOLS, RUN_MODES,
 };
@@ -126,20 +127,6 @@ fn present_keys(a: &RawRsStep) -> Vec<(&'static str, Pos)> {
     out
 }
 
-/// A number the driver and emulator hold as `f32`: finite in `f32` too (1e308 would become
-/// infinity on the way).
-fn f32_of(ctx: &Ctx<'_>, v: &S<f64>, key: &str) -> Res<f32> {
-    let single = ctx.finite(v, key)? as f32;
-    if single.is_finite() {
-        Ok(single)
-    } else {
-        Err(ctx.err(
-            pos(v),
-            format!("`{key}` is too large (beyond ±3.4e38, the range of the motor's numbers)"),
-        ))
-    }
-}
-
 /// A value of an emulator command, checked against the emulator's own bounds
 /// ([`sim::robstride::faults`]) so an absurd one is an error at its line, not NaN physics.
 fn emulator_value(
@@ -232,7 +219,7 @@ impl CommandArgs<'_, '_> {
     /// A required number, as the wire's f32.
     fn need(&self, v: &Option<S<f64>>, key: &str) -> Res<f32> {
         let v = self.ctx.required(v, key, self.name, self.at)?;
-        f32_of(self.ctx, v, key)
+        wire_f32(self.ctx, v, key)
     }
 
     /// A required duration in milliseconds.
@@ -243,7 +230,7 @@ impl CommandArgs<'_, '_> {
 
     /// An optional number, 0 when left out.
     fn opt(&self, v: &Option<S<f64>>, key: &str) -> Res<f32> {
-        v.as_ref().map_or(Ok(0.0), |v| f32_of(self.ctx, v, key))
+        v.as_ref().map_or(Ok(0.0), |v| wire_f32(self.ctx, v, key))
     }
 
     /// A required value of `key`, checked by `check` as the emulator checks it.
@@ -298,19 +285,12 @@ impl CommandArgs<'_, '_> {
 
     /// `expect:` (and `tolerance:`) of a parameter read.
     fn expectation(&self) -> Res<Option<Near>> {
-        let (ctx, a) = (self.ctx, self.a);
-        match &a.expect {
-            Some(e) => Ok(Some(Near {
-                value: ctx.finite(e, "expect")?,
-                tolerance: a
-                    .tolerance
-                    .as_ref()
-                    .map_or(Ok(DEFAULT_PARAM_TOLERANCE), |t| {
-                        ctx.non_negative(t, "tolerance")
-                    })?,
-            })),
-            None => Ok(None),
-        }
+        expectation(
+            self.ctx,
+            &self.a.expect,
+            &self.a.tolerance,
+            DEFAULT_PARAM_TOLERANCE,
+        )
     }
 }
 
