@@ -38,7 +38,7 @@ impl Figures {
         self.window_bits += u64::from(frame_bits(frame, StuffingPolicy::Exact));
     }
 
-    /// Close the window being filled if it has lasted [`WINDOW`] at `now`: its frames give
+    /// Close the window being filled if it has lasted `WINDOW` at `now`: its frames give
     /// the rates and the load. Called on every frame and on every read, so that a bus gone
     /// quiet reads 0 instead of the last figures it had. A window is closed within one
     /// `WINDOW` of its first frame (or of the previous close): when it is two windows old,

@@ -97,9 +97,13 @@ impl RobotLive {
         for j in &s.joints {
             let m = &j.actuator;
             panel.push(json!([
-                format!("{} ({} id {} on {})", j.joint, m.model, m.can_id, j.bus),
                 format!(
-                    "{}, {:.1} °C, faults: {}",
+                    "{} ({} {} id {} on {})",
+                    j.joint, m.kind, m.model, m.can_id, j.bus
+                ),
+                format!(
+                    "{}, {}, {:.1} °C, faults: {}",
+                    if m.enabled { "enabled" } else { "disabled" },
                     m.mode,
                     m.temperature_c,
                     match m.faults.as_slice() {

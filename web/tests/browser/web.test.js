@@ -388,7 +388,7 @@ test("the OpenArm live view draws both 7-DoF arms with grippers on their 16 Dami
   const models = { joint1: "DM8009", joint2: "DM8009", joint3: "DM4340", joint4: "DM4340", joint5: "DM4310", joint6: "DM4310", joint7: "DM4310", gripper: "DM4310" };
   for (const [bus, side] of [["can0", "right"], ["can1", "left"]]) {
     Object.entries(models).forEach(([j, m], i) => {
-      const row = `${side}_${j} (${m} id ${i + 1} on ${bus})`;
+      const row = `${side}_${j} (damiao ${m} id ${i + 1} on ${bus})`;
       assert.ok(rows.includes(row), `panel lists ${row}: ${rows}`);
     });
   }
@@ -413,6 +413,12 @@ test("the OpenArm live view draws both 7-DoF arms with grippers on their 16 Dami
   const q = await poses();
   assert.ok(dist(q.left_hand, p.left_hand) > 0.1, `the left hand moved: ${p.left_hand} → ${q.left_hand}`);
   assert.ok(dist(q.right_hand, p.right_hand) < 0.05, `the right hand stayed: ${p.right_hand} → ${q.right_hand}`);
+  // The panel says which joint a host enabled: the left elbow, and no other.
+  const states = await page.evaluate(() => window.armhilLive.state.panel.filter((r) => /_joint|_gripper/.test(r[0])).map((r) => [r[0].split(" ")[0], r[1].split(",")[0]]));
+  assert.equal(states.length, 16, `${states}`);
+  for (const [joint, state] of states) {
+    assert.equal(state, joint === "left_joint4" ? "enabled" : "disabled", `${joint}: ${state}`);
+  }
   // The enable and its answer are counted on can1.
   const ids = await page.evaluate(() => window.armhilLive.state.bus.ids.map((r) => r[0]));
   assert.ok(ids.includes("can1 004") && ids.includes("can1 014"), `bus figures: ${ids}`);
@@ -421,7 +427,7 @@ test("the OpenArm live view draws both 7-DoF arms with grippers on their 16 Dami
   await page.selectOption("#fault-kind", "mos_over_temperature");
   await page.fill("#fault-arg-joint", "right_joint2");
   await page.click("#fault-inject");
-  await until("right_joint2 to report it", async () => /right_joint2 \(DM8009 id 2 on can0\)mit, [\d.]+ °C, faults: mos_over_temperature/.test(await page.textContent("#status")), 5000);
+  await until("right_joint2 to report it", async () => /right_joint2 \(damiao DM8009 id 2 on can0\)disabled, mit, [\d.]+ °C, faults: mos_over_temperature/.test(await page.textContent("#status")), 5000);
   await page.evaluate(() => window.scrollTo(0, 0));
   await page.screenshot({ path: path.join(SHOTS, "live_openarm.png") });
   await page.click("#fault-clear");
