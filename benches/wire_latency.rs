@@ -19,6 +19,7 @@
 //!
 //! Prints figures; judges nothing. Run: `cargo bench --bench wire_latency` (Linux).
 
+use std::collections::{HashMap, VecDeque};
 use std::net::TcpListener;
 use std::process::{Child, Command, Stdio};
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -126,71 +127,28 @@ fn damiao_status_command(esc_id: u16) -> CanFrame {
 /// every 2 ms, the motors in turn, for `LOAD_SECONDS`; the latency of each feedback (on
 /// ESC_ID + 0x10) from its send, and how many were sent.
 async fn damiao_round_trips(addr: &str, buses: &[(&str, &[u16])]) -> (Vec<Duration>, u64, u64) {
-    let latencies = Arc::new(Mutex::new(Vec::new()));
-    let sent_total = Arc::new(AtomicU64::new(0));
-    let mut tasks = Vec::new();
+    let mut channels = Vec::new();
     for &(name, ids) in buses {
-        let bus: Arc<dyn CanBus> = Arc::new(
-            SocketcandBus::connect(addr, name)
-                .await
-                .expect("channel opens"),
-        );
+        let bus = SocketcandBus::connect(addr, name)
+            .await
+            .expect("channel opens");
         for &id in ids {
             let enable = driver::damiao::codec::special(id, driver::damiao::codec::special::ENABLE)
                 .expect("a frame");
-            send(bus.as_ref(), enable).await;
+            send(&bus, enable).await;
         }
         // The enables' feedback, before the timed exchanges.
         tokio::time::sleep(Duration::from_millis(100)).await;
         while let Ok(Ok(_)) = tokio::time::timeout(Duration::from_millis(5), bus.recv()).await {}
-        let sent_at: Arc<Mutex<[Option<Instant>; 32]>> = Arc::new(Mutex::new([None; 32]));
-        let end = Instant::now() + Duration::from_secs(LOAD_SECONDS);
-        let receiver = {
-            let (bus, sent_at, latencies) = (
-                Arc::clone(&bus),
-                Arc::clone(&sent_at),
-                Arc::clone(&latencies),
-            );
-            tokio::spawn(async move {
-                while let Ok(Ok(received)) =
-                    tokio::time::timeout(Duration::from_millis(200), bus.recv()).await
-                {
-                    let id = received.frame.raw_id();
-                    if (0x10..0x30).contains(&id) {
-                        let motor = (id - 0x10) as usize;
-                        if let Some(at) = sent_at.lock().unwrap()[motor].take() {
-                            latencies.lock().unwrap().push(at.elapsed());
-                        }
-                    }
-                }
-            })
-        };
-        let ids = ids.to_vec();
-        let sender = {
-            let sent_total = Arc::clone(&sent_total);
-            tokio::spawn(async move {
-                let mut ticks = tokio::time::interval(Duration::from_millis(2));
-                let mut next = ids.iter().copied().cycle();
-                while Instant::now() < end {
-                    ticks.tick().await;
-                    let motor = next.next().expect("a motor");
-                    sent_at.lock().unwrap()[usize::from(motor)] = Some(Instant::now());
-                    send(bus.as_ref(), damiao_status_command(motor)).await;
-                    sent_total.fetch_add(1, Ordering::Relaxed);
-                }
-                bus
-            })
-        };
-        tasks.push((sender, receiver));
+        channels.push((Arc::new(bus) as Arc<dyn CanBus>, ids.to_vec()));
     }
-    for (sender, receiver) in tasks {
-        let _bus = sender.await.expect("sender");
-        receiver.await.expect("receiver");
-    }
-    let mut latencies = std::mem::take(&mut *latencies.lock().unwrap());
-    latencies.sort();
-    let answered = latencies.len() as u64;
-    (latencies, answered, sent_total.load(Ordering::Relaxed))
+    let exchange = Exchange {
+        period: Duration::from_millis(2),
+        per_tick: 1,
+        command: damiao_status_command,
+        answering_motor: |id| (0x10..0x30).contains(&id).then(|| (id - 0x10) as u16),
+    };
+    timed_exchanges(channels, exchange).await
 }
 
 /// Start `sim ARGS --socketcand` on a free port, measure its CPU at rest and under
@@ -258,17 +216,59 @@ enum Pattern {
 
 /// 2,000 commands/s over the four channels; the answers' latencies and how many came.
 async fn commands_under_load(addr: &str, pattern: Pattern) -> (Vec<Duration>, u64, u64) {
+    let mut channels = Vec::new();
+    for (name, ids) in BUSES {
+        let bus = SocketcandBus::connect(addr, name)
+            .await
+            .expect("channel opens");
+        channels.push((
+            Arc::new(bus) as Arc<dyn CanBus>,
+            ids.iter().copied().map(u16::from).collect(),
+        ));
+    }
+    let (period, per_tick) = match pattern {
+        Pattern::Burst => (Duration::from_millis(10), BUSES[0].1.len()),
+        Pattern::Spaced => (Duration::from_millis(2), 1),
+    };
+    let exchange = Exchange {
+        period,
+        per_tick,
+        command: |motor| op_command(motor as u8),
+        // A type-2 status frame to our host id names the motor in bits 15..8.
+        answering_motor: |id| {
+            ((id >> 24) & 0x1F == 2 && id & 0xFF == HOST_ID).then_some(((id >> 8) & 0x7F) as u16)
+        },
+    };
+    timed_exchanges(channels, exchange).await
+}
+
+/// How a host exchanges frames with a bus's motors in [`timed_exchanges`].
+#[derive(Clone, Copy)]
+struct Exchange {
+    /// Time between ticks.
+    period: Duration,
+    /// Commands sent at each tick, to the motors in turn.
+    per_tick: usize,
+    /// The command to a motor.
+    command: fn(u16) -> CanFrame,
+    /// The motor a received frame answers for, if it is an answer.
+    answering_motor: fn(u32) -> Option<u16>,
+}
+
+/// On every channel at once for `LOAD_SECONDS`: `per_tick` commands each `period`, the motors
+/// in turn, each answer timed from its command's send; the latencies (sorted), how many
+/// answers and how many commands. A motor answers in order, so an answer is its oldest
+/// unanswered command's (a late answer is never paired with a later command).
+async fn timed_exchanges(
+    channels: Vec<(Arc<dyn CanBus>, Vec<u16>)>,
+    exchange: Exchange,
+) -> (Vec<Duration>, u64, u64) {
     let latencies = Arc::new(Mutex::new(Vec::new()));
     let sent_total = Arc::new(AtomicU64::new(0));
+    let end = Instant::now() + Duration::from_secs(LOAD_SECONDS);
     let mut tasks = Vec::new();
-    for (name, ids) in BUSES {
-        let bus: Arc<dyn CanBus> = Arc::new(
-            SocketcandBus::connect(addr, name)
-                .await
-                .expect("channel opens"),
-        );
-        let sent_at: Arc<Mutex<[Option<Instant>; 128]>> = Arc::new(Mutex::new([None; 128]));
-        let end = Instant::now() + Duration::from_secs(LOAD_SECONDS);
+    for (bus, ids) in channels {
+        let sent_at: Arc<Mutex<HashMap<u16, VecDeque<Instant>>>> = Arc::default();
         let receiver = {
             let (bus, sent_at, latencies) = (
                 Arc::clone(&bus),
@@ -279,12 +279,16 @@ async fn commands_under_load(addr: &str, pattern: Pattern) -> (Vec<Duration>, u6
                 while let Ok(Ok(received)) =
                     tokio::time::timeout(Duration::from_millis(200), bus.recv()).await
                 {
-                    let id = received.frame.raw_id();
-                    if (id >> 24) & 0x1F == 2 && id & 0xFF == HOST_ID {
-                        let motor = ((id >> 8) & 0x7F) as usize;
-                        if let Some(at) = sent_at.lock().unwrap()[motor].take() {
-                            latencies.lock().unwrap().push(at.elapsed());
-                        }
+                    let Some(motor) = (exchange.answering_motor)(received.frame.raw_id()) else {
+                        continue;
+                    };
+                    let sent = sent_at
+                        .lock()
+                        .unwrap()
+                        .get_mut(&motor)
+                        .and_then(VecDeque::pop_front);
+                    if let Some(at) = sent {
+                        latencies.lock().unwrap().push(at.elapsed());
                     }
                 }
             })
@@ -292,17 +296,18 @@ async fn commands_under_load(addr: &str, pattern: Pattern) -> (Vec<Duration>, u6
         let sender = {
             let sent_total = Arc::clone(&sent_total);
             tokio::spawn(async move {
-                let (period, per_tick) = match pattern {
-                    Pattern::Burst => (Duration::from_millis(10), ids.len()),
-                    Pattern::Spaced => (Duration::from_millis(2), 1),
-                };
-                let mut ticks = tokio::time::interval(period);
+                let mut ticks = tokio::time::interval(exchange.period);
                 let mut next = ids.iter().copied().cycle();
                 while Instant::now() < end {
                     ticks.tick().await;
-                    for motor in next.by_ref().take(per_tick) {
-                        sent_at.lock().unwrap()[usize::from(motor)] = Some(Instant::now());
-                        send(bus.as_ref(), op_command(motor)).await;
+                    for motor in next.by_ref().take(exchange.per_tick) {
+                        sent_at
+                            .lock()
+                            .unwrap()
+                            .entry(motor)
+                            .or_default()
+                            .push_back(Instant::now());
+                        send(bus.as_ref(), (exchange.command)(motor)).await;
                         sent_total.fetch_add(1, Ordering::Relaxed);
                     }
                 }
@@ -412,6 +417,12 @@ fn main() {
     let beside_silent = runtime.block_on(commands_under_load(&addr, Pattern::Burst));
     let silent_count = silent.len();
     drop(silent);
+    // At rest again, long after start: its hanging joints have crept to rest by now (about
+    // 20 s after power-on), so this is the robot doing nothing.
+    std::thread::sleep(Duration::from_secs(1));
+    let idle_after = cpu_percent(pid, || {
+        std::thread::sleep(Duration::from_secs(IDLE_SECONDS))
+    });
     drop(robot);
 
     println!("humanoid (20 actuators, 4 channels) over socketcand, real time:");
@@ -435,7 +446,7 @@ fn main() {
         echo.len()
     );
     println!(
-        "  CPU: {idle:.1} % of a core at rest, {loaded_burst:.1} % under the burst, {loaded_spaced:.1} % spaced"
+        "  CPU: {idle:.1} % of a core at rest 1 s after start, {loaded_burst:.1} % under the burst, {loaded_spaced:.1} % spaced, {idle_after:.1} % at rest after the load"
     );
 
     for (label, args) in [
