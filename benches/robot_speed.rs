@@ -70,7 +70,7 @@ fn shipped(name: &str) -> Subject {
         .actuators
         .iter()
         .map(|a| {
-            if let sim::actuator::ActuatorConfig::Damiao(m) = &a.actuator {
+            if let Some(m) = a.actuator.downcast_ref::<sim::damiao::MotorConfig>() {
                 return OPENARM_GAINS[usize::from(m.esc_id.saturating_sub(1)) % 8];
             }
             let leg = a.actuator.model().name != "RS02" || a.joint.contains("ankle");
@@ -208,6 +208,16 @@ fn damiao_enable_frame(m: &sim::damiao::MotorConfig) -> CanFrame {
     codec::special(m.esc_id, codec::special::ENABLE).expect("a frame")
 }
 
+/// A RobStride actuator's settings, when `a` is one.
+fn robstride(a: &sim::robot::JointActuator) -> Option<&sim::robstride::MotorConfig> {
+    a.actuator.downcast_ref()
+}
+
+/// A Damiao motor's settings, when `a` is one.
+fn damiao(a: &sim::robot::JointActuator) -> Option<&sim::damiao::MotorConfig> {
+    a.actuator.downcast_ref()
+}
+
 /// The hold frame of every actuator (where it is, at its gains), with the bus it goes on.
 fn hold_frames(running: &Running, start: &sim::robot::RobotSnapshot) -> Vec<(usize, CanFrame)> {
     running
@@ -218,11 +228,10 @@ fn hold_frames(running: &Running, start: &sim::robot::RobotSnapshot) -> Vec<(usi
         .zip(&running.gains)
         .map(|((a, j), (kp, kd))| {
             let angle = j.actuator.angle_rad;
-            let frame = match &a.actuator {
-                sim::actuator::ActuatorConfig::Robstride(m) => {
-                    hold_frame(m.can_id, m.model, angle, *kp, *kd)
-                }
-                sim::actuator::ActuatorConfig::Damiao(m) => damiao_hold_frame(m, angle, *kp, *kd),
+            let frame = match (robstride(a), damiao(a)) {
+                (Some(m), _) => hold_frame(m.can_id, m.model, angle, *kp, *kd),
+                (_, Some(m)) => damiao_hold_frame(m, angle, *kp, *kd),
+                _ => unreachable!("the robots here carry RobStride and Damiao actuators"),
             };
             (a.bus, frame)
         })
@@ -245,9 +254,10 @@ async fn hold_all(running: &Running) {
         send(&running.hosts[*bus], *frame).await;
     }
     for a in &running.config.actuators {
-        let enable = match &a.actuator {
-            sim::actuator::ActuatorConfig::Robstride(m) => enable_frame(m.can_id),
-            sim::actuator::ActuatorConfig::Damiao(m) => damiao_enable_frame(m),
+        let enable = match (robstride(a), damiao(a)) {
+            (Some(m), _) => enable_frame(m.can_id),
+            (_, Some(m)) => damiao_enable_frame(m),
+            _ => unreachable!("the robots here carry RobStride and Damiao actuators"),
         };
         send(&running.hosts[a.bus], enable).await;
     }

@@ -6,7 +6,9 @@
 //! - [`ShaftPlant`]: the single shaft an actuator turns (a rig, or a joint of a robot's world).
 //! - [`ActuatorFirmware`]: one actuator's firmware, frames in and frames out, ticked every
 //!   millisecond; its state as an [`ActuatorSnapshot`]; its faults by name, from its table.
-//! - [`registry`]: the actuator kinds and the model names each answers to.
+//! - [`registry`]: the actuator kinds and the model names each answers to (each kind's entry
+//!   in its own folder, `sim/src/<kind>/actuator.rs`), and [`ActuatorConfig`], one actuator's
+//!   settings of any kind.
 //! - `bus_runner`: actuators of one kind on one bus, one task serving them (what
 //!   `RobstrideBus` and `DamiaoBus` run on).
 
@@ -22,7 +24,8 @@ use crate::fault_args::{FaultArgError, FaultArgs};
 use crate::fault_desk::FaultInfo;
 
 pub use registry::{
-    configure, ActuatorConfig, ActuatorKind, ActuatorModel, ConfigureError, PowerOn, KINDS,
+    configure, ActuatorConfig, ActuatorKind, ActuatorModel, ActuatorSetup, AnySetup,
+    ConfigureError, PowerOn, KINDS,
 };
 pub use snapshot::{ActuatorSnapshot, Detail};
 

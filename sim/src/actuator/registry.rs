@@ -1,15 +1,17 @@
 //! The actuator kinds a robot joint can be driven by, the model names each answers to, and
 //! the settings of one actuator a robot carries. A robot file's `model:` is looked up here
-//! ([`configure`]); adding a kind is a variant of [`ActuatorConfig`] and a line in [`KINDS`].
+//! ([`configure`]). Each kind keeps its entry in its own folder (`sim/src/<kind>/actuator.rs`:
+//! its [`ActuatorKind`] and its settings' [`ActuatorSetup`]); adding one is a line in
+//! [`KINDS`].
+
+use std::any::Any;
+use std::fmt::Debug;
+use std::sync::Arc;
 
 use super::{ActuatorFirmware, ShaftPlant};
-use crate::damiao::faults::{self as damiao_faults, Thresholds};
-use crate::damiao::{DamiaoMotor, Model as DamiaoModel, MotorConfig as DamiaoConfig};
 use crate::fault_args::{FaultArgError, FaultArgs};
 use crate::fault_desk::FaultInfo;
-use crate::robstride::state_file::{uid_key, StateFile};
-use crate::robstride::Fault as RobstrideFault;
-use crate::robstride::{Actuator, Model as RobstrideModel, MotorConfig as RobstrideConfig};
+use crate::robstride::state_file::StateFile;
 use crate::yaml_words::suggestion;
 
 /// Facts about one actuator model a robot needs before its firmware runs.
@@ -70,78 +72,11 @@ pub fn kind_named(name: &str) -> Option<&'static ActuatorKind> {
     KINDS.iter().copied().find(|k| k.name == name)
 }
 
-/// Every actuator kind, in the order a model name is looked up.
-pub static KINDS: &[&ActuatorKind] = &[&ROBSTRIDE, &DAMIAO];
-
-/// RobStride's quasi-direct-drive actuators (private protocol, MIT and CANopen variants).
-pub static ROBSTRIDE: ActuatorKind = ActuatorKind {
-    name: crate::robstride::ACTUATOR_KIND,
-    model_names: || RobstrideModel::ALL.iter().map(|m| m.name()).collect(),
-    ids: (1, 0x7F),
-    configure: |model, can_id| {
-        let model = RobstrideModel::from_name(model)?;
-        let can_id = u8::try_from(can_id).unwrap_or(u8::MAX);
-        Some(ActuatorConfig::Robstride(RobstrideConfig::new(
-            can_id, model,
-        )))
-    },
-    bitrates_bps: &[1_000_000, 500_000, 250_000, 125_000],
-    fd: false,
-    faults: |_| crate::robstride::faults::actuator_fault_table(),
-    fault_label: |_, name, args, clearing| {
-        let fault = RobstrideFault::named(name)?;
-        let names: Vec<&str> = fault.values().iter().map(|p| p.name).collect();
-        args.only(name, &names)?;
-        Ok(if clearing {
-            fault.name().to_owned()
-        } else {
-            fault.with_values(args)?.label()
-        })
-    },
-};
-
-/// Damiao's joint motors (MIT, position-velocity, velocity and force-position on 11-bit
-/// identifiers): the OpenArm's.
-pub static DAMIAO: ActuatorKind = ActuatorKind {
-    name: crate::damiao::KIND,
-    model_names: || DamiaoModel::ALL.iter().map(|m| m.name()).collect(),
-    // The force-position command goes to 0x300 + id, which must stay below the register
-    // identifier 0x7FF.
-    ids: (1, 0x4FE),
-    bitrates_bps: &[1_000_000, 500_000, 250_000, 200_000, 125_000],
-    fd: true,
-    configure: |model, can_id| {
-        let model = DamiaoModel::from_name(model)?;
-        let esc_id = u16::try_from(can_id).unwrap_or(u16::MAX);
-        Some(ActuatorConfig::Damiao(DamiaoConfig::new(esc_id, model)))
-    },
-    faults: |model| damiao_faults::table(&damiao_limits(model)),
-    fault_label: |model, name, args, clearing| {
-        let limits = damiao_limits(model);
-        let fault = damiao_faults::Fault::named(name)?;
-        if clearing {
-            fault.build_to_clear(args, &limits)?;
-            Ok(fault.name().to_owned())
-        } else {
-            fault.build(args, &limits)?;
-            Ok(shown_with_values(fault.name(), args))
-        }
-    },
-};
-
-/// A Damiao `model`'s fault thresholds at power-on (a DM4310's for a name it does not know).
-fn damiao_limits(model: &str) -> Thresholds {
-    Thresholds::power_on(DamiaoModel::from_name(model).unwrap_or(DamiaoModel::DM4310))
-}
-
-/// `name` followed by its values as given (`over_voltage voltage_v=60`).
-fn shown_with_values(name: &str, args: &FaultArgs) -> String {
-    let mut shown = name.to_owned();
-    for (arg, value) in args.iter() {
-        shown.push_str(&format!(" {arg}={value}"));
-    }
-    shown
-}
+/// Every actuator kind, in the order a model name is looked up: one registration line each.
+pub static KINDS: &[&ActuatorKind] = &[
+    &crate::robstride::actuator::KIND,
+    &crate::damiao::actuator::KIND,
+];
 
 /// Why a robot file's actuator has no settings.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -206,73 +141,92 @@ pub struct PowerOn<'a> {
     pub kept: &'a StateFile,
 }
 
-/// The firmware settings of one actuator a robot carries: one variant per kind of [`KINDS`].
-#[derive(Debug, Clone, PartialEq)]
-pub enum ActuatorConfig {
-    /// A RobStride actuator (its `load` and rig fields are unused: the robot is the load).
-    Robstride(RobstrideConfig),
-    /// A Damiao motor (its `load` and rig fields are unused: the robot is the load).
-    Damiao(DamiaoConfig),
+/// The firmware settings of one actuator a robot carries, as its kind holds them: what a
+/// robot asks of an actuator of any kind before and after its firmware runs. Each kind
+/// implements it on its own settings (`sim/src/<kind>/actuator.rs`); a robot holds them as an
+/// [`ActuatorConfig`].
+pub trait ActuatorSetup: AnySetup + Debug + Send + Sync {
+    /// Its kind.
+    fn kind(&self) -> &'static ActuatorKind;
+
+    /// The CAN identifier at first power-on (a state file may hold a newer one).
+    fn can_id(&self) -> u32;
+
+    /// The model's facts.
+    fn model(&self) -> ActuatorModel;
+
+    /// The CAN identifier it answers on at power-on on bus `bus`, after what the state file
+    /// kept.
+    fn power_on_id(&self, bus: &str, kept: &StateFile) -> u32;
+
+    /// Its firmware, powered on driving `plant`.
+    fn power_on(&self, plant: Box<dyn ShaftPlant>, how: &PowerOn<'_>) -> Box<dyn ActuatorFirmware>;
+
+    /// Keeps what `firmware` (this actuator's, on bus `bus`) asked to save in `state`.
+    fn keep(&self, bus: &str, firmware: &dyn ActuatorFirmware, state: &mut StateFile);
 }
 
+/// What every [`ActuatorSetup`] has by being a settings type with an equality (implemented
+/// for them all): its concrete type, for the few places that need a kind's own settings, and
+/// an equality with another kind's.
+pub trait AnySetup {
+    /// Itself, to downcast to its kind's settings.
+    fn as_any(&self) -> &dyn Any;
+    /// Whether `other` is settings of the same type, equal to these.
+    fn same_as(&self, other: &dyn Any) -> bool;
+}
+
+impl<T: Any + PartialEq> AnySetup for T {
+    fn as_any(&self) -> &dyn Any {
+        self
+    }
+
+    fn same_as(&self, other: &dyn Any) -> bool {
+        other.downcast_ref::<T>() == Some(self)
+    }
+}
+
+/// The firmware settings of one actuator a robot carries, of any kind of [`KINDS`] (its
+/// `load` and rig fields, where it has them, are unused: the robot is the load). Equal when
+/// they are one kind's settings and equal.
+#[derive(Debug, Clone)]
+pub struct ActuatorConfig(Arc<dyn ActuatorSetup>);
+
 impl ActuatorConfig {
+    /// A kind's settings, held for a robot.
+    pub fn new(setup: impl ActuatorSetup + 'static) -> Self {
+        Self(Arc::new(setup))
+    }
+
+    /// The settings, as any kind's.
+    pub fn setup(&self) -> &dyn ActuatorSetup {
+        &*self.0
+    }
+
+    /// The settings as the kind whose settings are a `T` holds them, when they are.
+    pub fn downcast_ref<T: ActuatorSetup + 'static>(&self) -> Option<&T> {
+        self.setup().as_any().downcast_ref::<T>()
+    }
+
     /// Its kind.
     pub fn kind(&self) -> &'static ActuatorKind {
-        match self {
-            Self::Robstride(_) => &ROBSTRIDE,
-            Self::Damiao(_) => &DAMIAO,
-        }
+        self.0.kind()
     }
 
     /// The CAN identifier at first power-on (a state file may hold a newer one).
     pub fn can_id(&self) -> u32 {
-        match self {
-            Self::Robstride(m) => u32::from(m.can_id),
-            Self::Damiao(m) => u32::from(m.esc_id),
-        }
+        self.0.can_id()
     }
 
     /// The model's facts.
     pub fn model(&self) -> ActuatorModel {
-        match self {
-            Self::Robstride(m) => {
-                let spec = m.model.spec();
-                ActuatorModel {
-                    kind: ROBSTRIDE.name,
-                    name: m.model.name(),
-                    peak_torque_nm: spec.peak_torque_nm,
-                    rotor_inertia_kg_m2: spec.rotor_inertia_kg_m2,
-                }
-            }
-            Self::Damiao(m) => {
-                let spec = m.model.spec();
-                ActuatorModel {
-                    kind: DAMIAO.name,
-                    name: m.model.name(),
-                    peak_torque_nm: spec.peak_torque_nm,
-                    rotor_inertia_kg_m2: spec.rotor_inertia_kg_m2,
-                }
-            }
-        }
-    }
-
-    /// The RobStride settings, when it is one.
-    pub fn robstride(&self) -> Option<&RobstrideConfig> {
-        match self {
-            Self::Robstride(m) => Some(m),
-            Self::Damiao(_) => None,
-        }
+        self.0.model()
     }
 
     /// The CAN identifier it answers on at power-on on bus `bus`, after what the state file
     /// kept.
     pub fn power_on_id(&self, bus: &str, kept: &StateFile) -> u32 {
-        match self {
-            Self::Robstride(m) => u32::from(kept.power_on_id(m)),
-            Self::Damiao(m) => {
-                kept_damiao(m, bus, kept).map_or(u32::from(m.esc_id), |c| u32::from(c.esc_id))
-            }
-        }
+        self.0.power_on_id(bus, kept)
     }
 
     /// Its firmware, powered on driving `plant`.
@@ -281,50 +235,19 @@ impl ActuatorConfig {
         plant: Box<dyn ShaftPlant>,
         how: &PowerOn<'_>,
     ) -> Box<dyn ActuatorFirmware> {
-        match self {
-            Self::Robstride(m) => {
-                let saved = how.kept.motors.get(&uid_key(m.effective_uid()));
-                let mut actuator = Actuator::with_plant(m.clone(), saved, how.bitrate_bps, plant);
-                if saved.is_none() {
-                    actuator.set_master_id(how.host_id);
-                }
-                Box::new(actuator)
-            }
-            Self::Damiao(m) => {
-                let config = kept_damiao(m, how.bus, how.kept).unwrap_or_else(|| m.clone());
-                Box::new(DamiaoMotor::with_plant(config, plant))
-            }
-        }
+        self.0.power_on(plant, how)
     }
 
     /// Keeps what `firmware` (this actuator's, on bus `bus`) asked to save in `state`.
     pub fn keep(&self, bus: &str, firmware: &dyn ActuatorFirmware, state: &mut StateFile) {
-        match self {
-            Self::Damiao(m) => {
-                state
-                    .actuators
-                    .insert(damiao_key(m, bus), firmware.persisted());
-            }
-            Self::Robstride(m) => {
-                if let Ok(saved) = serde_json::from_value(firmware.persisted()) {
-                    state.motors.insert(uid_key(m.effective_uid()), saved);
-                }
-            }
-        }
+        self.0.keep(bus, firmware, state);
     }
 }
 
-/// The key of a Damiao motor in a robot's state file: its bus and configured id (ids repeat
-/// across buses, as on the OpenArm's two arms).
-fn damiao_key(m: &DamiaoConfig, bus: &str) -> String {
-    format!("{}:{bus}:{}", DAMIAO.name, m.esc_id)
-}
-
-/// A Damiao motor's settings from the flash image the state file kept, when it has one that
-/// reads (an unreadable one is ignored: the motor starts from its defaults).
-fn kept_damiao(m: &DamiaoConfig, bus: &str, kept: &StateFile) -> Option<DamiaoConfig> {
-    let image = kept.actuators.get(&damiao_key(m, bus))?;
-    DamiaoConfig::from_persisted(m.model, image).ok()
+impl PartialEq for ActuatorConfig {
+    fn eq(&self, other: &Self) -> bool {
+        self.setup().same_as(other.setup().as_any())
+    }
 }
 
 #[cfg(test)]
@@ -352,38 +275,6 @@ mod tests {
     }
 
     #[test]
-    fn each_kind_lists_the_rates_its_firmware_runs_at() {
-        let mut robstride: Vec<u32> = (1..=4)
-            .filter_map(crate::robstride::baud_code_bps)
-            .collect();
-        robstride.sort_unstable();
-        let mut listed = ROBSTRIDE.bitrates_bps.to_vec();
-        listed.sort_unstable();
-        assert_eq!(listed, robstride);
-        assert!(DAMIAO.bitrates_bps.contains(&1_000_000) && DAMIAO.bitrates_bps.contains(&200_000));
-    }
-
-    #[test]
-    fn a_damiao_model_is_damiaos_with_its_own_ids_faults_and_key() {
-        let config = configure("DM4310", 8).expect("DM4310 is Damiao's");
-        assert_eq!((config.kind().name, config.can_id()), ("damiao", 8));
-        assert!(config.robstride().is_none());
-        assert!(
-            configure("DM4310", 0x4FF).is_err(),
-            "0x300 + id must stay below 0x7FF"
-        );
-        assert!(
-            DAMIAO.has_fault("DM4310", "over_voltage")
-                && !DAMIAO.has_fault("DM4310", "gate_driver")
-        );
-        // Ids repeat across buses (the OpenArm's two arms): kept apart by bus.
-        let ActuatorConfig::Damiao(m) = &config else {
-            panic!("a Damiao config");
-        };
-        assert_ne!(damiao_key(m, "can0"), damiao_key(m, "can1"));
-    }
-
-    #[test]
     fn an_id_is_checked_by_the_models_kind() {
         assert_eq!(
             configure("RS03", 128),
@@ -398,18 +289,17 @@ mod tests {
     }
 
     #[test]
-    fn a_kinds_fault_labels_check_values_as_its_firmware_does() {
-        let glitch =
-            FaultArgs::new().with("counts", crate::fault_args::FaultArgValue::Number(100.0));
-        assert_eq!(
-            (ROBSTRIDE.fault_label)("RS03", "encoder_glitch", &glitch, false).as_deref(),
-            Ok("encoder_glitch 100 counts")
-        );
-        let huge = FaultArgs::new().with("counts", crate::fault_args::FaultArgValue::Number(1e6));
-        assert!((ROBSTRIDE.fault_label)("RS03", "encoder_glitch", &huge, false).is_err());
-        // Clearing takes the fault whatever its size.
-        assert!((ROBSTRIDE.fault_label)("RS03", "encoder_glitch", &FaultArgs::new(), true).is_ok());
-        assert!((ROBSTRIDE.fault_label)("RS03", "melt", &FaultArgs::new(), false).is_err());
-        assert!(ROBSTRIDE.has_fault("RS03", "gate_driver") && !ROBSTRIDE.has_fault("RS03", "melt"));
+    fn configs_are_equal_when_one_kinds_settings_are() {
+        let rs03 = configure("RS03", 5).unwrap();
+        assert_eq!(rs03, configure("RS03", 5).unwrap());
+        assert_eq!(rs03, rs03.clone());
+        assert_ne!(rs03, configure("RS03", 6).unwrap());
+        assert_ne!(rs03, configure("RS02", 5).unwrap());
+        // Another kind's settings on the same id are not equal, whatever they hold.
+        assert_ne!(rs03, configure("DM4310", 5).unwrap());
+        assert!(rs03
+            .downcast_ref::<crate::robstride::MotorConfig>()
+            .is_some());
+        assert!(rs03.downcast_ref::<crate::damiao::MotorConfig>().is_none());
     }
 }

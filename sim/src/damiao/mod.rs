@@ -48,6 +48,7 @@
 //! - Force-position: the current limit scales the model's peak torque (Imax drives the peak).
 //! - Temperatures stay where set (ambient, or a fault's); there is no thermal model yet.
 
+pub mod actuator;
 pub mod codec;
 pub mod faults;
 mod firmware;

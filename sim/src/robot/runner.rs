@@ -450,7 +450,7 @@ pub fn check_kept_ids(config: &RobotConfig, kept: &StateFile) -> Result<(), Robo
             .iter()
             .filter(|a| a.bus == k)
             .filter_map(|a| {
-                let motor = a.actuator.robstride()?;
+                let motor = a.actuator.downcast_ref::<crate::robstride::MotorConfig>()?;
                 let name = format!(
                     "joint `{}` (motor {}:{})",
                     a.joint,

@@ -29,6 +29,7 @@
 //!   variant on 11-bit IDs; CANopen as a CiA-301 node with the CiA-402 drive objects, see
 //!   `docs/protocols/robstride.md` §12 and §13).
 
+pub mod actuator;
 pub mod codec;
 pub mod control;
 pub mod faults;

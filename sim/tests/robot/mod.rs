@@ -53,7 +53,7 @@ fn arm_config(start: &[(&str, f64)]) -> RobotConfig {
             .map(|(k, (joint, model, bus))| JointActuator {
                 joint: (*joint).into(),
                 bus: *bus,
-                actuator: ActuatorConfig::Robstride(MotorConfig::new(k as u8 + 1, *model)),
+                actuator: ActuatorConfig::new(MotorConfig::new(k as u8 + 1, *model)),
                 direction: 1.0,
                 zero_offset_rad: 0.0,
             })
@@ -282,7 +282,7 @@ async fn a_lost_bus_stops_its_actuators_by_their_watchdog_and_the_others_hold() 
 #[tokio::test(start_paused = true)]
 async fn configuration_mistakes_are_named() {
     let mut twice = arm_config(&[]);
-    twice.actuators[1].actuator = ActuatorConfig::Robstride(MotorConfig::new(1, Model::RS03));
+    twice.actuators[1].actuator = ActuatorConfig::new(MotorConfig::new(1, Model::RS03));
     let nodes = || -> Vec<Arc<dyn CanBus>> {
         let bus = VirtualBus::new(VirtualBusConfig::default());
         vec![Arc::new(bus.attach("a")), Arc::new(bus.attach("b"))]
@@ -435,7 +435,7 @@ async fn a_state_file_putting_two_actuators_on_one_id_is_refused_at_spawn() {
     let mut kept = sim::robstride::state_file::StateFile::default();
     let moved = config.actuators[0]
         .actuator
-        .robstride()
+        .downcast_ref::<MotorConfig>()
         .expect("a RobStride actuator");
     kept.motors.insert(
         sim::robstride::state_file::uid_key(moved.effective_uid()),

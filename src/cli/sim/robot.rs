@@ -323,7 +323,10 @@ mod tests {
     /// A state file in which a host moved the first actuator of the first bus to `to`.
     fn moved_first(config: &RobotConfig, to: u8) -> StateFile {
         let mut kept = StateFile::default();
-        let motor = config.actuators[0].actuator.robstride().unwrap();
+        let motor = config.actuators[0]
+            .actuator
+            .downcast_ref::<sim::robstride::MotorConfig>()
+            .unwrap();
         kept.motors.insert(
             uid_key(motor.effective_uid()),
             PersistedMotor {

@@ -10,7 +10,9 @@ use bus::virtual_bus::VirtualBus;
 use bus::CanBus;
 use sim::fault_args::FaultArgs;
 use sim::robot::{RobotEmulator, RobotHandle};
-use sim::robstride::{Fault as MotorFault, RobstrideBus, RobstrideConfig, RobstrideHandle};
+use sim::robstride::{
+    Fault as MotorFault, MotorConfig, RobstrideBus, RobstrideConfig, RobstrideHandle,
+};
 use tokio::sync::Mutex;
 
 use super::joints::{GroupJoint, JointError, Joints};
@@ -137,12 +139,15 @@ fn rig_fault(
     fault: &str,
     args: &FaultArgs,
 ) -> Result<(u8, MotorFault), String> {
-    let motor = actuator.actuator.robstride().ok_or_else(|| {
-        format!(
-            "joint `{}`: a rig's actuator is RobStride's",
-            actuator.joint
-        )
-    })?;
+    let motor = actuator
+        .actuator
+        .downcast_ref::<MotorConfig>()
+        .ok_or_else(|| {
+            format!(
+                "joint `{}`: a rig's actuator is RobStride's",
+                actuator.joint
+            )
+        })?;
     let fault = MotorFault::named(fault)
         .and_then(|f| f.with_values(args))
         .map_err(|e| e.message)?;
@@ -203,7 +208,7 @@ pub(crate) fn spawn_emulator(
     let motors = settings
         .actuators
         .iter()
-        .filter_map(|a| a.actuator.robstride().cloned())
+        .filter_map(|a| a.actuator.downcast_ref::<MotorConfig>().cloned())
         .collect();
     let mut config = RobstrideConfig::new(motors);
     config.bus_bitrate_bps = bitrate_bps;

@@ -188,25 +188,14 @@ impl KindSpec for Kind {
     fn frame_decoder(settings: &Settings, buses: &[String]) -> Option<Arc<dyn FrameDecoder>> {
         // Each actuator is known by its bus and ID (a robot's IDs repeat across its buses),
         // and decoded by its own kind's decoder with its own model.
-        let bus_of = |a: &model::GroupActuator| buses.get(a.bus).cloned();
-        let robstride = super::robstride::decode::RobstrideFrames::of_motors(
-            settings.actuators.iter().filter_map(|a| {
-                let motor = a.actuator.robstride()?;
-                Some((bus_of(a), motor.can_id, motor.model))
-            }),
-        );
-        let damiao = super::damiao::decode::DamiaoFrames::of_motors(
-            settings.actuators.iter().filter_map(|a| match &a.actuator {
-                sim::actuator::ActuatorConfig::Damiao(m) => {
-                    Some((bus_of(a), m.esc_id, m.mst_id, m.model))
-                }
-                _ => None,
-            }),
-        );
-        Some(Arc::new(FirstOf(vec![
-            Box::new(robstride),
-            Box::new(damiao),
-        ])))
+        let actuators: Vec<_> = settings
+            .actuators
+            .iter()
+            .map(|a| (buses.get(a.bus).cloned(), &a.actuator))
+            .collect();
+        Some(Arc::new(FirstOf(
+            joints::KINDS.iter().map(|k| k.frames(&actuators)).collect(),
+        )))
     }
 }
 

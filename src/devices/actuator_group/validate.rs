@@ -79,7 +79,7 @@ pub(crate) fn settings(ctx: &Ctx<'_>, raw: &RawSettings, at: Pos) -> Res<GroupSe
         };
         actuators.push(GroupActuator {
             joint: a.joint.value.clone(),
-            actuator: ActuatorConfig::Robstride(MotorConfig::new(can_id, model).with_load(load)),
+            actuator: ActuatorConfig::new(MotorConfig::new(can_id, model).with_load(load)),
             bus: 0,
         });
     }

@@ -135,10 +135,9 @@ impl KindSpec for Kind {
             .motors
             .iter()
             .map(|m| {
-                sim::actuator::ActuatorConfig::Damiao(sim::damiao::MotorConfig::new(
+                sim::actuator::ActuatorSetup::model(&sim::damiao::MotorConfig::new(
                     m.esc_id, m.model,
                 ))
-                .model()
             })
             .collect()
     }

@@ -14,12 +14,35 @@ use driver::damiao::{
     ControlMode, DamiaoDriver, DamiaoError, DamiaoMotor, DriverConfig, Model, MotorState,
 };
 
-use super::{GroupJoint, JointError};
+use sim::actuator::ActuatorConfig;
+use sim::damiao::MotorConfig;
+
+use super::{GroupJoint, GroupKind, JointError, KindDrivers};
 use crate::devices::actuator_group::model::GroupMode;
+use crate::devices::damiao::decode::DamiaoFrames;
+use crate::devices::FrameDecoder;
 use crate::scenario::ErrorClass;
 
 /// How often the group reads an enabled motor's state.
 pub(crate) const POLL_PERIOD: Duration = Duration::from_millis(10);
+
+/// The group's side of Damiao's motors.
+pub(crate) struct Damiao;
+
+impl GroupKind for Damiao {
+    fn drivers(&self, timeout: Duration) -> Box<dyn KindDrivers> {
+        Box::new(DamiaoDrivers::new(timeout))
+    }
+
+    fn frames(&self, actuators: &[(Option<String>, &ActuatorConfig)]) -> Box<dyn FrameDecoder> {
+        Box::new(DamiaoFrames::of_motors(actuators.iter().filter_map(
+            |(bus, a)| {
+                let m = a.downcast_ref::<MotorConfig>()?;
+                Some((bus.clone(), m.esc_id, m.mst_id, m.model))
+            },
+        )))
+    }
+}
 
 /// One Damiao driver per bus, made when its first actuator asks.
 pub(crate) struct DamiaoDrivers {
@@ -28,7 +51,7 @@ pub(crate) struct DamiaoDrivers {
 }
 
 impl DamiaoDrivers {
-    pub(crate) fn new(timeout: Duration) -> Self {
+    fn new(timeout: Duration) -> Self {
         Self {
             timeout,
             by_bus: BTreeMap::new(),
@@ -36,7 +59,7 @@ impl DamiaoDrivers {
     }
 
     /// A handle on the motor commanded on `esc_id` and answering on `mst_id` on bus `bus`.
-    pub(crate) fn joint(
+    fn motor(
         &mut self,
         bus: usize,
         host: &Arc<dyn CanBus>,
@@ -63,6 +86,18 @@ impl DamiaoDrivers {
             motor: Arc::new(motor),
             poll: std::sync::Mutex::new(None),
         }))
+    }
+}
+
+impl KindDrivers for DamiaoDrivers {
+    fn joint(
+        &mut self,
+        bus: usize,
+        host: &Arc<dyn CanBus>,
+        actuator: &ActuatorConfig,
+    ) -> Option<Result<Arc<dyn GroupJoint>, String>> {
+        let m = actuator.downcast_ref::<MotorConfig>()?;
+        Some(self.motor(bus, host, m.esc_id, m.mst_id, m.model))
     }
 }
 

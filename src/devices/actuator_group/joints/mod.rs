@@ -10,12 +10,11 @@ use std::time::Duration;
 
 use async_trait::async_trait;
 use bus::CanBus;
+use sim::actuator::ActuatorConfig;
 
 use super::model::{GroupActuator, GroupMode};
+use crate::devices::FrameDecoder;
 use crate::scenario::ErrorClass;
-
-pub(crate) use self::damiao::DamiaoDrivers;
-pub(crate) use self::robstride::RobstrideDrivers;
 
 /// Why a joint's command failed, classed as scenario errors are.
 #[derive(Debug)]
@@ -47,12 +46,39 @@ pub(crate) trait GroupJoint: Send + Sync {
     fn is_enabled(&self) -> bool;
 }
 
+/// The group's side of one actuator kind: its drivers and its frames. Each kind's file
+/// (`joints/<kind>.rs`) implements it on a unit struct, and one line in [`KINDS`] registers it.
+pub(crate) trait GroupKind: Sync {
+    /// Its drivers for one run (one per bus, made when its first actuator asks), waiting
+    /// `timeout` for each reply.
+    fn drivers(&self, timeout: Duration) -> Box<dyn KindDrivers>;
+    /// Its actuators among `actuators` (each with its bus's name, when it has one), their
+    /// frames named by its decoder.
+    fn frames(&self, actuators: &[(Option<String>, &ActuatorConfig)]) -> Box<dyn FrameDecoder>;
+}
+
+/// One kind's drivers on every bus.
+pub(crate) trait KindDrivers: Send + Sync {
+    /// A handle on `actuator` on bus `bus` (node `host`), when it is this kind's (`None`: it
+    /// is another kind's).
+    fn joint(
+        &mut self,
+        bus: usize,
+        host: &Arc<dyn CanBus>,
+        actuator: &ActuatorConfig,
+    ) -> Option<Result<Arc<dyn GroupJoint>, String>>;
+}
+
+/// Every actuator kind a group drives, in the order a joint's kind and a frame's decoder are
+/// looked for: one registration line each.
+pub(crate) static KINDS: &[&dyn GroupKind] = &[&robstride::Robstride, &damiao::Damiao];
+
 /// The drivers of every kind on every bus, and a joint handle per actuator.
 pub(crate) struct Joints {
     /// One per actuator, in settings order.
     pub handles: Vec<Arc<dyn GroupJoint>>,
     /// Keeps the drivers' receive tasks alive while the handles are used.
-    _drivers: (RobstrideDrivers, DamiaoDrivers),
+    _drivers: Vec<Box<dyn KindDrivers>>,
 }
 
 impl Joints {
@@ -65,27 +91,28 @@ impl Joints {
         hosts: Vec<Arc<dyn CanBus>>,
         timeout: Duration,
     ) -> Result<Self, String> {
-        let mut robstride = RobstrideDrivers::new(timeout);
-        let mut damiao = DamiaoDrivers::new(timeout);
+        let mut drivers: Vec<Box<dyn KindDrivers>> =
+            KINDS.iter().map(|k| k.drivers(timeout)).collect();
         let mut handles: Vec<Arc<dyn GroupJoint>> = Vec::with_capacity(actuators.len());
         for a in actuators {
             let host = hosts.get(a.bus).ok_or_else(|| {
                 format!("device `{device}`: joint `{}`: no bus {}", a.joint, a.bus)
             })?;
-            let handle = match &a.actuator {
-                sim::actuator::ActuatorConfig::Robstride(m) => {
-                    robstride.joint(a.bus, host, m.can_id, m.model)
-                }
-                sim::actuator::ActuatorConfig::Damiao(m) => {
-                    damiao.joint(a.bus, host, m.esc_id, m.mst_id, m.model)
-                }
-            }
-            .map_err(|e| format!("device `{device}`: joint `{}`: {e}", a.joint))?;
+            let handle = drivers
+                .iter_mut()
+                .find_map(|d| d.joint(a.bus, host, &a.actuator))
+                .unwrap_or_else(|| {
+                    Err(format!(
+                        "no driver for a {} actuator",
+                        a.actuator.kind().name
+                    ))
+                })
+                .map_err(|e| format!("device `{device}`: joint `{}`: {e}", a.joint))?;
             handles.push(handle);
         }
         Ok(Self {
             handles,
-            _drivers: (robstride, damiao),
+            _drivers: drivers,
         })
     }
 }

@@ -10,9 +10,32 @@ use driver::robstride::{
     DriverConfig, Motor, MotorMode, OpControl, RobstrideDriver, RobstrideError, RunMode,
 };
 
-use super::{GroupJoint, JointError};
+use sim::actuator::ActuatorConfig;
+use sim::robstride::MotorConfig;
+
+use super::{GroupJoint, GroupKind, JointError, KindDrivers};
 use crate::devices::actuator_group::model::GroupMode;
+use crate::devices::robstride::decode::RobstrideFrames;
+use crate::devices::FrameDecoder;
 use crate::scenario::ErrorClass;
+
+/// The group's side of RobStride's actuators.
+pub(crate) struct Robstride;
+
+impl GroupKind for Robstride {
+    fn drivers(&self, timeout: Duration) -> Box<dyn KindDrivers> {
+        Box::new(RobstrideDrivers::new(timeout))
+    }
+
+    fn frames(&self, actuators: &[(Option<String>, &ActuatorConfig)]) -> Box<dyn FrameDecoder> {
+        Box::new(RobstrideFrames::of_motors(actuators.iter().filter_map(
+            |(bus, a)| {
+                let m = a.downcast_ref::<MotorConfig>()?;
+                Some((bus.clone(), m.can_id, m.model))
+            },
+        )))
+    }
+}
 
 /// One RobStride driver per bus, made when its first actuator asks.
 pub(crate) struct RobstrideDrivers {
@@ -21,7 +44,7 @@ pub(crate) struct RobstrideDrivers {
 }
 
 impl RobstrideDrivers {
-    pub(crate) fn new(timeout: Duration) -> Self {
+    fn new(timeout: Duration) -> Self {
         Self {
             timeout,
             by_bus: BTreeMap::new(),
@@ -29,7 +52,7 @@ impl RobstrideDrivers {
     }
 
     /// A handle on motor `can_id` of `model` on bus `bus` (node `host`).
-    pub(crate) fn joint(
+    fn motor(
         &mut self,
         bus: usize,
         host: &Arc<dyn CanBus>,
@@ -50,6 +73,18 @@ impl RobstrideDrivers {
         });
         let motor = driver.motor(can_id, model).map_err(|e| e.to_string())?;
         Ok(Arc::new(RobstrideJoint(motor)))
+    }
+}
+
+impl KindDrivers for RobstrideDrivers {
+    fn joint(
+        &mut self,
+        bus: usize,
+        host: &Arc<dyn CanBus>,
+        actuator: &ActuatorConfig,
+    ) -> Option<Result<Arc<dyn GroupJoint>, String>> {
+        let m = actuator.downcast_ref::<MotorConfig>()?;
+        Some(self.motor(bus, host, m.can_id, m.model))
     }
 }
 

@@ -1,6 +1,6 @@
 //! A Damiao emulator fault in a scenario's `faults:` list or an `inject:` step.
 
-use sim::actuator::registry::DAMIAO;
+use sim::damiao::actuator::KIND as DAMIAO;
 use sim::fault_args::FaultArgValue;
 
 use super::{esc_id_at, on_device};
