@@ -81,6 +81,25 @@ pub enum RobotError {
         /// Both actuators, the ID and the file.
         clash: Box<crate::robstride::state_file::IdClash>,
     },
+    /// The state file would put two actuators of one bus on one CAN ID, found through their
+    /// kinds' own kept settings (any kind; RobStride's clash is told in more detail by
+    /// [`RobotError::IdClash`] first).
+    #[error(
+        "bus `{bus}`: joints `{}` and `{}` would both power on with CAN ID {id} (0x{id:X}): the \
+         state file {} keeps one of them there (a host moved it and saved). Edit or delete that \
+         actuator's entry in the file",
+        joints[0], joints[1], state_file.display()
+    )]
+    PowerOnIdClash {
+        /// The bus.
+        bus: String,
+        /// The ID both would answer on.
+        id: u32,
+        /// Both joints, in robot-file order.
+        joints: [String; 2],
+        /// The state file.
+        state_file: std::path::PathBuf,
+    },
     /// The emulator task has stopped.
     #[error("the robot emulator has stopped")]
     Stopped,
@@ -444,7 +463,7 @@ pub fn check_kept_ids(config: &RobotConfig, kept: &StateFile) -> Result<(), Robo
         return Ok(());
     };
     for (k, bus) in config.buses.iter().enumerate() {
-        // Only RobStride actuators keep their IDs in the state file.
+        // RobStride's own check first: it names the kept entries.
         let on_bus = config
             .actuators
             .iter()
@@ -464,6 +483,20 @@ pub fn check_kept_ids(config: &RobotConfig, kept: &StateFile) -> Result<(), Robo
                 bus: bus.name.clone(),
                 clash: Box::new(clash),
             });
+        }
+        // Every kind: the ID each actuator powers on with, its kept settings applied.
+        let mut powered: Vec<(u32, &str)> = Vec::new();
+        for a in config.actuators.iter().filter(|a| a.bus == k) {
+            let id = a.actuator.power_on_id(&bus.name, kept);
+            if let Some((_, other)) = powered.iter().find(|(seen, _)| *seen == id) {
+                return Err(RobotError::PowerOnIdClash {
+                    bus: bus.name.clone(),
+                    id,
+                    joints: [(*other).to_owned(), a.joint.clone()],
+                    state_file: path.clone(),
+                });
+            }
+            powered.push((id, &a.joint));
         }
     }
     Ok(())

@@ -467,6 +467,45 @@ async fn a_state_file_putting_two_actuators_on_one_id_is_refused_at_spawn() {
     }
 }
 
+/// The same refusal for any kind: the wrist's actuators made Damiao motors (can1, ESC_IDs 4
+/// and 5), and the state file keeps the wrist pitch's motor moved to ESC_ID 4 (a host wrote
+/// ESC_ID and saved): the robot refuses, naming the bus, both joints, the id and the file.
+#[tokio::test(start_paused = true)]
+async fn a_state_file_putting_two_damiao_motors_on_one_id_is_refused_at_spawn() {
+    use sim::actuator::ActuatorFirmware;
+    let dir = tempfile::tempdir().expect("a temporary folder");
+    let path = dir.path().join("arm.json");
+    let mut config = arm_config(&[]);
+    config.state_file = Some(path.clone());
+    for a in config.actuators.iter_mut().filter(|a| a.bus == 1) {
+        let id = a.actuator.can_id();
+        a.actuator = sim::actuator::configure("DM4310", id).expect("a Damiao model");
+    }
+    // What the wrist pitch's motor (ESC_ID 5) flashes after a host moved it to ESC_ID 4.
+    let mut moved = sim::damiao::MotorConfig::new(4, sim::damiao::Model::DM4310);
+    moved.mst_id = 0x15;
+    let image = sim::damiao::DamiaoMotor::new(moved).persisted();
+    let mut kept = sim::robstride::state_file::StateFile::default();
+    kept.actuators.insert("damiao:can1:5".into(), image);
+    kept.save(&path).expect("state file written");
+    let bus = VirtualBus::new(VirtualBusConfig::default());
+    let buses: Vec<Arc<dyn CanBus>> = (0..2)
+        .map(|k| Arc::new(bus.attach(&format!("robot{k}"))) as Arc<dyn CanBus>)
+        .collect();
+    let error = RobotEmulator::spawn(config, buses)
+        .expect_err("two Damiao motors on ESC_ID 4 of can1")
+        .to_string();
+    for part in [
+        "bus `can1`",
+        "wrist_roll",
+        "wrist_pitch",
+        "CAN ID 4",
+        "arm.json",
+    ] {
+        assert!(error.contains(part), "{part:?} missing from: {error}");
+    }
+}
+
 /// An encoder glitch on the elbow's actuator: its loop holds the shifted reading at the
 /// target, so the joint itself settles the glitch's angle away (1024 counts of 16,384: π/8),
 /// while the actuator reports the target; cleared, the joint comes back.
