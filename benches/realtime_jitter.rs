@@ -1,14 +1,14 @@
 //! Real-time lock of the Piper emulator, printed (run: `cargo bench --bench realtime_jitter`).
 //!
-//! The emulator runs in real time on a virtual bus (multi-thread runtime with two workers, as
-//! `armhil sim piper` does) for a few seconds, once idle and once with every core loaded by a
-//! busy thread. For each run it prints the emulated steps per wall second (1000 when the clock
+//! The emulator runs in real time on a virtual bus (the runtime `armhil sim piper` runs on,
+//! `sim::pacer::real_time_runtime`) for a few seconds, once idle and once with every core
+//! loaded by a busy thread. For each run it prints the emulated steps per wall second (1000 when the clock
 //! keeps up), late wake-ups, overruns, the clock task's wake-up period p50/p99/max (nominal
 //! 1 ms or 5 ms: the pacer's own precision), and the send period p50/p99/max of 0x2A1 (200 Hz
 //! arm status) and 0x2A5 (200 Hz joint feedback) — nominal 5 ms. "error" is p99 − nominal.
-//! By default the emulator is paced as `sim::pacer` chooses (a kernel timer at 1 step per
-//! wake-up, a deadline thread at 5); `ARMHIL_REALTIME_PRIORITY=1` measures with the runtime's
-//! workers at real-time priority, `ARMHIL_PACER=kernel|thread|tokio` with one pacer for both.
+//! By default the emulator is paced as `sim::pacer` chooses (a kernel timer);
+//! `ARMHIL_REALTIME_PRIORITY=1` measures with the runtime's workers at real-time priority,
+//! `ARMHIL_PACER=kernel|thread|tokio` with another pacer.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -24,12 +24,7 @@ use sim::realtime::RealtimeStats;
 const RUN: Duration = Duration::from_secs(4);
 
 fn run_emulator(ticks_per_wake: u32) -> RealtimeStats {
-    let runtime = tokio::runtime::Builder::new_multi_thread()
-        .worker_threads(2)
-        .on_thread_start(sim::pacer::prefer_punctual_thread)
-        .enable_all()
-        .build()
-        .expect("a tokio runtime");
+    let runtime = sim::pacer::real_time_runtime().expect("a tokio runtime");
     runtime.block_on(async {
         let bus = VirtualBus::new(VirtualBusConfig::default());
         let emu_node = bus.attach("piper");

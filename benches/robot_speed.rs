@@ -336,11 +336,8 @@ fn extended_frame_bits(bytes: usize) -> f64 {
 }
 
 fn real_time_humanoid() {
-    let runtime = tokio::runtime::Builder::new_multi_thread()
-        .worker_threads(2)
-        .enable_all()
-        .build()
-        .expect("a runtime");
+    // The runtime `armhil sim robot` runs on.
+    let runtime = sim::pacer::real_time_runtime().expect("a runtime");
     runtime.block_on(async {
         let epoch = std::time::SystemTime::now()
             .duration_since(std::time::UNIX_EPOCH)

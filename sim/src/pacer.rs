@@ -6,15 +6,13 @@
 //! (`cargo bench --bench realtime_jitter`). In real time a [`Pacer`] instead follows the
 //! kernel's high-resolution clock:
 //!
-//! - **kernel timer** (default for a 1 ms clock on a multi-thread runtime, Linux): a periodic
-//!   timerfd that
+//! - **kernel timer** (default on a multi-thread runtime, Linux): a periodic timerfd that
 //!   tokio's I/O driver watches ([`bus::fine_timer::PeriodicTimer`]). The worker that sees the
 //!   expiry runs the step itself: no thread hop between the timer and the work, and one
 //!   thread fewer to wake a thousand times a second at rest. The runtime's workers ask the
 //!   fair scheduler for a short slice ([`prefer_punctual_thread`]), so a worker woken on
 //!   time preempts a busy thread instead of waiting out its slice.
-//! - **deadline thread** (default for a clock of several milliseconds per wake-up, the Piper's;
-//!   `ARMHIL_PACER=thread`, or where no timerfd exists): one small
+//! - **deadline thread** (`ARMHIL_PACER=thread`, or where no timerfd exists): one small
 //!   thread that sleeps until each absolute deadline (`clock_nanosleep(CLOCK_MONOTONIC,
 //!   TIMER_ABSTIME)`, 1 ns timer slack) and wakes the clock task through a [`Notify`]; the
 //!   step runs on whichever worker picks the task up.
@@ -84,16 +82,16 @@ impl Pacer {
     /// current runtime's flavour (see the module docs). `name` names the deadline thread when
     /// there is one, for `top -H` and debuggers. Must be called inside a tokio runtime.
     ///
-    /// On a multi-thread runtime the kernel timer (Linux) for a 1 ms `period` and the deadline
-    /// thread for a longer one, unless `ARMHIL_PACER` ([`PACER_ENV`]) asks for `kernel`,
-    /// `thread` (a deadline thread) or `tokio` (tokio's timer).
+    /// On a multi-thread runtime the kernel timer (Linux), unless `ARMHIL_PACER`
+    /// ([`PACER_ENV`]) asks for `kernel`, `thread` (a deadline thread) or `tokio` (tokio's
+    /// timer).
     pub fn new(period: Duration, name: &str) -> Self {
         let multi_thread = tokio::runtime::Handle::try_current()
             .is_ok_and(|h| h.runtime_flavor() == RuntimeFlavor::MultiThread);
         if !multi_thread {
             return Self::tokio_timer(period);
         }
-        match asked_pacer().unwrap_or_else(|| default_pacer(period)) {
+        match asked_pacer().unwrap_or(DEFAULT_PACER) {
             PacerKind::TokioTimer => Self::tokio_timer(period),
             PacerKind::DeadlineThread => Self::on_deadline_thread(period, name),
             PacerKind::KernelTimer => {
@@ -212,6 +210,30 @@ impl Drop for Pacer {
     }
 }
 
+/// Worker threads of [`real_time_runtime`]. One: on this project's 2-core machine, with every
+/// core busy, the Piper's 200 Hz period stayed within +0.17 ms in ten runs of ten with one
+/// worker, where two workers on the same timer strayed to +2.5 ms in one run of six (`cargo
+/// bench --bench realtime_jitter`); and the humanoid under 2,000 commands/s took 16-21 % of a
+/// core instead of 20-24 % (`cargo bench --bench wire_latency`): with two, the worker that saw
+/// a timer or a socket often woke its sibling to share the work, and each hand-over cost a task
+/// switch (half the samples of a profile under load). An emulator's work fits one core with
+/// room to spare; figures in `docs/timing.md`.
+pub const REAL_TIME_WORKERS: usize = 1;
+
+/// The runtime a real-time emulator runs on, as `armhil sim` starts it: [`REAL_TIME_WORKERS`]
+/// worker, made punctual ([`prefer_punctual_thread`]), timers and I/O enabled. Benches that
+/// measure `armhil sim`'s timing in-process start the same one.
+///
+/// # Errors
+/// The operating system's, when the worker thread or the I/O driver cannot be created.
+pub fn real_time_runtime() -> std::io::Result<tokio::runtime::Runtime> {
+    tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(REAL_TIME_WORKERS)
+        .on_thread_start(prefer_punctual_thread)
+        .enable_all()
+        .build()
+}
+
 /// The environment variable that lets an emulator's deadline thread and runtime workers take
 /// a real-time priority (`1`): see [`prefer_punctual_thread`].
 pub const REALTIME_PRIORITY_ENV: &str = "ARMHIL_REALTIME_PRIORITY";
@@ -240,20 +262,14 @@ fn realtime_priority_asked() -> bool {
 /// the default for the clock's period.
 pub const PACER_ENV: &str = "ARMHIL_PACER";
 
-/// The real-time pacer for a clock of `period` when the environment asks for none: the
-/// kernel timer for a 1 ms clock; the deadline thread for a clock that runs several steps per
-/// wake-up (the Piper's default of five). Both keep time on this project's 2-core machine
-/// (`docs/timing.md`), but in the emulated (TCG) test VM, where the Piper cannot keep up with
-/// real time, the vendor SDK saw its arm disabled after over 20 s in the one run with the
-/// kernel timer, 12 and 18 s in two with the thread: too few runs to tell, so the thread
-/// stays until that VM is measured more.
-fn default_pacer(period: Duration) -> PacerKind {
-    if period <= Duration::from_millis(1) {
-        PacerKind::KernelTimer
-    } else {
-        PacerKind::DeadlineThread
-    }
-}
+/// The real-time pacer when the environment asks for none: the kernel timer, whatever the
+/// clock's period. The Piper's clock (five steps per wake-up) had a deadline thread until
+/// 2026-12-07: on the project's 2-core machine with every core busy the thread's p99 period
+/// error was +0.7 to +2.8 ms in six runs of six, the kernel timer's +0.09 to +0.17 ms in ten
+/// of ten (one worker, `cargo bench --bench realtime_jitter`). The thread had been kept for
+/// the emulated (TCG) test VM, where the vendor SDK saw its arm disabled after 12, 18, 49 and
+/// over 60 s with it and 20 s in the one run with the kernel timer: it was never the better.
+const DEFAULT_PACER: PacerKind = PacerKind::KernelTimer;
 
 /// The pacer `ARMHIL_PACER` asks for, if it names one.
 fn asked_pacer() -> Option<PacerKind> {
@@ -564,11 +580,8 @@ mod tests {
             // Virtual time: the first wake-up at once, then exactly three periods.
             assert_eq!(t0.elapsed(), Duration::from_millis(15));
         });
-        let rt = tokio::runtime::Builder::new_multi_thread()
-            .worker_threads(1)
-            .enable_all()
-            .build()
-            .expect("runtime");
+        // The runtime `armhil sim` runs its emulators on.
+        let rt = real_time_runtime().expect("runtime");
         rt.block_on(async {
             let made: [fn() -> Pacer; 2] = [
                 || Pacer::on_deadline_thread(Duration::from_millis(1), "test-pacer"),
@@ -592,7 +605,8 @@ mod tests {
                     t0.elapsed()
                 );
             }
-            // A clock of several milliseconds per wake-up keeps the deadline thread.
+            // A clock of several milliseconds per wake-up (the Piper's) takes the kernel timer
+            // too: it kept time where the deadline thread did not (`DEFAULT_PACER`).
             kinds.push(Pacer::new(Duration::from_millis(5), "test-pacer").kind());
             #[cfg(target_os = "linux")]
             assert_eq!(
@@ -600,7 +614,7 @@ mod tests {
                 [
                     PacerKind::DeadlineThread,
                     PacerKind::KernelTimer,
-                    PacerKind::DeadlineThread
+                    PacerKind::KernelTimer
                 ]
             );
             #[cfg(not(target_os = "linux"))]

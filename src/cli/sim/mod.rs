@@ -77,17 +77,11 @@ served_kinds! {
     "robot" => Robot(robot),
 }
 
-/// The runtime every emulator of `armhil sim` runs on: two workers, made punctual (the clock's
-/// timer wakes on time, and a busy core would otherwise keep the worker that runs the step
-/// waiting; `cargo bench --bench realtime_jitter` measures it).
+/// The runtime every emulator of `armhil sim` runs on: `sim::pacer::real_time_runtime`, one
+/// punctual worker (why one: `sim::pacer::REAL_TIME_WORKERS`).
 fn real_time_runtime() -> anyhow::Result<tokio::runtime::Runtime> {
     use anyhow::Context as _;
-    tokio::runtime::Builder::new_multi_thread()
-        .worker_threads(2)
-        .on_thread_start(sim::pacer::prefer_punctual_thread)
-        .enable_all()
-        .build()
-        .context("cannot start the tokio runtime")
+    sim::pacer::real_time_runtime().context("cannot start the tokio runtime")
 }
 
 /// `--socketcand` takes `HOST:PORT`; a bare port means loopback.
