@@ -79,6 +79,47 @@ async fn an_answer_leaves_its_turnaround_after_the_request_arrived() {
     assert_eq!(slower - host_saw, Duration::from_micros(500));
 }
 
+/// The wire task sleeps through a turnaround to the end of the answer it expects; a frame
+/// queued meanwhile for the same instant with a lower identifier must still win arbitration,
+/// and the answer follow it back to back.
+#[tokio::test(start_paused = true)]
+async fn a_frame_queued_during_a_turnaround_still_arbitrates_against_the_answer() {
+    let guard = VirtualTimeline::start().unwrap();
+    let bus = bus_on(FineTimer::Virtual(guard.timeline().clone()));
+    let (host, motor, other) = (bus.attach("host"), bus.attach("motor"), bus.attach("other"));
+    let turnaround = Duration::from_micros(120);
+    let request = CanFrame::extended(0x0300_FD01, &[7; 8]).unwrap();
+    let answer = CanFrame::extended(0x0200_01FD, &[7; 8]).unwrap();
+    let urgent = CanFrame::extended(0x0000_0001, &[1; 8]).unwrap();
+    let timeline = guard.timeline().clone();
+    let firmware = tokio::spawn(async move {
+        motor.recv().await.unwrap();
+        motor.send_after(answer, turnaround).await.unwrap();
+        // Halfway through the turnaround (the wire task asleep by then), a rival queued for
+        // the same instant as the answer.
+        let half = turnaround / 2;
+        timeline.sleep_until(Instant::now() + half).await;
+        other.send_after(urgent, half).await.unwrap();
+        (motor, other)
+    });
+    let sent = Instant::now();
+    host.send(request).await.unwrap();
+    let first = host.recv().await.unwrap();
+    // Received when its last bit left the wire, not when the wire task would have woken.
+    assert_eq!(Instant::now() - sent, first.timestamp);
+    let second = host.recv().await.unwrap();
+    assert_eq!(Instant::now() - sent, second.timestamp);
+    let _nodes = firmware.await.unwrap();
+    let ready = wire_time(&request) + turnaround;
+    assert_eq!(first.frame, urgent);
+    assert_eq!(first.timestamp, ready + wire_time(&urgent));
+    assert_eq!(second.frame, answer);
+    assert_eq!(
+        second.timestamp,
+        ready + wire_time(&urgent) + wire_time(&answer)
+    );
+}
+
 #[tokio::test(start_paused = true)]
 async fn tokio_timers_keep_their_milliseconds_while_frames_fly() {
     let guard = VirtualTimeline::start().unwrap();

@@ -269,19 +269,45 @@ impl WireState {
         }
     }
 
-    /// Arbitrate among the queue heads ready at `start` and put the winner on the wire (or
-    /// let the fault set remove or hold it back).
-    fn start_next(&mut self, start: Duration) {
-        let winner = self
-            .nodes
+    /// When the wire task must next look at the wire, given the next event [`Self::advance`]
+    /// returned. A frame that will start later (a firmware's turnaround, an intermission) needs
+    /// no wake-up at its start: the model is lazy, and whoever queues a frame before then
+    /// brings the wire up to date and wakes the task to plan again. So with the wire idle and
+    /// no fault that could drop, delay or repeat it, the task sleeps until the end of the frame
+    /// that would win at `next` — one timer wake-up a frame instead of two (measured by
+    /// `cargo bench --bench wire_latency`). Delivery instants and timestamps are the model's
+    /// either way.
+    pub(super) fn wake_at(&self, next: Duration) -> Duration {
+        if self.in_flight.is_some() || !self.faults.is_empty() {
+            return next;
+        }
+        let Some(node) = self.winner_at(next) else {
+            return next;
+        };
+        self.nodes[node]
+            .queue
+            .front()
+            .map_or(next, |queued| next + self.wire_time(&queued.frame).1)
+    }
+
+    /// The node whose queue head wins arbitration at `start`: the lowest arbitration key
+    /// among the heads ready by then.
+    fn winner_at(&self, start: Duration) -> Option<usize> {
+        self.nodes
             .iter()
             .enumerate()
             .filter_map(|(index, slot)| {
                 let head = slot.queue.front()?;
                 (head.ready_at <= start).then_some((head.frame.id().arbitration_key(), index))
             })
-            .min();
-        let Some((_, node)) = winner else {
+            .min()
+            .map(|(_, node)| node)
+    }
+
+    /// Arbitrate among the queue heads ready at `start` and put the winner on the wire (or
+    /// let the fault set remove or hold it back).
+    fn start_next(&mut self, start: Duration) {
+        let Some(node) = self.winner_at(start) else {
             return;
         };
         let Some(queued) = self.nodes[node].queue.pop_front() else {
@@ -308,9 +334,10 @@ impl WireState {
         self.put_on_wire(queued.frame, node, start, fate);
     }
 
-    fn put_on_wire(&mut self, frame: CanFrame, node: usize, start: Duration, fate: Fate) {
-        let (bits, duration) = if frame.is_fd() {
-            let phases = phase_bits(&frame, self.params.stuffing);
+    /// The frame's length in bits and how long it occupies this wire.
+    fn wire_time(&self, frame: &CanFrame) -> (u32, Duration) {
+        if frame.is_fd() {
+            let phases = phase_bits(frame, self.params.stuffing);
             // Only queued on a bus with a data bit rate (see `enqueue`).
             let data_bps = self
                 .params
@@ -319,9 +346,13 @@ impl WireState {
             let duration = phases_duration(phases, self.params.bitrate_bps, data_bps);
             (phases.total(), duration)
         } else {
-            let bits = frame_bits(&frame, self.params.stuffing);
+            let bits = frame_bits(frame, self.params.stuffing);
             (bits, bits_duration(bits, self.params.bitrate_bps))
-        };
+        }
+    }
+
+    fn put_on_wire(&mut self, frame: CanFrame, node: usize, start: Duration, fate: Fate) {
+        let (bits, duration) = self.wire_time(&frame);
         let end = start + duration;
         self.in_flight = Some(InFlight {
             frame,
@@ -424,7 +455,9 @@ pub(super) async fn run_wire(shared: Arc<Shared>, mut sleeper: Sleeper) {
                 state.tap = None;
                 return;
             }
-            state.advance(shared.now(), true)
+            state
+                .advance(shared.now(), true)
+                .map(|next| state.wake_at(next))
         };
         match next {
             Some(at) => {
