@@ -20,25 +20,29 @@ fn armhil_ok(args: &[&std::ffi::OsStr]) -> String {
     String::from_utf8_lossy(&out.stdout).into_owned()
 }
 
+/// Runs `scenario` with its outputs under `out`, then decodes the capture it wrote there
+/// (`capture`, relative to `out`) by that scenario's devices: the decoded text.
+fn run_then_decode_by_scenario(scenario: &Path, out: &Path, capture: &str) -> String {
+    armhil_ok(&[
+        "run".as_ref(),
+        scenario.as_ref(),
+        "--out".as_ref(),
+        out.as_ref(),
+    ]);
+    armhil_ok(&[
+        "decode".as_ref(),
+        out.join(capture).as_ref(),
+        "--scenario".as_ref(),
+        scenario.as_ref(),
+    ])
+}
+
 #[test]
 fn a_robot_s_capture_is_decoded_by_its_scenario_s_devices_with_each_frame_s_bus() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let scenario = root.join("scenarios/robot/arm6_hold_gravity.yaml");
     let out = tempfile::tempdir().expect("a temporary folder");
-    armhil_ok(&[
-        "run".as_ref(),
-        scenario.as_ref(),
-        "--out".as_ref(),
-        out.path().as_ref(),
-    ]);
-    let capture = out.path().join("arm6_hold_gravity/bus.pcapng");
-
-    let text = armhil_ok(&[
-        "decode".as_ref(),
-        capture.as_ref(),
-        "--scenario".as_ref(),
-        scenario.as_ref(),
-    ]);
+    let text = run_then_decode_by_scenario(&scenario, out.path(), "arm6_hold_gravity/bus.pcapng");
     // Motor 6 (flange roll) sits on can1 and its status replies are named with its RS02 units;
     // motor 2 (shoulder pitch, RS04) on can0.
     let status_of = |bus: &str, motor: &str| {
@@ -136,19 +140,7 @@ fn frames_of_motors_sharing_an_id_on_two_buses_decode_by_their_own_bus() {
         "name: hold\nbench:\n  devices:\n    arm: {kind: actuator_group, robot: arm.yaml}\nsteps:\n  - group: {do: enable}\n  - group: {do: hold, targets_rad: {shoulder_yaw: 0, shoulder_pitch: 0, elbow_pitch: 0, wrist_roll: 0, wrist_pitch: 0, flange_roll: 0}, kp: 100, kd: 4}\n  - wait_ms: 20\n",
     )
     .expect("scenario written");
-    let out = dir.path().join("out");
-    armhil_ok(&[
-        "run".as_ref(),
-        scenario.as_ref(),
-        "--out".as_ref(),
-        out.as_ref(),
-    ]);
-    let text = armhil_ok(&[
-        "decode".as_ref(),
-        out.join("hold/bus.log").as_ref(),
-        "--scenario".as_ref(),
-        scenario.as_ref(),
-    ]);
+    let text = run_then_decode_by_scenario(&scenario, &dir.path().join("out"), "hold/bus.log");
     let kp_of = |bus: &str| -> Vec<f64> {
         text.lines()
             .filter(|l| l.contains(&format!("  {bus}  ")) && l.contains("OpControl  motor=1"))
@@ -448,19 +440,8 @@ fn a_damiao_bench_s_capture_is_decoded_by_its_scenario() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let scenario = root.join("scenarios/damiao/mit_hold.yaml");
     let out = tempfile::tempdir().expect("a temporary folder");
-    armhil_ok(&[
-        "run".as_ref(),
-        scenario.as_ref(),
-        "--out".as_ref(),
-        out.path().as_ref(),
-    ]);
+    let by_scenario = run_then_decode_by_scenario(&scenario, out.path(), "mit_hold/bus.log");
     let capture = out.path().join("mit_hold/bus.log");
-    let by_scenario = armhil_ok(&[
-        "decode".as_ref(),
-        capture.as_ref(),
-        "--scenario".as_ref(),
-        scenario.as_ref(),
-    ]);
     assert!(
         by_scenario.lines().all(|l| !l.contains("  ?  raw=")),
         "an undecoded frame:\n{by_scenario}"
