@@ -42,6 +42,7 @@ fn a_robot_s_capture_is_decoded_by_its_scenario_s_devices_with_each_frame_s_bus(
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let scenario = root.join("scenarios/robot/arm6_hold_gravity.yaml");
     let out = tempfile::tempdir().expect("a temporary folder");
+    let capture = out.path().join("arm6_hold_gravity/bus.pcapng");
     let text = run_then_decode_by_scenario(&scenario, out.path(), "arm6_hold_gravity/bus.pcapng");
     // Motor 6 (flange roll) sits on can1 and its status replies are named with its RS02 units;
     // motor 2 (shoulder pitch, RS04) on can0.
