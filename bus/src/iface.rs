@@ -28,6 +28,17 @@ pub trait CanBus: Send + Sync {
         self.send(frame).await
     }
 
+    /// How long ago `received`, a frame this endpoint returned from [`CanBus::recv`], finished
+    /// on the wire, by this bus's clock. A firmware's turnaround counts from there, so an
+    /// emulator that got round to a request late answers no later for it: it sends with
+    /// `send_after(answer, turnaround - since_received)`. Zero on buses that do not model the
+    /// wire (SocketCAN, socketcand), whose timestamps are another clock's and whose answers
+    /// leave at once anyway.
+    fn since_received(&self, received: &ReceivedFrame) -> Duration {
+        let _ = received;
+        Duration::ZERO
+    }
+
     /// Wait for the next frame from the bus, with its timestamp.
     async fn recv(&self) -> Result<ReceivedFrame, BusError>;
 

@@ -102,8 +102,8 @@ def robot(
     state_file: Optional[Union[str, "os.PathLike[str]"]] = None,
     gantry: Optional[str] = None,
 ) -> RobotEmulator:
-    """A whole robot from its robot file (``armhil sim robot FILE``): one physics world, a
-    RobStride actuator per actuated joint, every bus served at once — as channels of one
+    """A whole robot from its robot file (``armhil sim robot FILE``): one physics world, the
+    actuator the file names (RobStride, Damiao) on each actuated joint, every bus served at once — as channels of one
     socketcand server on ``socketcand`` (HOST:PORT, port 0 = a free port; see ``emu.host`` /
     ``emu.port``, channels ``emu.buses``), or with ``interfaces=True`` each on the SocketCAN
     interface of its name. A floating robot hangs on its gantry (``gantry``: ``"until_enabled"``,

@@ -9,8 +9,12 @@ Build the extension in release first (the dev build is several times slower):
   GIL release, a block_on on the driver runtime, result conversion) plus the solver's.
   A no-op call (`arm.name`) and an error return before any work (`v = 0`) bound it below.
 - Callback rate: realtime states delivered to a Python callback per second.
+- Emulators at rest: the process's CPU (% of one core) while each in-process emulator runs
+  with no client, 1 s after it started, over 5 s — the figure `cargo bench --bench
+  wire_latency` prints for `armhil sim`. The emulators share one runtime worker, as there.
 """
 
+import os
 import statistics
 import time
 import timeit
@@ -57,11 +61,29 @@ def bench(arm_type: str, emu) -> None:
     arm.disconnect()
 
 
+def cpu_at_rest(label: str, start, warm_up_s: float = 1.0, seconds: float = 5.0) -> None:
+    """Prints the process's CPU while the emulator `start()` returns runs with no client."""
+    with start():
+        time.sleep(warm_up_s)
+        cpu0, wall0 = time.process_time(), time.perf_counter()
+        time.sleep(seconds)
+        cpu1, wall1 = time.process_time(), time.perf_counter()
+    print(f"  {label}: {100 * (cpu1 - cpu0) / (wall1 - wall0):.1f} % of a core at rest")
+
+
 def main() -> None:
     with armhil.sim.realman() as emu:
         bench("realman", emu)
     with armhil.sim.piper() as emu:
         bench("piper", emu)
+    print("emulators in this process, no client:")
+    cpu_at_rest("realman", armhil.sim.realman)
+    cpu_at_rest("piper", armhil.sim.piper)
+    five = ["1:RS03", "2:RS03", "3:RS02", "4:RS02", "5:RS04"]
+    cpu_at_rest("robstride (5 motors)", lambda: armhil.sim.robstride(five))
+    cpu_at_rest("damiao (one DM4310)", lambda: armhil.sim.damiao(["1:DM4310"]))
+    humanoid = os.path.join(os.path.dirname(__file__), "..", "..", "robots", "humanoid.yaml")
+    cpu_at_rest("robot humanoid.yaml", lambda: armhil.sim.robot(humanoid))
 
 
 if __name__ == "__main__":

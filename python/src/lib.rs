@@ -44,11 +44,18 @@ pub(crate) fn with_python(f: impl FnOnce(Python<'_>)) {
     IN_PYTHON.fetch_sub(1, Ordering::SeqCst);
 }
 
-fn build_runtime(name: &str) -> tokio::runtime::Runtime {
-    tokio::runtime::Builder::new_multi_thread()
-        .worker_threads(2)
+/// A runtime of `workers` threads named `name`; `punctual` threads ask the kernel to run
+/// them on time (`sim::pacer::prefer_punctual_thread`), as `armhil sim`'s do.
+fn build_runtime(name: &str, workers: usize, punctual: bool) -> tokio::runtime::Runtime {
+    let mut builder = tokio::runtime::Builder::new_multi_thread();
+    builder
+        .worker_threads(workers)
         .thread_name(name)
-        .enable_all()
+        .enable_all();
+    if punctual {
+        builder.on_thread_start(sim::pacer::prefer_punctual_thread);
+    }
+    builder
         .build()
         // Without threads or timers nothing in this module can work; say so plainly.
         .unwrap_or_else(|e| panic!("armhil: cannot start the tokio runtime: {e}"))
@@ -57,13 +64,15 @@ fn build_runtime(name: &str) -> tokio::runtime::Runtime {
 /// The runtime the arm drivers run on.
 pub(crate) fn driver_runtime() -> &'static tokio::runtime::Runtime {
     static RT: OnceLock<tokio::runtime::Runtime> = OnceLock::new();
-    RT.get_or_init(|| build_runtime("armhil-driver"))
+    RT.get_or_init(|| build_runtime("armhil-driver", 2, false))
 }
 
-/// The runtime the emulators run on.
+/// The runtime the emulators run on: what `armhil sim` starts
+/// (`sim::pacer::real_time_runtime`), one punctual worker: two kept waking each other, and
+/// an emulator's work fits one core with room to spare.
 pub(crate) fn sim_runtime() -> &'static tokio::runtime::Runtime {
     static RT: OnceLock<tokio::runtime::Runtime> = OnceLock::new();
-    RT.get_or_init(|| build_runtime("armhil-sim"))
+    RT.get_or_init(|| build_runtime("armhil-sim", sim::pacer::REAL_TIME_WORKERS, true))
 }
 
 /// Runs `fut` to completion on `rt` with the GIL released. Inside a runtime thread (a

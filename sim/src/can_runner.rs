@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 use std::time::Duration;
 
-use bus::{BusError, CanBus, CanFrame};
+use bus::{BusError, CanBus, CanFrame, ReceivedFrame};
 use tokio::sync::mpsc;
 use tokio::task::JoinHandle;
 use tokio::time::{sleep, Instant};
@@ -115,7 +115,7 @@ impl StepClock {
 pub fn receive_frames(
     buses: Vec<(Arc<dyn CanBus>, String)>,
     label: &'static str,
-) -> (mpsc::Receiver<(usize, CanFrame)>, Vec<JoinHandle<()>>) {
+) -> (mpsc::Receiver<(usize, ReceivedFrame)>, Vec<JoinHandle<()>>) {
     let (tx, rx) = mpsc::channel(RX_QUEUE_FRAMES);
     let tasks = buses
         .into_iter()
@@ -126,7 +126,7 @@ pub fn receive_frames(
                 loop {
                     match bus.recv().await {
                         Ok(received) => {
-                            if tx.send((index, received.frame)).await.is_err() {
+                            if tx.send((index, received)).await.is_err() {
                                 break;
                             }
                         }

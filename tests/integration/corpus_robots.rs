@@ -49,6 +49,12 @@ const LIE_MS: u64 = 2000;
 /// height).
 const REST_MS: u64 = 500;
 const REST_MM: f64 = 5.0;
+
+/// Longest a `group: {do: enable}` of every actuator may take in virtual time (ms): one
+/// request and its answer per actuator, the buses in parallel, each answer a firmware's
+/// turnaround after its request (TALOS: 32 actuators on four buses).
+const ENABLE_ALL_MAX_MS: f64 = 10.0;
+
 /// Fallen: the base between these fractions of its start height.
 const FALLEN_RANGE: (f64, f64) = (0.05, 0.4);
 
@@ -296,6 +302,7 @@ fn stands_while_held_and_falls_when_let_go(name: &str) {
     let h = run.robot.start_height_m;
     let (stand_lo, stand_hi) = run.during(run.stand);
     let (rest_lo, rest_hi) = run.at_rest();
+    let enable_ms = run.result.steps[run.enable].took.as_secs_f64() * 1e3;
     let line = format!(
         "corpus_robots: {name}: {:.1} kg, {}; hung {HANG_MS} ms, start height {h:.4} m; every \
          actuator enabled in {:.1} ms; held at kp {}/N·m, kd {}/N·m: base \
@@ -303,7 +310,7 @@ fn stands_while_held_and_falls_when_let_go(name: &str) {
          {rest_lo:.3}..{rest_hi:.3} m; {:.1} s emulated in {:.2} s",
         run.robot.mass_kg,
         run.layout(),
-        run.result.steps[run.enable].took.as_secs_f64() * 1e3,
+        enable_ms,
         run.legged.kp_per_nm,
         run.legged.kd_per_nm,
         run.result.duration.as_secs_f64(),
@@ -315,6 +322,10 @@ fn stands_while_held_and_falls_when_let_go(name: &str) {
         Verdict::Passed,
         "{name}:\n{line}\n{}",
         run.details()
+    );
+    assert!(
+        enable_ms <= ENABLE_ALL_MAX_MS,
+        "{name}: enabling every actuator took {enable_ms:.1} ms (at most {ENABLE_ALL_MAX_MS})\n{line}"
     );
     assert!(
         (rest_hi - rest_lo) * 1000.0 <= REST_MM,

@@ -310,6 +310,11 @@ impl CanBus for VirtualNode {
         Ok(())
     }
 
+    fn since_received(&self, received: &ReceivedFrame) -> Duration {
+        let shared = self.shared();
+        (shared.epoch + shared.now()).saturating_sub(received.timestamp)
+    }
+
     async fn recv(&self) -> Result<ReceivedFrame, BusError> {
         if self.inner.closed.load(Ordering::Acquire) {
             return Err(BusError::Closed);

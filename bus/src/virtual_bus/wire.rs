@@ -28,11 +28,14 @@ pub(crate) struct Shared {
     pub(super) wake: Notify,
     /// Tokio instant of bus time zero.
     pub(super) start: Instant,
+    /// What a frame's timestamp adds to bus time (the configuration's epoch).
+    pub(super) epoch: Duration,
 }
 
 impl Shared {
     pub(super) fn new(state: WireState) -> Self {
         Self {
+            epoch: state.params.epoch,
             state: Mutex::new(state),
             wake: Notify::new(),
             start: Instant::now(),
@@ -69,10 +72,20 @@ impl Shared {
 /// A frame waiting in a node's transmit queue.
 struct Queued {
     frame: CanFrame,
+    /// Its length on this wire, worked out once when it is queued (an exact stuffing pass is
+    /// a few percent of a busy emulator's profile; planning and sending both need it).
+    length: WireLength,
     /// Bus time from which it may compete for the bus.
     ready_at: Duration,
     /// Set once a delay fault has held it, so one fault delays a frame only once.
     delayed: bool,
+}
+
+/// A frame's length on the wire: bits and the time they take.
+#[derive(Debug, Clone, Copy)]
+struct WireLength {
+    bits: u32,
+    duration: Duration,
 }
 
 /// One attached node.
@@ -178,6 +191,7 @@ impl WireState {
         now: Duration,
         ready_at: Duration,
     ) -> Result<(), BusError> {
+        let length = self.wire_time(&frame);
         let Some(slot) = self.nodes.get_mut(node) else {
             return Err(BusError::Closed);
         };
@@ -198,6 +212,7 @@ impl WireState {
         }
         slot.queue.push_back(Queued {
             frame,
+            length,
             ready_at: ready_at.max(now),
             delayed: false,
         });
@@ -287,7 +302,7 @@ impl WireState {
         self.nodes[node]
             .queue
             .front()
-            .map_or(next, |queued| next + self.wire_time(&queued.frame).1)
+            .map_or(next, |queued| next + queued.length.duration)
     }
 
     /// The node whose queue head wins arbitration at `start`: the lowest arbitration key
@@ -331,12 +346,12 @@ impl WireState {
             Verdict::Corrupt => Fate::Corrupt,
             Verdict::Duplicate => Fate::Duplicate,
         };
-        self.put_on_wire(queued.frame, node, start, fate);
+        self.put_on_wire(queued.frame, queued.length, node, start, fate);
     }
 
     /// The frame's length in bits and how long it occupies this wire.
-    fn wire_time(&self, frame: &CanFrame) -> (u32, Duration) {
-        if frame.is_fd() {
+    fn wire_time(&self, frame: &CanFrame) -> WireLength {
+        let (bits, duration) = if frame.is_fd() {
             let phases = phase_bits(frame, self.params.stuffing);
             // Only queued on a bus with a data bit rate (see `enqueue`).
             let data_bps = self
@@ -348,16 +363,23 @@ impl WireState {
         } else {
             let bits = frame_bits(frame, self.params.stuffing);
             (bits, bits_duration(bits, self.params.bitrate_bps))
-        }
+        };
+        WireLength { bits, duration }
     }
 
-    fn put_on_wire(&mut self, frame: CanFrame, node: usize, start: Duration, fate: Fate) {
-        let (bits, duration) = self.wire_time(&frame);
-        let end = start + duration;
+    fn put_on_wire(
+        &mut self,
+        frame: CanFrame,
+        length: WireLength,
+        node: usize,
+        start: Duration,
+        fate: Fate,
+    ) {
+        let end = start + length.duration;
         self.in_flight = Some(InFlight {
             frame,
             node,
-            bits,
+            bits: length.bits,
             start,
             end,
             fate,
@@ -390,7 +412,11 @@ impl WireState {
             Fate::Deliver => self.deliver(&flight),
             Fate::Duplicate => {
                 self.deliver(&flight);
-                self.put_on_wire(flight.frame, flight.node, flight.end, Fate::Deliver);
+                let length = WireLength {
+                    bits: flight.bits,
+                    duration: flight.end - flight.start,
+                };
+                self.put_on_wire(flight.frame, length, flight.node, flight.end, Fate::Deliver);
             }
         }
     }

@@ -21,7 +21,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Duration;
 
-use bus::{CanBus, CanFrame};
+use bus::{CanBus, CanFrame, ReceivedFrame};
 use tokio::sync::{mpsc, oneshot};
 use tokio::task::JoinHandle;
 
@@ -339,11 +339,11 @@ impl<K: BusKind> Runner<K> {
         clock.rest(false);
     }
 
-    async fn on_frame(&mut self, frame: &CanFrame) -> Result<(), StateFileError> {
+    async fn on_frame(&mut self, received: &ReceivedFrame) -> Result<(), StateFileError> {
         let mut replies = Vec::new();
         let mut turnaround = Duration::ZERO;
         for firmware in &mut self.firmwares {
-            let answer = deliver(firmware, frame);
+            let answer = deliver(firmware, &received.frame);
             if !answer.is_empty() {
                 turnaround = turnaround.max(firmware.turnaround());
             }
@@ -351,8 +351,10 @@ impl<K: BusKind> Runner<K> {
         }
         self.persist_if_requested()?;
         // Answered with the state of the latest step, after the slowest answering firmware's
-        // turnaround — not at the next step.
-        self.send_after(replies, turnaround).await;
+        // turnaround — not at the next step — counted from the request's last bit: the time
+        // this emulator took to get round to it is part of the turnaround, not added to it.
+        let left = turnaround.saturating_sub(self.bus.since_received(received));
+        self.send_after(replies, left).await;
         Ok(())
     }
 

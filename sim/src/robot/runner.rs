@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Duration;
 
-use bus::{CanBus, CanFrame};
+use bus::{CanBus, CanFrame, ReceivedFrame};
 use tokio::sync::{mpsc, oneshot};
 use tokio::task::JoinHandle;
 
@@ -702,7 +702,12 @@ impl Runner {
         }
     }
 
-    async fn on_frame(&mut self, port: usize, frame: &CanFrame) -> Result<(), StateFileError> {
+    async fn on_frame(
+        &mut self,
+        port: usize,
+        received: &ReceivedFrame,
+    ) -> Result<(), StateFileError> {
+        let frame = &received.frame;
         if self.ports[port].lost {
             return Ok(());
         }
@@ -718,8 +723,11 @@ impl Runner {
         }
         self.persist_if_requested()?;
         // Answered with the state of the latest step, after the slowest answering firmware's
-        // turnaround (one batch per frame: a bus carries one reply at a time anyway).
-        self.send_after(port, replies, turnaround).await;
+        // turnaround (one batch per frame: a bus carries one reply at a time anyway), counted
+        // from the request's last bit: the time this emulator took to get round to it is part
+        // of the turnaround, not added to it.
+        let left = turnaround.saturating_sub(self.ports[port].bus.since_received(received));
+        self.send_after(port, replies, left).await;
         Ok(())
     }
 

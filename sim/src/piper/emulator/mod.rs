@@ -18,7 +18,7 @@
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::Duration;
 
-use bus::{CanBus, CanFrame};
+use bus::CanBus;
 use tokio::sync::{mpsc, watch};
 use tokio::task::JoinHandle;
 
@@ -128,8 +128,8 @@ impl PiperEmulator {
         tracing::info!(firmware = %firmware.profile(), bus = bus.name(), "Piper emulator starting");
         let core = Arc::new(Mutex::new(firmware));
         let counters = Arc::new(Mutex::new(RealtimeCounters::new()));
-        let (in_tx, in_rx) = mpsc::channel::<CanFrame>(RX_QUEUE_FRAMES);
-        let (out_tx, out_rx) = mpsc::unbounded_channel::<(CanFrame, std::time::Duration)>();
+        let (in_tx, in_rx) = mpsc::channel::<bus::ReceivedFrame>(RX_QUEUE_FRAMES);
+        let (out_tx, out_rx) = mpsc::unbounded_channel::<tasks::Outgoing>();
         let (stop, stop_rx) = watch::channel(false);
         // A task that panics or gives up is reported, not left dead behind an open bus.
         let (supervisor, death) = Supervisor::new();
@@ -314,6 +314,7 @@ mod tests {
 mod catch_up_tests {
     use super::super::PiperConfig;
     use super::*;
+    use bus::CanFrame;
 
     fn count(frames: &[CanFrame], id: u32) -> usize {
         frames.iter().filter(|f| f.raw_id() == id).count()
@@ -344,6 +345,7 @@ mod catch_up_tests {
 #[cfg(test)]
 mod death_tests {
     use bus::virtual_bus::{VirtualBus, VirtualBusConfig};
+    use bus::CanFrame;
 
     use super::super::PiperConfig;
     use super::*;

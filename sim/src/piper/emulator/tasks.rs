@@ -3,7 +3,7 @@
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-use bus::{BusError, CanBus, CanFrame};
+use bus::{BusError, CanBus, CanFrame, ReceivedFrame};
 use tokio::sync::{mpsc, watch};
 use tokio::time::{sleep, Instant};
 
@@ -21,7 +21,7 @@ pub(super) const RX_QUEUE_FRAMES: usize = crate::can_runner::RX_QUEUE_FRAMES;
 /// The receiver task: the bus's frames into the core's queue until stopped or closed.
 pub(super) async fn receive(
     bus: Arc<dyn CanBus>,
-    in_tx: mpsc::Sender<CanFrame>,
+    in_tx: mpsc::Sender<ReceivedFrame>,
     mut stop: watch::Receiver<bool>,
 ) -> Result<(), String> {
     loop {
@@ -29,7 +29,7 @@ pub(super) async fn receive(
             biased;
             r = bus.recv() => match r {
                 Ok(rf) => {
-                    if in_tx.send(rf.frame).await.is_err() {
+                    if in_tx.send(rf).await.is_err() {
                         break;
                     }
                 }
@@ -57,8 +57,8 @@ pub(super) struct CoreTask {
 /// produced to the transmitter.
 pub(super) async fn run_core(
     task: CoreTask,
-    mut in_rx: mpsc::Receiver<CanFrame>,
-    out_tx: mpsc::UnboundedSender<(CanFrame, Duration)>,
+    mut in_rx: mpsc::Receiver<ReceivedFrame>,
+    out_tx: mpsc::UnboundedSender<Outgoing>,
     mut stop: watch::Receiver<bool>,
 ) -> Result<(), String> {
     let CoreTask {
@@ -95,14 +95,15 @@ pub(super) async fn run_core(
             }
             _ = stop.changed() => break,
         };
-        if let Some(frame) = arrived {
+        if let Some(mut latest) = arrived {
             // A frame is handled when it arrives and a query answered after the firmware's
             // turnaround, with the state of the latest step — not at the next step.
             {
                 let mut fw = lock(&core);
-                fw.handle_frame(&frame);
+                fw.handle_frame(&latest.frame);
                 while let Ok(frame) = in_rx.try_recv() {
-                    fw.handle_frame(&frame);
+                    fw.handle_frame(&frame.frame);
+                    latest = frame;
                 }
                 fw.drain_output_into(&mut produced);
                 if let Some(e) = fw.take_save_error() {
@@ -110,7 +111,7 @@ pub(super) async fn run_core(
                 }
             }
             for frame in produced.drain(..) {
-                if out_tx.send((frame, TURNAROUND)).is_err() {
+                if out_tx.send((frame, Some(latest))).is_err() {
                     return Ok(());
                 }
             }
@@ -127,7 +128,7 @@ pub(super) async fn run_core(
         {
             let mut fw = lock(&core);
             while let Ok(frame) = in_rx.try_recv() {
-                fw.handle_frame(&frame);
+                fw.handle_frame(&frame.frame);
             }
             if late {
                 fw.catch_up(plan.run as u32);
@@ -155,7 +156,7 @@ pub(super) async fn run_core(
             }
         }
         for frame in produced.drain(..) {
-            if out_tx.send((frame, Duration::ZERO)).is_err() {
+            if out_tx.send((frame, None)).is_err() {
                 // The transmitter ended: on a stop, or because the bus was closed (the owner
                 // of the bus closing it first is a way to stop, not a failure).
                 return Ok(());
@@ -193,18 +194,22 @@ impl OverrunReport {
     }
 }
 
-/// The transmitter task: the core's frames onto the bus (each with the delay before it may
-/// start, a query's turnaround), each retried a few times when the bus's transmit queue is
+/// A frame for the transmitter, and for an answer the request it answers: it leaves the
+/// firmware's turnaround after the request's last bit, however late the core got round to it.
+pub(super) type Outgoing = (CanFrame, Option<ReceivedFrame>);
+
+/// The transmitter task: the core's frames onto the bus (an answer after its turnaround),
+/// each retried a few times when the bus's transmit queue is
 /// full, then dropped (counted, warned at powers of two).
 pub(super) async fn transmit(
     bus: Arc<dyn CanBus>,
     counters: Arc<Mutex<RealtimeCounters>>,
-    mut out_rx: mpsc::UnboundedReceiver<(CanFrame, Duration)>,
+    mut out_rx: mpsc::UnboundedReceiver<Outgoing>,
     mut stop: watch::Receiver<bool>,
 ) -> Result<(), String> {
     let mut dropped: u64 = 0;
     loop {
-        let (frame, delay) = tokio::select! {
+        let (frame, request) = tokio::select! {
             biased;
             f = out_rx.recv() => match f {
                 Some(f) => f,
@@ -212,6 +217,9 @@ pub(super) async fn transmit(
             },
             _ = stop.changed() => break,
         };
+        let delay = request.map_or(Duration::ZERO, |request| {
+            TURNAROUND.saturating_sub(bus.since_received(&request))
+        });
         let mut attempts = 0;
         loop {
             match bus.send_after(frame, delay).await {
