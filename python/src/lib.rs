@@ -53,7 +53,7 @@ fn build_runtime(name: &str, workers: usize, punctual: bool) -> tokio::runtime::
         .thread_name(name)
         .enable_all();
     if punctual {
-        builder.on_thread_start(sim::pacer::prefer_punctual_thread);
+        builder.on_thread_start(::sim::pacer::prefer_punctual_thread);
     }
     builder
         .build()
@@ -72,7 +72,7 @@ pub(crate) fn driver_runtime() -> &'static tokio::runtime::Runtime {
 /// an emulator's work fits one core with room to spare.
 pub(crate) fn sim_runtime() -> &'static tokio::runtime::Runtime {
     static RT: OnceLock<tokio::runtime::Runtime> = OnceLock::new();
-    RT.get_or_init(|| build_runtime("armhil-sim", sim::pacer::REAL_TIME_WORKERS, true))
+    RT.get_or_init(|| build_runtime("armhil-sim", ::sim::pacer::REAL_TIME_WORKERS, true))
 }
 
 /// Runs `fut` to completion on `rt` with the GIL released. Inside a runtime thread (a
