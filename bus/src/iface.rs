@@ -29,14 +29,21 @@ pub trait CanBus: Send + Sync {
     }
 
     /// How long ago `received`, a frame this endpoint returned from [`CanBus::recv`], finished
-    /// on the wire, by this bus's clock. A firmware's turnaround counts from there, so an
-    /// emulator that got round to a request late answers no later for it: it sends with
-    /// `send_after(answer, turnaround - since_received)`. Zero on buses that do not model the
-    /// wire (SocketCAN, socketcand), whose timestamps are another clock's and whose answers
-    /// leave at once anyway.
+    /// on the wire, by this bus's clock. Zero on buses that do not model the wire (SocketCAN,
+    /// socketcand), whose timestamps are another clock's and whose answers leave at once
+    /// anyway.
     fn since_received(&self, received: &ReceivedFrame) -> Duration {
         let _ = received;
         Duration::ZERO
+    }
+
+    /// The delay to give [`CanBus::send_after`] for an answer to `request` that a firmware
+    /// sends `turnaround` after the request's last bit: the turnaround counts from there, so
+    /// an emulator that got round to the request late answers no later for it (the time it
+    /// took is part of the turnaround, not added to it), and one later than the whole
+    /// turnaround answers at once.
+    fn answer_delay(&self, request: &ReceivedFrame, turnaround: Duration) -> Duration {
+        turnaround.saturating_sub(self.since_received(request))
     }
 
     /// Wait for the next frame from the bus, with its timestamp.

@@ -44,18 +44,11 @@ pub(crate) fn with_python(f: impl FnOnce(Python<'_>)) {
     IN_PYTHON.fetch_sub(1, Ordering::SeqCst);
 }
 
-/// A runtime of `workers` threads named `name`; `punctual` threads ask the kernel to run
-/// them on time (`sim::pacer::prefer_punctual_thread`), as `armhil sim`'s do.
-fn build_runtime(name: &str, workers: usize, punctual: bool) -> tokio::runtime::Runtime {
-    let mut builder = tokio::runtime::Builder::new_multi_thread();
-    builder
-        .worker_threads(workers)
+fn build_runtime(name: &str) -> tokio::runtime::Runtime {
+    tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
         .thread_name(name)
-        .enable_all();
-    if punctual {
-        builder.on_thread_start(::sim::pacer::prefer_punctual_thread);
-    }
-    builder
+        .enable_all()
         .build()
         // Without threads or timers nothing in this module can work; say so plainly.
         .unwrap_or_else(|e| panic!("armhil: cannot start the tokio runtime: {e}"))
@@ -64,7 +57,7 @@ fn build_runtime(name: &str, workers: usize, punctual: bool) -> tokio::runtime::
 /// The runtime the arm drivers run on.
 pub(crate) fn driver_runtime() -> &'static tokio::runtime::Runtime {
     static RT: OnceLock<tokio::runtime::Runtime> = OnceLock::new();
-    RT.get_or_init(|| build_runtime("armhil-driver", 2, false))
+    RT.get_or_init(|| build_runtime("armhil-driver"))
 }
 
 /// The runtime the emulators run on: what `armhil sim` starts
@@ -72,7 +65,12 @@ pub(crate) fn driver_runtime() -> &'static tokio::runtime::Runtime {
 /// an emulator's work fits one core with room to spare.
 pub(crate) fn sim_runtime() -> &'static tokio::runtime::Runtime {
     static RT: OnceLock<tokio::runtime::Runtime> = OnceLock::new();
-    RT.get_or_init(|| build_runtime("armhil-sim", ::sim::pacer::REAL_TIME_WORKERS, true))
+    RT.get_or_init(|| {
+        ::sim::pacer::real_time_runtime_builder()
+            .thread_name("armhil-sim")
+            .build()
+            .unwrap_or_else(|e| panic!("armhil: cannot start the emulators' runtime: {e}"))
+    })
 }
 
 /// Runs `fut` to completion on `rt` with the GIL released. Inside a runtime thread (a

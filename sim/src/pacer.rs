@@ -227,11 +227,18 @@ pub const REAL_TIME_WORKERS: usize = 1;
 /// # Errors
 /// The operating system's, when the worker thread or the I/O driver cannot be created.
 pub fn real_time_runtime() -> std::io::Result<tokio::runtime::Runtime> {
-    tokio::runtime::Builder::new_multi_thread()
+    real_time_runtime_builder().build()
+}
+
+/// The builder of [`real_time_runtime`], for a host that adds its own settings (the Python
+/// package names its threads).
+pub fn real_time_runtime_builder() -> tokio::runtime::Builder {
+    let mut builder = tokio::runtime::Builder::new_multi_thread();
+    builder
         .worker_threads(REAL_TIME_WORKERS)
         .on_thread_start(prefer_punctual_thread)
-        .enable_all()
-        .build()
+        .enable_all();
+    builder
 }
 
 /// The environment variable that lets an emulator's deadline thread and runtime workers take

@@ -96,8 +96,10 @@ async fn a_late_handled_request_is_answered_its_turnaround_after_its_last_bit() 
             timeline.sleep_until(Instant::now() + busy).await;
             assert_eq!(motor.since_received(&request), busy);
             let answer = CanFrame::extended(0x0200_01FD, &[7; 8]).unwrap();
-            let left = turnaround.saturating_sub(motor.since_received(&request));
-            motor.send_after(answer, left).await.unwrap();
+            motor
+                .send_after(answer, motor.answer_delay(&request, turnaround))
+                .await
+                .unwrap();
             motor
         });
         let request = CanFrame::extended(0x0300_FD01, &[7; 8]).unwrap();

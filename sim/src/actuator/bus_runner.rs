@@ -353,8 +353,8 @@ impl<K: BusKind> Runner<K> {
         // Answered with the state of the latest step, after the slowest answering firmware's
         // turnaround — not at the next step — counted from the request's last bit: the time
         // this emulator took to get round to it is part of the turnaround, not added to it.
-        let left = turnaround.saturating_sub(self.bus.since_received(received));
-        self.send_after(replies, left).await;
+        let delay = self.bus.answer_delay(received, turnaround);
+        self.send_after(replies, delay).await;
         Ok(())
     }
 

@@ -726,8 +726,8 @@ impl Runner {
         // turnaround (one batch per frame: a bus carries one reply at a time anyway), counted
         // from the request's last bit: the time this emulator took to get round to it is part
         // of the turnaround, not added to it.
-        let left = turnaround.saturating_sub(self.ports[port].bus.since_received(received));
-        self.send_after(port, replies, left).await;
+        let delay = self.ports[port].bus.answer_delay(received, turnaround);
+        self.send_after(port, replies, delay).await;
         Ok(())
     }
 

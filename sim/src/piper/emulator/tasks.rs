@@ -218,7 +218,7 @@ pub(super) async fn transmit(
             _ = stop.changed() => break,
         };
         let delay = request.map_or(Duration::ZERO, |request| {
-            TURNAROUND.saturating_sub(bus.since_received(&request))
+            bus.answer_delay(&request, TURNAROUND)
         });
         let mut attempts = 0;
         loop {
